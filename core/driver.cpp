@@ -1,0 +1,83 @@
+#include "core/driver.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+namespace stiffbench {
+
+long fixed_step_count(double t0, double t_end, double h, long max_steps) {
+  require_input(std::isfinite(h) && h > 0, "step size h must be > 0 (got " + std::to_string(h) + ")");
+  require_input(std::isfinite(t_end) && t_end > t0,
+                "t-end must be > the model's initial time " + std::to_string(t0) + " (got " +
+                    std::to_string(t_end) + ")");
+  const double n = std::max(1.0, std::round((t_end - t0) / h));
+  if (n > static_cast<double>(max_steps)) {
+    std::ostringstream msg;
+    msg << "h = " << h << " over [" << t0 << ", " << t_end << "] would take " << n
+        << " steps (limit " << max_steps << ")";
+    throw BadInput(msg.str());
+  }
+  return static_cast<long>(n);
+}
+
+RunResult run_fixed_step(const OdeSystem& sys, Integrator& integ, const FixedStepOptions& opt,
+                         const Observer& observer) {
+  const Vec y0 = sys.initial_state();
+  return run_fixed_step_from(sys, integ, sys.initial_time(), y0, opt, observer);
+}
+
+RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0, CVecRef y0,
+                              const FixedStepOptions& opt, const Observer& observer) {
+  const long n = fixed_step_count(t0, opt.t_end, opt.h, opt.max_steps);
+  check_compatible(integ.info(), sys);
+
+  RunResult r;
+  r.n_steps = n;
+  r.h = (opt.t_end - t0) / static_cast<double>(n);
+  r.y = y0;
+  r.t = t0;
+  const double bound = opt.blowup_factor * std::max(1.0, y0.cwiseAbs().maxCoeff());
+
+  // Output at steps round(j·N/outputs), j = 0..outputs.
+  const long outputs = opt.outputs <= 0 ? 1 : std::min(opt.outputs, n);
+  long next_output_index = 1;
+  auto output_step = [&](long j) {
+    return static_cast<long>(std::llround(static_cast<double>(j) * static_cast<double>(n) /
+                                          static_cast<double>(outputs)));
+  };
+
+  const EvalCounters before = sys.counters();
+  const auto start = std::chrono::steady_clock::now();
+  integ.reset(sys, t0, r.y);
+  if (observer) observer(r.t, r.y);
+  for (long k = 0; k < n; ++k) {
+    const Status s = integ.step(sys, r.t, r.y, r.h, r.stats);
+    r.t = (k + 1 == n) ? opt.t_end : t0 + static_cast<double>(k + 1) * r.h;
+    ++r.stats.steps;
+    if (s != Status::ok) {
+      r.stats.status = s;
+      if (r.stats.message.empty()) r.stats.message = to_string(s) + " in the step ending at t = " + std::to_string(r.t);
+      break;
+    }
+    const double norm = r.y.cwiseAbs().maxCoeff();  // NaN propagates to a failed comparison
+    if (!(norm <= bound)) {
+      r.stats.status = Status::unstable;
+      std::ostringstream msg;
+      msg << "blow-up at t = " << r.t << " (step " << k + 1 << "): ‖y‖∞ = " << norm
+          << " exceeds " << bound;
+      r.stats.message = msg.str();
+      break;
+    }
+    if (observer && k + 1 == output_step(next_output_index)) {
+      observer(r.t, r.y);
+      ++next_output_index;
+    }
+  }
+  r.stats.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r.stats.f_evals += sys.counters().f_evals - before.f_evals;
+  r.stats.jac_evals += sys.counters().jac_evals - before.jac_evals;
+  return r;
+}
+
+}  // namespace stiffbench

@@ -1,0 +1,51 @@
+// The fixed-step driver: owns the time loop, calls an observer at output times, detects
+// blow-up. Steppers take one step; the driver decides where steps go (STYLE.md §4).
+//
+// A run over [t0, t_end] with requested step h takes N = max(1, round((t_end - t0)/h)) steps of
+// exactly (t_end - t0)/N, so every run ends exactly at t_end and error-vs-h tables report the
+// step actually used. Step k ends at t0 + k·h (computed, not accumulated).
+#pragma once
+
+#include <functional>
+
+#include "core/integrator.hpp"
+
+namespace stiffbench {
+
+using Observer = std::function<void(double t, CVecRef y)>;
+
+struct FixedStepOptions {
+  double t_end = 1.0;
+  double h = 0.1;
+  // Number of output intervals for the observer: it is called at t0 and then at the steps
+  // nearest to each of `outputs` equally spaced times (every step if outputs >= N; 0 means
+  // only t0 and t_end).
+  long outputs = 0;
+  // The run ends with status `unstable` when the state is not finite or its max-norm exceeds
+  // blowup_factor × max(1, ‖y0‖∞).
+  double blowup_factor = 1e10;
+  // Refuse runs longer than this many steps (a typo in h should not hang a sweep).
+  long max_steps = 2'000'000'000;
+};
+
+struct RunResult {
+  SolveStats stats;
+  double t = 0.0;   // time reached (t_end when status is ok)
+  Vec y;            // state at t
+  double h = 0.0;   // the step actually used, (t_end - t0)/N
+  long n_steps = 0; // N
+};
+
+// Number of steps the driver takes; BadInput for h <= 0, t_end <= t0 or too many steps.
+long fixed_step_count(double t0, double t_end, double h, long max_steps);
+
+// Runs `integ` on `sys` from its initial state. Evaluation counts are the system's counters
+// over this run; wall time covers the whole loop (observer included).
+RunResult run_fixed_step(const OdeSystem& sys, Integrator& integ, const FixedStepOptions& opt,
+                         const Observer& observer = {});
+
+// Same, starting from (t0, y0) instead of the system's initial condition.
+RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0, CVecRef y0,
+                              const FixedStepOptions& opt, const Observer& observer = {});
+
+}  // namespace stiffbench

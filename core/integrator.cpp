@@ -1,0 +1,46 @@
+#include "core/integrator.hpp"
+
+namespace stiffbench {
+
+std::string to_string(Family f) {
+  switch (f) {
+    case Family::explicit_rk:
+      return "explicit";
+    case Family::implicit:
+      return "implicit";
+    case Family::symplectic:
+      return "symplectic";
+    case Family::reference:
+      return "reference";
+  }
+  return "?";
+}
+
+std::string describe_requirements(const Requirements& r) {
+  std::vector<std::string> parts;
+  if (r.mechanical) parts.emplace_back("mechanical system");
+  if (r.velocity_independent) parts.emplace_back("velocity-independent acceleration");
+  if (r.jacobian) parts.emplace_back("Jacobian");
+  std::string out;
+  for (std::size_t i = 0; i < parts.size(); ++i) out += (i ? ", " : "") + parts[i];
+  return out.empty() ? "-" : out;
+}
+
+void check_compatible(const MethodInfo& info, const OdeSystem& sys) {
+  const std::string who = "integrator '" + info.name + "'";
+  const MechanicalSystem* mech = sys.as_mechanical();
+  if (info.requires_.mechanical && !mech) {
+    throw BadInput(who + " needs a mechanical system (y = [x; v]); model '" + sys.name() +
+                   "' is not one");
+  }
+  if (info.requires_.velocity_independent && mech && mech->velocity_dependent()) {
+    throw BadInput(who + " needs an acceleration that does not depend on velocity; model '" +
+                   sys.name() + "' has velocity-dependent forces (damping): use symplectic_euler "
+                   "or a general method");
+  }
+  if (info.requires_.jacobian && !sys.has_jacobian()) {
+    throw BadInput(who + " needs an analytic Jacobian; model '" + sys.name() + "' has none");
+  }
+}
+
+}  // namespace stiffbench

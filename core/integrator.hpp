@@ -1,0 +1,65 @@
+// The Integrator interface and the metadata the registry lists.
+//
+// A fixed-step integrator advances y in place by one step of size h. It may carry history
+// between steps (two-step Verlet, leapfrog's staggered velocity, BDF2); reset() starts it at
+// (t0, y0), allocates its workspaces (never per step) and checks that it can run on the system.
+// step() assumes y is what the previous step() or reset() left: the driver never edits it.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/ode_system.hpp"
+#include "core/solve_stats.hpp"
+
+namespace stiffbench {
+
+enum class Family { explicit_rk, implicit, symplectic, reference };
+std::string to_string(Family f);
+
+// What an integrator needs from the system.
+struct Requirements {
+  bool mechanical = false;             // y = [x; v] split (MechanicalSystem)
+  bool velocity_independent = false;   // a(t, x) must not depend on v
+  bool jacobian = false;               // an analytic Jacobian (otherwise finite differences)
+};
+
+struct MethodInfo {
+  std::string name;
+  Family family = Family::explicit_rk;
+  int order = 0;
+  int stages = 0;  // f (or acceleration) evaluations per step, after start-up
+  Requirements requires_ = {};
+  std::string description;
+};
+
+// Human-readable list of requirements ("mechanical system, velocity-independent acceleration").
+std::string describe_requirements(const Requirements& r);
+
+// BadInput naming the integrator and the model when the system lacks what the method needs.
+void check_compatible(const MethodInfo& info, const OdeSystem& sys);
+
+class Integrator {
+ public:
+  explicit Integrator(MethodInfo info) : info_(std::move(info)) {}
+  virtual ~Integrator() = default;
+  Integrator(const Integrator&) = delete;
+  Integrator& operator=(const Integrator&) = delete;
+
+  const MethodInfo& info() const { return info_; }
+
+  // Starts a run at (t0, y0) on `sys`; checks compatibility, allocates workspaces, clears
+  // history. The same system must be passed to the following step() calls.
+  virtual void reset(const OdeSystem& sys, double t0, CVecRef y0) = 0;
+
+  // Advances y from t to t + h. Returns Status::ok or the reason the step failed (e.g.
+  // newton_failed); it never returns a silently wrong step. Integrator-side counters (Newton
+  // iterations, linear solves) are added to `stats`; the driver counts steps and evaluations.
+  virtual Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) = 0;
+
+ private:
+  MethodInfo info_;
+};
+
+}  // namespace stiffbench

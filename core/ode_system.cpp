@@ -1,0 +1,65 @@
+#include "core/ode_system.hpp"
+
+#include <cmath>
+
+namespace stiffbench {
+
+void OdeSystem::exact(double, VecRef) const {
+  throw BadInput("model '" + name() + "' has no exact solution");
+}
+
+void OdeSystem::eval_jacobian(double, CVecRef, SparseMat&) const {
+  throw BadInput("model '" + name() + "' provides no analytic Jacobian");
+}
+
+void MechanicalSystem::stiffness_block(double, CVecRef, CVecRef, SparseMat&) const {
+  throw BadInput("model '" + name() + "' provides no stiffness block K = da/dx");
+}
+
+void MechanicalSystem::damping_block(double, CVecRef, CVecRef, SparseMat&) const {
+  throw BadInput("model '" + name() + "' provides no damping block D = da/dv");
+}
+
+void MechanicalSystem::eval_rhs(double t, CVecRef y, VecRef dydt) const {
+  const Index n = dofs();
+  dydt.head(n) = y.tail(n);
+  eval_acceleration(t, y.head(n), y.tail(n), dydt.tail(n));
+}
+
+void MechanicalSystem::eval_jacobian(double t, CVecRef y, SparseMat& jac) const {
+  // J = [[0, I], [K, D]]: x' = v contributes the identity block.
+  const Index n = dofs();
+  SparseMat k, d;
+  stiffness_block(t, y.head(n), y.tail(n), k);
+  damping_block(t, y.head(n), y.tail(n), d);
+  std::vector<Eigen::Triplet<double>> trips;
+  trips.reserve(static_cast<std::size_t>(n + k.nonZeros() + d.nonZeros()));
+  for (Index i = 0; i < n; ++i) trips.emplace_back(i, n + i, 1.0);
+  for (Index c = 0; c < k.outerSize(); ++c)
+    for (SparseMat::InnerIterator it(k, c); it; ++it) trips.emplace_back(n + it.row(), it.col(), it.value());
+  for (Index c = 0; c < d.outerSize(); ++c)
+    for (SparseMat::InnerIterator it(d, c); it; ++it)
+      trips.emplace_back(n + it.row(), n + it.col(), it.value());
+  jac.resize(2 * n, 2 * n);
+  jac.setFromTriplets(trips.begin(), trips.end());
+}
+
+Mat finite_difference_jacobian(const OdeSystem& sys, double t, CVecRef y) {
+  const Index n = y.size();
+  Mat jac(n, n);
+  Vec f0(n), f1(n), yp = y;
+  sys.rhs(t, y, f0);
+  for (Index j = 0; j < n; ++j) {
+    // Step sqrt(eps) scaled by the component: the usual balance of truncation and round-off.
+    const double dy = 1.4901161193847656e-08 * std::max(1.0, std::abs(y[j]));
+    yp[j] = y[j] + dy;
+    sys.rhs(t, yp, f1);
+    jac.col(j) = (f1 - f0) / dy;
+    yp[j] = y[j];
+  }
+  return jac;
+}
+
+double max_abs_diff(CVecRef a, CVecRef b) { return (a - b).cwiseAbs().maxCoeff(); }
+
+}  // namespace stiffbench

@@ -1,0 +1,122 @@
+// OdeSystem and MechanicalSystem: the only face of a model that integrators see.
+//
+// Evaluation counting happens here, at the system boundary: the public, non-virtual rhs(),
+// acceleration() and jacobian() count each call and then dispatch to the model's protected
+// eval_*() overrides. Every integrator, hand-written or library, and every finite-difference
+// Jacobian goes through these, so the counts in SolveStats are true for all of them.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace stiffbench {
+
+struct EvalCounters {
+  long f_evals = 0;    // rhs() and acceleration() calls
+  long jac_evals = 0;  // analytic jacobian() calls
+};
+
+// A conserved (or monitored) quantity of a model, e.g. energy or angular momentum.
+struct Invariant {
+  std::string name;
+  std::function<double(double t, CVecRef y)> value;
+};
+
+class MechanicalSystem;
+
+class OdeSystem {
+ public:
+  virtual ~OdeSystem() = default;
+
+  virtual std::string name() const = 0;
+  virtual Index dimension() const = 0;
+  virtual double initial_time() const { return 0.0; }
+  virtual Vec initial_state() const = 0;
+
+  // y' = f(t, y). Counted as one f evaluation.
+  void rhs(double t, CVecRef y, VecRef dydt) const {
+    count_f_eval();
+    eval_rhs(t, y, dydt);
+  }
+
+  // Optional analytic Jacobian J = ∂f/∂y as a sparse matrix whose pattern does not change
+  // between calls (implicit solvers analyse it once). Counted as one Jacobian evaluation.
+  virtual bool has_jacobian() const { return false; }
+  void jacobian(double t, CVecRef y, SparseMat& jac) const {
+    ++counters_.jac_evals;
+    eval_jacobian(t, y, jac);
+  }
+
+  // Optional exact solution y(t) of the initial value problem.
+  virtual bool has_exact() const { return false; }
+  virtual void exact(double t, VecRef y) const;
+
+  // Conserved or monitored quantities (energy first where there is one).
+  virtual std::vector<Invariant> invariants() const { return {}; }
+
+  // Estimate of the spectral radius of ∂f/∂y at (t, y): the stiffness that linear stability
+  // theory compares with h. Empty when the model cannot say.
+  virtual std::optional<double> stiffness(double /*t*/, CVecRef /*y*/) const { return std::nullopt; }
+
+  // Non-null for systems with y = [x; v].
+  virtual const MechanicalSystem* as_mechanical() const { return nullptr; }
+
+  const EvalCounters& counters() const { return counters_; }
+  void reset_counters() const { counters_ = {}; }
+
+ protected:
+  virtual void eval_rhs(double t, CVecRef y, VecRef dydt) const = 0;
+  virtual void eval_jacobian(double t, CVecRef y, SparseMat& jac) const;
+  void count_f_eval() const { ++counters_.f_evals; }
+
+ private:
+  mutable EvalCounters counters_;
+};
+
+// y = [x; v] with x' = v, v' = a(t, x, v); x and v each have dofs() entries.
+// Symplectic and Baraff–Witkin style schemes use this split; general schemes see only the
+// OdeSystem face.
+class MechanicalSystem : public OdeSystem {
+ public:
+  virtual Index dofs() const = 0;
+  Index dimension() const final { return 2 * dofs(); }
+  const MechanicalSystem* as_mechanical() const final { return this; }
+
+  // a(t, x, v). Counted as one f evaluation (it costs what rhs() costs).
+  void acceleration(double t, CVecRef x, CVecRef v, VecRef a) const {
+    count_f_eval();
+    eval_acceleration(t, x, v, a);
+  }
+
+  // Whether a depends on v (damping). Leapfrog and the Verlet family require it not to.
+  virtual bool velocity_dependent() const = 0;
+
+  // Diagonal of the mass matrix, one entry per dof.
+  virtual Vec masses() const { return Vec::Ones(dofs()); }
+
+  // Optional blocks K = ∂a/∂x and D = ∂a/∂v, sparse with fixed patterns. When present, the
+  // first-order Jacobian [[0, I], [K, D]] is assembled from them.
+  virtual bool has_force_jacobians() const { return false; }
+  virtual void stiffness_block(double t, CVecRef x, CVecRef v, SparseMat& k) const;
+  virtual void damping_block(double t, CVecRef x, CVecRef v, SparseMat& d) const;
+
+  bool has_jacobian() const override { return has_force_jacobians(); }
+
+ protected:
+  virtual void eval_acceleration(double t, CVecRef x, CVecRef v, VecRef a) const = 0;
+  void eval_rhs(double t, CVecRef y, VecRef dydt) const final;
+  void eval_jacobian(double t, CVecRef y, SparseMat& jac) const override;
+};
+
+// Dense finite-difference Jacobian (forward differences, one f evaluation per column plus one),
+// counted at the boundary like every other evaluation. For tests and small systems.
+Mat finite_difference_jacobian(const OdeSystem& sys, double t, CVecRef y);
+
+// Max-norm of a - b (convenience for errors).
+double max_abs_diff(CVecRef a, CVecRef b);
+
+}  // namespace stiffbench

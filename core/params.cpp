@@ -1,0 +1,137 @@
+#include "core/params.hpp"
+
+#include <charconv>
+#include <cmath>
+
+namespace stiffbench {
+
+std::string to_string(ParamType type) {
+  switch (type) {
+    case ParamType::real:
+      return "real";
+    case ParamType::integer:
+      return "integer";
+    case ParamType::boolean:
+      return "bool";
+    case ParamType::text:
+      return "text";
+  }
+  return "?";
+}
+
+std::string join(const std::vector<std::string>& items, const std::string& sep) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    if (i) out += sep;
+    out += items[i];
+  }
+  return out;
+}
+
+Params Params::from_assignments(const std::vector<std::string>& assignments) {
+  Params p;
+  for (const auto& a : assignments) {
+    const auto eq = a.find('=');
+    require_input(eq != std::string::npos && eq > 0 && eq + 1 < a.size(),
+                  "bad --param '" + a + "': expected key=value");
+    const std::string key = a.substr(0, eq);
+    require_input(!p.contains(key), "--param '" + key + "' given twice");
+    p.set(key, a.substr(eq + 1));
+  }
+  return p;
+}
+
+void Params::set(const std::string& key, const std::string& value) { values_[key] = value; }
+
+const std::string& Params::raw(const std::string& key) const {
+  const auto it = values_.find(key);
+  if (it == values_.end()) throw std::logic_error("parameter '" + key + "' read but not declared");
+  read_.insert(key);
+  return it->second;
+}
+
+namespace {
+
+double parse_real(const std::string& key, const std::string& s) {
+  double v = 0;
+  const auto* end = s.data() + s.size();
+  const auto [ptr, ec] = std::from_chars(s.data(), end, v);
+  require_input(ec == std::errc() && ptr == end,
+                "parameter '" + key + "': '" + s + "' is not a number");
+  require_input(std::isfinite(v), "parameter '" + key + "': '" + s + "' is not finite");
+  return v;
+}
+
+long parse_integer(const std::string& key, const std::string& s) {
+  long v = 0;
+  const auto* end = s.data() + s.size();
+  const auto [ptr, ec] = std::from_chars(s.data(), end, v);
+  require_input(ec == std::errc() && ptr == end,
+                "parameter '" + key + "': '" + s + "' is not an integer");
+  return v;
+}
+
+bool parse_boolean(const std::string& key, const std::string& s) {
+  if (s == "true" || s == "1" || s == "yes" || s == "on") return true;
+  if (s == "false" || s == "0" || s == "no" || s == "off") return false;
+  throw BadInput("parameter '" + key + "': '" + s + "' is not a boolean (true/false)");
+}
+
+void check_value(const ParamSpec& spec, const std::string& value) {
+  switch (spec.type) {
+    case ParamType::real:
+      parse_real(spec.key, value);
+      break;
+    case ParamType::integer:
+      parse_integer(spec.key, value);
+      break;
+    case ParamType::boolean:
+      parse_boolean(spec.key, value);
+      break;
+    case ParamType::text:
+      if (!spec.choices.empty()) {
+        bool ok = false;
+        for (const auto& c : spec.choices) ok = ok || c == value;
+        require_input(ok, "parameter '" + spec.key + "': '" + value + "' is not one of " +
+                              join(spec.choices, ", "));
+      }
+      break;
+  }
+}
+
+}  // namespace
+
+double Params::real(const std::string& key) const { return parse_real(key, raw(key)); }
+long Params::integer(const std::string& key) const { return parse_integer(key, raw(key)); }
+bool Params::boolean(const std::string& key) const { return parse_boolean(key, raw(key)); }
+const std::string& Params::text(const std::string& key) const { return raw(key); }
+
+Params resolve_params(const std::vector<ParamSpec>& specs, const Params& user,
+                      std::set<std::string>* consumed, const std::string& owner) {
+  Params out;
+  for (const auto& spec : specs) {
+    std::string value = spec.default_value;
+    if (user.contains(spec.key)) {
+      value = user.values().at(spec.key);
+      if (consumed) consumed->insert(spec.key);
+    }
+    try {
+      check_value(spec, value);
+    } catch (const BadInput& e) {
+      throw BadInput(std::string(e.what()) + " (" + owner + ")");
+    }
+    out.set(spec.key, value);
+  }
+  return out;
+}
+
+void check_all_consumed(const Params& user, const std::set<std::string>& consumed,
+                        const std::string& accepted_summary) {
+  for (const auto& [key, value] : user.values()) {
+    if (!consumed.count(key)) {
+      throw BadInput("unknown parameter '" + key + "' (" + accepted_summary + ")");
+    }
+  }
+}
+
+}  // namespace stiffbench

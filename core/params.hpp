@@ -1,0 +1,71 @@
+// Params: the key/value bag built from `--param k=v` flags (and later spec files).
+//
+// Every consumer (a model or integrator factory) declares the keys it accepts as ParamSpecs;
+// the registry fills in defaults, hands the factory only its own keys, and the caller checks
+// that every key the user gave was consumed by someone: an unknown or unused key is an error
+// naming the key (see Registry::create and check_all_consumed).
+#pragma once
+
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace stiffbench {
+
+enum class ParamType { real, integer, boolean, text };
+
+struct ParamSpec {
+  std::string key;
+  ParamType type = ParamType::real;
+  std::string default_value;  // as the user would type it
+  std::string help;
+  std::vector<std::string> choices = {};  // for text parameters: the allowed values (empty: any)
+};
+
+std::string to_string(ParamType type);
+
+class Params {
+ public:
+  Params() = default;
+
+  // Parses "key=value" strings; a malformed one is BadInput naming it.
+  static Params from_assignments(const std::vector<std::string>& assignments);
+
+  void set(const std::string& key, const std::string& value);
+  bool contains(const std::string& key) const { return values_.count(key) != 0; }
+  const std::map<std::string, std::string>& values() const { return values_; }
+  bool empty() const { return values_.empty(); }
+
+  // Typed reads. A missing key is a programming error (std::logic_error): the registry has
+  // filled in every declared default. A value that does not parse is BadInput naming the key.
+  double real(const std::string& key) const;
+  long integer(const std::string& key) const;
+  bool boolean(const std::string& key) const;
+  const std::string& text(const std::string& key) const;
+
+  // Keys read so far through the typed accessors.
+  const std::set<std::string>& read_keys() const { return read_; }
+
+ private:
+  const std::string& raw(const std::string& key) const;
+  std::map<std::string, std::string> values_;
+  mutable std::set<std::string> read_;
+};
+
+// Defaults of `specs` overlaid with the user's values for the keys the specs declare. Each
+// user key that was taken is added to `consumed`. Values are type-checked here, so a bad value
+// is reported before any run starts.
+Params resolve_params(const std::vector<ParamSpec>& specs, const Params& user,
+                      std::set<std::string>* consumed, const std::string& owner);
+
+// BadInput naming the first user key that no consumer took, with what each consumer accepts.
+void check_all_consumed(const Params& user, const std::set<std::string>& consumed,
+                        const std::string& accepted_summary);
+
+// "k1, k2, k3" for messages.
+std::string join(const std::vector<std::string>& items, const std::string& sep = ", ");
+
+}  // namespace stiffbench

@@ -1,0 +1,56 @@
+#include "core/solve_stats.hpp"
+
+#include <iomanip>
+#include <sstream>
+
+namespace stiffbench {
+
+std::string to_string(Status s) {
+  switch (s) {
+    case Status::ok:
+      return "ok";
+    case Status::unstable:
+      return "unstable";
+    case Status::newton_failed:
+      return "newton_failed";
+    case Status::solver_error:
+      return "solver_error";
+  }
+  return "?";
+}
+
+std::vector<std::string> SolveStats::field_names() {
+  return {"status",     "steps",       "rejected_steps", "f_evals",      "jac_evals", "lin_setups",
+          "lin_solves", "newton_iters", "newton_fails",  "krylov_iters", "wall_s"};
+}
+
+std::vector<std::string> SolveStats::field_values() const {
+  std::ostringstream wall;
+  wall << std::setprecision(6) << wall_s;
+  return {to_string(status),         std::to_string(steps),        std::to_string(rejected_steps),
+          std::to_string(f_evals),   std::to_string(jac_evals),    std::to_string(lin_setups),
+          std::to_string(lin_solves), std::to_string(newton_iters), std::to_string(newton_fails),
+          std::to_string(krylov_iters), wall.str()};
+}
+
+void print_stats_table(std::ostream& os, const SolveStats& s) {
+  const auto names = SolveStats::field_names();
+  const auto values = s.field_values();
+  for (std::size_t i = 0; i < names.size(); ++i)
+    os << "  " << std::left << std::setw(16) << names[i] << std::right << values[i] << "\n";
+  if (!s.message.empty()) os << "  " << std::left << std::setw(16) << "message" << s.message << "\n";
+}
+
+void print_stats_csv_header(std::ostream& os) {
+  const auto names = SolveStats::field_names();
+  for (std::size_t i = 0; i < names.size(); ++i) os << (i ? "," : "") << names[i];
+  os << "\n";
+}
+
+void print_stats_csv_row(std::ostream& os, const SolveStats& s) {
+  const auto values = s.field_values();
+  for (std::size_t i = 0; i < values.size(); ++i) os << (i ? "," : "") << values[i];
+  os << "\n";
+}
+
+}  // namespace stiffbench

@@ -1,0 +1,39 @@
+// One statistics record for every integrator, hand-written or library, and one printer.
+#pragma once
+
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace stiffbench {
+
+enum class Status { ok, unstable, newton_failed, solver_error };
+
+std::string to_string(Status s);
+
+struct SolveStats {
+  long steps = 0;
+  long rejected_steps = 0;
+  long f_evals = 0;    // counted at the system boundary (rhs and acceleration calls)
+  long jac_evals = 0;  // analytic Jacobian evaluations (finite-difference ones count as f_evals)
+  long lin_setups = 0;
+  long lin_solves = 0;
+  long newton_iters = 0;
+  long newton_fails = 0;
+  long krylov_iters = 0;
+  double wall_s = 0.0;
+  Status status = Status::ok;
+  std::string message;  // why a run did not end ok (empty otherwise)
+
+  // Field names and values in a fixed order, shared by the table and CSV printers.
+  static std::vector<std::string> field_names();
+  std::vector<std::string> field_values() const;
+};
+
+// "  steps          1000" ... one line per field.
+void print_stats_table(std::ostream& os, const SolveStats& s);
+// Header line and one row, comma separated, in field_names() order.
+void print_stats_csv_header(std::ostream& os);
+void print_stats_csv_row(std::ostream& os, const SolveStats& s);
+
+}  // namespace stiffbench

@@ -1,0 +1,56 @@
+// Methods as data: Butcher tableaux for Runge–Kutta methods and kick/drift coefficients for
+// symplectic splitting methods of mechanical systems. A tableau checks itself: row sums,
+// order conditions (rooted trees up to order 6) and its stability function R(z).
+#pragma once
+
+#include <complex>
+#include <string>
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace stiffbench {
+
+struct ButcherTableau {
+  std::string name;
+  Mat a;  // s×s stage matrix
+  Vec b;  // weights
+  Vec c;  // nodes, c = A·1
+  int order = 0;
+  Vec b_embedded = Vec();  // optional embedded weights (size 0: none)
+  int embedded_order = 0;
+
+  int stages() const { return static_cast<int>(b.size()); }
+  bool is_explicit() const;  // strictly lower triangular A
+
+  // max_i |c_i - Σ_j a_ij|.
+  double row_sum_defect() const;
+
+  // R(z) = 1 + z bᵀ (I - zA)⁻¹ 1: one step of the method on y' = λy multiplies y by R(hλ).
+  std::complex<double> stability(std::complex<double> z) const;
+
+  // Largest |bᵀΦ(τ) - 1/γ(τ)| over the rooted trees τ with exactly p vertices (Butcher's
+  // order conditions; Hairer–Nørsett–Wanner I, §II.2). Defined for 1 <= p <= 6.
+  double order_defect(int p) const { return order_defect(b, p); }
+  double order_defect(const Vec& weights, int p) const;
+
+  // Largest p <= max_order with every condition of order <= p met to tol.
+  int satisfied_order(double tol = 1e-12, int max_order = 6) const;
+};
+
+// Kick/drift splitting for x' = v, v' = a(t, x, v). One step of size h is, for j = 1..s:
+//   v ← v + h·kick[j]·a(t_j, x, v);   x ← x + h·drift[j]·v;   t_j = t + h·Σ_{i<j} drift[i].
+// Zero kicks cost no evaluation. Each stage is a shear, so the map is symplectic whenever a does
+// not depend on v.
+struct SplittingCoefficients {
+  std::string name;
+  std::vector<double> kick;
+  std::vector<double> drift;
+  int order = 0;
+
+  int evaluations_per_step() const;  // non-zero kicks
+  // Conditions up to order 2: Σ kick = Σ drift = 1 and Σ_j kick_j Σ_{i<j} drift_i = 1/2.
+  double order_defect(int p) const;
+};
+
+}  // namespace stiffbench

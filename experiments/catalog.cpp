@@ -1,0 +1,61 @@
+#include "experiments/catalog.hpp"
+
+#include <set>
+
+#include "integrators/register.hpp"
+#include "models/register.hpp"
+
+namespace stiffbench {
+
+const ModelRegistry& model_registry() {
+  static const ModelRegistry reg = [] {
+    ModelRegistry r("model");
+    register_problem_models(r);
+    return r;
+  }();
+  return reg;
+}
+
+const IntegratorRegistry& integrator_registry() {
+  static const IntegratorRegistry reg = [] {
+    IntegratorRegistry r("integrator");
+    register_explicit_integrators(r);
+    register_symplectic_integrators(r);
+    return r;
+  }();
+  return reg;
+}
+
+Setup make_setup(const std::string& model, const std::vector<std::string>& integrators,
+                 const Params& user) {
+  Setup s;
+  std::set<std::string> consumed;
+  std::string accepted = model_registry().accepted_keys(model);
+  // Look every name up before creating anything, so the first error is the unknown name.
+  for (const auto& name : integrators) integrator_registry().at(name);
+  s.model = model_registry().create(model, user, &consumed);
+  for (const auto& name : integrators) {
+    s.integrators.push_back(integrator_registry().create(name, user, &consumed));
+    check_compatible(s.integrators.back()->info(), *s.model);
+    if (!integrator_registry().at(name).params.empty())
+      accepted += "; " + integrator_registry().accepted_keys(name);
+  }
+  check_all_consumed(user, consumed, accepted);
+  return s;
+}
+
+std::vector<std::string> split_list(const std::string& s, const std::string& flag) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  while (true) {
+    const auto comma = s.find(',', start);
+    const std::string item = s.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    require_input(!item.empty(), flag + ": empty name in '" + s + "'");
+    out.push_back(item);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
+}  // namespace stiffbench

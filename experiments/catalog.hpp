@@ -1,0 +1,30 @@
+// The process-wide registries of models and integrators, and creation of a model plus a set of
+// integrators from one Params bag with the unknown-key check.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/catalog.hpp"
+
+namespace stiffbench {
+
+const ModelRegistry& model_registry();
+const IntegratorRegistry& integrator_registry();
+
+struct Setup {
+  std::unique_ptr<OdeSystem> model;
+  std::vector<std::unique_ptr<Integrator>> integrators;
+};
+
+// Creates the model and each integrator, offering every user key to each of them; a key none of
+// them declares is BadInput naming it. Each integrator is checked against the model, so an
+// incompatible pair is reported before any run starts.
+Setup make_setup(const std::string& model, const std::vector<std::string>& integrators,
+                 const Params& user);
+
+// Splits "a,b,c" (empty items are BadInput naming the flag).
+std::vector<std::string> split_list(const std::string& s, const std::string& flag);
+
+}  // namespace stiffbench

@@ -1,0 +1,284 @@
+#include "experiments/commands.hpp"
+
+#include <cstdlib>
+#include <filesystem>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+
+#include "core/driver.hpp"
+#include "experiments/build_info.hpp"
+#include "experiments/catalog.hpp"
+
+namespace stiffbench {
+
+namespace {
+
+void list_models(std::ostream& out) {
+  Table t{{"model", "kind", "exact", "parameters", "description"}, {}};
+  for (const auto& e : model_registry().entries()) {
+    std::vector<std::string> keys;
+    for (const auto& p : e.params) keys.push_back(p.key);
+    t.rows.push_back({e.info.name, e.info.mechanical ? "mechanical" : "first-order",
+                      e.info.exact ? "yes" : "no", join(keys, " "), e.info.description});
+  }
+  out << t.to_markdown();
+}
+
+void list_integrators(std::ostream& out) {
+  Table t{{"integrator", "family", "order", "stages", "requires", "description"}, {}};
+  for (const auto& e : integrator_registry().entries()) {
+    const MethodInfo& m = e.info;
+    t.rows.push_back({m.name, to_string(m.family), std::to_string(m.order), std::to_string(m.stages),
+                      describe_requirements(m.requires_), m.description});
+  }
+  out << t.to_markdown();
+}
+
+void list_experiments(std::ostream& out) {
+  Table t{{"experiment", "writes", "description"}, {}};
+  t.rows.push_back({"solve", "trajectory CSV (t,y0,y1,...)", "one fixed-step run; final state and statistics"});
+  t.rows.push_back({"convergence", "convergence.{csv,md,json}", "global error at t_end vs h, observed orders"});
+  t.rows.push_back({"local-error", "local_error.{csv,md,json}", "error of one step vs h, observed slopes"});
+  t.rows.push_back({"report", "DIR/REPORT.md and one folder per study", "the default suite"});
+  out << t.to_markdown();
+}
+
+void print_params(const std::vector<ParamSpec>& params, std::ostream& out) {
+  if (params.empty()) {
+    out << "\nParameters: none\n";
+    return;
+  }
+  out << "\nParameters (--param key=value):\n\n";
+  Table t{{"key", "type", "default", "meaning"}, {}};
+  for (const auto& p : params) {
+    std::string help = p.help;
+    if (!p.choices.empty()) help += " (one of: " + join(p.choices, ", ") + ")";
+    t.rows.push_back({p.key, to_string(p.type), p.default_value, help});
+  }
+  out << t.to_markdown();
+}
+
+}  // namespace
+
+void cmd_list(const std::string& what, std::ostream& out) {
+  if (what.empty() || what == "models") {
+    if (what.empty()) out << "Models:\n\n";
+    list_models(out);
+  }
+  if (what.empty() || what == "integrators") {
+    if (what.empty()) out << "\nIntegrators:\n\n";
+    list_integrators(out);
+  }
+  if (what.empty() || what == "experiments") {
+    if (what.empty()) out << "\nExperiments:\n\n";
+    list_experiments(out);
+  }
+}
+
+void cmd_describe(const std::string& name, std::ostream& out) {
+  if (const auto* m = model_registry().find(name)) {
+    out << "model " << name << ": " << m->info.description << "\n";
+    out << "kind: " << (m->info.mechanical ? "mechanical (y = [x; v])" : "first-order") << "\n";
+    out << "exact solution: " << (m->info.exact ? "yes" : "no") << "\n";
+    out << "source: " << m->info.source << "\n";
+    const auto sys = model_registry().create(name, Params{});
+    out << "dimension (defaults): " << sys->dimension() << "\n";
+    std::vector<std::string> inv;
+    for (const auto& i : sys->invariants()) inv.push_back(i.name);
+    out << "invariants: " << (inv.empty() ? "none" : join(inv)) << "\n";
+    out << "analytic Jacobian: " << (sys->has_jacobian() ? "yes" : "no") << "\n";
+    print_params(m->params, out);
+    return;
+  }
+  if (const auto* e = integrator_registry().find(name)) {
+    const MethodInfo& i = e->info;
+    out << "integrator " << name << ": " << i.description << "\n";
+    out << "family: " << to_string(i.family) << "\norder: " << i.order
+        << "\nevaluations per step: " << i.stages << "\nrequires: " << describe_requirements(i.requires_)
+        << "\n";
+    print_params(e->params, out);
+    return;
+  }
+  throw BadInput("unknown name '" + name + "': not a model (" + join(model_registry().names()) +
+                 ") nor an integrator (" + join(integrator_registry().names()) + ")");
+}
+
+void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
+  require_input(!opt.model.empty(), "--model is required");
+  require_input(!opt.integrator.empty(), "--integrator is required");
+  require_input(opt.outputs >= 1, "--outputs must be >= 1 (got " + std::to_string(opt.outputs) + ")");
+  Setup setup = make_setup(opt.model, {opt.integrator}, opt.params);
+  const OdeSystem& sys = *setup.model;
+  Integrator& integ = *setup.integrators.front();
+  FixedStepOptions fo;
+  fo.t_end = opt.t_end;
+  fo.h = opt.h;
+  fo.outputs = opt.outputs;
+  const long n = fixed_step_count(sys.initial_time(), opt.t_end, opt.h, fo.max_steps);
+  if (n > 10'000'000) err << "solve: " << n << " steps; this may take a while\n";
+
+  std::ostringstream traj;
+  if (!opt.out_csv.empty()) {
+    traj << "t";
+    for (Index i = 0; i < sys.dimension(); ++i) traj << ",y" << i;
+    traj << "\n";
+  }
+  Observer obs;
+  if (!opt.out_csv.empty()) {
+    obs = [&traj](double t, CVecRef y) {
+      traj << format_full(t);
+      for (Index i = 0; i < y.size(); ++i) traj << "," << format_full(y[i]);
+      traj << "\n";
+    };
+  }
+  const Vec y0 = sys.initial_state();
+  const RunResult r = run_fixed_step(sys, integ, fo, obs);
+  if (!opt.out_csv.empty()) {
+    // Written whatever the status: the trajectory up to a blow-up is part of the result.
+    write_file_atomic(opt.out_csv, traj.str());
+  }
+
+  out << std::setprecision(17);
+  out << "model        " << opt.model;
+  for (const auto& [k, v] : opt.params.values()) out << " " << k << "=" << v;
+  out << "\nintegrator   " << opt.integrator << " (" << to_string(integ.info().family) << ", order "
+      << integ.info().order << ")\n";
+  out << "h            " << format_full(r.h) << " (" << r.n_steps << " steps to t = " << format_full(opt.t_end) << ")\n";
+  if (const auto rho = sys.stiffness(sys.initial_time(), y0))
+    out << "stiffness    spectral radius ~ " << format_short(*rho) << " at t0, h*rho = " << format_short(*rho * r.h) << "\n";
+  out << "status       " << to_string(r.stats.status) << "\n";
+  if (!r.stats.message.empty()) out << "message      " << r.stats.message << "\n";
+  out << "\nfinal state at t = " << format_full(r.t) << ":\n";
+  for (Index i = 0; i < r.y.size(); ++i) out << "  y" << i << " = " << format_full(r.y[i]) << "\n";
+  if (sys.has_exact() && r.stats.status == Status::ok) {
+    Vec ye(sys.dimension());
+    sys.exact(r.t, ye);
+    out << "\nerror vs exact solution (max-norm): " << format_short(max_abs_diff(r.y, ye), 6) << "\n";
+  }
+  const auto invariants = sys.invariants();
+  if (!invariants.empty()) {
+    out << "\ninvariants          initial                  final                    rel. change\n";
+    for (const auto& inv : invariants) {
+      const double a = inv.value(sys.initial_time(), y0), b = inv.value(r.t, r.y);
+      out << "  " << std::left << std::setw(18) << inv.name << std::setw(25) << format_full(a)
+          << std::setw(25) << format_full(b) << std::right
+          << format_short(a != 0 ? (b - a) / std::abs(a) : b - a) << "\n";
+    }
+  }
+  out << "\nstatistics:\n";
+  print_stats_table(out, r.stats);
+  if (!opt.out_csv.empty()) out << "\ntrajectory: " << opt.out_csv << "\n";
+}
+
+bool plot_convergence(const std::string& csv, const std::string& png, const std::string& title,
+                      const std::vector<std::string>& integrators, bool local, std::ostream& err) {
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
+    err << "gnuplot not found: plots skipped\n";
+    return false;
+  }
+  const std::string script = std::string(STIFFBENCH_SOURCE_DIR) + "/plots/convergence.gp";
+  std::ostringstream cmd;
+  cmd << "gnuplot -e \"csvfile='" << csv << "'; outfile='" << png << "'; methods='"
+      << join(integrators, " ") << "'; ttl='" << title << "'; ycol=" << (local ? 5 : 6)
+      << "; ylab='" << (local ? "local error (max-norm)" : "global error at t_end (max-norm)")
+      << "'\" '" << script << "'";
+  if (std::system(cmd.str().c_str()) != 0) {
+    err << "gnuplot failed: " << cmd.str() << "\n";
+    return false;
+  }
+  return true;
+}
+
+namespace {
+
+struct SuiteItem {
+  std::string name;
+  std::string title;
+  ConvergenceSpec spec;
+  bool local = false;
+};
+
+std::vector<SuiteItem> default_suite(bool quick) {
+  std::vector<std::string> all = integrator_registry().names();
+  std::vector<std::string> general;  // methods for first-order systems
+  for (const auto& e : integrator_registry().entries())
+    if (!e.info.requires_.mechanical) general.push_back(e.info.name);
+  const int levels = quick ? 4 : 6;
+  auto spec = [&](std::string model, std::vector<std::string> integ, double t_end, double h,
+                  std::vector<std::string> params = {}, std::string reference = "auto") {
+    ConvergenceSpec s;
+    s.model = std::move(model);
+    s.integrators = std::move(integ);
+    s.t_end = t_end;
+    s.h = h;
+    s.levels = levels;
+    s.params = Params::from_assignments(params);
+    s.reference = std::move(reference);
+    return s;
+  };
+  return {
+      {"harmonic_oscillator", "Undamped harmonic oscillator (k = m = 1), t_end = 10",
+       spec("harmonic_oscillator", all, 10.0, 0.1), false},
+      {"harmonic_oscillator_local", "Local error, undamped harmonic oscillator",
+       spec("harmonic_oscillator", all, 10.0, 0.1), true},
+      {"kepler_e05", "Kepler orbit, e = 0.5, one period (exact via Kepler's equation)",
+       spec("kepler", all, 6.283185307179586, 0.01, {"e=0.5"}), false},
+      {"pendulum", "Nonlinear pendulum, θ0 = 1, t_end = 10 (reference rk4)",
+       spec("pendulum", all, 10.0, 0.1, {}, "rk4"), false},
+      {"prothero_robinson_l50", "Prothero-Robinson, λ = -50: explicit methods unstable for h|λ| beyond their limit",
+       spec("prothero_robinson", general, 10.0, 0.1, {"lambda=-50"}), false},
+  };
+}
+
+}  // namespace
+
+void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) {
+  namespace fs = std::filesystem;
+  const auto suite = default_suite(opt.quick);
+  std::ostringstream md;
+  md << "# stiffbench report\n\n";
+  md << "stiffbench " << STIFFBENCH_VERSION << ", revision " << STIFFBENCH_GIT_REVISION << ", "
+     << (opt.quick ? "quick" : "full") << " suite. Each section links its full-precision CSV, "
+     << "Markdown table and JSON metadata (spec, versions, compiler, flags, date).\n\n";
+  md << "Errors are max-norms against the exact solution or the named reference; 'observed order' is "
+        "log(e_k/e_{k+1})/log(h_k/h_{k+1}) between consecutive step sizes.\n\n";
+  for (std::size_t i = 0; i < suite.size(); ++i) {
+    const SuiteItem& item = suite[i];
+    err << "== [" << i + 1 << "/" << suite.size() << "] " << item.name << "\n";
+    const ConvergenceResult res =
+        item.local ? run_local_error(item.spec, &err) : run_convergence(item.spec, &err);
+    const std::string name = item.local ? "local_error" : "convergence";
+    const fs::path dir = fs::path(opt.out_dir) / item.name;
+    write_convergence_outputs(dir.string(), name, item.spec, res, item.local);
+    const bool plotted = plot_convergence((dir / (name + ".csv")).string(), (dir / (name + ".png")).string(),
+                                          item.title, item.spec.integrators, item.local, err);
+    md << "## " << item.title << "\n\n";
+    md << "[" << name << ".csv](" << item.name << "/" << name << ".csv) · [" << name << ".md]("
+       << item.name << "/" << name << ".md) · [" << name << ".json](" << item.name << "/" << name
+       << ".json)\n\n";
+    if (plotted) md << "![" << item.title << "](" << item.name << "/" << name << ".png)\n\n";
+    md << "Reference: " << res.reference_description << ".\n\n";
+    Table summary{{"integrator", item.local ? "expected slope" : "order", "last observed order",
+                   "status of finest run"},
+                  {}};
+    for (const auto& integ : item.spec.integrators) {
+      const auto last = last_observed_order(res.rows, integ);
+      std::string status;
+      int order = 0;
+      for (const auto& r : res.rows)
+        if (r.integrator == integ) {
+          status = to_string(r.stats.status);
+          order = r.order + (item.local ? 1 : 0);
+        }
+      char buf[32] = "-";
+      if (last) std::snprintf(buf, sizeof buf, "%.3f", *last);
+      summary.rows.push_back({integ, std::to_string(order), buf, status});
+    }
+    md << summary.to_markdown() << "\n";
+  }
+  write_file_atomic(fs::path(opt.out_dir) / "REPORT.md", md.str());
+  out << "wrote " << (fs::path(opt.out_dir) / "REPORT.md").string() << "\n";
+}
+
+}  // namespace stiffbench

@@ -1,0 +1,35 @@
+// The subcommands of `stiffbench`, callable from main() and from tests.
+#pragma once
+
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "experiments/convergence.hpp"
+
+namespace stiffbench {
+
+void cmd_list(const std::string& what, std::ostream& out);
+void cmd_describe(const std::string& name, std::ostream& out);
+
+struct SolveOptions {
+  std::string model, integrator;
+  Params params;
+  double h = 0, t_end = 0;
+  long outputs = 100;
+  std::string out_csv;  // empty: no trajectory file
+};
+void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err);
+
+struct ReportOptions {
+  std::string out_dir = "results";
+  bool quick = false;
+};
+void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err);
+
+// Writes gnuplot's PNG of error against h for one study; returns false (and says why on `err`)
+// when gnuplot is not available.
+bool plot_convergence(const std::string& csv, const std::string& png, const std::string& title,
+                      const std::vector<std::string>& integrators, bool local, std::ostream& err);
+
+}  // namespace stiffbench

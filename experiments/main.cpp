@@ -1,0 +1,123 @@
+// stiffbench: command-line entry point. Exit codes: 0 success, 2 bad input (one message on
+// stderr naming what is wrong), 1 anything else.
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "experiments/catalog.hpp"
+#include "experiments/commands.hpp"
+
+using namespace stiffbench;
+
+namespace {
+
+void add_study_flags(CLI::App* cmd, ConvergenceSpec& spec, std::string& integrators,
+                     std::vector<std::string>& params, std::string& out_dir) {
+  cmd->add_option("--model", spec.model, "model name (see `stiffbench list models`)")->required();
+  cmd->add_option("--integrators", integrators, "comma-separated integrator names")->required();
+  cmd->add_option("--param", params, "model/integrator parameter key=value (repeatable)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  cmd->add_option("--t-end", spec.t_end, "final time")->required();
+  cmd->add_option("--h", spec.h, "coarsest step size")->required();
+  cmd->add_option("--levels", spec.levels, "number of step sizes (>= 2)")->capture_default_str();
+  cmd->add_option("--refine", spec.refine, "ratio between consecutive step sizes (> 1)")
+      ->capture_default_str();
+  cmd->add_option("--reference", spec.reference,
+                  "exact | METHOD (run at (finest h)/16); default: exact where the model has one")
+      ->capture_default_str();
+  cmd->add_option("--out", out_dir, "output directory")->capture_default_str();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  set_command_line(argc, argv);
+  CLI::App app{
+      "stiffbench: a testbed comparing time integrators on stiff ODEs from physically based "
+      "simulation.\nExit codes: 0 success, 2 bad input, 1 other errors."};
+  app.require_subcommand(1);
+
+  std::string list_what;
+  auto* list = app.add_subcommand("list", "list models, integrators or experiments");
+  list->add_option("what", list_what, "models | integrators | experiments (default: all)")
+      ->check(CLI::IsMember({"models", "integrators", "experiments"}));
+
+  std::string describe_name;
+  auto* describe = app.add_subcommand("describe", "parameters, defaults and properties of a model or integrator");
+  describe->add_option("name", describe_name, "model or integrator name")->required();
+
+  SolveOptions solve_opt;
+  std::vector<std::string> solve_params;
+  auto* solve = app.add_subcommand("solve", "one fixed-step run: final state, invariants, statistics");
+  solve->add_option("--model", solve_opt.model, "model name")->required();
+  solve->add_option("--integrator", solve_opt.integrator, "integrator name")->required();
+  solve->add_option("--h", solve_opt.h, "step size (the run takes N = round(T/h) steps of T/N)")->required();
+  solve->add_option("--t-end", solve_opt.t_end, "final time")->required();
+  solve->add_option("--outputs", solve_opt.outputs, "number of output intervals in the trajectory")
+      ->capture_default_str();
+  solve->add_option("--param", solve_params, "model/integrator parameter key=value (repeatable)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  solve->add_option("--out", solve_opt.out_csv, "trajectory CSV file (columns t,y0,y1,...)");
+
+  ConvergenceSpec conv;
+  std::string conv_integrators, conv_out = "results";
+  std::vector<std::string> conv_params;
+  auto* convergence = app.add_subcommand(
+      "convergence", "global error at t_end against h = H/refine^k; writes convergence.{csv,md,json}");
+  add_study_flags(convergence, conv, conv_integrators, conv_params, conv_out);
+
+  ConvergenceSpec local;
+  std::string local_integrators, local_out = "results";
+  std::vector<std::string> local_params;
+  auto* local_error = app.add_subcommand(
+      "local-error", "error of one step from the initial state against h; writes local_error.{csv,md,json}");
+  local.t_end = 1.0;
+  add_study_flags(local_error, local, local_integrators, local_params, local_out);
+  local_error->get_option("--t-end")->required(false)->description("unused by the local study's error; kept for symmetry");
+
+  ReportOptions report_opt;
+  auto* report = app.add_subcommand("report", "run the default suite and write DIR/REPORT.md");
+  report->add_option("--out", report_opt.out_dir, "output directory")->capture_default_str();
+  report->add_flag("--quick", report_opt.quick, "fewer step sizes (a smoke run)");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "stiffbench: " << e.what() << "\n";
+    return 2;
+  }
+
+  try {
+    if (*list) cmd_list(list_what, std::cout);
+    if (*describe) cmd_describe(describe_name, std::cout);
+    if (*solve) {
+      solve_opt.params = Params::from_assignments(solve_params);
+      cmd_solve(solve_opt, std::cout, std::cerr);
+    }
+    if (*convergence || *local_error) {
+      const bool is_local = local_error->parsed();
+      ConvergenceSpec& spec = is_local ? local : conv;
+      spec.integrators = split_list(is_local ? local_integrators : conv_integrators, "--integrators");
+      spec.params = Params::from_assignments(is_local ? local_params : conv_params);
+      const std::string& dir = is_local ? local_out : conv_out;
+      const std::string name = is_local ? "local_error" : "convergence";
+      const ConvergenceResult res = is_local ? run_local_error(spec, &std::cerr) : run_convergence(spec, &std::cerr);
+      write_convergence_outputs(dir, name, spec, res, is_local);
+      std::cout << (is_local ? local_error_table(res) : convergence_table(res)).to_markdown();
+      std::cout << "\nwrote " << dir << "/" << name << ".{csv,md,json}\n";
+    }
+    if (*report) cmd_report(report_opt, std::cout, std::cerr);
+  } catch (const BadInput& e) {
+    std::cerr << "stiffbench: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "stiffbench: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,36 @@
+// File output owned by the experiments layer: tables as CSV and Markdown, JSON metadata, and
+// atomic writes (temporary name, then rename) so an interrupted run never leaves a truncated
+// table.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace stiffbench {
+
+struct Table {
+  std::vector<std::string> columns;
+  std::vector<std::vector<std::string>> rows;
+
+  std::string to_csv() const;
+  std::string to_markdown() const;
+};
+
+// Full precision (round-trips through text): for values in CSV files.
+std::string format_full(double x);
+// Short scientific form for Markdown tables and progress lines.
+std::string format_short(double x, int digits = 3);
+
+void write_file_atomic(const std::filesystem::path& path, const std::string& content);
+
+// Metadata common to every experiment: spec, versions, compiler, flags, git revision, thread
+// count, date, command line.
+nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json& spec);
+
+// The command line of this process, set once by main().
+void set_command_line(int argc, char** argv);
+
+}  // namespace stiffbench

@@ -1,0 +1,50 @@
+#include "integrators/register.hpp"
+
+#include <map>
+
+#include "integrators/explicit/explicit_rk.hpp"
+#include "integrators/explicit/tableaux.hpp"
+#include "integrators/symplectic/splitting.hpp"
+#include "integrators/symplectic/verlet.hpp"
+
+namespace stiffbench {
+
+void register_explicit_integrators(IntegratorRegistry& reg) {
+  static const std::map<std::string, std::string> descriptions = {
+      {"euler", "explicit (forward) Euler"},
+      {"heun", "Heun's method (explicit trapezoidal rule)"},
+      {"midpoint", "explicit midpoint rule"},
+      {"ralston", "Ralston's second-order method (minimum error bound)"},
+      {"kutta3", "Kutta's third-order method"},
+      {"ssprk3", "strong-stability-preserving RK3 (Shu-Osher)"},
+      {"rk4", "classic fourth-order Runge-Kutta"},
+      {"rk38", "Kutta's 3/8-rule fourth-order method"},
+  };
+  for (const ButcherTableau& t : explicit_tableaux()) {
+    const std::string desc = descriptions.at(t.name);
+    auto make = [t, desc](const Params&) { return std::make_unique<ExplicitRungeKutta>(t, desc); };
+    const MethodInfo info = ExplicitRungeKutta(t, desc).info();
+    reg.add({info, {}, make});
+  }
+}
+
+void register_symplectic_integrators(IntegratorRegistry& reg) {
+  static const std::map<std::string, std::pair<bool, std::string>> props = {
+      {"symplectic_euler",
+       {false, "symplectic Euler, velocity first: v+ = v + h a(t, x, v), x+ = x + h v+"}},
+      {"symplectic_euler_x",
+       {false, "symplectic Euler, position first: x+ = x + h v, v+ = v + h a(t+h, x+, v)"}},
+      {"velocity_verlet", {true, "velocity Verlet (kick-drift-kick), first-same-as-last"}},
+  };
+  for (const SplittingCoefficients& c : splitting_methods()) {
+    const auto& [vel_indep, desc] = props.at(c.name);
+    auto make = [c, vel_indep = vel_indep, desc = desc](const Params&) {
+      return std::make_unique<SplittingIntegrator>(c, vel_indep, desc);
+    };
+    reg.add({SplittingIntegrator(c, vel_indep, desc).info(), {}, make});
+  }
+  reg.add({PositionVerlet().info(), {}, [](const Params&) { return std::make_unique<PositionVerlet>(); }});
+  reg.add({Leapfrog().info(), {}, [](const Params&) { return std::make_unique<Leapfrog>(); }});
+}
+
+}  // namespace stiffbench

@@ -1,0 +1,11 @@
+// Registration of the hand-written integrators, in the order `list integrators` shows them.
+#pragma once
+
+#include "core/catalog.hpp"
+
+namespace stiffbench {
+
+void register_explicit_integrators(IntegratorRegistry& reg);
+void register_symplectic_integrators(IntegratorRegistry& reg);
+
+}  // namespace stiffbench

@@ -1,0 +1,79 @@
+#include "integrators/symplectic/splitting.hpp"
+
+namespace stiffbench {
+
+const std::vector<SplittingCoefficients>& splitting_methods() {
+  // Hairer, Lubich & Wanner, Geometric Numerical Integration (2006), §I.1 and §II.5.
+  static const std::vector<SplittingCoefficients> all = {
+      // v⁺ = v + h a(t, x, v),  x⁺ = x + h v⁺
+      {"symplectic_euler", {1.0}, {1.0}, 1},
+      // x⁺ = x + h v,  v⁺ = v + h a(t + h, x⁺, v)
+      {"symplectic_euler_x", {0.0, 1.0}, {1.0, 0.0}, 1},
+      // kick ½, drift 1, kick ½ (Störmer–Verlet in velocity form)
+      {"velocity_verlet", {0.5, 0.5}, {1.0, 0.0}, 2},
+  };
+  return all;
+}
+
+namespace {
+
+// First-same-as-last: the first stage kicks at the step's start position, the last kick is
+// followed by no drift (so it saw the end-of-step position), and the force cannot depend on
+// the velocity, which changed in between.
+bool is_fsal(const SplittingCoefficients& c, bool velocity_independent) {
+  const std::size_t s = c.kick.size();
+  std::size_t last_kick = s;
+  for (std::size_t j = 0; j < s; ++j)
+    if (c.kick[j] != 0.0) last_kick = j;
+  if (!velocity_independent || s < 2 || c.kick[0] == 0.0 || last_kick == 0 || last_kick == s)
+    return false;
+  for (std::size_t j = last_kick; j < s; ++j)
+    if (c.drift[j] != 0.0) return false;
+  return true;
+}
+
+}  // namespace
+
+SplittingIntegrator::SplittingIntegrator(SplittingCoefficients coeffs, bool velocity_independent,
+                                         std::string description)
+    : Integrator({coeffs.name, Family::symplectic, coeffs.order,
+                  coeffs.evaluations_per_step() - (is_fsal(coeffs, velocity_independent) ? 1 : 0),
+                  Requirements{true, velocity_independent, false}, std::move(description)}),
+      coeffs_(std::move(coeffs)),
+      fsal_(is_fsal(coeffs_, velocity_independent)) {}
+
+void SplittingIntegrator::reset(const OdeSystem& sys, double, CVecRef) {
+  check_compatible(info(), sys);
+  mech_ = sys.as_mechanical();
+  acc_.resize(mech_->dofs());
+  cached_x_.resize(mech_->dofs());
+  cache_valid_ = false;
+}
+
+Status SplittingIntegrator::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats&) {
+  if (&sys != mech_) throw std::logic_error("SplittingIntegrator::step: system differs from reset()");
+  const Index n = mech_->dofs();
+  auto x = y.head(n);
+  auto v = y.tail(n);
+  double tj = t;
+  const std::size_t s = coeffs_.kick.size();
+  for (std::size_t j = 0; j < s; ++j) {
+    if (const double kj = coeffs_.kick[j]; kj != 0.0) {
+      const bool reuse = fsal_ && j == 0 && cache_valid_ && cached_x_ == x;
+      if (!reuse) mech_->acceleration(tj, x, v, acc_);
+      v.noalias() += (h * kj) * acc_;
+    }
+    if (const double dj = coeffs_.drift[j]; dj != 0.0) {
+      x.noalias() += (h * dj) * v;
+      tj += h * dj;
+    }
+  }
+  if (fsal_) {
+    // The last kick evaluated a at the final position; keep it for the next step.
+    cached_x_ = x;
+    cache_valid_ = true;
+  }
+  return Status::ok;
+}
+
+}  // namespace stiffbench

@@ -1,0 +1,36 @@
+// Symplectic splitting methods for mechanical systems y = [x; v], as kick/drift coefficient
+// data (core/tableau.hpp SplittingCoefficients) read by one stepper:
+//   for j = 1..s:  v ← v + h·kick_j·a(t_j, x, v);   x ← x + h·drift_j·v.
+// When a stage's kick is followed only by zero drifts, the acceleration it evaluates is the
+// one at the end of the step; for velocity-independent forces the next step reuses it
+// (first-same-as-last), so velocity Verlet costs one evaluation per step after the first.
+#pragma once
+
+#include <vector>
+
+#include "core/integrator.hpp"
+#include "core/tableau.hpp"
+
+namespace stiffbench {
+
+// symplectic_euler (v first, the seed's form), symplectic_euler_x (x first), velocity_verlet.
+const std::vector<SplittingCoefficients>& splitting_methods();
+
+class SplittingIntegrator final : public Integrator {
+ public:
+  SplittingIntegrator(SplittingCoefficients coeffs, bool velocity_independent, std::string description);
+
+  const SplittingCoefficients& coefficients() const { return coeffs_; }
+  void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
+  Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
+
+ private:
+  SplittingCoefficients coeffs_;
+  bool fsal_;  // reuse the last stage's acceleration as the next step's first
+  const MechanicalSystem* mech_ = nullptr;
+  Vec acc_;          // acceleration workspace
+  Vec cached_x_;     // position at which acc_ was last evaluated (for reuse)
+  bool cache_valid_ = false;
+};
+
+}  // namespace stiffbench

@@ -1,0 +1,70 @@
+#include "models/problems/harmonic_oscillator.hpp"
+
+#include <cmath>
+
+namespace stiffbench {
+
+namespace {
+void one_by_one(SparseMat& m, double value) {
+  m.resize(1, 1);
+  m.setZero();
+  m.insert(0, 0) = value;
+}
+}  // namespace
+
+HarmonicOscillator::HarmonicOscillator(double m, double k, double gamma, double x0, double v0)
+    : m_(m), k_(k), gamma_(gamma), x0_(x0), v0_(v0) {
+  require_input(m > 0, "harmonic_oscillator: parameter 'm' must be > 0");
+  require_input(k > 0, "harmonic_oscillator: parameter 'k' must be > 0");
+  require_input(gamma >= 0, "harmonic_oscillator: parameter 'gamma' must be >= 0");
+}
+
+void HarmonicOscillator::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a) const {
+  a[0] = -(k_ * x[0] + gamma_ * v[0]) / m_;
+}
+
+void HarmonicOscillator::stiffness_block(double, CVecRef, CVecRef, SparseMat& k) const {
+  one_by_one(k, -k_ / m_);
+}
+
+void HarmonicOscillator::damping_block(double, CVecRef, CVecRef, SparseMat& d) const {
+  one_by_one(d, -gamma_ / m_);
+}
+
+void HarmonicOscillator::exact(double t, VecRef y) const {
+  const double beta = gamma_ / (2 * m_);
+  const double w0 = std::sqrt(k_ / m_);
+  const double disc = beta * beta - w0 * w0;
+  const double decay = std::exp(-beta * t);
+  if (std::abs(disc) <= 1e-14 * w0 * w0) {  // critical damping
+    const double b = v0_ + beta * x0_;
+    y[0] = decay * (x0_ + b * t);
+    y[1] = decay * (b - beta * (x0_ + b * t));
+  } else if (disc < 0) {  // underdamped (includes γ = 0)
+    const double wd = std::sqrt(-disc);
+    const double b = (v0_ + beta * x0_) / wd;
+    const double c = std::cos(wd * t), s = std::sin(wd * t);
+    y[0] = decay * (x0_ * c + b * s);
+    y[1] = decay * ((-beta * x0_ + b * wd) * c + (-beta * b - x0_ * wd) * s);
+  } else {  // overdamped
+    const double sq = std::sqrt(disc);
+    const double r1 = -beta + sq, r2 = -beta - sq;
+    const double c1 = (v0_ - r2 * x0_) / (r1 - r2), c2 = x0_ - c1;
+    y[0] = c1 * std::exp(r1 * t) + c2 * std::exp(r2 * t);
+    y[1] = c1 * r1 * std::exp(r1 * t) + c2 * r2 * std::exp(r2 * t);
+  }
+}
+
+std::vector<Invariant> HarmonicOscillator::invariants() const {
+  return {{"energy", [this](double, CVecRef y) {
+             return 0.5 * m_ * y[1] * y[1] + 0.5 * k_ * y[0] * y[0];
+           }}};
+}
+
+std::optional<double> HarmonicOscillator::stiffness(double, CVecRef) const {
+  // Largest |eigenvalue| of [[0, 1], [-k/m, -γ/m]].
+  const double beta = gamma_ / (2 * m_), w0 = std::sqrt(k_ / m_);
+  return beta <= w0 ? w0 : beta + std::sqrt(beta * beta - w0 * w0);
+}
+
+}  // namespace stiffbench

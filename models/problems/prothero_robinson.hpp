@@ -1,0 +1,43 @@
+// Prothero–Robinson problem (Prothero & Robinson, Math. Comp. 28, 1974):
+//   y' = λ (y - φ(t)) + φ'(t),   y(0) = φ(0) + y0_offset.
+// Exact solution y(t) = φ(t) + y0_offset·e^{λt}; with the default offset 0, y = φ exactly.
+// Parameters: lambda (λ = -1e6 by default: the stiffness knob), phi (sin | cos | exp, i.e.
+// φ = sin t, cos t or e^t), y0_offset. Jacobian λ; spectral radius |λ|. Explicit methods are
+// stable only for h|λ| below their real-axis limit (2 for Euler), while L-stable implicit
+// methods track φ for any h; the error of non-stiffly-accurate methods shows order reduction.
+#pragma once
+
+#include <string>
+
+#include "core/ode_system.hpp"
+
+namespace stiffbench {
+
+class ProtheroRobinson final : public OdeSystem {
+ public:
+  enum class Phi { sin, cos, exp };
+  ProtheroRobinson(double lambda, Phi phi, double y0_offset)
+      : lambda_(lambda), phi_(phi), offset_(y0_offset) {}
+
+  std::string name() const override { return "prothero_robinson"; }
+  Index dimension() const override { return 1; }
+  Vec initial_state() const override { return Vec::Constant(1, phi(0.0) + offset_); }
+  bool has_jacobian() const override { return true; }
+  bool has_exact() const override { return true; }
+  void exact(double t, VecRef y) const override;
+  std::optional<double> stiffness(double, CVecRef) const override { return std::abs(lambda_); }
+
+  double phi(double t) const;
+  double phi_dot(double t) const;
+
+ protected:
+  void eval_rhs(double t, CVecRef y, VecRef dydt) const override;
+  void eval_jacobian(double t, CVecRef y, SparseMat& jac) const override;
+
+ private:
+  double lambda_;
+  Phi phi_;
+  double offset_;
+};
+
+}  // namespace stiffbench

@@ -1,0 +1,10 @@
+// Registration of every model with its parameters (defaults and meaning for `describe`).
+#pragma once
+
+#include "core/catalog.hpp"
+
+namespace stiffbench {
+
+void register_problem_models(ModelRegistry& reg);
+
+}  // namespace stiffbench
