@@ -81,6 +81,18 @@ int main(int argc, char** argv) {
   report->add_option("--out", report_opt.out_dir, "output directory")->capture_default_str();
   report->add_flag("--quick", report_opt.quick, "fewer step sizes (a smoke run)");
 
+  if (argc > 1 && argv[1][0] != '-') {
+    bool known = false;
+    std::vector<std::string> names;
+    for (const auto* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+      names.push_back(sub->get_name());
+      known = known || sub->get_name() == argv[1];
+    }
+    if (!known) {
+      std::cerr << "stiffbench: unknown command '" << argv[1] << "'; known: " << join(names) << "\n";
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

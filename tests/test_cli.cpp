@@ -1,0 +1,176 @@
+// The command-line contract, run on the real binary: exit codes, one-line messages naming the
+// bad value, and the output files' column names.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+namespace {
+
+struct Outcome {
+  int code = -1;
+  std::string out, err;
+};
+
+Outcome run(const std::string& args) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const auto err_file = dir / ("stiffbench_cli_err_" + std::to_string(::getpid()));
+  const std::string cmd = std::string(STIFFBENCH_BIN) + " " + args + " 2>" + err_file.string();
+  Outcome o;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  if (!p) return o;
+  std::array<char, 4096> buf{};
+  std::size_t n = 0;
+  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) o.out.append(buf.data(), n);
+  const int status = ::pclose(p);
+  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream f(err_file);
+  o.err.assign(std::istreambuf_iterator<char>(f), {});
+  std::filesystem::remove(err_file);
+  return o;
+}
+
+int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+
+struct BadCase {
+  const char* label;
+  std::string args;
+  std::string must_name;  // the message must contain this
+};
+
+void PrintTo(const BadCase& c, std::ostream* os) { *os << c.args; }
+
+class BadInputTest : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(BadInputTest, ExitsTwoWithOneMessageNamingTheValue) {
+  const Outcome o = run(GetParam().args);
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find(GetParam().must_name), std::string::npos) << o.err;
+  EXPECT_EQ(lines(o.err), 1) << o.err;
+  EXPECT_TRUE(o.out.empty()) << o.out;
+}
+
+const std::string kSolve = "solve --model harmonic_oscillator --integrator rk4 --h 0.1 --t-end 1";
+const std::string kConv =
+    "convergence --model harmonic_oscillator --integrators euler --t-end 1 --h 0.1 --out /tmp/sbtest";
+
+INSTANTIATE_TEST_SUITE_P(
+    Cli, BadInputTest,
+    ::testing::Values(
+        BadCase{"unknown_model", "solve --model nosuchmodel --integrator rk4 --h 0.1 --t-end 1", "nosuchmodel"},
+        BadCase{"unknown_integrator", "solve --model kepler --integrator nosuchmethod --h 0.1 --t-end 1",
+                "nosuchmethod"},
+        BadCase{"unknown_integrator_in_list",
+                "convergence --model kepler --integrators rk4,bogus --t-end 1 --h 0.1 --out /tmp/sbtest",
+                "bogus"},
+        BadCase{"unknown_param", kSolve + " --param stiffnes=3", "stiffnes"},
+        BadCase{"param_not_a_number", kSolve + " --param k=abc", "abc"},
+        BadCase{"param_malformed", kSolve + " --param k", "k"},
+        BadCase{"h_zero", "solve --model kepler --integrator rk4 --h 0 --t-end 1", "h"},
+        BadCase{"h_negative", "solve --model kepler --integrator rk4 --h -0.5 --t-end 1", "-0.5"},
+        BadCase{"t_end_zero", "solve --model kepler --integrator rk4 --h 0.1 --t-end 0", "t-end"},
+        BadCase{"t_end_negative", kConv + " --t-end -2", "t-end"},
+        BadCase{"h_zero_convergence", kConv + " --h 0", "--h"},
+        BadCase{"levels_one", kConv + " --levels 1", "--levels"},
+        BadCase{"symplectic_on_first_order",
+                "solve --model dahlquist --integrator velocity_verlet --h 0.1 --t-end 1", "dahlquist"},
+        BadCase{"leapfrog_on_damped",
+                "solve --model harmonic_oscillator --param gamma=0.1 --integrator leapfrog --h 0.1 --t-end 1",
+                "leapfrog"},
+        BadCase{"model_param_out_of_range", "solve --model kepler --param e=1.5 --integrator rk4 --h 0.1 --t-end 1",
+                "'e'"},
+        BadCase{"missing_flag", "solve --model kepler --integrator rk4 --h 0.1", "--t-end"},
+        BadCase{"unknown_subcommand", "frobnicate", "frobnicate"},
+        BadCase{"unknown_list_kind", "list widgets", "widgets"},
+        BadCase{"describe_unknown", "describe nosuchthing", "nosuchthing"}),
+    [](const auto& param_info) { return std::string(param_info.param.label); });
+
+TEST(Cli, HelpExitsZero) {
+  const Outcome o = run("--help");
+  EXPECT_EQ(o.code, 0);
+  EXPECT_NE(o.out.find("convergence"), std::string::npos);
+}
+
+TEST(Cli, ListIntegratorsShowsAllThirteenWithFamilyAndOrder) {
+  const Outcome o = run("list integrators");
+  ASSERT_EQ(o.code, 0);
+  for (const char* row : {"| euler | explicit | 1 |", "| heun | explicit | 2 |", "| midpoint | explicit | 2 |",
+                          "| ralston | explicit | 2 |", "| kutta3 | explicit | 3 |", "| ssprk3 | explicit | 3 |",
+                          "| rk4 | explicit | 4 |", "| rk38 | explicit | 4 |",
+                          "| symplectic_euler | symplectic | 1 |", "| symplectic_euler_x | symplectic | 1 |",
+                          "| verlet | symplectic | 2 |", "| velocity_verlet | symplectic | 2 |",
+                          "| leapfrog | symplectic | 2 |"})
+    EXPECT_NE(o.out.find(row), std::string::npos) << row;
+}
+
+TEST(Cli, DescribeListsParametersWithDefaults) {
+  const Outcome o = run("describe kepler");
+  ASSERT_EQ(o.code, 0);
+  EXPECT_NE(o.out.find("| e | real | 0 |"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("angular_momentum"), std::string::npos);
+}
+
+// The circular Kepler orbit returns to its initial state after one period 2π; rk4 with
+// h = 1e-3 has a global error ~1e-13 there (measured), far inside 1e-9.
+TEST(Cli, SolveKeplerOnePeriodReturnsToStart) {
+  const auto csv = std::filesystem::temp_directory_path() / "sb_kepler_traj.csv";
+  const Outcome o = run("solve --model kepler --integrator rk4 --h 0.001 --t-end 6.283185307179586 --outputs 10 --out " +
+                        csv.string());
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_NE(o.out.find("status       ok"), std::string::npos);
+  // Final state lines "  yI = value".
+  const double expected[4] = {1, 0, 0, 1};
+  for (int i = 0; i < 4; ++i) {
+    const std::string key = "  y" + std::to_string(i) + " = ";
+    const auto pos = o.out.find(key);
+    ASSERT_NE(pos, std::string::npos);
+    EXPECT_NEAR(std::stod(o.out.substr(pos + key.size())), expected[i], 1e-9);
+  }
+  std::ifstream f(csv);
+  std::string header;
+  std::getline(f, header);
+  EXPECT_EQ(header, "t,y0,y1,y2,y3");
+  int rows = 0;
+  for (std::string line; std::getline(f, line);) ++rows;
+  EXPECT_EQ(rows, 11);
+  std::filesystem::remove(csv);
+}
+
+// Explicit Euler on the stiff Prothero-Robinson problem is reported as unstable, exit code 0:
+// the run itself is a valid result.
+TEST(Cli, UnstableRunExitsZeroAndSaysSo) {
+  const Outcome o = run("solve --model prothero_robinson --param lambda=-1e6 --integrator rk4 --h 0.1 --t-end 10");
+  EXPECT_EQ(o.code, 0) << o.err;
+  EXPECT_NE(o.out.find("status       unstable"), std::string::npos) << o.out;
+}
+
+TEST(Cli, ConvergenceWritesContractFiles) {
+  const auto dir = std::filesystem::temp_directory_path() / "sb_conv_test";
+  std::filesystem::remove_all(dir);
+  const Outcome o = run("convergence --model harmonic_oscillator --integrators euler,rk4 --t-end 1 --h 0.1 --levels 3 --out " +
+                        dir.string());
+  ASSERT_EQ(o.code, 0) << o.err;
+  std::ifstream f(dir / "convergence.csv");
+  std::string header;
+  std::getline(f, header);
+  EXPECT_EQ(header,
+            "model,integrator,order,h,steps,error,observed_order,f_evals,jac_evals,lin_solves,wall_s,status");
+  int rows = 0;
+  for (std::string line; std::getline(f, line);) ++rows;
+  EXPECT_EQ(rows, 6);
+  EXPECT_TRUE(std::filesystem::exists(dir / "convergence.md"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "convergence.json"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "convergence.csv.tmp"));
+  const Outcome l = run("local-error --model harmonic_oscillator --integrators heun --h 0.1 --levels 2 --out " +
+                        dir.string());
+  ASSERT_EQ(l.code, 0) << l.err;
+  std::ifstream g(dir / "local_error.csv");
+  std::getline(g, header);
+  EXPECT_EQ(header, "model,integrator,order,h,local_error,observed_order");
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace

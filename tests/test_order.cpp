@@ -1,0 +1,119 @@
+// Observed orders of every registered integrator, through the same experiment code the
+// `convergence` and `local-error` commands use.
+#include <gtest/gtest.h>
+
+#include "experiments/catalog.hpp"
+#include "experiments/convergence.hpp"
+
+namespace stiffbench {
+namespace {
+
+std::vector<std::string> all_integrators() { return integrator_registry().names(); }
+
+class OrderTest : public ::testing::TestWithParam<std::string> {
+ protected:
+  int order() const { return integrator_registry().at(GetParam()).info.order; }
+};
+
+// Global error at t = 10 on the undamped oscillator (exact solution cos t), h = 0.1 / 2^k,
+// k = 0..5. The last pair (h = 0.00625 → 0.003125) is in the asymptotic range for every method
+// and far above round-off (smallest error, rk4's, is ~1e-10).
+TEST_P(OrderTest, GlobalOrderOnHarmonicOscillator) {
+  ConvergenceSpec spec;
+  spec.model = "harmonic_oscillator";
+  spec.integrators = {GetParam()};
+  spec.t_end = 10;
+  spec.h = 0.1;
+  spec.levels = 6;
+  const auto res = run_convergence(spec, nullptr);
+  const auto p = last_observed_order(res.rows, GetParam());
+  ASSERT_TRUE(p.has_value());
+  EXPECT_NEAR(*p, order(), 0.2);
+}
+
+// Local error of one step from (x, v) = (1, 0): the leading term is C h^{p+1}, so the slope
+// is order + 1. Step sizes 0.4 / 2^k, k = 0..4 (smallest rk4 error ~1e-10).
+TEST_P(OrderTest, LocalErrorSlopeOnHarmonicOscillator) {
+  ConvergenceSpec spec;
+  spec.model = "harmonic_oscillator";
+  spec.integrators = {GetParam()};
+  spec.h = 0.4;
+  spec.levels = 5;
+  const auto res = run_local_error(spec, nullptr);
+  const auto p = last_observed_order(res.rows, GetParam());
+  ASSERT_TRUE(p.has_value());
+  EXPECT_NEAR(*p, order() + 1, 0.2);
+}
+
+// The oscillator is linear, so it checks only the linear order conditions. The eccentric
+// Kepler orbit (e = 0.5, exact solution through Kepler's equation) exercises the nonlinear
+// ones. t_end = 5 is deliberately not a period: after exactly one period of this reversible
+// orbit the first-order symplectic Euler errors cancel and it shows order 2.
+TEST_P(OrderTest, GlobalOrderOnEccentricKepler) {
+  ConvergenceSpec spec;
+  spec.model = "kepler";
+  spec.params = Params::from_assignments({"e=0.5"});
+  spec.integrators = {GetParam()};
+  spec.t_end = 5;
+  spec.h = 0.01;
+  spec.levels = 4;
+  const auto res = run_convergence(spec, nullptr);
+  const auto p = last_observed_order(res.rows, GetParam());
+  ASSERT_TRUE(p.has_value());
+  EXPECT_NEAR(*p, order(), 0.2);
+}
+
+INSTANTIATE_TEST_SUITE_P(AllIntegrators, OrderTest, ::testing::ValuesIn(all_integrators()),
+                         [](const auto& param_info) { return param_info.param; });
+
+// observed_order is empty on each integrator's first row and computed from consecutive rows
+// of the same integrator only.
+TEST(ConvergenceRows, ObservedOrderOnlyBetweenRowsOfOneIntegrator) {
+  ConvergenceSpec spec;
+  spec.model = "harmonic_oscillator";
+  spec.integrators = {"euler", "rk4"};
+  spec.t_end = 1;
+  spec.h = 0.1;
+  spec.levels = 3;
+  const auto res = run_convergence(spec, nullptr);
+  ASSERT_EQ(res.rows.size(), 6u);
+  EXPECT_FALSE(res.rows[0].observed_order.has_value());
+  EXPECT_FALSE(res.rows[3].observed_order.has_value());
+  const auto& a = res.rows[1];
+  const auto& b = res.rows[2];
+  EXPECT_DOUBLE_EQ(*b.observed_order, std::log(a.error / b.error) / std::log(a.h / b.h));
+  EXPECT_EQ(res.reference_description, "exact");
+}
+
+// A reference run replaces the exact solution when asked: rk4 at (finest h)/16 is accurate
+// to ~1e-11 here, far below euler's errors, so the orders agree with the exact reference.
+TEST(ConvergenceRows, ReferenceMethodAgreesWithExact) {
+  ConvergenceSpec spec;
+  spec.model = "harmonic_oscillator";
+  spec.integrators = {"euler", "heun"};
+  spec.t_end = 2;
+  spec.h = 0.1;
+  spec.levels = 3;
+  const auto exact = run_convergence(spec, nullptr);
+  spec.reference = "rk4";
+  const auto ref = run_convergence(spec, nullptr);
+  ASSERT_EQ(exact.rows.size(), ref.rows.size());
+  for (std::size_t i = 0; i < exact.rows.size(); ++i)
+    EXPECT_NEAR(ref.rows[i].error, exact.rows[i].error, 1e-9 + 1e-6 * exact.rows[i].error);
+  EXPECT_NE(ref.reference_description.find("rk4"), std::string::npos);
+}
+
+TEST(ConvergenceRows, NoExactSolutionNeedsReference) {
+  ConvergenceSpec spec;
+  spec.model = "pendulum";
+  spec.integrators = {"euler"};
+  spec.t_end = 1;
+  spec.h = 0.1;
+  spec.levels = 2;
+  EXPECT_THROW(run_convergence(spec, nullptr), BadInput);
+  spec.reference = "exact";
+  EXPECT_THROW(run_convergence(spec, nullptr), BadInput);
+}
+
+}  // namespace
+}  // namespace stiffbench
