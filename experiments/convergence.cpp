@@ -233,18 +233,10 @@ std::string markdown_report(const std::string& name, const ConvergenceSpec& spec
     const int expected = r.order + (local ? 1 : 0);
     const auto last = last_observed_order(res.rows, r.integrator);
     const auto fit = fitted_order(res.rows, r.integrator);
-    summary.rows.push_back({r.integrator, std::to_string(expected), last ? format_short(*last, 2) : "-",
-                            fit ? format_short(*fit, 2) : "-",
+    summary.rows.push_back({r.integrator, std::to_string(expected), last ? format_fixed(*last) : "-",
+                            fit ? format_fixed(*fit) : "-",
                             last ? (std::abs(*last - expected) <= 0.2 ? "yes" : "no") : "-"});
   }
-  // Observed orders in fixed notation read better than scientific.
-  for (auto& row : summary.rows)
-    for (int c : {2, 3})
-      if (row[static_cast<std::size_t>(c)] != "-") {
-        char buf[32];
-        std::snprintf(buf, sizeof buf, "%.3f", std::stod(row[static_cast<std::size_t>(c)]));
-        row[static_cast<std::size_t>(c)] = buf;
-      }
   os << summary.to_markdown() << "\n";
   Table detail = local ? local_error_table(res) : convergence_table(res);
   // Shorter numbers in the Markdown copy; the CSV keeps full precision.
@@ -253,11 +245,7 @@ std::string markdown_report(const std::string& name, const ConvergenceSpec& spec
       const auto& col = detail.columns[c];
       if ((col == "h" || col == "error" || col == "local_error" || col == "wall_s") && !row[c].empty())
         row[c] = format_short(std::stod(row[c]), col == "wall_s" ? 2 : 3);
-      if (col == "observed_order" && !row[c].empty()) {
-        char buf[32];
-        std::snprintf(buf, sizeof buf, "%.3f", std::stod(row[c]));
-        row[c] = buf;
-      }
+      if (col == "observed_order" && !row[c].empty()) row[c] = format_fixed(std::stod(row[c]));
     }
   os << detail.to_markdown();
   os << "\nFull-precision values: `" << name << ".csv`; metadata: `" << name << ".json`.\n";

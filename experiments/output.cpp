@@ -72,6 +72,12 @@ std::string format_short(double x, int digits) {
   return buf;
 }
 
+std::string format_fixed(double x, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, x);
+  return buf;
+}
+
 void write_file_atomic(const std::filesystem::path& path, const std::string& content) {
   if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
   const auto tmp = std::filesystem::path(path.string() + ".tmp");
@@ -103,7 +109,7 @@ nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json&
   j["experiment"] = experiment;
   j["spec"] = spec;
   j["stiffbench_version"] = STIFFBENCH_VERSION;
-  j["git_revision"] = STIFFBENCH_GIT_REVISION;
+  j["git_revision"] = git_revision();
   j["compiler"] = std::string("g++ ") + __VERSION__;
   j["build_type"] = STIFFBENCH_BUILD_TYPE;
   j["flags"] = STIFFBENCH_CXX_FLAGS;

@@ -23,6 +23,8 @@ struct Table {
 std::string format_full(double x);
 // Short scientific form for Markdown tables and progress lines.
 std::string format_short(double x, int digits = 3);
+// Fixed-point form with `digits` decimals (observed orders).
+std::string format_fixed(double x, int digits = 3);
 
 void write_file_atomic(const std::filesystem::path& path, const std::string& content);
 

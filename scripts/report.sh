@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# The main job: install dependencies, build, and run `stiffbench report` on the default suite.
+# Usage: scripts/report.sh [OUT_DIR] [--quick]     (default OUT_DIR: results)
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+out="${1:-results}"
+shift || true
+"$root/scripts/install-deps.sh"
+"$root/scripts/build.sh" "$root/build"
+"$root/build/experiments/stiffbench" report --out "$out" "$@"
