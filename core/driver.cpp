@@ -7,10 +7,11 @@
 namespace stiffbench {
 
 long fixed_step_count(double t0, double t_end, double h, long max_steps) {
-  require_input(std::isfinite(h) && h > 0, "step size h must be > 0 (got " + std::to_string(h) + ")");
-  require_input(std::isfinite(t_end) && t_end > t0,
-                "t-end must be > the model's initial time " + std::to_string(t0) + " (got " +
-                    std::to_string(t_end) + ")");
+  require_input(std::isfinite(h) && h > 0,
+                "step size h must be > 0 (got " + std::to_string(h) + ")");
+  require_input(std::isfinite(t_end) && t_end > t0, "t-end must be > the model's initial time " +
+                                                        std::to_string(t0) + " (got " +
+                                                        std::to_string(t_end) + ")");
   const double n = std::max(1.0, std::round((t_end - t0) / h));
   if (n > static_cast<double>(max_steps)) {
     std::ostringstream msg;
@@ -57,15 +58,16 @@ RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0
     ++r.stats.steps;
     if (s != Status::ok) {
       r.stats.status = s;
-      if (r.stats.message.empty()) r.stats.message = to_string(s) + " in the step ending at t = " + std::to_string(r.t);
+      if (r.stats.message.empty())
+        r.stats.message = to_string(s) + " in the step ending at t = " + std::to_string(r.t);
       break;
     }
     const double norm = r.y.cwiseAbs().maxCoeff();  // NaN propagates to a failed comparison
     if (!(norm <= bound)) {
       r.stats.status = Status::unstable;
       std::ostringstream msg;
-      msg << "blow-up at t = " << r.t << " (step " << k + 1 << "): ‖y‖∞ = " << norm
-          << " exceeds " << bound;
+      msg << "blow-up at t = " << r.t << " (step " << k + 1 << "): ‖y‖∞ = " << norm << " exceeds "
+          << bound;
       r.stats.message = msg.str();
       break;
     }

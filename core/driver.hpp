@@ -30,10 +30,10 @@ struct FixedStepOptions {
 
 struct RunResult {
   SolveStats stats;
-  double t = 0.0;   // time reached (t_end when status is ok)
-  Vec y;            // state at t
-  double h = 0.0;   // the step actually used, (t_end - t0)/N
-  long n_steps = 0; // N
+  double t = 0.0;    // time reached (t_end when status is ok)
+  Vec y;             // state at t
+  double h = 0.0;    // the step actually used, (t_end - t0)/N
+  long n_steps = 0;  // N
 };
 
 // Number of steps the driver takes; BadInput for h <= 0, t_end <= t0 or too many steps.

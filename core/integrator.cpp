@@ -35,7 +35,8 @@ void check_compatible(const MethodInfo& info, const OdeSystem& sys) {
   }
   if (info.requires_.velocity_independent && mech && mech->velocity_dependent()) {
     throw BadInput(who + " needs an acceleration that does not depend on velocity; model '" +
-                   sys.name() + "' has velocity-dependent forces (damping): use symplectic_euler "
+                   sys.name() +
+                   "' has velocity-dependent forces (damping): use symplectic_euler "
                    "or a general method");
   }
   if (info.requires_.jacobian && !sys.has_jacobian()) {

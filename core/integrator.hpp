@@ -20,9 +20,9 @@ std::string to_string(Family f);
 
 // What an integrator needs from the system.
 struct Requirements {
-  bool mechanical = false;             // y = [x; v] split (MechanicalSystem)
-  bool velocity_independent = false;   // a(t, x) must not depend on v
-  bool jacobian = false;               // an analytic Jacobian (otherwise finite differences)
+  bool mechanical = false;            // y = [x; v] split (MechanicalSystem)
+  bool velocity_independent = false;  // a(t, x) must not depend on v
+  bool jacobian = false;              // an analytic Jacobian (otherwise finite differences)
 };
 
 struct MethodInfo {

@@ -36,7 +36,8 @@ void MechanicalSystem::eval_jacobian(double t, CVecRef y, SparseMat& jac) const 
   trips.reserve(static_cast<std::size_t>(n + k.nonZeros() + d.nonZeros()));
   for (Index i = 0; i < n; ++i) trips.emplace_back(i, n + i, 1.0);
   for (Index c = 0; c < k.outerSize(); ++c)
-    for (SparseMat::InnerIterator it(k, c); it; ++it) trips.emplace_back(n + it.row(), it.col(), it.value());
+    for (SparseMat::InnerIterator it(k, c); it; ++it)
+      trips.emplace_back(n + it.row(), it.col(), it.value());
   for (Index c = 0; c < d.outerSize(); ++c)
     for (SparseMat::InnerIterator it(d, c); it; ++it)
       trips.emplace_back(n + it.row(), n + it.col(), it.value());

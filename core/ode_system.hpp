@@ -60,7 +60,9 @@ class OdeSystem {
 
   // Estimate of the spectral radius of ∂f/∂y at (t, y): the stiffness that linear stability
   // theory compares with h. Empty when the model cannot say.
-  virtual std::optional<double> stiffness(double /*t*/, CVecRef /*y*/) const { return std::nullopt; }
+  virtual std::optional<double> stiffness(double /*t*/, CVecRef /*y*/) const {
+    return std::nullopt;
+  }
 
   // Non-null for systems with y = [x; v].
   virtual const MechanicalSystem* as_mechanical() const { return nullptr; }

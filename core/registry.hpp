@@ -26,7 +26,8 @@ class Registry {
   explicit Registry(std::string kind) : kind_(std::move(kind)) {}
 
   void add(Entry entry) {
-    if (find(entry.info.name)) throw std::logic_error(kind_ + " '" + entry.info.name + "' registered twice");
+    if (find(entry.info.name))
+      throw std::logic_error(kind_ + " '" + entry.info.name + "' registered twice");
     entries_.push_back(std::move(entry));
   }
 

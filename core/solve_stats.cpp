@@ -20,17 +20,24 @@ std::string to_string(Status s) {
 }
 
 std::vector<std::string> SolveStats::field_names() {
-  return {"status",     "steps",       "rejected_steps", "f_evals",      "jac_evals", "lin_setups",
-          "lin_solves", "newton_iters", "newton_fails",  "krylov_iters", "wall_s"};
+  return {"status",     "steps",        "rejected_steps", "f_evals",      "jac_evals", "lin_setups",
+          "lin_solves", "newton_iters", "newton_fails",   "krylov_iters", "wall_s"};
 }
 
 std::vector<std::string> SolveStats::field_values() const {
   std::ostringstream wall;
   wall << std::setprecision(6) << wall_s;
-  return {to_string(status),         std::to_string(steps),        std::to_string(rejected_steps),
-          std::to_string(f_evals),   std::to_string(jac_evals),    std::to_string(lin_setups),
-          std::to_string(lin_solves), std::to_string(newton_iters), std::to_string(newton_fails),
-          std::to_string(krylov_iters), wall.str()};
+  return {to_string(status),
+          std::to_string(steps),
+          std::to_string(rejected_steps),
+          std::to_string(f_evals),
+          std::to_string(jac_evals),
+          std::to_string(lin_setups),
+          std::to_string(lin_solves),
+          std::to_string(newton_iters),
+          std::to_string(newton_fails),
+          std::to_string(krylov_iters),
+          wall.str()};
 }
 
 void print_stats_table(std::ostream& os, const SolveStats& s) {
@@ -38,7 +45,8 @@ void print_stats_table(std::ostream& os, const SolveStats& s) {
   const auto values = s.field_values();
   for (std::size_t i = 0; i < names.size(); ++i)
     os << "  " << std::left << std::setw(16) << names[i] << std::right << values[i] << "\n";
-  if (!s.message.empty()) os << "  " << std::left << std::setw(16) << "message" << s.message << "\n";
+  if (!s.message.empty())
+    os << "  " << std::left << std::setw(16) << "message" << s.message << "\n";
 }
 
 void print_stats_csv_header(std::ostream& os) {

@@ -49,7 +49,8 @@ std::vector<std::string> split_list(const std::string& s, const std::string& fla
   std::size_t start = 0;
   while (true) {
     const auto comma = s.find(',', start);
-    const std::string item = s.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    const std::string item =
+        s.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     require_input(!item.empty(), flag + ": empty name in '" + s + "'");
     out.push_back(item);
     if (comma == std::string::npos) break;

@@ -29,17 +29,20 @@ void list_integrators(std::ostream& out) {
   Table t{{"integrator", "family", "order", "stages", "requires", "description"}, {}};
   for (const auto& e : integrator_registry().entries()) {
     const MethodInfo& m = e.info;
-    t.rows.push_back({m.name, to_string(m.family), std::to_string(m.order), std::to_string(m.stages),
-                      describe_requirements(m.requires_), m.description});
+    t.rows.push_back({m.name, to_string(m.family), std::to_string(m.order),
+                      std::to_string(m.stages), describe_requirements(m.requires_), m.description});
   }
   out << t.to_markdown();
 }
 
 void list_experiments(std::ostream& out) {
   Table t{{"experiment", "writes", "description"}, {}};
-  t.rows.push_back({"solve", "trajectory CSV (t,y0,y1,...)", "one fixed-step run; final state and statistics"});
-  t.rows.push_back({"convergence", "convergence.{csv,md,json}", "global error at t_end vs h, observed orders"});
-  t.rows.push_back({"local-error", "local_error.{csv,md,json}", "error of one step vs h, observed slopes"});
+  t.rows.push_back(
+      {"solve", "trajectory CSV (t,y0,y1,...)", "one fixed-step run; final state and statistics"});
+  t.rows.push_back(
+      {"convergence", "convergence.{csv,md,json}", "global error at t_end vs h, observed orders"});
+  t.rows.push_back(
+      {"local-error", "local_error.{csv,md,json}", "error of one step vs h, observed slopes"});
   t.rows.push_back({"report", "DIR/REPORT.md and one folder per study", "the default suite"});
   out << t.to_markdown();
 }
@@ -95,8 +98,8 @@ void cmd_describe(const std::string& name, std::ostream& out) {
     const MethodInfo& i = e->info;
     out << "integrator " << name << ": " << i.description << "\n";
     out << "family: " << to_string(i.family) << "\norder: " << i.order
-        << "\nevaluations per step: " << i.stages << "\nrequires: " << describe_requirements(i.requires_)
-        << "\n";
+        << "\nevaluations per step: " << i.stages
+        << "\nrequires: " << describe_requirements(i.requires_) << "\n";
     print_params(e->params, out);
     return;
   }
@@ -107,7 +110,8 @@ void cmd_describe(const std::string& name, std::ostream& out) {
 void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   require_input(!opt.model.empty(), "--model is required");
   require_input(!opt.integrator.empty(), "--integrator is required");
-  require_input(opt.outputs >= 1, "--outputs must be >= 1 (got " + std::to_string(opt.outputs) + ")");
+  require_input(opt.outputs >= 1,
+                "--outputs must be >= 1 (got " + std::to_string(opt.outputs) + ")");
   Setup setup = make_setup(opt.model, {opt.integrator}, opt.params);
   const OdeSystem& sys = *setup.model;
   Integrator& integ = *setup.integrators.front();
@@ -144,9 +148,11 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   for (const auto& [k, v] : opt.params.values()) out << " " << k << "=" << v;
   out << "\nintegrator   " << opt.integrator << " (" << to_string(integ.info().family) << ", order "
       << integ.info().order << ")\n";
-  out << "h            " << format_full(r.h) << " (" << r.n_steps << " steps to t = " << format_full(opt.t_end) << ")\n";
+  out << "h            " << format_full(r.h) << " (" << r.n_steps
+      << " steps to t = " << format_full(opt.t_end) << ")\n";
   if (const auto rho = sys.stiffness(sys.initial_time(), y0))
-    out << "stiffness    spectral radius ~ " << format_short(*rho) << " at t0, h*rho = " << format_short(*rho * r.h) << "\n";
+    out << "stiffness    spectral radius ~ " << format_short(*rho)
+        << " at t0, h*rho = " << format_short(*rho * r.h) << "\n";
   out << "status       " << to_string(r.stats.status) << "\n";
   if (!r.stats.message.empty()) out << "message      " << r.stats.message << "\n";
   out << "\nfinal state at t = " << format_full(r.t) << ":\n";
@@ -154,7 +160,8 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   if (sys.has_exact() && r.stats.status == Status::ok) {
     Vec ye(sys.dimension());
     sys.exact(r.t, ye);
-    out << "\nerror vs exact solution (max-norm): " << format_short(max_abs_diff(r.y, ye), 6) << "\n";
+    out << "\nerror vs exact solution (max-norm): " << format_short(max_abs_diff(r.y, ye), 6)
+        << "\n";
   }
   const auto invariants = sys.invariants();
   if (!invariants.empty()) {
@@ -236,7 +243,8 @@ std::vector<SuiteItem> default_suite(bool quick) {
        spec("kepler", all, 5.0, 0.02, {"e=0.5"}), false},
       {"pendulum", "Nonlinear pendulum, θ0 = 1, t_end = 10 (reference rk4)",
        spec("pendulum", all, 10.0, 0.1, {}, "rk4"), false},
-      {"prothero_robinson_l50", "Prothero-Robinson, λ = -50: explicit methods unstable for h|λ| beyond their limit",
+      {"prothero_robinson_l50",
+       "Prothero-Robinson, λ = -50: explicit methods unstable for h|λ| beyond their limit",
        spec("prothero_robinson", general, 10.0, 0.1, {"lambda=-50"}), false},
   };
 }
@@ -251,7 +259,8 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
   md << "stiffbench " << STIFFBENCH_VERSION << ", revision " << git_revision() << ", "
      << (opt.quick ? "quick" : "full") << " suite. Each section links its full-precision CSV, "
      << "Markdown table and JSON metadata (spec, versions, compiler, flags, date).\n\n";
-  md << "Errors are max-norms against the exact solution or the named reference; 'observed order' is "
+  md << "Errors are max-norms against the exact solution or the named reference; 'observed order' "
+        "is "
         "log(e_k/e_{k+1})/log(h_k/h_{k+1}) between consecutive step sizes.\n\n";
   for (std::size_t i = 0; i < suite.size(); ++i) {
     const SuiteItem& item = suite[i];
@@ -261,8 +270,9 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
     const std::string name = item.local ? "local_error" : "convergence";
     const fs::path dir = fs::path(opt.out_dir) / item.name;
     write_convergence_outputs(dir.string(), name, item.spec, res, item.local);
-    const bool plotted = plot_convergence((dir / (name + ".csv")).string(), (dir / (name + ".png")).string(),
-                                          item.title, item.spec.integrators, item.local, err);
+    const bool plotted =
+        plot_convergence((dir / (name + ".csv")).string(), (dir / (name + ".png")).string(),
+                         item.title, item.spec.integrators, item.local, err);
     md << "## " << item.title << "\n\n";
     md << "[" << name << ".csv](" << item.name << "/" << name << ".csv) · [" << name << ".md]("
        << item.name << "/" << name << ".md) · [" << name << ".json](" << item.name << "/" << name
@@ -281,7 +291,8 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
           status = to_string(r.stats.status);
           order = r.order + (item.local ? 1 : 0);
         }
-      summary.rows.push_back({integ, std::to_string(order), last ? format_fixed(*last) : "-", status});
+      summary.rows.push_back(
+          {integ, std::to_string(order), last ? format_fixed(*last) : "-", status});
     }
     md << summary.to_markdown() << "\n";
   }

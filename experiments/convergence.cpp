@@ -21,9 +21,14 @@ void ConvergenceSpec::validate() const {
 }
 
 nlohmann::json ConvergenceSpec::to_json() const {
-  return {{"model", model},     {"params", params.values()}, {"integrators", integrators},
-          {"t_end", t_end},     {"h", h},                    {"levels", levels},
-          {"refine", refine},   {"reference", reference}};
+  return {{"model", model},
+          {"params", params.values()},
+          {"integrators", integrators},
+          {"t_end", t_end},
+          {"h", h},
+          {"levels", levels},
+          {"refine", refine},
+          {"reference", reference}};
 }
 
 namespace {
@@ -32,13 +37,15 @@ namespace {
 class Reference {
  public:
   Reference(const ConvergenceSpec& spec, const OdeSystem& sys, double h_fine) : sys_(sys) {
-    const bool want_exact = spec.reference == "exact" || (spec.reference == "auto" && sys.has_exact());
+    const bool want_exact =
+        spec.reference == "exact" || (spec.reference == "auto" && sys.has_exact());
     if (spec.reference == "auto" && !sys.has_exact()) {
       throw BadInput("model '" + sys.name() +
                      "' has no exact solution: pass --reference METHOD (e.g. --reference rk4)");
     }
     if (want_exact) {
-      require_input(sys.has_exact(), "--reference exact: model '" + sys.name() + "' has no exact solution");
+      require_input(sys.has_exact(),
+                    "--reference exact: model '" + sys.name() + "' has no exact solution");
       description_ = "exact";
       return;
     }
@@ -89,8 +96,9 @@ void add_observed_orders(std::vector<ConvergenceRow>& rows) {
 std::string progress_line(std::size_t k, std::size_t n, const ConvergenceRow& r) {
   std::ostringstream os;
   os << "[" << k << "/" << n << "] " << r.model << " " << r.integrator << " h=" << format_short(r.h)
-     << " error=" << (r.stats.status == Status::ok ? format_short(r.error) : to_string(r.stats.status))
-     << " (" << format_short(r.stats.wall_s, 2) << " s)\n";
+     << " error="
+     << (r.stats.status == Status::ok ? format_short(r.error) : to_string(r.stats.status)) << " ("
+     << format_short(r.stats.wall_s, 2) << " s)\n";
   return os.str();
 }
 
@@ -134,9 +142,8 @@ ConvergenceResult run_study(const ConvergenceSpec& spec, std::ostream* progress,
       row.h = r.h;
       row.steps = r.n_steps;
       row.stats = r.stats;
-      row.error = r.stats.status == Status::ok
-                      ? max_abs_diff(r.y, ref_values[local ? k : 0])
-                      : std::numeric_limits<double>::quiet_NaN();
+      row.error = r.stats.status == Status::ok ? max_abs_diff(r.y, ref_values[local ? k : 0])
+                                               : std::numeric_limits<double>::quiet_NaN();
       result.rows.push_back(row);
       if (progress) *progress << progress_line(++done, total, row) << std::flush;
     }
@@ -190,7 +197,8 @@ Table convergence_table(const ConvergenceResult& res) {
           {}};
   for (const auto& r : res.rows) {
     t.rows.push_back({r.model, r.integrator, std::to_string(r.order), format_full(r.h),
-                      std::to_string(r.steps), r.stats.status == Status::ok ? format_full(r.error) : "",
+                      std::to_string(r.steps),
+                      r.stats.status == Status::ok ? format_full(r.error) : "",
                       optional_full(r.observed_order), std::to_string(r.stats.f_evals),
                       std::to_string(r.stats.jac_evals), std::to_string(r.stats.lin_solves),
                       format_full(r.stats.wall_s), to_string(r.stats.status)});
@@ -214,7 +222,9 @@ std::string markdown_report(const std::string& name, const ConvergenceSpec& spec
                             const ConvergenceResult& res, bool local) {
   std::ostringstream os;
   os << "# " << (local ? "Local error" : "Convergence") << ": " << spec.model << "\n\n";
-  os << "Error: max-norm " << (local ? "after one step of size h from the initial state" : "at t_end = " + format_full(spec.t_end))
+  os << "Error: max-norm "
+     << (local ? "after one step of size h from the initial state"
+               : "at t_end = " + format_full(spec.t_end))
      << "; reference: " << res.reference_description << ".";
   if (!spec.params.empty()) {
     os << " Parameters:";
@@ -233,8 +243,8 @@ std::string markdown_report(const std::string& name, const ConvergenceSpec& spec
     const int expected = r.order + (local ? 1 : 0);
     const auto last = last_observed_order(res.rows, r.integrator);
     const auto fit = fitted_order(res.rows, r.integrator);
-    summary.rows.push_back({r.integrator, std::to_string(expected), last ? format_fixed(*last) : "-",
-                            fit ? format_fixed(*fit) : "-",
+    summary.rows.push_back({r.integrator, std::to_string(expected),
+                            last ? format_fixed(*last) : "-", fit ? format_fixed(*fit) : "-",
                             last ? (std::abs(*last - expected) <= 0.2 ? "yes" : "no") : "-"});
   }
   os << summary.to_markdown() << "\n";
@@ -243,7 +253,8 @@ std::string markdown_report(const std::string& name, const ConvergenceSpec& spec
   for (auto& row : detail.rows)
     for (std::size_t c = 0; c < detail.columns.size(); ++c) {
       const auto& col = detail.columns[c];
-      if ((col == "h" || col == "error" || col == "local_error" || col == "wall_s") && !row[c].empty())
+      if ((col == "h" || col == "error" || col == "local_error" || col == "wall_s") &&
+          !row[c].empty())
         row[c] = format_short(std::stod(row[c]), col == "wall_s" ? 2 : 3);
       if (col == "observed_order" && !row[c].empty()) row[c] = format_fixed(std::stod(row[c]));
     }

@@ -28,7 +28,7 @@ struct ConvergenceSpec {
   Params params;
   std::vector<std::string> integrators;
   double t_end = 1.0;
-  double h = 0.1;    // coarsest step
+  double h = 0.1;  // coarsest step
   int levels = 5;
   double refine = 2.0;
   std::string reference = "auto";  // auto | exact | METHOD
@@ -40,7 +40,7 @@ struct ConvergenceSpec {
 struct ConvergenceRow {
   std::string model, integrator;
   int order = 0;
-  double h = 0;    // actual step
+  double h = 0;  // actual step
   long steps = 0;
   double error = 0;
   std::optional<double> observed_order;
@@ -70,7 +70,6 @@ Table local_error_table(const ConvergenceResult& r);  // the local_error.csv con
 // Writes DIR/NAME.csv, DIR/NAME.md and DIR/NAME.json (NAME = convergence or local_error);
 // `local` selects the local-error expectation (order + 1) in the Markdown summary.
 void write_convergence_outputs(const std::string& dir, const std::string& name,
-                               const ConvergenceSpec& spec, const ConvergenceResult& r,
-                               bool local);
+                               const ConvergenceSpec& spec, const ConvergenceResult& r, bool local);
 
 }  // namespace stiffbench

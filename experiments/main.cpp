@@ -43,15 +43,18 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"models", "integrators", "experiments"}));
 
   std::string describe_name;
-  auto* describe = app.add_subcommand("describe", "parameters, defaults and properties of a model or integrator");
+  auto* describe = app.add_subcommand(
+      "describe", "parameters, defaults and properties of a model or integrator");
   describe->add_option("name", describe_name, "model or integrator name")->required();
 
   SolveOptions solve_opt;
   std::vector<std::string> solve_params;
-  auto* solve = app.add_subcommand("solve", "one fixed-step run: final state, invariants, statistics");
+  auto* solve =
+      app.add_subcommand("solve", "one fixed-step run: final state, invariants, statistics");
   solve->add_option("--model", solve_opt.model, "model name")->required();
   solve->add_option("--integrator", solve_opt.integrator, "integrator name")->required();
-  solve->add_option("--h", solve_opt.h, "step size (the run takes N = round(T/h) steps of T/N)")->required();
+  solve->add_option("--h", solve_opt.h, "step size (the run takes N = round(T/h) steps of T/N)")
+      ->required();
   solve->add_option("--t-end", solve_opt.t_end, "final time")->required();
   solve->add_option("--outputs", solve_opt.outputs, "number of output intervals in the trajectory")
       ->capture_default_str();
@@ -64,17 +67,20 @@ int main(int argc, char** argv) {
   std::string conv_integrators, conv_out = "results";
   std::vector<std::string> conv_params;
   auto* convergence = app.add_subcommand(
-      "convergence", "global error at t_end against h = H/refine^k; writes convergence.{csv,md,json}");
+      "convergence",
+      "global error at t_end against h = H/refine^k; writes convergence.{csv,md,json}");
   add_study_flags(convergence, conv, conv_integrators, conv_params, conv_out);
 
   ConvergenceSpec local;
   std::string local_integrators, local_out = "results";
   std::vector<std::string> local_params;
   auto* local_error = app.add_subcommand(
-      "local-error", "error of one step from the initial state against h; writes local_error.{csv,md,json}");
+      "local-error",
+      "error of one step from the initial state against h; writes local_error.{csv,md,json}");
   local.t_end = 1.0;
   add_study_flags(local_error, local, local_integrators, local_params, local_out);
-  local_error->get_option("--t-end")->required(false)->description("unused by the local study's error; kept for symmetry");
+  local_error->get_option("--t-end")->required(false)->description(
+      "unused by the local study's error; kept for symmetry");
 
   ReportOptions report_opt;
   auto* report = app.add_subcommand("report", "run the default suite and write DIR/REPORT.md");
@@ -89,7 +95,8 @@ int main(int argc, char** argv) {
       known = known || sub->get_name() == argv[1];
     }
     if (!known) {
-      std::cerr << "stiffbench: unknown command '" << argv[1] << "'; known: " << join(names) << "\n";
+      std::cerr << "stiffbench: unknown command '" << argv[1] << "'; known: " << join(names)
+                << "\n";
       return 2;
     }
   }
@@ -114,11 +121,13 @@ int main(int argc, char** argv) {
     if (*convergence || *local_error) {
       const bool is_local = local_error->parsed();
       ConvergenceSpec& spec = is_local ? local : conv;
-      spec.integrators = split_list(is_local ? local_integrators : conv_integrators, "--integrators");
+      spec.integrators =
+          split_list(is_local ? local_integrators : conv_integrators, "--integrators");
       spec.params = Params::from_assignments(is_local ? local_params : conv_params);
       const std::string& dir = is_local ? local_out : conv_out;
       const std::string name = is_local ? "local_error" : "convergence";
-      const ConvergenceResult res = is_local ? run_local_error(spec, &std::cerr) : run_convergence(spec, &std::cerr);
+      const ConvergenceResult res =
+          is_local ? run_local_error(spec, &std::cerr) : run_convergence(spec, &std::cerr);
       write_convergence_outputs(dir, name, spec, res, is_local);
       std::cout << (is_local ? local_error_table(res) : convergence_table(res)).to_markdown();
       std::cout << "\nwrote " << dir << "/" << name << ".{csv,md,json}\n";

@@ -113,8 +113,9 @@ nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json&
   j["compiler"] = std::string("g++ ") + __VERSION__;
   j["build_type"] = STIFFBENCH_BUILD_TYPE;
   j["flags"] = STIFFBENCH_CXX_FLAGS;
-  j["eigen_version"] = std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) +
-                       "." + std::to_string(EIGEN_MINOR_VERSION);
+  j["eigen_version"] = std::to_string(EIGEN_WORLD_VERSION) + "." +
+                       std::to_string(EIGEN_MAJOR_VERSION) + "." +
+                       std::to_string(EIGEN_MINOR_VERSION);
   j["threads"] = omp_get_max_threads();
   j["date"] = date;
   j["command_line"] = g_command_line;

@@ -43,7 +43,9 @@ void register_symplectic_integrators(IntegratorRegistry& reg) {
     };
     reg.add({SplittingIntegrator(c, vel_indep, desc).info(), {}, make});
   }
-  reg.add({PositionVerlet().info(), {}, [](const Params&) { return std::make_unique<PositionVerlet>(); }});
+  reg.add({PositionVerlet().info(), {}, [](const Params&) {
+             return std::make_unique<PositionVerlet>();
+           }});
   reg.add({Leapfrog().info(), {}, [](const Params&) { return std::make_unique<Leapfrog>(); }});
 }
 

@@ -55,16 +55,19 @@ TEST_P(BadInputTest, ExitsTwoWithOneMessageNamingTheValue) {
 
 const std::string kSolve = "solve --model harmonic_oscillator --integrator rk4 --h 0.1 --t-end 1";
 const std::string kConv =
-    "convergence --model harmonic_oscillator --integrators euler --t-end 1 --h 0.1 --out /tmp/sbtest";
+    "convergence --model harmonic_oscillator --integrators euler --t-end 1 --h 0.1 --out "
+    "/tmp/sbtest";
 
 INSTANTIATE_TEST_SUITE_P(
     Cli, BadInputTest,
     ::testing::Values(
-        BadCase{"unknown_model", "solve --model nosuchmodel --integrator rk4 --h 0.1 --t-end 1", "nosuchmodel"},
-        BadCase{"unknown_integrator", "solve --model kepler --integrator nosuchmethod --h 0.1 --t-end 1",
-                "nosuchmethod"},
+        BadCase{"unknown_model", "solve --model nosuchmodel --integrator rk4 --h 0.1 --t-end 1",
+                "nosuchmodel"},
+        BadCase{"unknown_integrator",
+                "solve --model kepler --integrator nosuchmethod --h 0.1 --t-end 1", "nosuchmethod"},
         BadCase{"unknown_integrator_in_list",
-                "convergence --model kepler --integrators rk4,bogus --t-end 1 --h 0.1 --out /tmp/sbtest",
+                "convergence --model kepler --integrators rk4,bogus --t-end 1 --h 0.1 --out "
+                "/tmp/sbtest",
                 "bogus"},
         BadCase{"unknown_param", kSolve + " --param stiffnes=3", "stiffnes"},
         BadCase{"param_not_a_number", kSolve + " --param k=abc", "abc"},
@@ -76,12 +79,14 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"h_zero_convergence", kConv + " --h 0", "--h"},
         BadCase{"levels_one", kConv + " --levels 1", "--levels"},
         BadCase{"symplectic_on_first_order",
-                "solve --model dahlquist --integrator velocity_verlet --h 0.1 --t-end 1", "dahlquist"},
+                "solve --model dahlquist --integrator velocity_verlet --h 0.1 --t-end 1",
+                "dahlquist"},
         BadCase{"leapfrog_on_damped",
-                "solve --model harmonic_oscillator --param gamma=0.1 --integrator leapfrog --h 0.1 --t-end 1",
+                "solve --model harmonic_oscillator --param gamma=0.1 --integrator leapfrog --h 0.1 "
+                "--t-end 1",
                 "leapfrog"},
-        BadCase{"model_param_out_of_range", "solve --model kepler --param e=1.5 --integrator rk4 --h 0.1 --t-end 1",
-                "'e'"},
+        BadCase{"model_param_out_of_range",
+                "solve --model kepler --param e=1.5 --integrator rk4 --h 0.1 --t-end 1", "'e'"},
         BadCase{"missing_flag", "solve --model kepler --integrator rk4 --h 0.1", "--t-end"},
         BadCase{"unknown_subcommand", "frobnicate", "frobnicate"},
         BadCase{"unknown_list_kind", "list widgets", "widgets"},
@@ -97,12 +102,13 @@ TEST(Cli, HelpExitsZero) {
 TEST(Cli, ListIntegratorsShowsAllThirteenWithFamilyAndOrder) {
   const Outcome o = run("list integrators");
   ASSERT_EQ(o.code, 0);
-  for (const char* row : {"| euler | explicit | 1 |", "| heun | explicit | 2 |", "| midpoint | explicit | 2 |",
-                          "| ralston | explicit | 2 |", "| kutta3 | explicit | 3 |", "| ssprk3 | explicit | 3 |",
-                          "| rk4 | explicit | 4 |", "| rk38 | explicit | 4 |",
-                          "| symplectic_euler | symplectic | 1 |", "| symplectic_euler_x | symplectic | 1 |",
-                          "| verlet | symplectic | 2 |", "| velocity_verlet | symplectic | 2 |",
-                          "| leapfrog | symplectic | 2 |"})
+  for (const char* row :
+       {"| euler | explicit | 1 |", "| heun | explicit | 2 |", "| midpoint | explicit | 2 |",
+        "| ralston | explicit | 2 |", "| kutta3 | explicit | 3 |", "| ssprk3 | explicit | 3 |",
+        "| rk4 | explicit | 4 |", "| rk38 | explicit | 4 |",
+        "| symplectic_euler | symplectic | 1 |", "| symplectic_euler_x | symplectic | 1 |",
+        "| verlet | symplectic | 2 |", "| velocity_verlet | symplectic | 2 |",
+        "| leapfrog | symplectic | 2 |"})
     EXPECT_NE(o.out.find(row), std::string::npos) << row;
 }
 
@@ -117,8 +123,10 @@ TEST(Cli, DescribeListsParametersWithDefaults) {
 // h = 1e-3 has a global error ~1e-13 there (measured), far inside 1e-9.
 TEST(Cli, SolveKeplerOnePeriodReturnsToStart) {
   const auto csv = std::filesystem::temp_directory_path() / "sb_kepler_traj.csv";
-  const Outcome o = run("solve --model kepler --integrator rk4 --h 0.001 --t-end 6.283185307179586 --outputs 10 --out " +
-                        csv.string());
+  const Outcome o =
+      run("solve --model kepler --integrator rk4 --h 0.001 --t-end 6.283185307179586 --outputs 10 "
+          "--out " +
+          csv.string());
   ASSERT_EQ(o.code, 0) << o.err;
   EXPECT_NE(o.out.find("status       ok"), std::string::npos);
   // Final state lines "  yI = value".
@@ -142,7 +150,8 @@ TEST(Cli, SolveKeplerOnePeriodReturnsToStart) {
 // Explicit Euler on the stiff Prothero-Robinson problem is reported as unstable, exit code 0:
 // the run itself is a valid result.
 TEST(Cli, UnstableRunExitsZeroAndSaysSo) {
-  const Outcome o = run("solve --model prothero_robinson --param lambda=-1e6 --integrator rk4 --h 0.1 --t-end 10");
+  const Outcome o = run(
+      "solve --model prothero_robinson --param lambda=-1e6 --integrator rk4 --h 0.1 --t-end 10");
   EXPECT_EQ(o.code, 0) << o.err;
   EXPECT_NE(o.out.find("status       unstable"), std::string::npos) << o.out;
 }
@@ -150,22 +159,26 @@ TEST(Cli, UnstableRunExitsZeroAndSaysSo) {
 TEST(Cli, ConvergenceWritesContractFiles) {
   const auto dir = std::filesystem::temp_directory_path() / "sb_conv_test";
   std::filesystem::remove_all(dir);
-  const Outcome o = run("convergence --model harmonic_oscillator --integrators euler,rk4 --t-end 1 --h 0.1 --levels 3 --out " +
-                        dir.string());
+  const Outcome o =
+      run("convergence --model harmonic_oscillator --integrators euler,rk4 --t-end 1 --h 0.1 "
+          "--levels 3 --out " +
+          dir.string());
   ASSERT_EQ(o.code, 0) << o.err;
   std::ifstream f(dir / "convergence.csv");
   std::string header;
   std::getline(f, header);
   EXPECT_EQ(header,
-            "model,integrator,order,h,steps,error,observed_order,f_evals,jac_evals,lin_solves,wall_s,status");
+            "model,integrator,order,h,steps,error,observed_order,f_evals,jac_evals,lin_solves,wall_"
+            "s,status");
   int rows = 0;
   for (std::string line; std::getline(f, line);) ++rows;
   EXPECT_EQ(rows, 6);
   EXPECT_TRUE(std::filesystem::exists(dir / "convergence.md"));
   EXPECT_TRUE(std::filesystem::exists(dir / "convergence.json"));
   EXPECT_FALSE(std::filesystem::exists(dir / "convergence.csv.tmp"));
-  const Outcome l = run("local-error --model harmonic_oscillator --integrators heun --h 0.1 --levels 2 --out " +
-                        dir.string());
+  const Outcome l =
+      run("local-error --model harmonic_oscillator --integrators heun --h 0.1 --levels 2 --out " +
+          dir.string());
   ASSERT_EQ(l.code, 0) << l.err;
   std::ifstream g(dir / "local_error.csv");
   std::getline(g, header);

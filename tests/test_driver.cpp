@@ -45,7 +45,8 @@ TEST(Driver, ObserverAtEquallySpacedOutputs) {
   std::vector<double> times;
   run_fixed_step(*sys, *rk, opt, [&](double t, CVecRef) { times.push_back(t); });
   ASSERT_EQ(times.size(), 11u);
-  for (std::size_t j = 0; j < times.size(); ++j) EXPECT_NEAR(times[j], 0.1 * static_cast<double>(j), 1e-14);
+  for (std::size_t j = 0; j < times.size(); ++j)
+    EXPECT_NEAR(times[j], 0.1 * static_cast<double>(j), 1e-14);
   EXPECT_EQ(times.back(), 1.0);
 }
 

@@ -55,7 +55,8 @@ TEST(EvaluationCount, SymplecticMethods) {
 // The one-step map of a method on the linear oscillator x'' = -k x - γ x' is a 2×2 matrix M;
 // its columns are the images of (1, 0) and (0, 1).
 Mat amplification_matrix(const std::string& method, double k, double gamma, double h) {
-  auto sys = model("harmonic_oscillator", {"k=" + std::to_string(k), "gamma=" + std::to_string(gamma)});
+  auto sys =
+      model("harmonic_oscillator", {"k=" + std::to_string(k), "gamma=" + std::to_string(gamma)});
   Mat m(2, 2);
   for (int j = 0; j < 2; ++j) {
     auto integ = make(method);
@@ -94,7 +95,8 @@ TEST(SymplecticStructure, AreaPreservingOnUndampedOscillator) {
   for (const auto& name : {"symplectic_euler", "symplectic_euler_x", "velocity_verlet"}) {
     EXPECT_NEAR(amplification_matrix(name, 4.0, 0.0, 0.3).determinant(), 1.0, 1e-14) << name;
   }
-  EXPECT_NEAR(amplification_matrix("velocity_verlet", 4.0, 0.0, 0.3).trace(), 2 - 0.09 * 4.0, 1e-14);
+  EXPECT_NEAR(amplification_matrix("velocity_verlet", 4.0, 0.0, 0.3).trace(), 2 - 0.09 * 4.0,
+              1e-14);
   EXPECT_GT(amplification_matrix("rk4", 4.0, 0.0, 0.3).determinant(), 0.0);
   EXPECT_LT(amplification_matrix("rk4", 4.0, 0.0, 0.3).determinant(), 1.0);  // RK4 damps
 }
@@ -112,8 +114,8 @@ TEST(SymplecticStructure, DampedOscillatorLongRunDecaysAtTheRightRate) {
   const double n_steps = 1000;
   const double se_norm = run_fixed_step(*sys, *se, opt).y.norm();
   const double eu_norm = run_fixed_step(*sys, *eu, opt).y.norm();
-  const double se_rate = std::pow(1 - h * gamma, n_steps / 2);              // ≈ 0.082
-  const double eu_rate = std::pow(1 - h * gamma + h * h, n_steps / 2);     // ≈ 12.1
+  const double se_rate = std::pow(1 - h * gamma, n_steps / 2);          // ≈ 0.082
+  const double eu_rate = std::pow(1 - h * gamma + h * h, n_steps / 2);  // ≈ 12.1
   // The eigenvectors are not orthogonal, so the norm matches the rate within a bounded factor.
   EXPECT_GT(se_norm, se_rate / 2);
   EXPECT_LT(se_norm, se_rate * 2);
@@ -153,8 +155,8 @@ EnergyTrace kepler_energy(const std::string& method, double h, int orbits) {
 // Explicit Euler has no such invariant and its energy error grows with time.
 TEST(SymplecticStructure, KeplerEnergyBoundedOver1000Orbits) {
   const double h = 0.005;
-  for (const auto& name : {"symplectic_euler", "symplectic_euler_x", "velocity_verlet", "verlet",
-                           "leapfrog"}) {
+  for (const auto& name :
+       {"symplectic_euler", "symplectic_euler_x", "velocity_verlet", "verlet", "leapfrog"}) {
     const EnergyTrace tr = kepler_energy(name, h, 1000);
     ASSERT_EQ(tr.status, Status::ok) << name;
     EXPECT_LT(tr.max_dev_last, 1.5 * tr.max_dev_first) << name;
@@ -197,8 +199,8 @@ TEST(SymplecticStructure, RefusesWhatItCannotIntegrate) {
       EXPECT_NE(std::string(e.what()).find("velocity"), std::string::npos);
     }
   }
-  for (const auto& name : {"symplectic_euler", "symplectic_euler_x", "velocity_verlet", "verlet",
-                           "leapfrog"}) {
+  for (const auto& name :
+       {"symplectic_euler", "symplectic_euler_x", "velocity_verlet", "verlet", "leapfrog"}) {
     auto integ = make(name);
     try {
       run_fixed_step(*dahl, *integ, opt);

@@ -41,13 +41,16 @@ TEST(Params, UnknownKeyIsRejectedNamingIt) {
     FAIL();
   } catch (const BadInput& e) {
     EXPECT_NE(std::string(e.what()).find("'eccentricity'"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("e, gm, a"), std::string::npos) << e.what();  // what kepler takes
+    EXPECT_NE(std::string(e.what()).find("e, gm, a"), std::string::npos)
+        << e.what();  // what kepler takes
   }
 }
 
 TEST(Params, ChoicesAreChecked) {
-  EXPECT_THROW(model_registry().create("prothero_robinson", Params::from_assignments({"phi=tan"})), BadInput);
-  EXPECT_NO_THROW(model_registry().create("prothero_robinson", Params::from_assignments({"phi=cos"})));
+  EXPECT_THROW(model_registry().create("prothero_robinson", Params::from_assignments({"phi=tan"})),
+               BadInput);
+  EXPECT_NO_THROW(
+      model_registry().create("prothero_robinson", Params::from_assignments({"phi=cos"})));
 }
 
 // Every registered model and integrator can be created from its defaults, and reads every

@@ -3,10 +3,15 @@
 namespace stiffbench {
 
 ExplicitRungeKutta::ExplicitRungeKutta(ButcherTableau tableau, std::string description)
-    : Integrator({tableau.name, Family::explicit_rk, tableau.order, tableau.stages(), {},
+    : Integrator({tableau.name,
+                  Family::explicit_rk,
+                  tableau.order,
+                  tableau.stages(),
+                  {},
                   std::move(description)}),
       tableau_(std::move(tableau)) {
-  if (!tableau_.is_explicit()) throw std::logic_error("tableau '" + tableau_.name + "' is not explicit");
+  if (!tableau_.is_explicit())
+    throw std::logic_error("tableau '" + tableau_.name + "' is not explicit");
 }
 
 void ExplicitRungeKutta::reset(const OdeSystem& sys, double, CVecRef) {

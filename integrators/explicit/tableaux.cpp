@@ -15,7 +15,8 @@ ButcherTableau make(std::string name, int order, std::vector<std::vector<double>
   for (Index i = 0; i < s; ++i) {
     t.b[i] = b[static_cast<std::size_t>(i)];
     const auto& row = a[static_cast<std::size_t>(i)];
-    for (Index j = 0; j < static_cast<Index>(row.size()); ++j) t.a(i, j) = row[static_cast<std::size_t>(j)];
+    for (Index j = 0; j < static_cast<Index>(row.size()); ++j)
+      t.a(i, j) = row[static_cast<std::size_t>(j)];
   }
   // Nodes are the row sums (c = A·1): stated once, not typed twice.
   t.c = t.a.rowwise().sum();

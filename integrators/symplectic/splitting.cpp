@@ -51,7 +51,8 @@ void SplittingIntegrator::reset(const OdeSystem& sys, double, CVecRef) {
 }
 
 Status SplittingIntegrator::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats&) {
-  if (&sys != mech_) throw std::logic_error("SplittingIntegrator::step: system differs from reset()");
+  if (&sys != mech_)
+    throw std::logic_error("SplittingIntegrator::step: system differs from reset()");
   const Index n = mech_->dofs();
   auto x = y.head(n);
   auto v = y.tail(n);

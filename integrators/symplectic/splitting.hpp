@@ -18,7 +18,8 @@ const std::vector<SplittingCoefficients>& splitting_methods();
 
 class SplittingIntegrator final : public Integrator {
  public:
-  SplittingIntegrator(SplittingCoefficients coeffs, bool velocity_independent, std::string description);
+  SplittingIntegrator(SplittingCoefficients coeffs, bool velocity_independent,
+                      std::string description);
 
   const SplittingCoefficients& coefficients() const { return coeffs_; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
@@ -28,8 +29,8 @@ class SplittingIntegrator final : public Integrator {
   SplittingCoefficients coeffs_;
   bool fsal_;  // reuse the last stage's acceleration as the next step's first
   const MechanicalSystem* mech_ = nullptr;
-  Vec acc_;          // acceleration workspace
-  Vec cached_x_;     // position at which acc_ was last evaluated (for reuse)
+  Vec acc_;       // acceleration workspace
+  Vec cached_x_;  // position at which acc_ was last evaluated (for reuse)
   bool cache_valid_ = false;
 };
 

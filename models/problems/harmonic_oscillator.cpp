@@ -56,9 +56,8 @@ void HarmonicOscillator::exact(double t, VecRef y) const {
 }
 
 std::vector<Invariant> HarmonicOscillator::invariants() const {
-  return {{"energy", [this](double, CVecRef y) {
-             return 0.5 * m_ * y[1] * y[1] + 0.5 * k_ * y[0] * y[0];
-           }}};
+  return {{"energy",
+           [this](double, CVecRef y) { return 0.5 * m_ * y[1] * y[1] + 0.5 * k_ * y[0] * y[0]; }}};
 }
 
 std::optional<double> HarmonicOscillator::stiffness(double, CVecRef) const {

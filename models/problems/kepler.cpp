@@ -37,7 +37,10 @@ void Kepler::stiffness_block(double, CVecRef x, CVecRef, SparseMat& k) const {
   k.setFromTriplets(t.begin(), t.end());
 }
 
-void Kepler::damping_block(double, CVecRef, CVecRef, SparseMat& d) const { d.resize(2, 2); d.setZero(); }
+void Kepler::damping_block(double, CVecRef, CVecRef, SparseMat& d) const {
+  d.resize(2, 2);
+  d.setZero();
+}
 
 void Kepler::exact(double t, VecRef y) const {
   const double n = std::sqrt(gm_ / (a_ * a_ * a_));

@@ -1,9 +1,9 @@
+#include "models/register.hpp"
 #include "models/problems/dahlquist.hpp"
 #include "models/problems/harmonic_oscillator.hpp"
 #include "models/problems/kepler.hpp"
 #include "models/problems/pendulum.hpp"
 #include "models/problems/prothero_robinson.hpp"
-#include "models/register.hpp"
 
 namespace stiffbench {
 
