@@ -64,6 +64,14 @@ class OdeSystem {
     return std::nullopt;
   }
 
+  // Optional holonomic constraints C(y) = 0 enforced strictly, not by forces. The fixed-step
+  // driver calls project() after every accepted step of every integrator; the model projects
+  // y back onto the constraint manifold (positions, then velocities onto its tangent space)
+  // with the method its header documents. constraint_residual() is max |C| (an observable).
+  virtual bool has_constraints() const { return false; }
+  virtual void project(double /*t*/, VecRef /*y*/) const {}
+  virtual double constraint_residual(CVecRef /*y*/) const { return 0.0; }
+
   // Non-null for systems with y = [x; v].
   virtual const MechanicalSystem* as_mechanical() const { return nullptr; }
 

@@ -163,6 +163,10 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
     out << "\nerror vs exact solution (max-norm): " << format_short(max_abs_diff(r.y, ye), 6)
         << "\n";
   }
+  if (sys.has_constraints()) {
+    out << "\nconstraint residual max|C|: initial " << format_short(sys.constraint_residual(y0))
+        << ", final " << format_short(sys.constraint_residual(r.y)) << "\n";
+  }
   const auto invariants = sys.invariants();
   if (!invariants.empty()) {
     out << "\ninvariants          initial                  final                    rel. change\n";
