@@ -12,6 +12,16 @@ void OdeSystem::eval_jacobian(double, CVecRef, SparseMat&) const {
   throw BadInput("model '" + name() + "' provides no analytic Jacobian");
 }
 
+SparseMat OdeSystem::jacobian_pattern() const {
+  if (!has_jacobian()) throw BadInput("model '" + name() + "' provides no Jacobian sparsity pattern");
+  SparseMat jac;
+  const Vec y0 = initial_state();
+  eval_jacobian(initial_time(), y0, jac);  // structure only: not counted as an evaluation
+  jac.makeCompressed();
+  for (Index k = 0; k < jac.nonZeros(); ++k) jac.valuePtr()[k] = 1.0;
+  return jac;
+}
+
 void MechanicalSystem::stiffness_block(double, CVecRef, CVecRef, SparseMat&) const {
   throw BadInput("model '" + name() + "' provides no stiffness block K = da/dx");
 }

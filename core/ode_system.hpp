@@ -51,6 +51,14 @@ class OdeSystem {
     eval_jacobian(t, y, jac);
   }
 
+  // Sparsity pattern of ∂f/∂y (values irrelevant), for column-grouped finite differences.
+  // By default the structure of the analytic Jacobian at the initial state, when there is one.
+  virtual bool has_jacobian_pattern() const { return has_jacobian(); }
+  virtual SparseMat jacobian_pattern() const;
+
+  // True when f does not depend on t explicitly (Rosenbrock methods then skip ∂f/∂t).
+  virtual bool autonomous() const { return false; }
+
   // Optional exact solution y(t) of the initial value problem.
   virtual bool has_exact() const { return false; }
   virtual void exact(double t, VecRef y) const;

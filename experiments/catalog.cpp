@@ -21,6 +21,7 @@ const IntegratorRegistry& integrator_registry() {
     IntegratorRegistry r("integrator");
     register_explicit_integrators(r);
     register_symplectic_integrators(r);
+    register_implicit_integrators(r);
     return r;
   }();
   return reg;

@@ -4,6 +4,9 @@
 
 #include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/explicit/tableaux.hpp"
+#include "integrators/implicit/baraff_witkin.hpp"
+#include "integrators/implicit/dirk.hpp"
+#include "integrators/implicit/linearly_implicit.hpp"
 #include "integrators/symplectic/splitting.hpp"
 #include "integrators/symplectic/verlet.hpp"
 
@@ -47,6 +50,40 @@ void register_symplectic_integrators(IntegratorRegistry& reg) {
              return std::make_unique<PositionVerlet>();
            }});
   reg.add({Leapfrog().info(), {}, [](const Params&) { return std::make_unique<Leapfrog>(); }});
+}
+
+void register_implicit_integrators(IntegratorRegistry& reg) {
+  static const std::map<std::string, std::string> descriptions = {
+      {"backward_euler", "backward (implicit) Euler with Newton; L-stable"},
+      {"implicit_midpoint", "implicit midpoint rule; A-stable, symplectic, no damping"},
+      {"trapezoidal", "trapezoidal rule (Crank-Nicolson); A-stable, no damping at infinity"},
+      {"sdirk2", "two-stage SDIRK, gamma = 1 - 1/sqrt(2); L-stable, stiffly accurate"},
+      {"sdirk3", "three-stage SDIRK of Alexander (1977); L-stable, stiffly accurate"},
+  };
+  const auto newton_specs = implicit_param_specs(true);
+  const auto linear_specs = implicit_param_specs(false);
+  for (const ButcherTableau& t : implicit_tableaux()) {
+    const std::string desc = descriptions.at(t.name);
+    auto make = [t, desc](const Params& p) {
+      return std::make_unique<DirkIntegrator>(t, desc, read_implicit_options(p, true));
+    };
+    reg.add({DirkIntegrator(t, desc, {}).info(), newton_specs, make});
+  }
+  reg.add({Bdf2Integrator({}).info(), newton_specs, [](const Params& p) {
+             return std::make_unique<Bdf2Integrator>(read_implicit_options(p, true));
+           }});
+  reg.add({SemiImplicitEuler({}).info(), linear_specs, [](const Params& p) {
+             return std::make_unique<SemiImplicitEuler>(read_implicit_options(p, false));
+           }});
+  const std::string ros_desc = "ROS2 Rosenbrock method (Verwer et al. 1999), gamma = 1 + 1/sqrt(2); L-stable";
+  reg.add({Rosenbrock(rosenbrock2_tableau(), ros_desc, {}).info(), linear_specs,
+           [ros_desc](const Params& p) {
+             return std::make_unique<Rosenbrock>(rosenbrock2_tableau(), ros_desc,
+                                                 read_implicit_options(p, false));
+           }});
+  reg.add({BaraffWitkin({}).info(), linear_specs, [](const Params& p) {
+             return std::make_unique<BaraffWitkin>(read_implicit_options(p, false));
+           }});
 }
 
 }  // namespace stiffbench

@@ -7,5 +7,6 @@ namespace stiffbench {
 
 void register_explicit_integrators(IntegratorRegistry& reg);
 void register_symplectic_integrators(IntegratorRegistry& reg);
+void register_implicit_integrators(IntegratorRegistry& reg);
 
 }  // namespace stiffbench

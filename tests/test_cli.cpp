@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
+#include <vector>
 
 namespace {
 
@@ -183,6 +185,31 @@ TEST(Cli, ConvergenceWritesContractFiles) {
   std::ifstream g(dir / "local_error.csv");
   std::getline(g, header);
   EXPECT_EQ(header, "model,integrator,order,h,local_error,observed_order");
+  std::filesystem::remove_all(dir);
+}
+
+// Implicit rows of convergence.csv carry their Jacobian and linear-solve counts (issue #3).
+TEST(Cli, ConvergenceRowsOfImplicitMethodsCountJacobiansAndSolves) {
+  const auto dir = std::filesystem::temp_directory_path() / "sb_conv_implicit";
+  std::filesystem::remove_all(dir);
+  const Outcome o = run(
+      "convergence --model harmonic_oscillator --integrators backward_euler,sdirk3,bdf2,rosenbrock2 --t-end 1 "
+      "--h 0.1 --levels 2 --out " + dir.string());
+  ASSERT_EQ(o.code, 0) << o.err;
+  std::ifstream f(dir / "convergence.csv");
+  std::string line;
+  std::getline(f, line);
+  int rows = 0;
+  while (std::getline(f, line)) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+    ASSERT_EQ(cells.size(), 12u) << line;
+    EXPECT_GT(std::stol(cells[8]), 0) << line;  // jac_evals
+    EXPECT_GT(std::stol(cells[9]), 0) << line;  // lin_solves
+    ++rows;
+  }
+  EXPECT_EQ(rows, 8);
   std::filesystem::remove_all(dir);
 }
 

@@ -20,6 +20,7 @@ class Dahlquist final : public OdeSystem {
   Index dimension() const override { return 2; }
   Vec initial_state() const override { return Vec{{z0_.real(), z0_.imag()}}; }
   bool has_jacobian() const override { return true; }
+  bool autonomous() const override { return true; }
   bool has_exact() const override { return true; }
   void exact(double t, VecRef y) const override;
   std::optional<double> stiffness(double, CVecRef) const override { return std::abs(lambda_); }

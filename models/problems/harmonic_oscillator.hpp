@@ -19,6 +19,7 @@ class HarmonicOscillator final : public MechanicalSystem {
   std::string name() const override { return "harmonic_oscillator"; }
   Index dofs() const override { return 1; }
   Vec initial_state() const override { return Vec{{x0_, v0_}}; }
+  bool autonomous() const override { return true; }
   bool velocity_dependent() const override { return gamma_ != 0.0; }
   Vec masses() const override { return Vec::Constant(1, m_); }
   bool has_force_jacobians() const override { return true; }

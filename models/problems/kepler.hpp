@@ -21,6 +21,7 @@ class Kepler final : public MechanicalSystem {
   std::string name() const override { return "kepler"; }
   Index dofs() const override { return 2; }
   Vec initial_state() const override;
+  bool autonomous() const override { return true; }
   bool velocity_dependent() const override { return false; }
   bool has_force_jacobians() const override { return true; }
   void stiffness_block(double t, CVecRef x, CVecRef v, SparseMat& k) const override;

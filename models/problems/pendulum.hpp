@@ -18,6 +18,7 @@ class Pendulum final : public MechanicalSystem {
   std::string name() const override { return "pendulum"; }
   Index dofs() const override { return 1; }
   Vec initial_state() const override { return Vec{{theta0_, omega0_}}; }
+  bool autonomous() const override { return true; }
   bool velocity_dependent() const override { return false; }
   bool has_force_jacobians() const override { return true; }
   void stiffness_block(double t, CVecRef x, CVecRef v, SparseMat& k) const override;

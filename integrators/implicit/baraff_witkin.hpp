@@ -1,0 +1,34 @@
+// Baraff & Witkin (SIGGRAPH 1998) semi-implicit Euler for mechanical systems, in velocity form:
+//   (M - h D_f - h² K_f) Δv = h (f + h K_f v),   v⁺ = v + Δv,   x⁺ = x + h v⁺,
+// with forces f = M a, K_f = M K = ∂f/∂x, D_f = M D = ∂f/∂v, all at (t, x, v) — one
+// linearisation of backward Euler, so order 1. The matrix has the dofs' dimension (half the
+// first-order system) and is symmetric when M K and M D are (mass-spring networks); with SPD
+// -K_f and -D_f it is SPD and ldlt or cg apply (REFERENCES.md). Pinned dofs with zero K and D
+// rows get the row M_ii Δv_i = h M_ii a_i = 0.
+// Cost per step: one acceleration, one K and D evaluation (counted as one Jacobian), one
+// factorisation and one solve.
+#pragma once
+
+#include "core/integrator.hpp"
+#include "integrators/implicit/implicit_core.hpp"
+
+namespace stiffbench {
+
+class BaraffWitkin final : public Integrator {
+ public:
+  explicit BaraffWitkin(ImplicitOptions opt);
+  void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
+  Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
+
+ private:
+  std::vector<SparseTerm> terms(double h) const;
+
+  ImplicitOptions opt_;
+  const MechanicalSystem* mech_ = nullptr;
+  std::unique_ptr<LinearSolver> solver_;
+  SparseCombination a_;
+  SparseMat mass_, k_, d_;
+  Vec m_, acc_, rhs_, dv_;
+};
+
+}  // namespace stiffbench

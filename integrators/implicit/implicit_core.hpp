@@ -1,0 +1,106 @@
+// What every implicit method shares: the Jacobian (analytic, or finite differences dense /
+// column-grouped over a known pattern / matrix-free products), the matrix W = I - hγJ in a
+// fixed pattern, its linear solver, and Newton's method for stage equations
+//     z = ψ + hγ f(t, z).
+//
+// Newton (parameter `newton`):
+//   full      J re-evaluated and W refactored at every iterate;
+//   modified  J evaluated once per step (at the first iterate of the step), reused by all stages;
+//   frozen    J kept across steps, re-evaluated only when Newton fails with a stale J.
+// With a stale J a failed solve is retried once from the same start with a fresh J; a second
+// failure returns Status::newton_failed (the step is never silently accepted).
+// Convergence: after at least one iteration, ‖G(z)‖ ≤ tol or ‖Δz‖ ≤ tol in the norm
+// max_i |·_i| / (1 + |z_i|), where G(z) = z - ψ - hγ f(t, z). Each step can carry an error of
+// order tol, so a fixed-step run has an error floor of about N·tol: tighten newton_tol for
+// convergence studies at very small h. A linear problem with an exact J converges after one iteration
+// (one linear solve), confirmed by the residual at the next iterate.
+//
+// Counting: every f evaluation (Newton residuals, finite-difference columns, matrix-free
+// products) goes through OdeSystem::rhs and is counted there. stats.jac_evals gets +1 for each
+// finite-difference Jacobian; analytic ones are counted at the system boundary.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/integrator.hpp"
+#include "core/params.hpp"
+#include "integrators/implicit/linear_solver.hpp"
+#include "integrators/implicit/sparse_assembly.hpp"
+
+namespace stiffbench {
+
+enum class NewtonMode { full, modified, frozen };
+enum class JacobianSource { automatic, analytic, fd_dense, fd_colored, matrix_free };
+
+struct ImplicitOptions {
+  NewtonMode newton = NewtonMode::modified;
+  double newton_tol = 1e-12;
+  int newton_max_iter = 10;
+  JacobianSource jacobian = JacobianSource::automatic;
+  LinearSolverOptions linear;
+  bool preconditioner_given = false;
+};
+
+// Parameters of the implicit family (with_newton: also the Newton keys).
+std::vector<ParamSpec> implicit_param_specs(bool with_newton);
+ImplicitOptions read_implicit_options(const Params& p, bool with_newton);
+
+// Greedy column grouping for finite-difference Jacobians (Curtis, Powell & Reid 1974): columns
+// that share no row get the same colour and are perturbed together.
+std::vector<int> color_columns(const SparseMat& pattern, int* n_colors);
+
+class ImplicitCore {
+ public:
+  explicit ImplicitCore(ImplicitOptions opt) : opt_(std::move(opt)) {}
+
+  // Chooses the Jacobian source and linear solver for `sys`, computes the pattern of W and
+  // runs the symbolic analysis. BadInput for impossible combinations (e.g. matrix_free with a
+  // direct solver).
+  void reset(const OdeSystem& sys);
+
+  // Marks the start of a step (modified Newton evaluates J again at its first iterate).
+  void new_step() { jac_fresh_in_step_ = false; }
+
+  // J at (t, y); fy = f(t, y) (finite differences reuse it).
+  void update_jacobian(const OdeSystem& sys, double t, CVecRef y, CVecRef fy, SolveStats& stats);
+
+  // W = I - hγ J with the current J, factored (or set up for Krylov). False if singular.
+  bool prepare(double hg, SolveStats& stats);
+
+  // Solves W x = b. x is the initial guess for Krylov solvers.
+  bool solve(CVecRef b, VecRef x, SolveStats& stats);
+
+  // out = J v with the current J (assembled) or a finite-difference product (matrix-free).
+  void jacobian_times(CVecRef v, VecRef out, SolveStats& stats);
+
+  // Newton on z = ψ + hγ f(t, z). z holds the initial guess; on success fz = f(t, z).
+  Status solve_stage(const OdeSystem& sys, double t, CVecRef psi, double hg, VecRef z, VecRef fz,
+                     SolveStats& stats);
+
+  JacobianSource jacobian_source() const { return source_; }
+  LinearSolverKind linear_solver() const { return solver_ ? solver_->kind() : opt_.linear.kind; }
+  const SparseMat& jacobian_matrix() const { return jac_; }
+  const ImplicitOptions& options() const { return opt_; }
+
+ private:
+  void fd_jacobian(const OdeSystem& sys, double t, CVecRef y, CVecRef fy);
+  void rebuild_w_pattern();
+
+  ImplicitOptions opt_;
+  JacobianSource source_ = JacobianSource::analytic;
+  std::unique_ptr<LinearSolver> solver_;
+  const OdeSystem* sys_ = nullptr;
+  SparseMat jac_, identity_;
+  SparseCombination w_;
+  std::vector<int> colors_;
+  int n_colors_ = 0;
+  bool have_jac_ = false, jac_fresh_in_step_ = false, w_current_ = false;
+  double w_hg_ = 0.0;
+  // Linearisation point of the matrix-free product.
+  double lin_t_ = 0.0;
+  Vec lin_y_, lin_f_, tmp_, tmp2_, g_, delta_, z0_;
+};
+
+}  // namespace stiffbench

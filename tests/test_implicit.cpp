@@ -1,0 +1,356 @@
+// Implicit integrators: Newton, Jacobians, linear solvers, stiff behaviour.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+
+#include "core/driver.hpp"
+#include "experiments/catalog.hpp"
+#include "integrators/implicit/dirk.hpp"
+#include "integrators/implicit/implicit_core.hpp"
+#include "models/problems/dahlquist.hpp"
+
+namespace stiffbench {
+inline void PrintTo(const ButcherTableau& t, std::ostream* os) { *os << t.name; }
+namespace {
+
+std::unique_ptr<Integrator> make(const std::string& name, std::vector<std::string> params = {}) {
+  return integrator_registry().create(name, Params::from_assignments(params));
+}
+std::unique_ptr<OdeSystem> model(const std::string& name, std::vector<std::string> params = {}) {
+  return model_registry().create(name, Params::from_assignments(params));
+}
+
+// --- Tableaux -----------------------------------------------------------------------------
+
+class ImplicitTableauTest : public ::testing::TestWithParam<ButcherTableau> {};
+
+TEST_P(ImplicitTableauTest, RowSumsAndExactOrder) {
+  const ButcherTableau& t = GetParam();
+  EXPECT_LE(t.row_sum_defect(), 1e-15);
+  for (int p = 1; p <= t.order; ++p) EXPECT_LE(t.order_defect(p), 1e-14) << "order " << p;
+  EXPECT_GT(t.order_defect(t.order + 1), 1e-6);
+}
+
+// One step of the DIRK stepper on y' = λy equals R(hλ) y0 (Newton converges to round-off on a
+// linear problem), including a very stiff z where R(z) → R(∞).
+TEST_P(ImplicitTableauTest, StabilityFunctionMatchesOneStep) {
+  const ButcherTableau& t = GetParam();
+  for (const std::complex<double> z : {std::complex<double>(-0.7, 0.3), {-2.0, 1.5}, {0.2, -1.1}, {-1e6, 0.0}}) {
+    Dahlquist sys(z, {1.0, 0.0});
+    DirkIntegrator integ(t, "", {});
+    Vec y = sys.initial_state();
+    SolveStats stats;
+    integ.reset(sys, 0.0, y);
+    ASSERT_EQ(integ.step(sys, 0.0, y, 1.0, stats), Status::ok);
+    const std::complex<double> r = t.stability(z);
+    // Rounding grows with |z|: k_i = (z_i - ψ_i)/(h a_ii) cancels terms of size |z|.
+    const double tol = 1e-14 * (1.0 + std::abs(z));
+    EXPECT_NEAR(y[0], r.real(), tol) << z;
+    EXPECT_NEAR(y[1], r.imag(), tol) << z;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Dirk, ImplicitTableauTest, ::testing::ValuesIn(implicit_tableaux()),
+                         [](const auto& param_info) { return param_info.param.name; });
+
+// L-stability: |R(z)| ≤ 1 on the imaginary axis (A-stability, sampled) and R(∞) = 0 for the
+// methods documented as L-stable; |R(∞)| = 1 for implicit midpoint and trapezoidal.
+TEST(ImplicitStability, LStableMethodsDampInfinity) {
+  for (const auto& t : implicit_tableaux()) {
+    for (double y = 0.1; y < 1e4; y *= 1.7) EXPECT_LE(std::abs(t.stability({0.0, y})), 1.0 + 1e-12) << t.name;
+    // R(-1e6) stands for R(∞): (1 + z/2)/(1 - z/2) = -1 + 4e-6 for the A-stable pair, O(1/|z|)
+    // for the L-stable ones. (Larger |z| loses digits to cancellation in 1 + z bᵀ(I - zA)⁻¹1.)
+    const double r_inf = std::abs(t.stability(-1e6));
+    if (t.name == "implicit_midpoint" || t.name == "trapezoidal") {
+      EXPECT_NEAR(r_inf, 1.0, 1e-5) << t.name;
+    } else {
+      EXPECT_LT(r_inf, 1e-5) << t.name;
+    }
+  }
+}
+
+// --- Stiff behaviour -----------------------------------------------------------------------
+
+double max_error_along(const OdeSystem& sys, Integrator& integ, double h, double t_end, Status* status) {
+  FixedStepOptions opt;
+  opt.t_end = t_end;
+  opt.h = h;
+  opt.outputs = 1'000'000;  // every step
+  double max_err = 0;
+  Vec ye(sys.dimension());
+  const RunResult r = run_fixed_step(sys, integ, opt, [&](double t, CVecRef y) {
+    sys.exact(t, ye);
+    max_err = std::max(max_err, max_abs_diff(y, ye));
+  });
+  *status = r.stats.status;
+  return max_err;
+}
+
+// Prothero–Robinson with λ = -1e6, h = 0.1 (hλ = -1e5): L-stable methods damp the stiff
+// component and follow y = sin t (their error is the O(h^p) error of tracking φ, far below
+// 1e-3); every explicit method's amplification |R(hλ)| ≫ 1 makes it blow up.
+TEST(Stiff, ProtheroRobinsonLStableMethodsTrackExplicitBlowUp) {
+  auto sys = model("prothero_robinson", {"lambda=-1e6"});
+  for (const auto& name : {"backward_euler", "bdf2", "sdirk2", "sdirk3"}) {
+    auto integ = make(name);
+    Status st;
+    const double err = max_error_along(*sys, *integ, 0.1, 10.0, &st);
+    EXPECT_EQ(st, Status::ok) << name;
+    EXPECT_LT(err, 1e-3) << name;
+  }
+  for (const auto& e : integrator_registry().entries()) {
+    if (e.info.family != Family::explicit_rk) continue;
+    auto integ = make(e.info.name);
+    FixedStepOptions opt;
+    opt.t_end = 10.0;
+    opt.h = 0.1;
+    EXPECT_EQ(run_fixed_step(*sys, *integ, opt).stats.status, Status::unstable) << e.info.name;
+  }
+}
+
+// Implicit midpoint preserves quadratic invariants exactly (Cooper 1987): on the undamped
+// oscillator the energy ½(x² + v²) stays constant up to round-off even at h = 0.5 over 10,000
+// steps. Newton converges to round-off on this linear problem, so only rounding remains
+// (measured drift ~1e-14; bound 1e-12).
+TEST(Stiff, ImplicitMidpointKeepsQuadraticEnergy) {
+  auto sys = model("harmonic_oscillator");
+  auto integ = make("implicit_midpoint");
+  FixedStepOptions opt;
+  opt.t_end = 5000.0;
+  opt.h = 0.5;
+  const RunResult r = run_fixed_step(*sys, *integ, opt);
+  ASSERT_EQ(r.n_steps, 10000);
+  const auto energy = sys->invariants().front().value;
+  const double e0 = energy(0, sys->initial_state());
+  EXPECT_LT(std::abs(energy(r.t, r.y) - e0) / e0, 1e-12);
+}
+
+// --- Newton --------------------------------------------------------------------------------
+
+// On a linear problem with the exact Jacobian, Newton's first iterate solves the stage
+// equation exactly: one iteration (one linear solve) per implicit stage, with full, modified
+// and frozen Jacobians alike.
+TEST(Newton, OneIterationPerStageOnLinearProblems) {
+  auto sys = model("dahlquist", {"lambda_re=-3", "lambda_im=5"});
+  const std::map<std::string, int> implicit_stages = {
+      {"backward_euler", 1}, {"implicit_midpoint", 1}, {"trapezoidal", 1}, {"sdirk2", 2}, {"sdirk3", 3}, {"bdf2", 1}};
+  for (const auto& [name, stages] : implicit_stages) {
+    for (const auto& mode : {"full", "modified", "frozen"}) {
+      auto integ = make(name, {std::string("newton=") + mode});
+      FixedStepOptions opt;
+      opt.t_end = 1.0;
+      opt.h = 0.01;
+      const RunResult r = run_fixed_step(*sys, *integ, opt);
+      ASSERT_EQ(r.stats.status, Status::ok);
+      // bdf2's first step is an sdirk2 start-up (2 stages).
+      const long expected = name == "bdf2" ? 99 + 2 : 100L * stages;
+      EXPECT_EQ(r.stats.newton_iters, expected) << name << " " << mode;
+      EXPECT_EQ(r.stats.lin_solves, expected) << name << " " << mode;
+      EXPECT_EQ(r.stats.newton_fails, 0);
+    }
+  }
+}
+
+// Jacobian reuse: full Newton evaluates J at every iterate, modified once per step, frozen
+// once per run (on this problem Newton never fails, so it is never refreshed).
+TEST(Newton, JacobianEvaluationCountsFollowTheMode) {
+  auto sys = model("kepler", {"e=0.3"});
+  FixedStepOptions opt;
+  opt.t_end = 1.0;
+  opt.h = 0.01;
+  auto full = make("backward_euler", {"newton=full"});
+  auto modified = make("backward_euler", {"newton=modified"});
+  auto frozen = make("backward_euler", {"newton=frozen"});
+  const RunResult rf = run_fixed_step(*sys, *full, opt);
+  const RunResult rm = run_fixed_step(*sys, *modified, opt);
+  const RunResult rz = run_fixed_step(*sys, *frozen, opt);
+  EXPECT_EQ(rf.stats.jac_evals, rf.stats.newton_iters);
+  EXPECT_EQ(rm.stats.jac_evals, 100);
+  EXPECT_EQ(rz.stats.jac_evals, 1);
+  // All three solve the same equations to the Newton tolerance (1e-12 per step, 100 steps).
+  EXPECT_LT(max_abs_diff(rf.y, rm.y), 1e-9);
+  EXPECT_LT(max_abs_diff(rf.y, rz.y), 1e-9);
+}
+
+// A Newton failure ends the run with status newton_failed: a single iteration cannot solve
+// the nonlinear stage equation of the pendulum at a large step.
+TEST(Newton, FailureEndsRunWithStatus) {
+  auto sys = model("pendulum", {"theta0=3"});
+  auto integ = make("backward_euler", {"newton_max_iter=1", "newton=full"});
+  FixedStepOptions opt;
+  opt.t_end = 10.0;
+  opt.h = 1.0;
+  const RunResult r = run_fixed_step(*sys, *integ, opt);
+  EXPECT_EQ(r.stats.status, Status::newton_failed);
+  EXPECT_GE(r.stats.newton_fails, 1);
+  EXPECT_NE(r.stats.message.find("Newton"), std::string::npos);
+}
+
+// --- Jacobians -----------------------------------------------------------------------------
+
+// Finite-difference Jacobians (dense and column-grouped) agree with the analytic one to a
+// relative 1e-6 on every registered model that provides one, at a state away from the
+// initial one (reached by a short rk4 run).
+TEST(Jacobian, FiniteDifferencesMatchAnalyticOnEveryModel) {
+  for (const auto& e : model_registry().entries()) {
+    auto sys = model_registry().create(e.info.name, Params{});
+    if (!sys->has_jacobian()) continue;
+    auto rk = make("rk4");
+    FixedStepOptions opt;
+    opt.t_end = sys->initial_time() + 0.05;
+    opt.h = 0.001;
+    const RunResult run = run_fixed_step(*sys, *rk, opt);
+    const Vec y = run.stats.status == Status::ok ? run.y : sys->initial_state();
+    const double t = run.t;
+    Vec f(sys->dimension());
+    sys->rhs(t, y, f);
+    SparseMat analytic;
+    sys->jacobian(t, y, analytic);
+    const Mat ja(analytic);
+    for (const auto& source : {JacobianSource::fd_dense, JacobianSource::fd_colored}) {
+      ImplicitOptions o;
+      o.jacobian = source;
+      ImplicitCore core(o);
+      core.reset(*sys);
+      SolveStats stats;
+      core.update_jacobian(*sys, t, y, f, stats);
+      const Mat jf(core.jacobian_matrix());
+      const double scale = std::max(1.0, ja.cwiseAbs().maxCoeff());
+      EXPECT_LT((jf - ja).cwiseAbs().maxCoeff() / scale, 1e-6)
+          << e.info.name << (source == JacobianSource::fd_dense ? " fd_dense" : " fd_colored");
+      EXPECT_EQ(stats.jac_evals, 1);
+    }
+  }
+}
+
+// Greedy colouring of a tridiagonal pattern needs 3 colours (columns j, j+3, ... share no
+// row), so a column-grouped Jacobian costs 3 evaluations whatever n is.
+TEST(Jacobian, ColoringOfTridiagonalPatternUsesThreeColours) {
+  const Index n = 40;
+  std::vector<Eigen::Triplet<double>> t;
+  for (Index i = 0; i < n; ++i)
+    for (Index j = std::max<Index>(0, i - 1); j <= std::min(n - 1, i + 1); ++j) t.emplace_back(i, j, 1.0);
+  SparseMat p(n, n);
+  p.setFromTriplets(t.begin(), t.end());
+  int colors = 0;
+  const auto c = color_columns(p, &colors);
+  EXPECT_EQ(colors, 3);
+  for (Index j = 0; j + 1 < n; ++j) EXPECT_NE(c[static_cast<std::size_t>(j)], c[static_cast<std::size_t>(j + 1)]);
+}
+
+// --- Linear solvers ------------------------------------------------------------------------
+
+// Heat equation u_t = u_xx on (0, 1), Dirichlet ends, n interior points: y' = -A y with
+// A = tridiag(-1, 2, -1)/Δx², symmetric positive definite, so W = I + hγA is sparse SPD and
+// every linear solver applies. Exact solution for y0 = sin(πx): e^{-λt} sin(πx) with
+// λ = (4/Δx²) sin²(πΔx/2) (eigenvalue of A).
+class Heat1d final : public OdeSystem {
+ public:
+  explicit Heat1d(Index n) : n_(n), dx_(1.0 / static_cast<double>(n + 1)) {}
+  std::string name() const override { return "heat1d"; }
+  Index dimension() const override { return n_; }
+  Vec initial_state() const override {
+    Vec y(n_);
+    for (Index i = 0; i < n_; ++i) y[i] = std::sin(M_PI * dx_ * static_cast<double>(i + 1));
+    return y;
+  }
+  bool has_jacobian() const override { return true; }
+  bool autonomous() const override { return true; }
+
+ protected:
+  void eval_rhs(double, CVecRef y, VecRef d) const override {
+    const double c = 1.0 / (dx_ * dx_);
+    for (Index i = 0; i < n_; ++i) {
+      const double l = i > 0 ? y[i - 1] : 0.0, r = i + 1 < n_ ? y[i + 1] : 0.0;
+      d[i] = c * (l - 2 * y[i] + r);
+    }
+  }
+  void eval_jacobian(double, CVecRef, SparseMat& j) const override {
+    const double c = 1.0 / (dx_ * dx_);
+    std::vector<Eigen::Triplet<double>> t;
+    for (Index i = 0; i < n_; ++i) {
+      t.emplace_back(i, i, -2 * c);
+      if (i > 0) t.emplace_back(i, i - 1, c);
+      if (i + 1 < n_) t.emplace_back(i, i + 1, c);
+    }
+    j.resize(n_, n_);
+    j.setFromTriplets(t.begin(), t.end());
+  }
+
+ private:
+  Index n_;
+  double dx_;
+};
+
+// Every linear solver (and the matrix-free Krylov path) gives the same backward-Euler step to
+// 1e-10 on the sparse SPD system (Krylov tolerance 1e-13 relative).
+TEST(LinearSolvers, AllChoicesGiveTheSameStep) {
+  Heat1d sys(300);
+  const Vec y0 = sys.initial_state();
+  auto one_step = [&](std::vector<std::string> params) {
+    params.push_back("krylov_tol=1e-13");
+    auto integ = make("backward_euler", params);
+    FixedStepOptions opt;
+    opt.t_end = 1e-3;
+    opt.h = 1e-3;
+    const RunResult r = run_fixed_step(sys, *integ, opt);
+    EXPECT_EQ(r.stats.status, Status::ok) << params[0] << " " << params[1] << ": " << r.stats.message;
+    return r.y;
+  };
+  const Vec ref = one_step({"linear_solver=sparse_lu"});
+  for (const auto& solver : {"dense_lu", "ldlt", "cg", "bicgstab", "gmres"}) {
+    EXPECT_LT(max_abs_diff(one_step({std::string("linear_solver=") + solver}), ref), 1e-10) << solver;
+    if (std::string(solver) == "cg" || std::string(solver) == "bicgstab" || std::string(solver) == "gmres") {
+      EXPECT_LT(max_abs_diff(one_step({std::string("linear_solver=") + solver, "preconditioner=none"}), ref), 1e-10)
+          << solver << " unpreconditioned";
+      EXPECT_LT(max_abs_diff(one_step({std::string("linear_solver=") + solver, "jacobian=matrix_free"}), ref), 1e-8)
+          << solver << " matrix-free";  // finite-difference products: ~√eps relative per product
+    }
+  }
+  // And the step is backward Euler's: the sine mode decays by 1/(1 + hλ).
+  const double dx = 1.0 / 301.0;
+  const double lambda = 4.0 / (dx * dx) * std::pow(std::sin(M_PI * dx / 2), 2);
+  EXPECT_LT(max_abs_diff(ref, y0 / (1.0 + 1e-3 * lambda)), 1e-12);
+}
+
+TEST(LinearSolvers, ImpossibleCombinationsAreBadInput) {
+  Heat1d sys(10);
+  auto a = make("backward_euler", {"jacobian=matrix_free", "linear_solver=sparse_lu"});
+  FixedStepOptions opt;
+  EXPECT_THROW(run_fixed_step(sys, *a, opt), BadInput);
+  auto b = make("backward_euler", {"jacobian=matrix_free", "linear_solver=gmres", "preconditioner=jacobi"});
+  EXPECT_THROW(run_fixed_step(sys, *b, opt), BadInput);
+  EXPECT_THROW(make("backward_euler", {"linear_solver=qr"}), BadInput);
+}
+
+// CG and LDLᵀ refuse the non-symmetric Newton matrix of a first-order mechanical system
+// (W = [[I, -hI], [-hK, I]]) instead of solving a different system.
+TEST(LinearSolvers, SymmetricSolversRefuseNonSymmetricMatrix) {
+  auto sys = model("kepler");
+  for (const auto& solver : {"cg", "ldlt"}) {
+    auto integ = make("backward_euler", {std::string("linear_solver=") + solver});
+    FixedStepOptions opt;
+    opt.t_end = 1.0;
+    opt.h = 0.1;
+    EXPECT_EQ(run_fixed_step(*sys, *integ, opt).stats.status, Status::newton_failed) << solver;
+  }
+}
+
+// Baraff–Witkin on the oscillator: one step is (1 - hD - h²K)Δv = h(a + hKv) by hand.
+TEST(BaraffWitkin, OneStepMatchesFormula) {
+  const double k = 4, gamma = 0.3, h = 0.1, x0 = 1, v0 = 0.5;
+  auto sys = model("harmonic_oscillator", {"k=4", "gamma=0.3", "x0=1", "v0=0.5"});
+  auto integ = make("baraff_witkin");
+  Vec y = sys->initial_state();
+  SolveStats stats;
+  integ->reset(*sys, 0, y);
+  ASSERT_EQ(integ->step(*sys, 0, y, h, stats), Status::ok);
+  const double a = -k * x0 - gamma * v0;
+  const double dv = h * (a + h * (-k) * v0) / (1 + h * gamma + h * h * k);
+  EXPECT_NEAR(y[1], v0 + dv, 1e-15);
+  EXPECT_NEAR(y[0], x0 + h * (v0 + dv), 1e-15);
+}
+
+}  // namespace
+}  // namespace stiffbench
