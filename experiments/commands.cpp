@@ -250,6 +250,10 @@ std::vector<SuiteItem> default_suite(bool quick) {
       {"prothero_robinson_l50",
        "Prothero-Robinson, λ = -50: explicit methods unstable for h|λ| beyond their limit",
        spec("prothero_robinson", general, 10.0, 0.1, {"lambda=-50"}), false},
+      {"prothero_robinson_stiff",
+       "Prothero-Robinson, λ = -1e6 (h|λ| up to 1e5): explicit methods unstable, L-stable "
+       "methods track φ",
+       spec("prothero_robinson", general, 10.0, 0.1, {"lambda=-1e6"}), false},
   };
 }
 
