@@ -83,4 +83,44 @@ RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0
   return r;
 }
 
+RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOptions& opt,
+                       const Observer& observer) {
+  const double t0 = sys.initial_time();
+  require_input(std::isfinite(opt.t_end) && opt.t_end > t0,
+                "t-end must be > the model's initial time " + std::to_string(t0));
+  require_input(integ.supports_adaptive(),
+                "integrator '" + integ.info().name + "' is fixed-step only: give --h");
+  check_compatible(integ.info(), sys);
+  RunResult r;
+  r.y = sys.initial_state();
+  r.t = t0;
+  const long outputs = std::max(1L, opt.outputs);
+  const EvalCounters before = sys.counters();
+  const auto start = std::chrono::steady_clock::now();
+  integ.reset(sys, t0, r.y);
+  if (observer) observer(r.t, r.y);
+  for (long j = 1; j <= outputs; ++j) {
+    const double t_out = j == outputs ? opt.t_end
+                                      : t0 + (opt.t_end - t0) * static_cast<double>(j) /
+                                                 static_cast<double>(outputs);
+    const Status s = integ.advance_to(sys, t_out, r.y, r.stats);
+    if (s != Status::ok) {
+      r.stats.status = s;
+      break;
+    }
+    r.t = t_out;
+    if (!r.y.allFinite()) {
+      r.stats.status = Status::unstable;
+      r.stats.message = "non-finite state at t = " + std::to_string(t_out);
+      break;
+    }
+    if (observer) observer(r.t, r.y);
+  }
+  r.stats.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r.stats.f_evals = sys.counters().f_evals - before.f_evals;
+  r.stats.jac_evals += sys.counters().jac_evals - before.jac_evals;
+  r.n_steps = r.stats.steps;
+  return r;
+}
+
 }  // namespace stiffbench

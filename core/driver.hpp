@@ -48,4 +48,14 @@ RunResult run_fixed_step(const OdeSystem& sys, Integrator& integ, const FixedSte
 RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0, CVecRef y0,
                               const FixedStepOptions& opt, const Observer& observer = {});
 
+struct AdaptiveOptions {
+  double t_end = 1.0;
+  long outputs = 0;  // observer at t0 and at `outputs` equally spaced times (0: only t_end)
+};
+
+// Runs an adaptive integrator from the system's initial state to t_end, stopping at the output
+// times. Status and library counters come from the integrator; f evaluations from the system.
+RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOptions& opt,
+                       const Observer& observer = {});
+
 }  // namespace stiffbench

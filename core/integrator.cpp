@@ -26,6 +26,10 @@ std::string describe_requirements(const Requirements& r) {
   return out.empty() ? "-" : out;
 }
 
+Status Integrator::advance_to(const OdeSystem&, double, VecRef, SolveStats&) {
+  throw BadInput("integrator '" + info_.name + "' has no adaptive mode: give --h");
+}
+
 void check_compatible(const MethodInfo& info, const OdeSystem& sys) {
   const std::string who = "integrator '" + info.name + "'";
   const MechanicalSystem* mech = sys.as_mechanical();

@@ -58,6 +58,14 @@ class Integrator {
   // iterations, linear solves) are added to `stats`; the driver counts steps and evaluations.
   virtual Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) = 0;
 
+  // Adaptive mode (the library references): after reset(), advance_to() integrates from the
+  // current time to t_out with the method's own step-size control, writes y(t_out) and sets
+  // the library's own counters in `stats` (cumulative since reset). A fixed-step run calls
+  // only step(), an adaptive run only advance_to().
+  virtual bool supports_fixed_step() const { return true; }
+  virtual bool supports_adaptive() const { return false; }
+  virtual Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats);
+
  private:
   MethodInfo info_;
 };

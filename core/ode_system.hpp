@@ -56,6 +56,19 @@ class OdeSystem {
   virtual bool has_jacobian_pattern() const { return has_jacobian(); }
   virtual SparseMat jacobian_pattern() const;
 
+  // Optional additive split f = f_E + f_I for IMEX methods (f_E non-stiff, treated
+  // explicitly; f_I stiff, implicitly). Each part's call counts as one f evaluation. Without a
+  // split, IMEX integrators treat all of f implicitly.
+  virtual bool has_imex_split() const { return false; }
+  void rhs_explicit_part(double t, CVecRef y, VecRef fe) const {
+    count_f_eval();
+    eval_rhs_explicit_part(t, y, fe);
+  }
+  void rhs_implicit_part(double t, CVecRef y, VecRef fi) const {
+    count_f_eval();
+    eval_rhs_implicit_part(t, y, fi);
+  }
+
   // True when f does not depend on t explicitly (Rosenbrock methods then skip ∂f/∂t).
   virtual bool autonomous() const { return false; }
 
@@ -89,6 +102,11 @@ class OdeSystem {
  protected:
   virtual void eval_rhs(double t, CVecRef y, VecRef dydt) const = 0;
   virtual void eval_jacobian(double t, CVecRef y, SparseMat& jac) const;
+  // The split's parts (only called when has_imex_split()); the Jacobian of f_I is that of f
+  // restricted to the implicit part, which a split model provides through eval_jacobian when
+  // its explicit part does not depend on y.
+  virtual void eval_rhs_explicit_part(double, CVecRef, VecRef) const {}
+  virtual void eval_rhs_implicit_part(double, CVecRef, VecRef) const {}
   void count_f_eval() const { ++counters_.f_evals; }
 
  private:

@@ -45,8 +45,12 @@ void print_stats_table(std::ostream& os, const SolveStats& s) {
   const auto values = s.field_values();
   for (std::size_t i = 0; i < names.size(); ++i)
     os << "  " << std::left << std::setw(16) << names[i] << std::right << values[i] << "\n";
+  if (s.library_f_evals >= 0)
+    os << "  " << std::left << std::setw(16) << "library_f_evals" << std::right << s.library_f_evals
+       << "\n";
   if (!s.message.empty())
     os << "  " << std::left << std::setw(16) << "message" << s.message << "\n";
+  if (!s.library_report.empty()) os << "\nlibrary statistics:\n" << s.library_report;
 }
 
 void print_stats_csv_header(std::ostream& os) {

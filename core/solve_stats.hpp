@@ -21,9 +21,14 @@ struct SolveStats {
   long newton_iters = 0;
   long newton_fails = 0;
   long krylov_iters = 0;
+  // The library's own count of f evaluations (references only; -1 when not reported). It can
+  // differ from f_evals, which the testbed counts at the system boundary: see the reference
+  // integrators' headers for why.
+  long library_f_evals = -1;
   double wall_s = 0.0;
   Status status = Status::ok;
   std::string message;  // why a run did not end ok (empty otherwise)
+  std::string library_report;  // a library's own statistics printout (references), or empty
 
   // Field names and values in a fixed order, shared by the table and CSV printers.
   static std::vector<std::string> field_names();

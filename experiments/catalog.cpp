@@ -22,6 +22,7 @@ const IntegratorRegistry& integrator_registry() {
     register_explicit_integrators(r);
     register_symplectic_integrators(r);
     register_implicit_integrators(r);
+    register_reference_integrators(r);
     return r;
   }();
   return reg;

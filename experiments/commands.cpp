@@ -1,5 +1,6 @@
 #include "experiments/commands.hpp"
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <iomanip>
@@ -29,8 +30,9 @@ void list_integrators(std::ostream& out) {
   Table t{{"integrator", "family", "order", "stages", "requires", "description"}, {}};
   for (const auto& e : integrator_registry().entries()) {
     const MethodInfo& m = e.info;
-    t.rows.push_back({m.name, to_string(m.family), std::to_string(m.order),
-                      std::to_string(m.stages), describe_requirements(m.requires_), m.description});
+    t.rows.push_back({m.name, to_string(m.family), m.order ? std::to_string(m.order) : "variable",
+                      m.stages ? std::to_string(m.stages) : "variable",
+                      describe_requirements(m.requires_), m.description});
   }
   out << t.to_markdown();
 }
@@ -115,12 +117,25 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   Setup setup = make_setup(opt.model, {opt.integrator}, opt.params);
   const OdeSystem& sys = *setup.model;
   Integrator& integ = *setup.integrators.front();
+  double t_end = opt.t_end;
+  if (std::isnan(t_end)) {
+    t_end = model_registry().at(opt.model).info.t_end;
+    require_input(t_end > 0, "--t-end is required: model '" + opt.model + "' has no default end time");
+  }
+  // Fixed step with --h; without it the integrator's own step control (references only).
+  const bool adaptive = std::isnan(opt.h);
+  require_input(!adaptive || integ.supports_adaptive(),
+                "--h is required: integrator '" + opt.integrator + "' is fixed-step");
+  require_input(adaptive || integ.supports_fixed_step(),
+                "integrator '" + opt.integrator + "' has no fixed-step mode: omit --h and set --param rtol=R");
   FixedStepOptions fo;
-  fo.t_end = opt.t_end;
+  fo.t_end = t_end;
   fo.h = opt.h;
   fo.outputs = opt.outputs;
-  const long n = fixed_step_count(sys.initial_time(), opt.t_end, opt.h, fo.max_steps);
-  if (n > 10'000'000) err << "solve: " << n << " steps; this may take a while\n";
+  if (!adaptive) {
+    const long n = fixed_step_count(sys.initial_time(), t_end, opt.h, fo.max_steps);
+    if (n > 10'000'000) err << "solve: " << n << " steps; this may take a while\n";
+  }
 
   std::ostringstream traj;
   if (!opt.out_csv.empty()) {
@@ -137,7 +152,8 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
     };
   }
   const Vec y0 = sys.initial_state();
-  const RunResult r = run_fixed_step(sys, integ, fo, obs);
+  const RunResult r = adaptive ? run_adaptive(sys, integ, {t_end, opt.outputs}, obs)
+                               : run_fixed_step(sys, integ, fo, obs);
   if (!opt.out_csv.empty()) {
     // Written whatever the status: the trajectory up to a blow-up is part of the result.
     write_file_atomic(opt.out_csv, traj.str());
@@ -148,11 +164,17 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   for (const auto& [k, v] : opt.params.values()) out << " " << k << "=" << v;
   out << "\nintegrator   " << opt.integrator << " (" << to_string(integ.info().family) << ", order "
       << integ.info().order << ")\n";
-  out << "h            " << format_full(r.h) << " (" << r.n_steps
-      << " steps to t = " << format_full(opt.t_end) << ")\n";
-  if (const auto rho = sys.stiffness(sys.initial_time(), y0))
-    out << "stiffness    spectral radius ~ " << format_short(*rho)
-        << " at t0, h*rho = " << format_short(*rho * r.h) << "\n";
+  if (adaptive) {
+    out << "steps        adaptive (" << r.stats.steps << " steps to t = " << format_full(t_end) << ")\n";
+  } else {
+    out << "h            " << format_full(r.h) << " (" << r.n_steps
+        << " steps to t = " << format_full(t_end) << ")\n";
+  }
+  if (const auto rho = sys.stiffness(sys.initial_time(), y0)) {
+    out << "stiffness    spectral radius ~ " << format_short(*rho) << " at t0";
+    if (!adaptive) out << ", h*rho = " << format_short(*rho * r.h);
+    out << "\n";
+  }
   out << "status       " << to_string(r.stats.status) << "\n";
   if (!r.stats.message.empty()) out << "message      " << r.stats.message << "\n";
   out << "\nfinal state at t = " << format_full(r.t) << ":\n";

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <iosfwd>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -15,7 +16,9 @@ void cmd_describe(const std::string& name, std::ostream& out);
 struct SolveOptions {
   std::string model, integrator;
   Params params;
-  double h = 0, t_end = 0;
+  // NaN: not given (adaptive mode / the model's default end time).
+  double h = std::numeric_limits<double>::quiet_NaN();
+  double t_end = std::numeric_limits<double>::quiet_NaN();
   long outputs = 100;
   std::string out_csv;  // empty: no trajectory file
 };

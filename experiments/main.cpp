@@ -53,9 +53,10 @@ int main(int argc, char** argv) {
       app.add_subcommand("solve", "one fixed-step run: final state, invariants, statistics");
   solve->add_option("--model", solve_opt.model, "model name")->required();
   solve->add_option("--integrator", solve_opt.integrator, "integrator name")->required();
-  solve->add_option("--h", solve_opt.h, "step size (the run takes N = round(T/h) steps of T/N)")
-      ->required();
-  solve->add_option("--t-end", solve_opt.t_end, "final time")->required();
+  solve->add_option("--h", solve_opt.h,
+                    "step size (the run takes N = round(T/h) steps of T/N); omit for the adaptive "
+                    "mode of a reference integrator");
+  solve->add_option("--t-end", solve_opt.t_end, "final time (default: the model's literature end time)");
   solve->add_option("--outputs", solve_opt.outputs, "number of output intervals in the trajectory")
       ->capture_default_str();
   solve->add_option("--param", solve_params, "model/integrator parameter key=value (repeatable)")

@@ -7,6 +7,8 @@
 #include "integrators/implicit/baraff_witkin.hpp"
 #include "integrators/implicit/dirk.hpp"
 #include "integrators/implicit/linearly_implicit.hpp"
+#include "integrators/reference/gsl.hpp"
+#include "integrators/reference/sundials.hpp"
 #include "integrators/symplectic/splitting.hpp"
 #include "integrators/symplectic/verlet.hpp"
 
@@ -84,6 +86,11 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
   reg.add({BaraffWitkin({}).info(), linear_specs, [](const Params& p) {
              return std::make_unique<BaraffWitkin>(read_implicit_options(p, false));
            }});
+}
+
+void register_reference_integrators(IntegratorRegistry& reg) {
+  register_sundials_integrators(reg);
+  register_gsl_integrators(reg);
 }
 
 }  // namespace stiffbench

@@ -8,5 +8,7 @@ namespace stiffbench {
 void register_explicit_integrators(IntegratorRegistry& reg);
 void register_symplectic_integrators(IntegratorRegistry& reg);
 void register_implicit_integrators(IntegratorRegistry& reg);
+// The library references (integrators/reference/).
+void register_reference_integrators(IntegratorRegistry& reg);
 
 }  // namespace stiffbench

@@ -26,6 +26,8 @@ class ProtheroRobinson final : public OdeSystem {
   bool has_exact() const override { return true; }
   void exact(double t, VecRef y) const override;
   std::optional<double> stiffness(double, CVecRef) const override { return std::abs(lambda_); }
+  // IMEX split: f_I = λ(y - φ(t)) (stiff), f_E = φ'(t) (independent of y, so J_I = J = λ).
+  bool has_imex_split() const override { return true; }
 
   double phi(double t) const;
   double phi_dot(double t) const;
@@ -33,6 +35,10 @@ class ProtheroRobinson final : public OdeSystem {
  protected:
   void eval_rhs(double t, CVecRef y, VecRef dydt) const override;
   void eval_jacobian(double t, CVecRef y, SparseMat& jac) const override;
+  void eval_rhs_explicit_part(double t, CVecRef, VecRef fe) const override { fe[0] = phi_dot(t); }
+  void eval_rhs_implicit_part(double t, CVecRef y, VecRef fi) const override {
+    fi[0] = lambda_ * (y[0] - phi(t));
+  }
 
  private:
   double lambda_;

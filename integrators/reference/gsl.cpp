@@ -1,0 +1,182 @@
+#include "integrators/reference/gsl.hpp"
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_odeiv2.h>
+
+#include <cmath>
+#include <iostream>
+
+namespace stiffbench {
+
+namespace {
+
+struct GslMethod {
+  const char* name;
+  const gsl_odeiv2_step_type* const* type;  // address of the GSL global (initialised at load)
+  int order;                                 // 0: variable order
+  bool needs_jacobian;
+  bool fixed_ok;
+  const char* description;
+};
+
+const std::vector<GslMethod>& gsl_methods() {
+  static const std::vector<GslMethod> all = {
+      {"gsl_rk4", &gsl_odeiv2_step_rk4, 4, false, true, "GSL classic RK4 (step doubling for the error)"},
+      {"gsl_rkf45", &gsl_odeiv2_step_rkf45, 5, false, true, "GSL Runge-Kutta-Fehlberg 4(5)"},
+      {"gsl_rkck", &gsl_odeiv2_step_rkck, 5, false, true, "GSL Cash-Karp 4(5)"},
+      {"gsl_rk8pd", &gsl_odeiv2_step_rk8pd, 8, false, true, "GSL Prince-Dormand 8(7)"},
+      {"gsl_rk2imp", &gsl_odeiv2_step_rk2imp, 2, true, true, "GSL implicit Gauss-Legendre, 1 stage (midpoint)"},
+      {"gsl_rk4imp", &gsl_odeiv2_step_rk4imp, 4, true, true, "GSL implicit Gauss-Legendre, 2 stages"},
+      {"gsl_bsimp", &gsl_odeiv2_step_bsimp, 0, true, true, "GSL Bader-Deuflhard semi-implicit extrapolation"},
+      {"gsl_msadams", &gsl_odeiv2_step_msadams, 0, false, false, "GSL variable-order Adams (1-12); adaptive only"},
+      {"gsl_msbdf", &gsl_odeiv2_step_msbdf, 0, true, false, "GSL variable-order BDF (1-5); adaptive only"},
+  };
+  return all;
+}
+
+class GslIntegrator final : public Integrator {
+ public:
+  GslIntegrator(MethodInfo info, const GslMethod& m, double rtol, double atol, double h0)
+      : Integrator(std::move(info)), method_(m), rtol_(rtol), atol_(atol), h0_(h0) {
+    gsl_set_error_handler_off();  // GSL aborts by default; we report status codes instead
+  }
+  ~GslIntegrator() override { free_driver(); }
+
+  bool supports_fixed_step() const override { return method_.fixed_ok; }
+  bool supports_adaptive() const override { return true; }
+
+  void reset(const OdeSystem& sys, double t0, CVecRef y0) override {
+    check_compatible(info(), sys);
+    sys_ = &sys;
+    n_ = sys.dimension();
+    t_ = t0;
+    y_last_ = y0;
+    f0_.resize(n_);
+    f1_.resize(n_);
+    tmp_.resize(n_);
+    gsys_ = {func, method_.needs_jacobian ? jac : nullptr, static_cast<std::size_t>(n_), this};
+    fixed_h_ = 0;
+    make_driver(h0_);
+  }
+
+  Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override {
+    require_input(method_.fixed_ok, "integrator '" + info().name + "' is adaptive only: give --param rtol=R, not --h");
+    sync(sys, t, y);
+    if (h != fixed_h_) {
+      make_driver(h);
+      fixed_h_ = h;
+    }
+    double tt = t_;
+    const int status = gsl_odeiv2_driver_apply_fixed_step(driver_, &tt, h, 1, y.data());
+    return finish(status, tt, y, stats, true);
+  }
+
+  Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) override {
+    sync(sys, t_, y);
+    double tt = t_;
+    const int status = gsl_odeiv2_driver_apply(driver_, &tt, t_out, y.data());
+    return finish(status, tt, y, stats, false);
+  }
+
+ private:
+  static int func(double t, const double y[], double f[], void* p) {
+    auto* self = static_cast<GslIntegrator*>(p);
+    Eigen::Map<const Vec> yv(y, self->n_);
+    Eigen::Map<Vec> fv(f, self->n_);
+    self->sys_->rhs(t, yv, fv);
+    return fv.allFinite() ? GSL_SUCCESS : GSL_EBADFUNC;
+  }
+
+  // dfdy is row-major: dfdy[i*n + j] = ∂f_i/∂y_j.
+  static int jac(double t, const double y[], double* dfdy, double dfdt[], void* p) {
+    auto* self = static_cast<GslIntegrator*>(p);
+    const Index n = self->n_;
+    Eigen::Map<const Vec> yv(y, n);
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> jm(dfdy, n, n);
+    if (self->sys_->has_jacobian()) {
+      self->sys_->jacobian(t, yv, self->jac_);
+      jm = Mat(self->jac_);
+    } else {
+      jm = finite_difference_jacobian(*self->sys_, t, yv);
+      ++self->fd_jacobians_;
+    }
+    Eigen::Map<Vec> ft(dfdt, n);
+    if (self->sys_->autonomous()) {
+      ft.setZero();
+    } else {
+      const double dt = 1.4901161193847656e-08 * std::max(1.0, std::abs(t));
+      self->sys_->rhs(t, yv, self->f0_);
+      self->sys_->rhs(t + dt, yv, self->f1_);
+      ft = (self->f1_ - self->f0_) / dt;
+    }
+    return GSL_SUCCESS;
+  }
+
+  void free_driver() {
+    if (driver_) gsl_odeiv2_driver_free(driver_);
+    driver_ = nullptr;
+  }
+
+  void make_driver(double h) {
+    free_driver();
+    driver_ = gsl_odeiv2_driver_alloc_y_new(&gsys_, *method_.type, h, atol_, rtol_);
+    if (!driver_) throw std::runtime_error("gsl_odeiv2_driver_alloc_y_new failed for " + info().name);
+  }
+
+  // GSL keeps its steppers' history inside the driver: a state changed from outside (or a new
+  // time) resets it.
+  void sync(const OdeSystem& sys, double t, CVecRef y) {
+    if (&sys != sys_) throw std::logic_error("GslIntegrator: system differs from reset()");
+    if (std::abs(t - t_) <= 1e-13 * std::max(1.0, std::abs(t)) && y == y_last_) return;
+    gsl_odeiv2_driver_reset(driver_);
+    t_ = t;
+  }
+
+  Status finish(int status, double tt, VecRef y, SolveStats& stats, bool fixed) {
+    if (!fixed) stats.steps = static_cast<long>(driver_->e->count);
+    stats.rejected_steps = static_cast<long>(driver_->e->failed_steps);
+    stats.jac_evals = fd_jacobians_;
+    if (status != GSL_SUCCESS) {
+      stats.message = "GSL " + info().name + ": " + gsl_strerror(status) + " (status " +
+                      std::to_string(status) + ") at t = " + std::to_string(tt);
+      std::cerr << "stiffbench: " << stats.message << "\n";
+      return Status::solver_error;
+    }
+    t_ = tt;
+    y_last_ = y;
+    return Status::ok;
+  }
+
+  GslMethod method_;
+  double rtol_, atol_, h0_;
+  const OdeSystem* sys_ = nullptr;
+  Index n_ = 0;
+  gsl_odeiv2_system gsys_{};
+  gsl_odeiv2_driver* driver_ = nullptr;
+  SparseMat jac_;
+  Vec f0_, f1_, tmp_, y_last_;
+  double t_ = 0, fixed_h_ = 0;
+  long fd_jacobians_ = 0;
+};
+
+}  // namespace
+
+void register_gsl_integrators(IntegratorRegistry& reg) {
+  using P = ParamType;
+  const std::vector<ParamSpec> specs = {
+      {"rtol", P::real, "1e-6", "relative tolerance (adaptive mode)"},
+      {"atol", P::real, "1e-10", "absolute tolerance (adaptive mode)"},
+      {"h0", P::real, "1e-6", "initial step of the adaptive driver"},
+  };
+  for (const GslMethod& m : gsl_methods()) {
+    const MethodInfo info{m.name, Family::reference, m.order, 0, {}, m.description};
+    reg.add({info, specs, [info, m](const Params& p) {
+               const double rtol = p.real("rtol"), atol = p.real("atol"), h0 = p.real("h0");
+               require_input(rtol >= 0 && atol >= 0 && rtol + atol > 0, "parameters 'rtol'/'atol' must be >= 0, not both 0");
+               require_input(h0 > 0, "parameter 'h0' must be > 0");
+               return std::make_unique<GslIntegrator>(info, m, rtol, atol, h0);
+             }});
+  }
+}
+
+}  // namespace stiffbench

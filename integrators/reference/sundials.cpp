@@ -1,0 +1,474 @@
+#include "integrators/reference/sundials.hpp"
+
+#include <arkode/arkode_arkstep.h>
+#include <arkode/arkode_butcher_dirk.h>
+#include <arkode/arkode_butcher_erk.h>
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sunlinsol/sunlinsol_band.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunlinsol/sunlinsol_klu.h>
+#include <sunlinsol/sunlinsol_spgmr.h>
+#include <sunmatrix/sunmatrix_band.h>
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <iostream>
+
+namespace stiffbench {
+
+namespace {
+
+enum class Lin { dense, band, klu, spgmr };
+enum class Kind { cvode_bdf, cvode_adams, arkode_erk, arkode_dirk, arkode_imex };
+
+struct Settings {
+  double rtol = 1e-6, atol = 1e-10;
+  Lin lin = Lin::dense;
+  std::string jacobian = "auto";  // auto | analytic | dq
+  long max_steps = 100000;
+  int max_order = 0;  // 0: the library's default
+  std::string explicit_table, implicit_table;
+};
+
+// Reads a FILE* report (PrintAllStats) into a string.
+std::string capture(const std::function<void(FILE*)>& print) {
+  char* buf = nullptr;
+  std::size_t len = 0;
+  FILE* f = open_memstream(&buf, &len);
+  if (!f) return {};
+  print(f);
+  std::fclose(f);
+  std::string out(buf, len);
+  std::free(buf);
+  return out;
+}
+
+class SundialsIntegrator final : public Integrator {
+ public:
+  SundialsIntegrator(MethodInfo info, Kind kind, Settings s)
+      : Integrator(std::move(info)), kind_(kind), set_(std::move(s)) {
+    SUNContext_Create(nullptr, &ctx_);
+  }
+  ~SundialsIntegrator() override {
+    free_memory();
+    SUNContext_Free(&ctx_);
+  }
+
+  bool supports_fixed_step() const override { return !is_cvode(); }
+  bool supports_adaptive() const override { return true; }
+
+  void reset(const OdeSystem& sys, double t0, CVecRef y0) override {
+    check_compatible(info(), sys);
+    sys_ = &sys;
+    n_ = sys.dimension();
+    use_analytic_ = set_.jacobian == "analytic" || (set_.jacobian == "auto" && sys.has_jacobian());
+    require_input(!use_analytic_ || sys.has_jacobian(),
+                  "integrator '" + info().name + "': model '" + sys.name() + "' has no analytic Jacobian");
+    require_input(set_.lin != Lin::klu || use_analytic_,
+                  "integrator '" + info().name + "': linear_solver=klu needs the model's analytic sparse Jacobian");
+    if (use_analytic_ && needs_linear_solver()) {
+      jac_ = sys.jacobian_pattern();
+      jac_.makeCompressed();
+    }
+    t_ = t0;
+    y_last_ = y0;
+    fixed_h_ = 0;
+    fixed_mode_ = false;
+    create(t0, y0);
+  }
+
+  Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override {
+    require_input(!is_cvode(), "integrator '" + info().name + "' is adaptive only: give --param rtol=R, not --h");
+    sync(sys, t, y);
+    if (h != fixed_h_) {
+      if (!check(ARKStepSetFixedStep(mem_, h), "ARKStepSetFixedStep", stats)) return Status::solver_error;
+      fixed_h_ = h;
+    }
+    // One internal step of exactly h (ARK_ONE_STEP with a fixed step size).
+    fixed_mode_ = true;
+    return evolve(t + h, y, ARK_ONE_STEP, stats);
+  }
+
+  Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) override {
+    sync(sys, t_, y);
+    return evolve(t_out, y, is_cvode() ? CV_NORMAL : ARK_NORMAL, stats);
+  }
+
+ private:
+  bool is_cvode() const { return kind_ == Kind::cvode_bdf || kind_ == Kind::cvode_adams; }
+  bool needs_linear_solver() const { return kind_ != Kind::arkode_erk; }
+
+  void free_memory() {
+    if (mem_) {
+      if (is_cvode()) CVodeFree(&mem_);
+      else ARKStepFree(&mem_);
+    }
+    if (ls_) SUNLinSolFree(ls_);
+    if (a_) SUNMatDestroy(a_);
+    mem_ = nullptr;
+    ls_ = nullptr;
+    a_ = nullptr;
+  }
+
+  // --- callbacks (C ABI: exceptions must not cross it) -----------------------------------
+  static int rhs_cb(sunrealtype t, N_Vector y, N_Vector yd, void* ud) {
+    auto* self = static_cast<SundialsIntegrator*>(ud);
+    try {
+      Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), self->n_);
+      Eigen::Map<Vec> dv(N_VGetArrayPointer(yd), self->n_);
+      self->sys_->rhs(t, yv, dv);
+      return dv.allFinite() ? 0 : 1;  // non-finite: recoverable, the library retries smaller
+    } catch (const std::exception& e) {
+      self->callback_error_ = e.what();
+      return -1;
+    }
+  }
+  static int rhs_explicit_cb(sunrealtype t, N_Vector y, N_Vector yd, void* ud) {
+    auto* self = static_cast<SundialsIntegrator*>(ud);
+    Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), self->n_);
+    Eigen::Map<Vec> dv(N_VGetArrayPointer(yd), self->n_);
+    self->sys_->rhs_explicit_part(t, yv, dv);
+    return dv.allFinite() ? 0 : 1;
+  }
+  static int rhs_implicit_cb(sunrealtype t, N_Vector y, N_Vector yd, void* ud) {
+    auto* self = static_cast<SundialsIntegrator*>(ud);
+    Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), self->n_);
+    Eigen::Map<Vec> dv(N_VGetArrayPointer(yd), self->n_);
+    self->sys_->rhs_implicit_part(t, yv, dv);
+    return dv.allFinite() ? 0 : 1;
+  }
+  void eval_jac(sunrealtype t, N_Vector y) {
+    Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), n_);
+    sys_->jacobian(t, yv, jac_);
+    jac_.makeCompressed();
+  }
+  static int jac_dense_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector, N_Vector, N_Vector) {
+    auto* self = static_cast<SundialsIntegrator*>(ud);
+    self->eval_jac(t, y);
+    SUNMatZero(j);
+    for (Index c = 0; c < self->jac_.outerSize(); ++c)
+      for (SparseMat::InnerIterator it(self->jac_, c); it; ++it) SM_ELEMENT_D(j, it.row(), c) = it.value();
+    return 0;
+  }
+  static int jac_band_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector, N_Vector, N_Vector) {
+    auto* self = static_cast<SundialsIntegrator*>(ud);
+    self->eval_jac(t, y);
+    SUNMatZero(j);
+    for (Index c = 0; c < self->jac_.outerSize(); ++c)
+      for (SparseMat::InnerIterator it(self->jac_, c); it; ++it) SM_ELEMENT_B(j, it.row(), c) = it.value();
+    return 0;
+  }
+  static int jac_sparse_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector, N_Vector, N_Vector) {
+    auto* self = static_cast<SundialsIntegrator*>(ud);
+    self->eval_jac(t, y);
+    const SparseMat& m = self->jac_;
+    if (SUNSparseMatrix_NNZ(j) < m.nonZeros()) return -1;
+    sunindextype* colptr = SUNSparseMatrix_IndexPointers(j);
+    sunindextype* rows = SUNSparseMatrix_IndexValues(j);
+    sunrealtype* data = SUNSparseMatrix_Data(j);
+    for (Index c = 0; c <= m.outerSize(); ++c) colptr[c] = m.outerIndexPtr()[c];
+    for (Index k = 0; k < m.nonZeros(); ++k) {
+      rows[k] = m.innerIndexPtr()[k];
+      data[k] = m.valuePtr()[k];
+    }
+    return 0;
+  }
+  static int jtsetup_cb(sunrealtype t, N_Vector y, N_Vector, void* ud) {
+    static_cast<SundialsIntegrator*>(ud)->eval_jac(t, y);
+    return 0;
+  }
+  static int jtimes_cb(N_Vector v, N_Vector jv, sunrealtype, N_Vector, N_Vector, void* ud, N_Vector) {
+    auto* self = static_cast<SundialsIntegrator*>(ud);
+    Eigen::Map<const Vec> vv(N_VGetArrayPointer(v), self->n_);
+    Eigen::Map<Vec> out(N_VGetArrayPointer(jv), self->n_);
+    out.noalias() = self->jac_ * vv;
+    return 0;
+  }
+  static void err_cb(int code, const char* module, const char* function, char* msg, void* ud) {
+    if (code > 0) return;  // warnings
+    auto* self = static_cast<SundialsIntegrator*>(ud);
+    self->library_error_ = std::string(module) + "::" + function + ": " + msg;
+  }
+
+  bool check(int flag, const char* what, SolveStats& stats) {
+    if (flag >= 0) return true;
+    const char* name = is_cvode() ? CVodeGetReturnFlagName(flag) : ARKStepGetReturnFlagName(flag);
+    stats.message = std::string(what) + " failed: " + name + (library_error_.empty() ? "" : " (" + library_error_ + ")");
+    if (!callback_error_.empty()) stats.message += "; " + callback_error_;
+    std::cerr << "stiffbench: " << info().name << ": " << stats.message << "\n";
+    return false;
+  }
+
+  void create(double t0, CVecRef y0) {
+    free_memory();
+    // The library copies y0 into its own vectors; the wrapper only lends it the data.
+    N_Vector y = N_VMake_Serial(n_, const_cast<double*>(y0.data()), ctx_);
+    SolveStats dummy;
+    auto ok = [&](int flag, const char* what) {
+      if (!check(flag, what, dummy)) throw std::runtime_error(dummy.message);
+    };
+    if (is_cvode()) {
+      mem_ = CVodeCreate(kind_ == Kind::cvode_bdf ? CV_BDF : CV_ADAMS, ctx_);
+      ok(CVodeInit(mem_, rhs_cb, t0, y), "CVodeInit");
+      ok(CVodeSetUserData(mem_, this), "CVodeSetUserData");
+      ok(CVodeSetErrHandlerFn(mem_, err_cb, this), "CVodeSetErrHandlerFn");
+      ok(CVodeSStolerances(mem_, set_.rtol, set_.atol), "CVodeSStolerances");
+      ok(CVodeSetMaxNumSteps(mem_, set_.max_steps), "CVodeSetMaxNumSteps");
+      if (set_.max_order > 0) ok(CVodeSetMaxOrd(mem_, set_.max_order), "CVodeSetMaxOrd");
+    } else {
+      const bool imex = kind_ == Kind::arkode_imex && sys_->has_imex_split();
+      ARKRhsFn fe = kind_ == Kind::arkode_erk ? rhs_cb : imex ? rhs_explicit_cb : nullptr;
+      ARKRhsFn fi = kind_ == Kind::arkode_erk ? nullptr : imex ? rhs_implicit_cb : rhs_cb;
+      mem_ = ARKStepCreate(fe, fi, t0, y, ctx_);
+      ok(ARKStepSetUserData(mem_, this), "ARKStepSetUserData");
+      ok(ARKStepSetErrHandlerFn(mem_, err_cb, this), "ARKStepSetErrHandlerFn");
+      ok(ARKStepSStolerances(mem_, set_.rtol, set_.atol), "ARKStepSStolerances");
+      ok(ARKStepSetMaxNumSteps(mem_, set_.max_steps), "ARKStepSetMaxNumSteps");
+      const char* itab = kind_ == Kind::arkode_erk ? "ARKODE_DIRK_NONE" : set_.implicit_table.c_str();
+      const char* etab = kind_ == Kind::arkode_dirk || (kind_ == Kind::arkode_imex && !imex)
+                             ? "ARKODE_ERK_NONE"
+                             : set_.explicit_table.c_str();
+      ok(ARKStepSetTableName(mem_, itab, etab), "ARKStepSetTableName");
+    }
+    if (needs_linear_solver()) attach_linear_solver(y, ok);
+    N_VDestroy(y);
+  }
+
+  template <class Ok>
+  void attach_linear_solver(N_Vector y, Ok&& ok) {
+    const bool cv = is_cvode();
+    switch (set_.lin) {
+      case Lin::dense:
+        a_ = SUNDenseMatrix(n_, n_, ctx_);
+        ls_ = SUNLinSol_Dense(y, a_, ctx_);
+        break;
+      case Lin::band: {
+        Index mu = n_ - 1, ml = n_ - 1;
+        if (sys_->has_jacobian_pattern()) {
+          mu = ml = 0;
+          const SparseMat p = sys_->jacobian_pattern();
+          for (Index c = 0; c < p.outerSize(); ++c)
+            for (SparseMat::InnerIterator it(p, c); it; ++it) {
+              mu = std::max(mu, c - it.row());
+              ml = std::max(ml, it.row() - c);
+            }
+        }
+        a_ = SUNBandMatrix(n_, mu, ml, ctx_);
+        ls_ = SUNLinSol_Band(y, a_, ctx_);
+        break;
+      }
+      case Lin::klu:
+        a_ = SUNSparseMatrix(n_, n_, jac_.nonZeros(), CSC_MAT, ctx_);
+        ls_ = SUNLinSol_KLU(y, a_, ctx_);
+        break;
+      case Lin::spgmr:
+        ls_ = SUNLinSol_SPGMR(y, SUN_PREC_NONE, 0, ctx_);
+        break;
+    }
+    if (cv) ok(CVodeSetLinearSolver(mem_, ls_, a_), "CVodeSetLinearSolver");
+    else ok(ARKStepSetLinearSolver(mem_, ls_, a_), "ARKStepSetLinearSolver");
+    if (!use_analytic_) return;  // the library's difference quotients
+    if (set_.lin == Lin::spgmr) {
+      if (cv) ok(CVodeSetJacTimes(mem_, jtsetup_cb, jtimes_cb), "CVodeSetJacTimes");
+      else ok(ARKStepSetJacTimes(mem_, jtsetup_cb, jtimes_cb), "ARKStepSetJacTimes");
+      return;
+    }
+    auto fn = set_.lin == Lin::dense ? jac_dense_cb : set_.lin == Lin::band ? jac_band_cb : jac_sparse_cb;
+    if (cv) ok(CVodeSetJacFn(mem_, fn), "CVodeSetJacFn");
+    else ok(ARKStepSetJacFn(mem_, fn), "ARKStepSetJacFn");
+  }
+
+  // Re-initialises the library when the state was changed from outside (e.g. a constraint
+  // projection) or when the driver restarts at another time.
+  void sync(const OdeSystem& sys, double t, CVecRef y) {
+    if (&sys != sys_) throw std::logic_error("SundialsIntegrator: system differs from reset()");
+    // The driver computes t0 + k·h while the library accumulates: equal up to rounding.
+    if (std::abs(t - t_) <= 1e-13 * std::max(1.0, std::abs(t)) && y == y_last_) return;
+    N_Vector yw = N_VMake_Serial(n_, const_cast<double*>(y.data()), ctx_);
+    if (is_cvode()) CVodeReInit(mem_, t, yw);
+    else {
+      const bool imex = kind_ == Kind::arkode_imex && sys_->has_imex_split();
+      ARKStepReInit(mem_, kind_ == Kind::arkode_erk ? rhs_cb : imex ? rhs_explicit_cb : nullptr,
+                    kind_ == Kind::arkode_erk ? nullptr : imex ? rhs_implicit_cb : rhs_cb, t, yw);
+    }
+    N_VDestroy(yw);
+    t_ = t;
+  }
+
+  Status evolve(double t_out, VecRef y, int mode, SolveStats& stats) {
+    library_error_.clear();
+    callback_error_.clear();
+    N_Vector yout = N_VMake_Serial(n_, y.data(), ctx_);  // the driver's storage: no copy
+    sunrealtype tret = t_;
+    const int flag = is_cvode() ? CVode(mem_, t_out, yout, &tret, mode) : ARKStepEvolve(mem_, t_out, yout, &tret, mode);
+    N_VDestroy(yout);
+    read_counters(stats);
+    if (!check(flag, is_cvode() ? "CVode" : "ARKStepEvolve", stats)) return Status::solver_error;
+    t_ = tret;
+    y_last_ = y;
+    return Status::ok;
+  }
+
+  void read_counters(SolveStats& s) {
+    long steps = 0, etf = 0, nni = 0, ncf = 0, nsetups = 0, nje = 0, nli = 0, nfe = 0, nfi = 0, nfels = 0;
+    if (is_cvode()) {
+      CVodeGetNumSteps(mem_, &steps);
+      CVodeGetNumErrTestFails(mem_, &etf);
+      CVodeGetNumRhsEvals(mem_, &nfe);
+      CVodeGetNumNonlinSolvIters(mem_, &nni);
+      CVodeGetNumNonlinSolvConvFails(mem_, &ncf);
+      CVodeGetNumLinSolvSetups(mem_, &nsetups);
+      CVodeGetNumJacEvals(mem_, &nje);
+      CVodeGetNumLinIters(mem_, &nli);
+      CVodeGetNumLinRhsEvals(mem_, &nfels);
+      s.library_report = capture([&](FILE* f) { CVodePrintAllStats(mem_, f, SUN_OUTPUTFORMAT_TABLE); });
+    } else {
+      ARKStepGetNumSteps(mem_, &steps);
+      ARKStepGetNumErrTestFails(mem_, &etf);
+      ARKStepGetNumRhsEvals(mem_, &nfe, &nfi);
+      if (needs_linear_solver()) {
+        ARKStepGetNumNonlinSolvIters(mem_, &nni);
+        ARKStepGetNumNonlinSolvConvFails(mem_, &ncf);
+        ARKStepGetNumLinSolvSetups(mem_, &nsetups);
+        ARKStepGetNumJacEvals(mem_, &nje);
+        ARKStepGetNumLinIters(mem_, &nli);
+        ARKStepGetNumLinRhsEvals(mem_, &nfels);
+      }
+      s.library_report = capture([&](FILE* f) { ARKStepPrintAllStats(mem_, f, SUN_OUTPUTFORMAT_TABLE); });
+    }
+    if (!fixed_mode_) s.steps = steps;  // the fixed-step driver counts its own steps
+    s.rejected_steps = etf;
+    s.newton_iters = nni;
+    s.newton_fails = ncf;
+    s.lin_setups = nsetups;
+    s.lin_solves = needs_linear_solver() ? nni : 0;  // one linear solve per Newton iteration
+    s.krylov_iters = nli;
+    // Analytic Jacobians are counted at the system boundary; difference-quotient ones here.
+    s.jac_evals = use_analytic_ ? 0 : nje;
+    s.library_f_evals = nfe + nfi + nfels;
+  }
+
+  Kind kind_;
+  Settings set_;
+  SUNContext ctx_ = nullptr;
+  void* mem_ = nullptr;
+  SUNLinearSolver ls_ = nullptr;
+  SUNMatrix a_ = nullptr;
+  const OdeSystem* sys_ = nullptr;
+  Index n_ = 0;
+  bool use_analytic_ = false;
+  SparseMat jac_;
+  Vec y_last_;
+  double t_ = 0, fixed_h_ = 0;
+  bool fixed_mode_ = false;
+  std::string library_error_, callback_error_;
+};
+
+std::vector<ParamSpec> common_specs(bool linear) {
+  using P = ParamType;
+  std::vector<ParamSpec> s = {
+      {"rtol", P::real, "1e-6", "relative tolerance (adaptive mode; also scales Newton's tolerance)"},
+      {"atol", P::real, "1e-10", "absolute tolerance"},
+      {"max_steps", P::integer, "100000", "maximum internal steps per output interval"},
+  };
+  if (linear) {
+    s.push_back({"linear_solver", P::text, "dense", "dense, band, klu (sparse, needs the analytic Jacobian) or spgmr",
+                 {"dense", "band", "klu", "spgmr"}});
+    s.push_back({"jacobian", P::text, "auto", "analytic, dq (library difference quotients); auto: analytic where provided",
+                 {"auto", "analytic", "dq"}});
+  }
+  return s;
+}
+
+Settings read_common(const Params& p, bool linear) {
+  Settings s;
+  s.rtol = p.real("rtol");
+  s.atol = p.real("atol");
+  require_input(s.rtol > 0, "parameter 'rtol' must be > 0");
+  require_input(s.atol >= 0, "parameter 'atol' must be >= 0");
+  s.max_steps = p.integer("max_steps");
+  require_input(s.max_steps >= 1, "parameter 'max_steps' must be >= 1");
+  if (linear) {
+    const std::string& l = p.text("linear_solver");
+    s.lin = l == "band" ? Lin::band : l == "klu" ? Lin::klu : l == "spgmr" ? Lin::spgmr : Lin::dense;
+    s.jacobian = p.text("jacobian");
+  }
+  return s;
+}
+
+// Order of an ARKODE table by name (BadInput for an unknown name).
+int erk_order(const std::string& name) {
+  ARKodeButcherTable t = ARKodeButcherTable_LoadERKByName(name.c_str());
+  require_input(t != nullptr, "parameter 'explicit_table': unknown ARKODE explicit table '" + name + "'");
+  const int q = t->q;
+  ARKodeButcherTable_Free(t);
+  return q;
+}
+int dirk_order(const std::string& name) {
+  ARKodeButcherTable t = ARKodeButcherTable_LoadDIRKByName(name.c_str());
+  require_input(t != nullptr, "parameter 'implicit_table': unknown ARKODE implicit table '" + name + "'");
+  const int q = t->q;
+  ARKodeButcherTable_Free(t);
+  return q;
+}
+
+}  // namespace
+
+void register_sundials_integrators(IntegratorRegistry& reg) {
+  using P = ParamType;
+  auto cvode_specs = common_specs(true);
+  cvode_specs.push_back({"max_order", P::integer, "0", "maximum order (0: CVODE default, 5 for BDF, 12 for Adams)"});
+  for (const auto& [name, kind, desc] :
+       {std::tuple{"cvode_bdf", Kind::cvode_bdf, "SUNDIALS CVODE, variable-order BDF (1-5) with Newton; adaptive"},
+        std::tuple{"cvode_adams", Kind::cvode_adams, "SUNDIALS CVODE, variable-order Adams-Moulton (1-12) with Newton; adaptive"}}) {
+    const MethodInfo info{name, Family::reference, 0, 0, {}, desc};
+    reg.add({info, cvode_specs, [info, kind = kind](const Params& p) {
+               Settings s = read_common(p, true);
+               s.max_order = static_cast<int>(p.integer("max_order"));
+               require_input(s.max_order >= 0, "parameter 'max_order' must be >= 0");
+               return std::make_unique<SundialsIntegrator>(info, kind, s);
+             }});
+  }
+  auto erk_specs = common_specs(false);
+  erk_specs.push_back({"explicit_table", P::text, "ARKODE_DORMAND_PRINCE_7_4_5", "ARKODE explicit Butcher table name"});
+  reg.add({{"arkode_erk", Family::reference, erk_order("ARKODE_DORMAND_PRINCE_7_4_5"), 7, {},
+            "SUNDIALS ARKODE ARKStep, explicit table by name; adaptive or fixed step"},
+           erk_specs, [](const Params& p) {
+             Settings s = read_common(p, false);
+             s.explicit_table = p.text("explicit_table");
+             MethodInfo info{"arkode_erk", Family::reference, erk_order(s.explicit_table), 0, {},
+                             "ARKODE ERK " + s.explicit_table};
+             return std::make_unique<SundialsIntegrator>(info, Kind::arkode_erk, s);
+           }});
+  auto dirk_specs = common_specs(true);
+  dirk_specs.push_back({"implicit_table", P::text, "ARKODE_SDIRK_5_3_4", "ARKODE implicit Butcher table name"});
+  reg.add({{"arkode_dirk", Family::reference, dirk_order("ARKODE_SDIRK_5_3_4"), 5, {},
+            "SUNDIALS ARKODE ARKStep, DIRK table by name (default L-stable SDIRK order 4); adaptive or fixed step"},
+           dirk_specs, [](const Params& p) {
+             Settings s = read_common(p, true);
+             s.implicit_table = p.text("implicit_table");
+             MethodInfo info{"arkode_dirk", Family::reference, dirk_order(s.implicit_table), 0, {},
+                             "ARKODE DIRK " + s.implicit_table};
+             return std::make_unique<SundialsIntegrator>(info, Kind::arkode_dirk, s);
+           }});
+  auto imex_specs = common_specs(true);
+  imex_specs.push_back({"explicit_table", P::text, "ARKODE_ARK436L2SA_ERK_6_3_4", "explicit table of the ARK pair"});
+  imex_specs.push_back({"implicit_table", P::text, "ARKODE_ARK436L2SA_DIRK_6_3_4", "implicit table of the ARK pair"});
+  reg.add({{"arkode_imex", Family::reference, dirk_order("ARKODE_ARK436L2SA_DIRK_6_3_4"), 6, {},
+            "SUNDIALS ARKODE ARKStep IMEX with the model's split (all-implicit without one)"},
+           imex_specs, [](const Params& p) {
+             Settings s = read_common(p, true);
+             s.explicit_table = p.text("explicit_table");
+             s.implicit_table = p.text("implicit_table");
+             const int q = std::min(erk_order(s.explicit_table), dirk_order(s.implicit_table));
+             MethodInfo info{"arkode_imex", Family::reference, q, 0, {},
+                             "ARKODE IMEX " + s.explicit_table + " / " + s.implicit_table};
+             return std::make_unique<SundialsIntegrator>(info, Kind::arkode_imex, s);
+           }});
+}
+
+}  // namespace stiffbench
