@@ -55,17 +55,26 @@ void MechanicalSystem::eval_jacobian(double t, CVecRef y, SparseMat& jac) const 
   jac.setFromTriplets(trips.begin(), trips.end());
 }
 
+double fd_increment(double yj, double y_norm) {
+  constexpr double kCbrtEps = 6.0554544523933395e-06;  // (2^-52)^(1/3)
+  const double scale = std::max(std::abs(yj), 1e-3 * y_norm);
+  return kCbrtEps * (scale > 0 ? scale : 1.0);
+}
+
 Mat finite_difference_jacobian(const OdeSystem& sys, double t, CVecRef y) {
   const Index n = y.size();
   Mat jac(n, n);
-  Vec f0(n), f1(n), yp = y;
-  sys.rhs(t, y, f0);
+  Vec fp(n), fm(n), yp = y;
+  const double y_norm = y.cwiseAbs().maxCoeff();
   for (Index j = 0; j < n; ++j) {
-    // Step sqrt(eps) scaled by the component: the usual balance of truncation and round-off.
-    const double dy = 1.4901161193847656e-08 * std::max(1.0, std::abs(y[j]));
-    yp[j] = y[j] + dy;
-    sys.rhs(t, yp, f1);
-    jac.col(j) = (f1 - f0) / dy;
+    const double d = fd_increment(y[j], y_norm);
+    yp[j] = y[j] + d;
+    const double up = yp[j] - y[j];  // representable increments actually applied
+    sys.rhs(t, yp, fp);
+    yp[j] = y[j] - d;
+    const double down = y[j] - yp[j];
+    sys.rhs(t, yp, fm);
+    jac.col(j) = (fp - fm) / (up + down);
     yp[j] = y[j];
   }
   return jac;

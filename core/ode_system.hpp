@@ -148,8 +148,17 @@ class MechanicalSystem : public OdeSystem {
   void eval_jacobian(double t, CVecRef y, SparseMat& jac) const override;
 };
 
-// Dense finite-difference Jacobian (forward differences, one f evaluation per column plus one),
-// counted at the boundary like every other evaluation. For tests and small systems.
+// Central-difference increment for component j: eps^(1/3)·max(|y_j|, 1e-3‖y‖∞), or eps^(1/3)
+// when y = 0 (balances the O(δ²) truncation against the O(eps/δ) rounding). Scaling by the
+// component keeps the truncation error relative for small components of badly scaled systems
+// (Robertson's y2 ~ 1e-5 next to y1 ~ 1: a forward difference with increment √eps·max(1, |y_j|)
+// was off by 2e-4 relative in the 3e7·y2² derivative); the floor keeps increments that rounding
+// would swamp away from components that are (nearly) zero.
+double fd_increment(double yj, double y_norm);
+
+// Dense finite-difference Jacobian (central differences, two f evaluations per column), counted
+// at the boundary like every other evaluation. For tests, GSL without an analytic Jacobian and
+// small systems.
 Mat finite_difference_jacobian(const OdeSystem& sys, double t, CVecRef y);
 
 // Max-norm of a - b (convenience for errors).

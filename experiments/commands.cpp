@@ -4,12 +4,14 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iomanip>
+#include <limits>
 #include <ostream>
 #include <sstream>
 
 #include "core/driver.hpp"
 #include "experiments/build_info.hpp"
 #include "experiments/catalog.hpp"
+#include "experiments/work_precision.hpp"
 
 namespace stiffbench {
 
@@ -45,6 +47,8 @@ void list_experiments(std::ostream& out) {
       {"convergence", "convergence.{csv,md,json}", "global error at t_end vs h, observed orders"});
   t.rows.push_back(
       {"local-error", "local_error.{csv,md,json}", "error of one step vs h, observed slopes"});
+  t.rows.push_back({"work-precision", "work_precision.{csv,md,json}",
+                    "error at t_end against work: h ladder for fixed-step methods, tolerance ladder for references"});
   t.rows.push_back({"report", "DIR/REPORT.md and one folder per study", "the default suite"});
   out << t.to_markdown();
 }
@@ -163,7 +167,7 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   out << "model        " << opt.model;
   for (const auto& [k, v] : opt.params.values()) out << " " << k << "=" << v;
   out << "\nintegrator   " << opt.integrator << " (" << to_string(integ.info().family) << ", order "
-      << integ.info().order << ")\n";
+      << (integ.info().order ? std::to_string(integ.info().order) : "variable") << ")\n";
   if (adaptive) {
     out << "steps        adaptive (" << r.stats.steps << " steps to t = " << format_full(t_end) << ")\n";
   } else {
@@ -204,31 +208,55 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   if (!opt.out_csv.empty()) out << "\ntrajectory: " << opt.out_csv << "\n";
 }
 
-bool plot_convergence(const std::string& csv, const std::string& png, const std::string& title,
-                      const std::vector<std::string>& integrators, bool local, std::ostream& err) {
+namespace {
+
+// Runs plots/SCRIPT with gnuplot, defining `vars` (name, value) as gnuplot strings. Values go
+// inside gnuplot single quotes inside a shell double-quoted argument: single quotes are
+// doubled, characters the shell would expand are dropped.
+bool run_gnuplot(const std::string& script, const std::vector<std::pair<std::string, std::string>>& vars,
+                 std::ostream& err) {
   if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
     err << "gnuplot not found: plots skipped\n";
     return false;
   }
-  const std::string script = std::string(STIFFBENCH_SOURCE_DIR) + "/plots/convergence.gp";
-  // The title goes inside a gnuplot single-quoted string inside a shell double-quoted one:
-  // double the single quotes, drop what the shell would expand.
-  std::string safe_title;
-  for (char ch : title) {
-    if (ch == '"' || ch == '$' || ch == '`' || ch == '\\') continue;
-    if (ch == '\'') safe_title += '\'';
-    safe_title += ch;
-  }
   std::ostringstream cmd;
-  cmd << "gnuplot -e \"csvfile='" << csv << "'; outfile='" << png << "'; methods='"
-      << join(integrators, " ") << "'; ttl='" << safe_title << "'; ycol=" << (local ? 5 : 6)
-      << "; ylab='" << (local ? "local error (max-norm)" : "global error at t_end (max-norm)")
-      << "'\" '" << script << "'";
+  cmd << "gnuplot -e \"";
+  for (const auto& [name, value] : vars) {
+    std::string quoted;
+    for (char ch : value) {
+      if (ch == '"' || ch == '$' || ch == '`' || ch == '\\') continue;
+      if (ch == '\'') quoted += '\'';
+      quoted += ch;
+    }
+    cmd << name << "='" << quoted << "'; ";
+  }
+  cmd << "\" '" << STIFFBENCH_SOURCE_DIR << "/plots/" << script << "'";
   if (std::system(cmd.str().c_str()) != 0) {
     err << "gnuplot failed: " << cmd.str() << "\n";
     return false;
   }
   return true;
+}
+
+}  // namespace
+
+bool plot_convergence(const std::string& csv, const std::string& png, const std::string& title,
+                      const std::vector<std::string>& integrators, bool local, std::ostream& err) {
+  return run_gnuplot("convergence.gp",
+                     {{"csvfile", csv},
+                      {"outfile", png},
+                      {"methods", join(integrators, " ")},
+                      {"ttl", title},
+                      {"ycolumn", local ? "5" : "6"},
+                      {"ylab", local ? "local error (max-norm)" : "global error at t_end (max-norm)"}},
+                     err);
+}
+
+bool plot_work_precision(const std::string& csv, const std::string& png, const std::string& title,
+                         const std::vector<std::string>& integrators, std::ostream& err) {
+  return run_gnuplot("work_precision.gp",
+                     {{"csvfile", csv}, {"outfile", png}, {"methods", join(integrators, " ")}, {"ttl", title}},
+                     err);
 }
 
 namespace {
@@ -241,10 +269,14 @@ struct SuiteItem {
 };
 
 std::vector<SuiteItem> default_suite(bool quick) {
-  std::vector<std::string> all = integrator_registry().names();
-  std::vector<std::string> general;  // methods for first-order systems
-  for (const auto& e : integrator_registry().entries())
+  // The hand-written methods (the references are adaptive or have no fixed order: they appear
+  // in the work-precision studies).
+  std::vector<std::string> all, general;  // general: methods for first-order systems
+  for (const auto& e : integrator_registry().entries()) {
+    if (e.info.family == Family::reference) continue;
+    all.push_back(e.info.name);
     if (!e.info.requires_.mechanical) general.push_back(e.info.name);
+  }
   const int levels = quick ? 4 : 6;
   auto spec = [&](std::string model, std::vector<std::string> integ, double t_end, double h,
                   std::vector<std::string> params = {}, std::string reference = "auto") {
@@ -323,6 +355,56 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
         }
       summary.rows.push_back(
           {integ, std::to_string(order), last ? format_fixed(*last) : "-", status});
+    }
+    md << summary.to_markdown() << "\n";
+  }
+  // Work-precision: hand-written implicit methods against the library references.
+  struct WpItem {
+    std::string name, title;
+    WorkPrecisionSpec spec;
+  };
+  std::vector<WpItem> wp_items;
+  {
+    WorkPrecisionSpec w;
+    w.model = "hires";
+    w.integrators = {"cvode_bdf", "arkode_dirk", "gsl_msbdf", "gsl_bsimp", "sdirk3", "bdf2", "rosenbrock2"};
+    w.levels = opt.quick ? 3 : 4;
+    w.tol_levels = opt.quick ? 4 : 7;
+    w.repeats = opt.quick ? 1 : 3;
+    wp_items.push_back({"hires_work_precision", "HIRES (t_end = 321.8122): work against precision", w});
+  }
+  for (std::size_t i = 0; i < wp_items.size(); ++i) {
+    const WpItem& item = wp_items[i];
+    err << "== [work-precision " << i + 1 << "/" << wp_items.size() << "] " << item.name << "\n";
+    const WorkPrecisionResult res = run_work_precision(item.spec, &err);
+    const fs::path dir = fs::path(opt.out_dir) / item.name;
+    write_work_precision_outputs(dir.string(), item.spec, res);
+    const bool plotted = plot_work_precision((dir / "work_precision.csv").string(),
+                                             (dir / "work_precision.png").string(), item.title,
+                                             item.spec.integrators, err);
+    md << "## " << item.title << "\n\n";
+    md << "[work_precision.csv](" << item.name << "/work_precision.csv) · [work_precision.md](" << item.name
+       << "/work_precision.md) · [work_precision.json](" << item.name << "/work_precision.json)\n\n";
+    if (plotted) md << "![" << item.title << "](" << item.name << "/work_precision.png)\n\n";
+    md << "Reference: " << res.reference_description << ". Fixed-step methods over h, references over "
+       << "rtol (atol = " << format_full(item.spec.atol_factor) << "·rtol).\n\n";
+    Table summary{{"integrator", "settings", "best error", "f_evals at best", "status"}, {}};
+    for (const auto& name : item.spec.integrators) {
+      int n = 0;
+      double best = std::numeric_limits<double>::infinity();
+      long fe = 0;
+      std::string status = "ok";
+      for (const auto& r : res.rows) {
+        if (r.integrator != name) continue;
+        ++n;
+        if (r.stats.status != Status::ok) status = to_string(r.stats.status);
+        else if (r.error < best) {
+          best = r.error;
+          fe = r.stats.f_evals;
+        }
+      }
+      summary.rows.push_back({name, std::to_string(n), std::isfinite(best) ? format_short(best) : "-",
+                              std::to_string(fe), status});
     }
     md << summary.to_markdown() << "\n";
   }

@@ -35,4 +35,7 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err);
 bool plot_convergence(const std::string& csv, const std::string& png, const std::string& title,
                       const std::vector<std::string>& integrators, bool local, std::ostream& err);
 
+bool plot_work_precision(const std::string& csv, const std::string& png, const std::string& title,
+                         const std::vector<std::string>& integrators, std::ostream& err);
+
 }  // namespace stiffbench

@@ -5,6 +5,7 @@
 
 #include "experiments/catalog.hpp"
 #include "experiments/commands.hpp"
+#include "experiments/work_precision.hpp"
 
 using namespace stiffbench;
 
@@ -83,6 +84,37 @@ int main(int argc, char** argv) {
   local_error->get_option("--t-end")->required(false)->description(
       "unused by the local study's error; kept for symmetry");
 
+  WorkPrecisionSpec wp;
+  std::string wp_integrators, wp_out = "results";
+  std::vector<std::string> wp_params;
+  auto* work_precision = app.add_subcommand(
+      "work-precision",
+      "error against work: fixed-step methods over an h ladder, references over a tolerance "
+      "ladder; writes work_precision.{csv,md,json}");
+  work_precision->add_option("--model", wp.model, "model name")->required();
+  work_precision->add_option("--integrators", wp_integrators, "comma-separated integrator names")->required();
+  work_precision->add_option("--param", wp_params, "model/integrator parameter key=value (repeatable)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  work_precision->add_option("--t-end", wp.t_end, "final time (default: the model's literature end time)");
+  work_precision->add_option("--h", wp.h, "coarsest step of fixed-step methods (default: (t_end - t0)/16000)");
+  work_precision->add_option("--levels", wp.levels, "number of step sizes")->capture_default_str();
+  work_precision->add_option("--refine", wp.refine, "ratio between step sizes")->capture_default_str();
+  work_precision->add_option("--tol-levels", wp.tol_levels, "number of tolerances (factor 10 apart)")
+      ->capture_default_str();
+  work_precision->add_option("--rtol-max", wp.rtol_max, "loosest relative tolerance")->capture_default_str();
+  work_precision->add_option("--atol-factor", wp.atol_factor, "atol = atol_factor * rtol")->capture_default_str();
+  work_precision->add_option("--repeats", wp.repeats, "runs per setting; wall time is the minimum")
+      ->capture_default_str();
+  work_precision->add_option("--reference", wp.reference,
+                             "exact | METHOD; default: exact where available, else cvode_bdf")
+      ->capture_default_str();
+  work_precision->add_option("--reference-rtol", wp.reference_rtol, "rtol of an adaptive reference run")
+      ->capture_default_str();
+  work_precision->add_option("--reference-atol", wp.reference_atol, "atol of an adaptive reference run")
+      ->capture_default_str();
+  work_precision->add_option("--out", wp_out, "output directory")->capture_default_str();
+
   ReportOptions report_opt;
   auto* report = app.add_subcommand("report", "run the default suite and write DIR/REPORT.md");
   report->add_option("--out", report_opt.out_dir, "output directory")->capture_default_str();
@@ -132,6 +164,14 @@ int main(int argc, char** argv) {
       write_convergence_outputs(dir, name, spec, res, is_local);
       std::cout << (is_local ? local_error_table(res) : convergence_table(res)).to_markdown();
       std::cout << "\nwrote " << dir << "/" << name << ".{csv,md,json}\n";
+    }
+    if (*work_precision) {
+      wp.integrators = split_list(wp_integrators, "--integrators");
+      wp.params = Params::from_assignments(wp_params);
+      const WorkPrecisionResult res = run_work_precision(wp, &std::cerr);
+      write_work_precision_outputs(wp_out, wp, res);
+      std::cout << work_precision_table(res).to_markdown();
+      std::cout << "\nwrote " << wp_out << "/work_precision.{csv,md,json}\n";
     }
     if (*report) cmd_report(report_opt, std::cout, std::cerr);
   } catch (const BadInput& e) {

@@ -3,10 +3,10 @@
 # separate steps).
 #
 #   gnuplot -e "csvfile='DIR/convergence.csv'; outfile='DIR/convergence.png'; \
-#               methods='euler rk4'; ttl='title'; ycol=6; ylab='error'" plots/convergence.gp
+#               methods='euler rk4'; ttl='title'; ycolumn='6'; ylab='error'" plots/convergence.gp
 #
-# ycol: 6 for convergence.csv (error), 5 for local_error.csv (local_error). Column 4 is h.
-if (!exists("ycol")) ycol = 6
+# ycolumn: 6 for convergence.csv (error), 5 for local_error.csv (local_error). Column 4 is h.
+ycol = exists("ycolumn") ? int(ycolumn) : 6
 if (!exists("ylab")) ylab = "error (max-norm)"
 if (!exists("ttl")) ttl = ""
 set terminal pngcairo size 900,650 enhanced font ",10"

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <vector>
 
@@ -210,6 +211,39 @@ TEST(Cli, ConvergenceRowsOfImplicitMethodsCountJacobiansAndSolves) {
     ++rows;
   }
   EXPECT_EQ(rows, 8);
+  std::filesystem::remove_all(dir);
+}
+
+// Issue #5's work-precision run on HIRES with the default ladders (h from (t_end - t0)/16000,
+// rtol from 1e-5): within every method, sorted by f evaluations, the error at t_end falls.
+// (--repeats only changes the wall-time column, so 1 repeat checks the same numbers.)
+TEST(Cli, WorkPrecisionOnHiresErrorFallsAsWorkRises) {
+  const auto dir = std::filesystem::temp_directory_path() / "sb_wp_hires";
+  std::filesystem::remove_all(dir);
+  const Outcome o = run(
+      "work-precision --model hires --integrators cvode_bdf,arkode_dirk,gsl_msbdf,gsl_bsimp,sdirk3,bdf2 "
+      "--repeats 1 --out " + dir.string());
+  ASSERT_EQ(o.code, 0) << o.err;
+  std::ifstream f(dir / "work_precision.csv");
+  std::string line;
+  std::getline(f, line);
+  EXPECT_EQ(line, "model,integrator,setting,error,f_evals,jac_evals,lin_solves,steps,wall_s,status,mescd");
+  std::map<std::string, std::vector<std::pair<long, double>>> by_method;
+  while (std::getline(f, line)) {
+    std::vector<std::string> c;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
+    ASSERT_EQ(c.size(), 11u) << line;
+    ASSERT_EQ(c[9], "ok") << line;
+    by_method[c[1]].emplace_back(std::stol(c[4]), std::stod(c[3]));
+  }
+  EXPECT_EQ(by_method.size(), 6u);
+  for (auto& [method, points] : by_method) {
+    std::sort(points.begin(), points.end());
+    EXPECT_GE(points.size(), 4u) << method;
+    for (std::size_t i = 1; i < points.size(); ++i)
+      EXPECT_LT(points[i].second, points[i - 1].second) << method << " at f_evals " << points[i].first;
+  }
   std::filesystem::remove_all(dir);
 }
 

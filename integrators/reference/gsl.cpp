@@ -27,7 +27,8 @@ const std::vector<GslMethod>& gsl_methods() {
       {"gsl_rk8pd", &gsl_odeiv2_step_rk8pd, 8, false, true, "GSL Prince-Dormand 8(7)"},
       {"gsl_rk2imp", &gsl_odeiv2_step_rk2imp, 2, true, true, "GSL implicit Gauss-Legendre, 1 stage (midpoint)"},
       {"gsl_rk4imp", &gsl_odeiv2_step_rk4imp, 4, true, true, "GSL implicit Gauss-Legendre, 2 stages"},
-      {"gsl_bsimp", &gsl_odeiv2_step_bsimp, 0, true, true, "GSL Bader-Deuflhard semi-implicit extrapolation"},
+      {"gsl_bsimp", &gsl_odeiv2_step_bsimp, 0, true, false,
+       "GSL Bader-Deuflhard semi-implicit extrapolation (order set by the tolerance); adaptive only"},
       {"gsl_msadams", &gsl_odeiv2_step_msadams, 0, false, false, "GSL variable-order Adams (1-12); adaptive only"},
       {"gsl_msbdf", &gsl_odeiv2_step_msbdf, 0, true, false, "GSL variable-order BDF (1-5); adaptive only"},
   };
@@ -54,6 +55,8 @@ class GslIntegrator final : public Integrator {
     f0_.resize(n_);
     f1_.resize(n_);
     tmp_.resize(n_);
+    yerr_.resize(n_);
+    fixed_steps_ = 0;
     gsys_ = {func, method_.needs_jacobian ? jac : nullptr, static_cast<std::size_t>(n_), this};
     fixed_h_ = 0;
     make_driver(h0_);
@@ -66,9 +69,12 @@ class GslIntegrator final : public Integrator {
       make_driver(h);
       fixed_h_ = h;
     }
-    double tt = t_;
-    const int status = gsl_odeiv2_driver_apply_fixed_step(driver_, &tt, h, 1, y.data());
-    return finish(status, tt, y, stats, true);
+    // The bare stepper: the driver's fixed-step function still applies the error control and
+    // refuses steps whose estimate exceeds the tolerance.
+    const int status = gsl_odeiv2_step_apply(driver_->s, t_, h, y.data(), yerr_.data(), nullptr,
+                                             nullptr, &gsys_);
+    if (status == GSL_SUCCESS) ++fixed_steps_;
+    return finish(status, t_ + h, y, stats, true);
   }
 
   Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) override {
@@ -133,8 +139,10 @@ class GslIntegrator final : public Integrator {
   }
 
   Status finish(int status, double tt, VecRef y, SolveStats& stats, bool fixed) {
-    if (!fixed) stats.steps = static_cast<long>(driver_->e->count);
-    stats.rejected_steps = static_cast<long>(driver_->e->failed_steps);
+    if (!fixed) {
+      stats.steps = static_cast<long>(driver_->e->count);
+      stats.rejected_steps = static_cast<long>(driver_->e->failed_steps);
+    }
     stats.jac_evals = fd_jacobians_;
     if (status != GSL_SUCCESS) {
       stats.message = "GSL " + info().name + ": " + gsl_strerror(status) + " (status " +
@@ -154,7 +162,8 @@ class GslIntegrator final : public Integrator {
   gsl_odeiv2_system gsys_{};
   gsl_odeiv2_driver* driver_ = nullptr;
   SparseMat jac_;
-  Vec f0_, f1_, tmp_, y_last_;
+  Vec f0_, f1_, tmp_, yerr_, y_last_;
+  long fixed_steps_ = 0;
   double t_ = 0, fixed_h_ = 0;
   long fd_jacobians_ = 0;
 };

@@ -1,0 +1,71 @@
+#include "models/problems/e5.hpp"
+
+#include <cmath>
+
+namespace stiffbench {
+
+namespace {
+
+// min(‖J‖₁, ‖J‖∞) ≥ ρ(J): every eigenvalue lies in a Gershgorin disc of J (rows) and of Jᵀ
+// (columns), and each disc lies within radius max row (column) absolute sum of the origin.
+double gershgorin_radius(const SparseMat& jac) {
+  Vec rows = Vec::Zero(jac.rows()), cols = Vec::Zero(jac.cols());
+  for (Index c = 0; c < jac.outerSize(); ++c) {
+    for (SparseMat::InnerIterator it(jac, c); it; ++it) {
+      rows[it.row()] += std::abs(it.value());
+      cols[it.col()] += std::abs(it.value());
+    }
+  }
+  return std::min(rows.maxCoeff(), cols.maxCoeff());
+}
+
+}  // namespace
+
+E5::E5(double a, double b, double c, double m) : a_(a), b_(b), c_(c), m_(m) {
+  require_input(a >= 0, "e5: parameter 'a' must be >= 0");
+  require_input(b >= 0, "e5: parameter 'b' must be >= 0");
+  require_input(c >= 0, "e5: parameter 'c' must be >= 0");
+  require_input(m >= 0, "e5: parameter 'm' must be >= 0");
+}
+
+void E5::eval_rhs(double, CVecRef y, VecRef dydt) const {
+  // The four reaction rates, shared so that y2' - y3' - y4' = 0 to round-off.
+  const double ra = a_ * y[0];              // A y1
+  const double rb = b_ * y[0] * y[2];       // B y1 y3
+  const double rm = m_ * c_ * y[1] * y[2];  // M C y2 y3
+  const double rc = c_ * y[3];              // C y4
+  dydt[0] = -ra - rb;
+  dydt[1] = ra - rm;
+  dydt[2] = ra - rb - rm + rc;
+  dydt[3] = rb - rc;
+}
+
+void E5::eval_jacobian(double, CVecRef y, SparseMat& jac) const {
+  const double mc = m_ * c_;
+  const std::vector<Eigen::Triplet<double>> t{{0, 0, -a_ - b_ * y[2]},
+                                              {0, 2, -b_ * y[0]},
+                                              {1, 0, a_},
+                                              {1, 1, -mc * y[2]},
+                                              {1, 2, -mc * y[1]},
+                                              {2, 0, a_ - b_ * y[2]},
+                                              {2, 1, -mc * y[2]},
+                                              {2, 2, -b_ * y[0] - mc * y[1]},
+                                              {2, 3, c_},
+                                              {3, 0, b_ * y[2]},
+                                              {3, 2, b_ * y[0]},
+                                              {3, 3, -c_}};
+  jac.resize(4, 4);
+  jac.setFromTriplets(t.begin(), t.end());
+}
+
+std::vector<Invariant> E5::invariants() const {
+  return {{"y2-y3-y4", [](double, CVecRef y) { return y[1] - y[2] - y[3]; }}};
+}
+
+std::optional<double> E5::stiffness(double t, CVecRef y) const {
+  SparseMat jac;
+  eval_jacobian(t, y, jac);  // not counted: an estimate, not a solver's evaluation
+  return gershgorin_radius(jac);
+}
+
+}  // namespace stiffbench

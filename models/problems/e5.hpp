@@ -1,0 +1,49 @@
+// E5: a chemical pyrolysis problem from the stiff test set of Enright, Hull & Lindberg (BIT 15,
+// 1975), as in Hairer & Wanner, Solving ODEs II, §IV.10 (problem E5):
+//   y1' = -A y1 - B y1 y3
+//   y2' =  A y1 - M C y2 y3
+//   y3' =  A y1 - B y1 y3 - M C y2 y3 + C y4
+//   y4' =  B y1 y3 - C y4
+// with the literature constants A = 7.89e-10, B = 1.1e7, C = 1.13e3, M = 1e6 (parameters a, b,
+// c, m, each >= 0), y(0) = (1.76e-3, 0, 0, 0) and the literature time span [0, 1e13] (pass
+// --t-end 1e13). y2, y3, y4 stay many orders of magnitude below y1 (about 1e-3), so error
+// measures need a per-component or tiny absolute scale.
+// Invariant "y2-y3-y4" (= 0): y2' - y3' - y4' = 0 identically. It is the only linear one:
+// asking wᵀf ≡ 0 monomial by monomial, the y2y3 terms give w2 = -w3, the y4 terms w3 = w4,
+// the y1y3 terms w4 = w1 + w3, so w1 = 0 and the y1 terms then hold.
+// Jacobian (fixed pattern, 12 entries):
+//   [[-A - B y3,   0,        -B y1,            0],
+//    [ A,         -M C y3,   -M C y2,          0],
+//    [ A - B y3,  -M C y3,   -B y1 - M C y2,   C],
+//    [ B y3,       0,         B y1,           -C]].
+// stiffness(): min(‖J‖₁, ‖J‖∞), the Gershgorin bound on the spectral radius.
+#pragma once
+
+#include "core/ode_system.hpp"
+
+namespace stiffbench {
+
+class E5 final : public OdeSystem {
+ public:
+  E5(double a, double b, double c, double m);
+
+  std::string name() const override { return "e5"; }
+  Index dimension() const override { return 4; }
+  Vec initial_state() const override { return Vec{{1.76e-3, 0.0, 0.0, 0.0}}; }
+  bool has_jacobian() const override { return true; }
+  bool autonomous() const override { return true; }
+  std::vector<Invariant> invariants() const override;
+  std::optional<double> stiffness(double t, CVecRef y) const override;
+
+  // End of the literature time span (Hairer–Wanner §IV.10).
+  double literature_end_time() const { return 1e13; }
+
+ protected:
+  void eval_rhs(double t, CVecRef y, VecRef dydt) const override;
+  void eval_jacobian(double t, CVecRef y, SparseMat& jac) const override;
+
+ private:
+  double a_, b_, c_, m_;
+};
+
+}  // namespace stiffbench

@@ -1,0 +1,54 @@
+#include "models/problems/orego.hpp"
+
+#include <cmath>
+
+namespace stiffbench {
+
+namespace {
+
+// min(‖J‖₁, ‖J‖∞) ≥ ρ(J): every eigenvalue lies in a Gershgorin disc of J (rows) and of Jᵀ
+// (columns), and each disc lies within radius max row (column) absolute sum of the origin.
+double gershgorin_radius(const SparseMat& jac) {
+  Vec rows = Vec::Zero(jac.rows()), cols = Vec::Zero(jac.cols());
+  for (Index c = 0; c < jac.outerSize(); ++c) {
+    for (SparseMat::InnerIterator it(jac, c); it; ++it) {
+      rows[it.row()] += std::abs(it.value());
+      cols[it.col()] += std::abs(it.value());
+    }
+  }
+  return std::min(rows.maxCoeff(), cols.maxCoeff());
+}
+
+}  // namespace
+
+Orego::Orego(double s, double w, double q) : s_(s), w_(w), q_(q) {
+  require_input(s > 0, "orego: parameter 's' must be > 0");
+  require_input(w >= 0, "orego: parameter 'w' must be >= 0");
+  require_input(q >= 0, "orego: parameter 'q' must be >= 0");
+}
+
+void Orego::eval_rhs(double, CVecRef y, VecRef dydt) const {
+  dydt[0] = s_ * (y[1] + y[0] * (1 - q_ * y[0] - y[1]));
+  dydt[1] = (y[2] - (1 + y[0]) * y[1]) / s_;
+  dydt[2] = w_ * (y[0] - y[2]);
+}
+
+void Orego::eval_jacobian(double, CVecRef y, SparseMat& jac) const {
+  const std::vector<Eigen::Triplet<double>> t{{0, 0, s_ * (1 - 2 * q_ * y[0] - y[1])},
+                                              {0, 1, s_ * (1 - y[0])},
+                                              {1, 0, -y[1] / s_},
+                                              {1, 1, -(1 + y[0]) / s_},
+                                              {1, 2, 1 / s_},
+                                              {2, 0, w_},
+                                              {2, 2, -w_}};
+  jac.resize(3, 3);
+  jac.setFromTriplets(t.begin(), t.end());
+}
+
+std::optional<double> Orego::stiffness(double t, CVecRef y) const {
+  SparseMat jac;
+  eval_jacobian(t, y, jac);  // not counted: an estimate, not a solver's evaluation
+  return gershgorin_radius(jac);
+}
+
+}  // namespace stiffbench

@@ -1,0 +1,45 @@
+// OREGO: the Oregonator, Field & Noyes' model of the Belousov–Zhabotinskii reaction (Field &
+// Noyes 1974), as in Hairer & Wanner, Solving ODEs II, §IV.10 and the IVP test set of Mazzia &
+// Magherini (problem "orego"):
+//   y1' = s (y2 + y1 (1 - q y1 - y2))
+//   y2' = (y3 - (1 + y1) y2) / s
+//   y3' = w (y1 - y3)
+// with the literature constants s = 77.27, w = 0.161, q = 8.375e-6 (parameters s > 0, w >= 0,
+// q >= 0), y(0) = (1, 2, 3) and the literature time span [0, 360] (pass --t-end 360). The
+// solution is periodic with period about 303 and sharp spikes (y1 up to about 1e5, y2 down to
+// about 1): fixed-step runs need small h over the whole span.
+// No linear invariant.
+// Jacobian (fixed pattern, 7 entries; ∂f1/∂y3 = ∂f3/∂y2 = 0 structurally):
+//   [[s (1 - 2 q y1 - y2),  s (1 - y1),   0  ],
+//    [-y2 / s,             -(1 + y1)/s,   1/s],
+//    [ w,                   0,           -w  ]].
+// stiffness(): min(‖J‖₁, ‖J‖∞), the Gershgorin bound on the spectral radius.
+#pragma once
+
+#include "core/ode_system.hpp"
+
+namespace stiffbench {
+
+class Orego final : public OdeSystem {
+ public:
+  Orego(double s, double w, double q);
+
+  std::string name() const override { return "orego"; }
+  Index dimension() const override { return 3; }
+  Vec initial_state() const override { return Vec{{1.0, 2.0, 3.0}}; }
+  bool has_jacobian() const override { return true; }
+  bool autonomous() const override { return true; }
+  std::optional<double> stiffness(double t, CVecRef y) const override;
+
+  // End of the literature time span (Hairer–Wanner §IV.10; IVP test set).
+  double literature_end_time() const { return 360.0; }
+
+ protected:
+  void eval_rhs(double t, CVecRef y, VecRef dydt) const override;
+  void eval_jacobian(double t, CVecRef y, SparseMat& jac) const override;
+
+ private:
+  double s_, w_, q_;
+};
+
+}  // namespace stiffbench

@@ -1,0 +1,64 @@
+#include "models/problems/robertson.hpp"
+
+#include <cmath>
+
+namespace stiffbench {
+
+namespace {
+
+// min(‖J‖₁, ‖J‖∞) ≥ ρ(J): every eigenvalue lies in a Gershgorin disc of J (rows) and of Jᵀ
+// (columns), and each disc lies within radius max row (column) absolute sum of the origin.
+double gershgorin_radius(const SparseMat& jac) {
+  Vec rows = Vec::Zero(jac.rows()), cols = Vec::Zero(jac.cols());
+  for (Index c = 0; c < jac.outerSize(); ++c) {
+    for (SparseMat::InnerIterator it(jac, c); it; ++it) {
+      rows[it.row()] += std::abs(it.value());
+      cols[it.col()] += std::abs(it.value());
+    }
+  }
+  return std::min(rows.maxCoeff(), cols.maxCoeff());
+}
+
+}  // namespace
+
+Robertson::Robertson(double k1, double k2, double k3) : k1_(k1), k2_(k2), k3_(k3) {
+  require_input(k1 >= 0, "robertson: parameter 'k1' must be >= 0");
+  require_input(k2 >= 0, "robertson: parameter 'k2' must be >= 0");
+  require_input(k3 >= 0, "robertson: parameter 'k3' must be >= 0");
+}
+
+void Robertson::eval_rhs(double, CVecRef y, VecRef dydt) const {
+  // The three reaction rates, each added to one species and subtracted from another, so the
+  // components sum to zero up to round-off (the "mass" invariant).
+  const double r1 = k1_ * y[0];         // A → B
+  const double r2 = k2_ * y[1] * y[1];  // 2B → B + C
+  const double r3 = k3_ * y[1] * y[2];  // B + C → A + C
+  dydt[0] = -r1 + r3;
+  dydt[1] = r1 - r3 - r2;
+  dydt[2] = r2;
+}
+
+void Robertson::eval_jacobian(double, CVecRef y, SparseMat& jac) const {
+  // The same 7 entries at every call, zero-valued ones included (y2 = y3 = 0 at t = 0).
+  const std::vector<Eigen::Triplet<double>> t{{0, 0, -k1_},
+                                              {0, 1, k3_ * y[2]},
+                                              {0, 2, k3_ * y[1]},
+                                              {1, 0, k1_},
+                                              {1, 1, -k3_ * y[2] - 2 * k2_ * y[1]},
+                                              {1, 2, -k3_ * y[1]},
+                                              {2, 1, 2 * k2_ * y[1]}};
+  jac.resize(3, 3);
+  jac.setFromTriplets(t.begin(), t.end());
+}
+
+std::vector<Invariant> Robertson::invariants() const {
+  return {{"mass", [](double, CVecRef y) { return y[0] + y[1] + y[2]; }}};
+}
+
+std::optional<double> Robertson::stiffness(double t, CVecRef y) const {
+  SparseMat jac;
+  eval_jacobian(t, y, jac);  // not counted: an estimate, not a solver's evaluation
+  return gershgorin_radius(jac);
+}
+
+}  // namespace stiffbench
