@@ -11,7 +11,6 @@ const ModelRegistry& model_registry() {
   static const ModelRegistry reg = [] {
     ModelRegistry r("model");
     register_problem_models(r);
-    register_mass_spring_models(r);
     return r;
   }();
   return reg;

@@ -53,6 +53,12 @@ namespace {
 
 // --- Krylov methods -----------------------------------------------------------------------
 
+// out = M⁻¹ in for the Jacobi preconditioner M = diag(W); identity when diag is empty.
+void apply_jacobi(const Vec& diag, CVecRef in, Vec& out) {
+  if (diag.size()) out = in.cwiseQuotient(diag);
+  else out = in;
+}
+
 // Preconditioned conjugate gradients (Saad, Iterative Methods, Alg. 9.1).
 LinearSolveResult pcg(const LinearOperator& op, const Vec& diag, CVecRef b, VecRef x,
                       const LinearSolverOptions& opt) {
@@ -66,11 +72,7 @@ LinearSolveResult pcg(const LinearOperator& op, const Vec& diag, CVecRef b, VecR
   Vec r(n), z(n), p(n), ap(n);
   op(x, ap);
   r = b - ap;
-  auto precond = [&](const Vec& in, Vec& out) {
-    if (diag.size()) out = in.cwiseQuotient(diag);
-    else out = in;
-  };
-  precond(r, z);
+  apply_jacobi(diag, r, z);
   p = z;
   double rz = r.dot(z);
   for (int it = 0; it < opt.krylov_max_iter; ++it) {
@@ -85,7 +87,7 @@ LinearSolveResult pcg(const LinearOperator& op, const Vec& diag, CVecRef b, VecR
     const double alpha = rz / pap;
     x += alpha * p;
     r -= alpha * ap;
-    precond(r, z);
+    apply_jacobi(diag, r, z);
     const double rz_new = r.dot(z);
     p = z + (rz_new / rz) * p;
     rz = rz_new;
@@ -113,10 +115,6 @@ LinearSolveResult bicgstab(const LinearOperator& op, const Vec& diag, CVecRef b,
   p.setZero();
   v.setZero();
   double rho = 1, alpha = 1, omega = 1;
-  auto precond = [&](const Vec& in, Vec& out) {
-    if (diag.size()) out = in.cwiseQuotient(diag);
-    else out = in;
-  };
   for (int it = 0; it < opt.krylov_max_iter; ++it) {
     res.residual = r.norm() / bnorm;
     if (res.residual <= opt.krylov_tol) return res;
@@ -125,7 +123,7 @@ LinearSolveResult bicgstab(const LinearOperator& op, const Vec& diag, CVecRef b,
     const double beta = (rho_new / rho) * (alpha / omega);
     rho = rho_new;
     p = r + beta * (p - omega * v);
-    precond(p, ph);
+    apply_jacobi(diag, p, ph);
     op(ph, v);
     const double r0v = r0.dot(v);
     if (r0v == 0) break;
@@ -137,7 +135,7 @@ LinearSolveResult bicgstab(const LinearOperator& op, const Vec& diag, CVecRef b,
       ++res.iterations;
       continue;
     }
-    precond(s, sh);
+    apply_jacobi(diag, s, sh);
     op(sh, t);
     const double tt = t.dot(t);
     if (tt == 0) break;
@@ -166,10 +164,6 @@ LinearSolveResult gmres(const LinearOperator& op, const Vec& diag, CVecRef b, Ve
   const int m = std::max(1, std::min<int>(opt.gmres_restart, static_cast<int>(n)));
   Mat v(n, m + 1), h = Mat::Zero(m + 1, m);
   Vec cs(m), sn(m), g(m + 1), w(n), z(n), r(n);
-  auto precond = [&](CVecRef in, Vec& out) {
-    if (diag.size()) out = in.cwiseQuotient(diag);
-    else out = in;
-  };
   bool converged = false;
   while (res.iterations < opt.krylov_max_iter) {
     op(x, w);
@@ -182,7 +176,7 @@ LinearSolveResult gmres(const LinearOperator& op, const Vec& diag, CVecRef b, Ve
     g[0] = beta;
     int k = 0;
     for (; k < m && res.iterations < opt.krylov_max_iter; ++k) {
-      precond(v.col(k), z);
+      apply_jacobi(diag, v.col(k), z);
       op(z, w);
       for (int i = 0; i <= k; ++i) {  // modified Gram–Schmidt
         h(i, k) = w.dot(v.col(i));
@@ -212,7 +206,7 @@ LinearSolveResult gmres(const LinearOperator& op, const Vec& diag, CVecRef b, Ve
     // Solve the k×k upper-triangular system and update x = x + M⁻¹ V y.
     const Vec y = h.topLeftCorner(k, k).triangularView<Eigen::Upper>().solve(g.head(k));
     Vec update = v.leftCols(k) * y;
-    precond(update, z);
+    apply_jacobi(diag, update, z);
     x += z;
     if (converged) {
       // The recursive residual estimate is the convergence test (as in CG): with a matrix-free
