@@ -11,6 +11,7 @@ const ModelRegistry& model_registry() {
   static const ModelRegistry reg = [] {
     ModelRegistry r("model");
     register_problem_models(r);
+    register_mass_spring_models(r);
     return r;
   }();
   return reg;
