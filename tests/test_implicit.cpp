@@ -354,3 +354,36 @@ TEST(BaraffWitkin, OneStepMatchesFormula) {
 
 }  // namespace
 }  // namespace stiffbench
+
+namespace stiffbench {
+namespace {
+
+// Baraff–Witkin's matrix M - hD - h²K is symmetric for a mass-spring network without pins (M K
+// and M D are symmetric force Jacobians) and SPD at this step size, so LDLᵀ and CG apply and
+// every linear solver gives the same step (issue #3's SPD check on issue #4's model). With pins
+// K keeps the columns of the pinned points (exact, not symmetric) and LDLᵀ/CG refuse.
+TEST(BaraffWitkin, AllLinearSolversAgreeOnFreeCloth) {
+  auto sys = model("cloth", {"n=8", "pin=none"});
+  auto step_with = [&](const std::string& solver) {
+    auto integ = make("baraff_witkin", {"linear_solver=" + solver, "krylov_tol=1e-14"});
+    FixedStepOptions opt;
+    opt.t_end = 0.01;
+    opt.h = 0.01;
+    const RunResult r = run_fixed_step(*sys, *integ, opt);
+    EXPECT_EQ(r.stats.status, Status::ok) << solver << ": " << r.stats.message;
+    return r.y;
+  };
+  const Vec ref = step_with("sparse_lu");
+  for (const auto& solver : {"dense_lu", "ldlt", "cg", "bicgstab", "gmres"})
+    EXPECT_LT(max_abs_diff(step_with(solver), ref), 1e-10) << solver;
+  // The pinned cloth's matrix is not symmetric: LDLᵀ refuses rather than solve another system.
+  auto pinned = model("cloth", {"n=8"});
+  auto ldlt = make("baraff_witkin", {"linear_solver=ldlt"});
+  FixedStepOptions opt;
+  opt.t_end = 0.01;
+  opt.h = 0.01;
+  EXPECT_EQ(run_fixed_step(*pinned, *ldlt, opt).stats.status, Status::solver_error);
+}
+
+}  // namespace
+}  // namespace stiffbench

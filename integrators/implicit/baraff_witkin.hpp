@@ -2,9 +2,11 @@
 //   (M - h D_f - h² K_f) Δv = h (f + h K_f v),   v⁺ = v + Δv,   x⁺ = x + h v⁺,
 // with forces f = M a, K_f = M K = ∂f/∂x, D_f = M D = ∂f/∂v, all at (t, x, v) — one
 // linearisation of backward Euler, so order 1. The matrix has the dofs' dimension (half the
-// first-order system) and is symmetric when M K and M D are (mass-spring networks); with SPD
-// -K_f and -D_f it is SPD and ldlt or cg apply (REFERENCES.md). Pinned dofs with zero K and D
-// rows get the row M_ii Δv_i = h M_ii a_i = 0.
+// first-order system) and is symmetric when M K and M D are (mass-spring networks without
+// pins); with SPD -K_f and -D_f it is SPD and ldlt or cg apply (REFERENCES.md). Pinned dofs with
+// zero K and D rows get the row M_ii Δv_i = h M_ii a_i = 0; their columns stay (free points feel
+// their pinned neighbours), so with pins the matrix is not symmetric and ldlt/cg refuse
+// (solver_error): use sparse_lu, bicgstab or gmres there.
 // Cost per step: one acceleration, one K and D evaluation (counted as one Jacobian), one
 // factorisation and one solve.
 #pragma once
