@@ -14,7 +14,6 @@ struct ModelInfo {
   bool mechanical = false;  // y = [x; v]
   bool exact = false;       // provides the exact solution
   std::string source;       // where the equations and reference values come from
-  double t_end = 0.0;       // the literature's end time, used when --t-end is omitted (0: none)
 };
 
 using ModelRegistry = Registry<OdeSystem, ModelInfo>;

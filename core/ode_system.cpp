@@ -80,6 +80,16 @@ Mat finite_difference_jacobian(const OdeSystem& sys, double t, CVecRef y) {
   return jac;
 }
 
+double gershgorin_bound(const SparseMat& jac) {
+  Vec rows = Vec::Zero(jac.rows()), cols = Vec::Zero(jac.cols());
+  for (Index c = 0; c < jac.outerSize(); ++c)
+    for (SparseMat::InnerIterator it(jac, c); it; ++it) {
+      rows[it.row()] += std::abs(it.value());
+      cols[it.col()] += std::abs(it.value());
+    }
+  return std::min(rows.maxCoeff(), cols.maxCoeff());
+}
+
 double max_abs_diff(CVecRef a, CVecRef b) { return (a - b).cwiseAbs().maxCoeff(); }
 
 }  // namespace stiffbench

@@ -35,6 +35,8 @@ class OdeSystem {
   virtual std::string name() const = 0;
   virtual Index dimension() const = 0;
   virtual double initial_time() const { return 0.0; }
+  // The literature's end time of the problem, used when a command is given no --t-end.
+  virtual std::optional<double> end_time() const { return std::nullopt; }
   virtual Vec initial_state() const = 0;
 
   // y' = f(t, y). Counted as one f evaluation.
@@ -160,6 +162,11 @@ double fd_increment(double yj, double y_norm);
 // at the boundary like every other evaluation. For tests, GSL without an analytic Jacobian and
 // small systems.
 Mat finite_difference_jacobian(const OdeSystem& sys, double t, CVecRef y);
+
+// min(‖J‖₁, ‖J‖∞) ≥ ρ(J): every eigenvalue lies in a Gershgorin disc of J (rows) and of Jᵀ
+// (columns), and each disc lies within the largest absolute row (column) sum of the origin.
+// A cheap stiffness bound for models with a sparse Jacobian.
+double gershgorin_bound(const SparseMat& jac);
 
 // Max-norm of a - b (convenience for errors).
 double max_abs_diff(CVecRef a, CVecRef b);

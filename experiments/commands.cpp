@@ -123,8 +123,9 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   Integrator& integ = *setup.integrators.front();
   double t_end = opt.t_end;
   if (std::isnan(t_end)) {
-    t_end = model_registry().at(opt.model).info.t_end;
-    require_input(t_end > 0, "--t-end is required: model '" + opt.model + "' has no default end time");
+    const auto literature = sys.end_time();
+    require_input(literature.has_value(), "--t-end is required: model '" + opt.model + "' has no default end time");
+    t_end = *literature;
   }
   // Fixed step with --h; without it the integrator's own step control (references only).
   const bool adaptive = std::isnan(opt.h);

@@ -79,8 +79,9 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
   const OdeSystem& sys = *setup.model;
   const double t0 = sys.initial_time();
   if (spec.t_end == 0) {
-    spec.t_end = model_registry().at(spec.model).info.t_end;
-    require_input(spec.t_end > 0, "--t-end is required: model '" + spec.model + "' has no default end time");
+    const auto literature = sys.end_time();
+    require_input(literature.has_value(), "--t-end is required: model '" + spec.model + "' has no default end time");
+    spec.t_end = *literature;
   }
   require_input(spec.t_end > t0, "--t-end must be > the model's initial time");
   if (spec.h == 0) spec.h = (spec.t_end - t0) / 16000;

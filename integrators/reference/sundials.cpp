@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <iostream>
 
@@ -201,8 +202,11 @@ class SundialsIntegrator final : public Integrator {
 
   bool check(int flag, const char* what, SolveStats& stats) {
     if (flag >= 0) return true;
-    const char* name = is_cvode() ? CVodeGetReturnFlagName(flag) : ARKStepGetReturnFlagName(flag);
-    stats.message = std::string(what) + " failed: " + name + (library_error_.empty() ? "" : " (" + library_error_ + ")");
+    // The library allocates the flag name; the caller frees it.
+    char* name = is_cvode() ? CVodeGetReturnFlagName(flag) : ARKStepGetReturnFlagName(flag);
+    stats.message = std::string(what) + " failed: " + (name ? name : "unknown flag") +
+                    (library_error_.empty() ? "" : " (" + library_error_ + ")");
+    std::free(name);
     if (!callback_error_.empty()) stats.message += "; " + callback_error_;
     std::cerr << "stiffbench: " << info().name << ": " << stats.message << "\n";
     return false;

@@ -4,23 +4,6 @@
 
 namespace stiffbench {
 
-namespace {
-
-// min(‖J‖₁, ‖J‖∞) ≥ ρ(J): every eigenvalue lies in a Gershgorin disc of J (rows) and of Jᵀ
-// (columns), and each disc lies within radius max row (column) absolute sum of the origin.
-double gershgorin_radius(const SparseMat& jac) {
-  Vec rows = Vec::Zero(jac.rows()), cols = Vec::Zero(jac.cols());
-  for (Index c = 0; c < jac.outerSize(); ++c) {
-    for (SparseMat::InnerIterator it(jac, c); it; ++it) {
-      rows[it.row()] += std::abs(it.value());
-      cols[it.col()] += std::abs(it.value());
-    }
-  }
-  return std::min(rows.maxCoeff(), cols.maxCoeff());
-}
-
-}  // namespace
-
 E5::E5(double a, double b, double c, double m) : a_(a), b_(b), c_(c), m_(m) {
   require_input(a >= 0, "e5: parameter 'a' must be >= 0");
   require_input(b >= 0, "e5: parameter 'b' must be >= 0");
@@ -65,7 +48,7 @@ std::vector<Invariant> E5::invariants() const {
 std::optional<double> E5::stiffness(double t, CVecRef y) const {
   SparseMat jac;
   eval_jacobian(t, y, jac);  // not counted: an estimate, not a solver's evaluation
-  return gershgorin_radius(jac);
+  return gershgorin_bound(jac);
 }
 
 }  // namespace stiffbench

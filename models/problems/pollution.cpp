@@ -7,19 +7,6 @@ namespace stiffbench {
 
 namespace {
 
-// min(‖J‖₁, ‖J‖∞) ≥ ρ(J): every eigenvalue lies in a Gershgorin disc of J (rows) and of Jᵀ
-// (columns), and each disc lies within radius max row (column) absolute sum of the origin.
-double gershgorin_radius(const SparseMat& jac) {
-  Vec rows = Vec::Zero(jac.rows()), cols = Vec::Zero(jac.cols());
-  for (Index c = 0; c < jac.outerSize(); ++c) {
-    for (SparseMat::InnerIterator it(jac, c); it; ++it) {
-      rows[it.row()] += std::abs(it.value());
-      cols[it.col()] += std::abs(it.value());
-    }
-  }
-  return std::min(rows.maxCoeff(), cols.maxCoeff());
-}
-
 // One mass-action reaction: r = k·y[a] (first order, b = 0) or k·y[a]·y[b], and its net
 // stoichiometry. Species numbers are the literature's 1-based ones (0 ends a list).
 struct Reaction {
@@ -118,7 +105,7 @@ std::vector<Invariant> Pollution::invariants() const {
 std::optional<double> Pollution::stiffness(double t, CVecRef y) const {
   SparseMat jac;
   eval_jacobian(t, y, jac);  // not counted: an estimate, not a solver's evaluation
-  return gershgorin_radius(jac);
+  return gershgorin_bound(jac);
 }
 
 }  // namespace stiffbench

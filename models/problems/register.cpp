@@ -70,11 +70,11 @@ void register_problem_models(ModelRegistry& reg) {
              return std::make_unique<ProtheroRobinson>(p.real("lambda"), phi, p.real("y0_offset"));
            }});
   // Classic stiff test problems (Hairer & Wanner II §IV.10; IVP test set of Mazzia &
-  // Magherini). The literature end time is ModelInfo::t_end, used when --t-end is omitted
-  // (for van_der_pol it is the scaled form's t = 2).
+  // Magherini). Each model's end_time() is the literature end time, used when --t-end is
+  // omitted.
   reg.add({{"robertson",
             "Robertson's chemical kinetics (3 species, stiff); literature end time t = 1e11", false,
-            false, "Robertson 1966; Hairer & Wanner II §IV.10 (ROBER); IVP test set 'rober'", 1e11},
+            false, "Robertson 1966; Hairer & Wanner II §IV.10 (ROBER); IVP test set 'rober'"},
            {{"k1", P::real, "0.04", "rate constant of A → B (>= 0)"},
             {"k2", P::real, "3e7", "rate constant of 2B → B + C (>= 0)"},
             {"k3", P::real, "1e4", "rate constant of B + C → A + C (>= 0)"}},
@@ -82,7 +82,7 @@ void register_problem_models(ModelRegistry& reg) {
              return std::make_unique<Robertson>(p.real("k1"), p.real("k2"), p.real("k3"));
            }});
   reg.add({{"hires", "HIRES plant photomorphogenesis (8 species); literature end time t = 321.8122",
-            false, false, "Schäfer 1975; Hairer & Wanner II §IV.10 (HIRES); IVP test set 'hires'", 321.8122},
+            false, false, "Schäfer 1975; Hairer & Wanner II §IV.10 (HIRES); IVP test set 'hires'"},
            {},
            [](const Params&) { return std::make_unique<Hires>(); }});
   reg.add(
@@ -90,7 +90,7 @@ void register_problem_models(ModelRegistry& reg) {
         "van der Pol oscillator, scaled y2' = ((1-y1²)y2 - y1)/ε with ε = 1/μ² (default) or "
         "classical y2' = μ(1-y1²)y2 - y1; literature end time t = 2 (scaled) or t = 2μ (form=mu)",
         false, false,
-        "Hairer & Wanner II §IV.10 (VDPOL, ε = 1e-6); IVP test set 'vdpol' (μ = 1000)", 2.0},
+        "Hairer & Wanner II §IV.10 (VDPOL, ε = 1e-6); IVP test set 'vdpol' (μ = 1000)"},
        {{"form",
          P::text,
          "scaled",
@@ -102,17 +102,17 @@ void register_problem_models(ModelRegistry& reg) {
              p.text("form") == "scaled" ? VanDerPol::Form::scaled : VanDerPol::Form::mu;
          return std::make_unique<VanDerPol>(form, p.real("mu"));
        }});
-  reg.add(
-      {{"orego", "Oregonator (Belousov–Zhabotinskii reaction); literature end time t = 360", false,
-        false, "Field & Noyes 1974; Hairer & Wanner II §IV.10 (OREGO); IVP test set 'orego'", 360.0},
-       {{"s", P::real, "77.27", "time-scale ratio s (> 0)"},
-        {"w", P::real, "0.161", "rate w (>= 0)"},
-        {"q", P::real, "8.375e-6", "rate q (>= 0)"}},
-       [](const Params& p) {
-         return std::make_unique<Orego>(p.real("s"), p.real("w"), p.real("q"));
-       }});
+  reg.add({{"orego", "Oregonator (Belousov–Zhabotinskii reaction); literature end time t = 360",
+            false, false,
+            "Field & Noyes 1974; Hairer & Wanner II §IV.10 (OREGO); IVP test set 'orego'"},
+           {{"s", P::real, "77.27", "time-scale ratio s (> 0)"},
+            {"w", P::real, "0.161", "rate w (>= 0)"},
+            {"q", P::real, "8.375e-6", "rate q (>= 0)"}},
+           [](const Params& p) {
+             return std::make_unique<Orego>(p.real("s"), p.real("w"), p.real("q"));
+           }});
   reg.add({{"e5", "E5 chemical pyrolysis (4 species, badly scaled); literature end time t = 1e13",
-            false, false, "Enright, Hull & Lindberg 1975; Hairer & Wanner II §IV.10 (E5)", 1e13},
+            false, false, "Enright, Hull & Lindberg 1975; Hairer & Wanner II §IV.10 (E5)"},
            {{"a", P::real, "7.89e-10", "rate constant A (>= 0)"},
             {"b", P::real, "1.1e7", "rate constant B (>= 0)"},
             {"c", P::real, "1.13e3", "rate constant C (>= 0)"},
@@ -122,7 +122,7 @@ void register_problem_models(ModelRegistry& reg) {
            }});
   reg.add({{"pollution",
             "POLLU air-pollution chemistry (20 species, 25 reactions); literature end time t = 60",
-            false, false, "Verwer 1994 (SIAM J. Sci. Comput. 15); IVP test set 'pollu'", 60.0},
+            false, false, "Verwer 1994 (SIAM J. Sci. Comput. 15); IVP test set 'pollu'"},
            {},
            [](const Params&) { return std::make_unique<Pollution>(); }});
 }

@@ -4,23 +4,6 @@
 
 namespace stiffbench {
 
-namespace {
-
-// min(‖J‖₁, ‖J‖∞) ≥ ρ(J): every eigenvalue lies in a Gershgorin disc of J (rows) and of Jᵀ
-// (columns), and each disc lies within radius max row (column) absolute sum of the origin.
-double gershgorin_radius(const SparseMat& jac) {
-  Vec rows = Vec::Zero(jac.rows()), cols = Vec::Zero(jac.cols());
-  for (Index c = 0; c < jac.outerSize(); ++c) {
-    for (SparseMat::InnerIterator it(jac, c); it; ++it) {
-      rows[it.row()] += std::abs(it.value());
-      cols[it.col()] += std::abs(it.value());
-    }
-  }
-  return std::min(rows.maxCoeff(), cols.maxCoeff());
-}
-
-}  // namespace
-
 Robertson::Robertson(double k1, double k2, double k3) : k1_(k1), k2_(k2), k3_(k3) {
   require_input(k1 >= 0, "robertson: parameter 'k1' must be >= 0");
   require_input(k2 >= 0, "robertson: parameter 'k2' must be >= 0");
@@ -58,7 +41,7 @@ std::vector<Invariant> Robertson::invariants() const {
 std::optional<double> Robertson::stiffness(double t, CVecRef y) const {
   SparseMat jac;
   eval_jacobian(t, y, jac);  // not counted: an estimate, not a solver's evaluation
-  return gershgorin_radius(jac);
+  return gershgorin_bound(jac);
 }
 
 }  // namespace stiffbench

@@ -4,23 +4,6 @@
 
 namespace stiffbench {
 
-namespace {
-
-// min(‖J‖₁, ‖J‖∞) ≥ ρ(J): every eigenvalue lies in a Gershgorin disc of J (rows) and of Jᵀ
-// (columns), and each disc lies within radius max row (column) absolute sum of the origin.
-double gershgorin_radius(const SparseMat& jac) {
-  Vec rows = Vec::Zero(jac.rows()), cols = Vec::Zero(jac.cols());
-  for (Index c = 0; c < jac.outerSize(); ++c) {
-    for (SparseMat::InnerIterator it(jac, c); it; ++it) {
-      rows[it.row()] += std::abs(it.value());
-      cols[it.col()] += std::abs(it.value());
-    }
-  }
-  return std::min(rows.maxCoeff(), cols.maxCoeff());
-}
-
-}  // namespace
-
 VanDerPol::VanDerPol(Form form, double mu) : form_(form), mu_(mu), eps_(1.0 / (mu * mu)) {
   require_input(mu > 0, "van_der_pol: parameter 'mu' must be > 0");
   require_input(std::isfinite(eps_) && eps_ > 0,
@@ -53,7 +36,7 @@ void VanDerPol::eval_jacobian(double, CVecRef y, SparseMat& jac) const {
 std::optional<double> VanDerPol::stiffness(double t, CVecRef y) const {
   SparseMat jac;
   eval_jacobian(t, y, jac);  // not counted: an estimate, not a solver's evaluation
-  return gershgorin_radius(jac);
+  return gershgorin_bound(jac);
 }
 
 }  // namespace stiffbench
