@@ -13,7 +13,8 @@ void OdeSystem::eval_jacobian(double, CVecRef, SparseMat&) const {
 }
 
 SparseMat OdeSystem::jacobian_pattern() const {
-  if (!has_jacobian()) throw BadInput("model '" + name() + "' provides no Jacobian sparsity pattern");
+  if (!has_jacobian())
+    throw BadInput("model '" + name() + "' provides no Jacobian sparsity pattern");
   SparseMat jac;
   const Vec y0 = initial_state();
   eval_jacobian(initial_time(), y0, jac);  // structure only: not counted as an evaluation

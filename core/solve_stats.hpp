@@ -27,7 +27,7 @@ struct SolveStats {
   long library_f_evals = -1;
   double wall_s = 0.0;
   Status status = Status::ok;
-  std::string message;  // why a run did not end ok (empty otherwise)
+  std::string message;         // why a run did not end ok (empty otherwise)
   std::string library_report;  // a library's own statistics printout (references), or empty
 
   // Field names and values in a fixed order, shared by the table and CSV printers.

@@ -48,7 +48,8 @@ void list_experiments(std::ostream& out) {
   t.rows.push_back(
       {"local-error", "local_error.{csv,md,json}", "error of one step vs h, observed slopes"});
   t.rows.push_back({"work-precision", "work_precision.{csv,md,json}",
-                    "error at t_end against work: h ladder for fixed-step methods, tolerance ladder for references"});
+                    "error at t_end against work: h ladder for fixed-step methods, tolerance "
+                    "ladder for references"});
   t.rows.push_back({"report", "DIR/REPORT.md and one folder per study", "the default suite"});
   out << t.to_markdown();
 }
@@ -124,7 +125,8 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   double t_end = opt.t_end;
   if (std::isnan(t_end)) {
     const auto literature = sys.end_time();
-    require_input(literature.has_value(), "--t-end is required: model '" + opt.model + "' has no default end time");
+    require_input(literature.has_value(),
+                  "--t-end is required: model '" + opt.model + "' has no default end time");
     t_end = *literature;
   }
   // Fixed step with --h; without it the integrator's own step control (references only).
@@ -132,7 +134,8 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   require_input(!adaptive || integ.supports_adaptive(),
                 "--h is required: integrator '" + opt.integrator + "' is fixed-step");
   require_input(adaptive || integ.supports_fixed_step(),
-                "integrator '" + opt.integrator + "' has no fixed-step mode: omit --h and set --param rtol=R");
+                "integrator '" + opt.integrator +
+                    "' has no fixed-step mode: omit --h and set --param rtol=R");
   FixedStepOptions fo;
   fo.t_end = t_end;
   fo.h = opt.h;
@@ -170,7 +173,8 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   out << "\nintegrator   " << opt.integrator << " (" << to_string(integ.info().family) << ", order "
       << (integ.info().order ? std::to_string(integ.info().order) : "variable") << ")\n";
   if (adaptive) {
-    out << "steps        adaptive (" << r.stats.steps << " steps to t = " << format_full(t_end) << ")\n";
+    out << "steps        adaptive (" << r.stats.steps << " steps to t = " << format_full(t_end)
+        << ")\n";
   } else {
     out << "h            " << format_full(r.h) << " (" << r.n_steps
         << " steps to t = " << format_full(t_end) << ")\n";
@@ -214,8 +218,8 @@ namespace {
 // Runs plots/SCRIPT with gnuplot, defining `vars` (name, value) as gnuplot strings. Values go
 // inside gnuplot single quotes inside a shell double-quoted argument: single quotes are
 // doubled, characters the shell would expand are dropped.
-bool run_gnuplot(const std::string& script, const std::vector<std::pair<std::string, std::string>>& vars,
-                 std::ostream& err) {
+bool run_gnuplot(const std::string& script,
+                 const std::vector<std::pair<std::string, std::string>>& vars, std::ostream& err) {
   if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
     err << "gnuplot not found: plots skipped\n";
     return false;
@@ -243,21 +247,23 @@ bool run_gnuplot(const std::string& script, const std::vector<std::pair<std::str
 
 bool plot_convergence(const std::string& csv, const std::string& png, const std::string& title,
                       const std::vector<std::string>& integrators, bool local, std::ostream& err) {
-  return run_gnuplot("convergence.gp",
-                     {{"csvfile", csv},
-                      {"outfile", png},
-                      {"methods", join(integrators, " ")},
-                      {"ttl", title},
-                      {"ycolumn", local ? "5" : "6"},
-                      {"ylab", local ? "local error (max-norm)" : "global error at t_end (max-norm)"}},
-                     err);
+  return run_gnuplot(
+      "convergence.gp",
+      {{"csvfile", csv},
+       {"outfile", png},
+       {"methods", join(integrators, " ")},
+       {"ttl", title},
+       {"ycolumn", local ? "5" : "6"},
+       {"ylab", local ? "local error (max-norm)" : "global error at t_end (max-norm)"}},
+      err);
 }
 
 bool plot_work_precision(const std::string& csv, const std::string& png, const std::string& title,
                          const std::vector<std::string>& integrators, std::ostream& err) {
-  return run_gnuplot("work_precision.gp",
-                     {{"csvfile", csv}, {"outfile", png}, {"methods", join(integrators, " ")}, {"ttl", title}},
-                     err);
+  return run_gnuplot(
+      "work_precision.gp",
+      {{"csvfile", csv}, {"outfile", png}, {"methods", join(integrators, " ")}, {"ttl", title}},
+      err);
 }
 
 namespace {
@@ -368,11 +374,13 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
   {
     WorkPrecisionSpec w;
     w.model = "hires";
-    w.integrators = {"cvode_bdf", "arkode_dirk", "gsl_msbdf", "gsl_bsimp", "sdirk3", "bdf2", "rosenbrock2"};
+    w.integrators = {"cvode_bdf", "arkode_dirk", "gsl_msbdf",  "gsl_bsimp",
+                     "sdirk3",    "bdf2",        "rosenbrock2"};
     w.levels = opt.quick ? 3 : 4;
     w.tol_levels = opt.quick ? 4 : 7;
     w.repeats = opt.quick ? 1 : 3;
-    wp_items.push_back({"hires_work_precision", "HIRES (t_end = 321.8122): work against precision", w});
+    wp_items.push_back(
+        {"hires_work_precision", "HIRES (t_end = 321.8122): work against precision", w});
   }
   for (std::size_t i = 0; i < wp_items.size(); ++i) {
     const WpItem& item = wp_items[i];
@@ -384,10 +392,12 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
                                              (dir / "work_precision.png").string(), item.title,
                                              item.spec.integrators, err);
     md << "## " << item.title << "\n\n";
-    md << "[work_precision.csv](" << item.name << "/work_precision.csv) · [work_precision.md](" << item.name
-       << "/work_precision.md) · [work_precision.json](" << item.name << "/work_precision.json)\n\n";
+    md << "[work_precision.csv](" << item.name << "/work_precision.csv) · [work_precision.md]("
+       << item.name << "/work_precision.md) · [work_precision.json](" << item.name
+       << "/work_precision.json)\n\n";
     if (plotted) md << "![" << item.title << "](" << item.name << "/work_precision.png)\n\n";
-    md << "Reference: " << res.reference_description << ". Fixed-step methods over h, references over "
+    md << "Reference: " << res.reference_description
+       << ". Fixed-step methods over h, references over "
        << "rtol (atol = " << format_full(item.spec.atol_factor) << "·rtol).\n\n";
     Table summary{{"integrator", "settings", "best error", "f_evals at best", "status"}, {}};
     for (const auto& name : item.spec.integrators) {
@@ -398,14 +408,16 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
       for (const auto& r : res.rows) {
         if (r.integrator != name) continue;
         ++n;
-        if (r.stats.status != Status::ok) status = to_string(r.stats.status);
+        if (r.stats.status != Status::ok)
+          status = to_string(r.stats.status);
         else if (r.error < best) {
           best = r.error;
           fe = r.stats.f_evals;
         }
       }
-      summary.rows.push_back({name, std::to_string(n), std::isfinite(best) ? format_short(best) : "-",
-                              std::to_string(fe), status});
+      summary.rows.push_back({name, std::to_string(n),
+                              std::isfinite(best) ? format_short(best) : "-", std::to_string(fe),
+                              status});
     }
     md << summary.to_markdown() << "\n";
   }

@@ -109,9 +109,10 @@ ConvergenceResult run_study(const ConvergenceSpec& spec, std::ostream* progress,
   const double t0 = sys.initial_time();
   require_input(spec.t_end > t0, "--t-end must be > the model's initial time");
   for (const auto& integ : setup.integrators)
-    require_input(integ->supports_fixed_step(),
-                  "integrator '" + integ->info().name +
-                      "' is adaptive only: a step-size study needs fixed steps (use work-precision)");
+    require_input(
+        integ->supports_fixed_step(),
+        "integrator '" + integ->info().name +
+            "' is adaptive only: a step-size study needs fixed steps (use work-precision)");
 
   // Actual step sizes are fixed by the driver's N = round(T/h) rule (global study); the local
   // study uses h_k exactly.

@@ -57,7 +57,8 @@ int main(int argc, char** argv) {
   solve->add_option("--h", solve_opt.h,
                     "step size (the run takes N = round(T/h) steps of T/N); omit for the adaptive "
                     "mode of a reference integrator");
-  solve->add_option("--t-end", solve_opt.t_end, "final time (default: the model's literature end time)");
+  solve->add_option("--t-end", solve_opt.t_end,
+                    "final time (default: the model's literature end time)");
   solve->add_option("--outputs", solve_opt.outputs, "number of output intervals in the trajectory")
       ->capture_default_str();
   solve->add_option("--param", solve_params, "model/integrator parameter key=value (repeatable)")
@@ -92,26 +93,37 @@ int main(int argc, char** argv) {
       "error against work: fixed-step methods over an h ladder, references over a tolerance "
       "ladder; writes work_precision.{csv,md,json}");
   work_precision->add_option("--model", wp.model, "model name")->required();
-  work_precision->add_option("--integrators", wp_integrators, "comma-separated integrator names")->required();
-  work_precision->add_option("--param", wp_params, "model/integrator parameter key=value (repeatable)")
+  work_precision->add_option("--integrators", wp_integrators, "comma-separated integrator names")
+      ->required();
+  work_precision
+      ->add_option("--param", wp_params, "model/integrator parameter key=value (repeatable)")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  work_precision->add_option("--t-end", wp.t_end, "final time (default: the model's literature end time)");
-  work_precision->add_option("--h", wp.h, "coarsest step of fixed-step methods (default: (t_end - t0)/16000)");
+  work_precision->add_option("--t-end", wp.t_end,
+                             "final time (default: the model's literature end time)");
+  work_precision->add_option("--h", wp.h,
+                             "coarsest step of fixed-step methods (default: (t_end - t0)/16000)");
   work_precision->add_option("--levels", wp.levels, "number of step sizes")->capture_default_str();
-  work_precision->add_option("--refine", wp.refine, "ratio between step sizes")->capture_default_str();
-  work_precision->add_option("--tol-levels", wp.tol_levels, "number of tolerances (factor 10 apart)")
+  work_precision->add_option("--refine", wp.refine, "ratio between step sizes")
       ->capture_default_str();
-  work_precision->add_option("--rtol-max", wp.rtol_max, "loosest relative tolerance")->capture_default_str();
-  work_precision->add_option("--atol-factor", wp.atol_factor, "atol = atol_factor * rtol")->capture_default_str();
+  work_precision
+      ->add_option("--tol-levels", wp.tol_levels, "number of tolerances (factor 10 apart)")
+      ->capture_default_str();
+  work_precision->add_option("--rtol-max", wp.rtol_max, "loosest relative tolerance")
+      ->capture_default_str();
+  work_precision->add_option("--atol-factor", wp.atol_factor, "atol = atol_factor * rtol")
+      ->capture_default_str();
   work_precision->add_option("--repeats", wp.repeats, "runs per setting; wall time is the minimum")
       ->capture_default_str();
-  work_precision->add_option("--reference", wp.reference,
-                             "exact | METHOD; default: exact where available, else cvode_bdf")
+  work_precision
+      ->add_option("--reference", wp.reference,
+                   "exact | METHOD; default: exact where available, else cvode_bdf")
       ->capture_default_str();
-  work_precision->add_option("--reference-rtol", wp.reference_rtol, "rtol of an adaptive reference run")
+  work_precision
+      ->add_option("--reference-rtol", wp.reference_rtol, "rtol of an adaptive reference run")
       ->capture_default_str();
-  work_precision->add_option("--reference-atol", wp.reference_atol, "atol of an adaptive reference run")
+  work_precision
+      ->add_option("--reference-atol", wp.reference_atol, "atol of an adaptive reference run")
       ->capture_default_str();
   work_precision->add_option("--out", wp_out, "output directory")->capture_default_str();
 

@@ -12,11 +12,20 @@
 namespace stiffbench {
 
 nlohmann::json WorkPrecisionSpec::to_json() const {
-  return {{"model", model},           {"params", params.values()}, {"integrators", integrators},
-          {"t_end", t_end},           {"h", h},                    {"levels", levels},
-          {"refine", refine},         {"tol_levels", tol_levels},  {"rtol_max", rtol_max},
-          {"atol_factor", atol_factor}, {"repeats", repeats},      {"reference", reference},
-          {"reference_rtol", reference_rtol}, {"reference_atol", reference_atol}};
+  return {{"model", model},
+          {"params", params.values()},
+          {"integrators", integrators},
+          {"t_end", t_end},
+          {"h", h},
+          {"levels", levels},
+          {"refine", refine},
+          {"tol_levels", tol_levels},
+          {"rtol_max", rtol_max},
+          {"atol_factor", atol_factor},
+          {"repeats", repeats},
+          {"reference", reference},
+          {"reference_rtol", reference_rtol},
+          {"reference_atol", reference_atol}};
 }
 
 namespace {
@@ -27,7 +36,8 @@ Vec reference_state(const WorkPrecisionSpec& spec, const OdeSystem& sys, double 
   Vec y(sys.dimension());
   const bool exact = spec.reference == "exact" || (spec.reference == "auto" && sys.has_exact());
   if (exact) {
-    require_input(sys.has_exact(), "--reference exact: model '" + sys.name() + "' has no exact solution");
+    require_input(sys.has_exact(),
+                  "--reference exact: model '" + sys.name() + "' has no exact solution");
     sys.exact(t_end, y);
     *description = "exact";
     return y;
@@ -45,7 +55,8 @@ Vec reference_state(const WorkPrecisionSpec& spec, const OdeSystem& sys, double 
   RunResult r;
   if (integ->supports_adaptive()) {
     r = run_adaptive(sys, *integ, {t_end, 0});
-    *description = method + " adaptive, rtol = " + p.values().at("rtol") + ", atol = " + p.values().at("atol");
+    *description =
+        method + " adaptive, rtol = " + p.values().at("rtol") + ", atol = " + p.values().at("atol");
   } else {
     FixedStepOptions opt;
     opt.t_end = t_end;
@@ -60,7 +71,8 @@ Vec reference_state(const WorkPrecisionSpec& spec, const OdeSystem& sys, double 
 
 double mescd(CVecRef y, CVecRef ref, double ratio) {
   double m = 0;
-  for (Index i = 0; i < y.size(); ++i) m = std::max(m, std::abs(y[i] - ref[i]) / (ratio + std::abs(ref[i])));
+  for (Index i = 0; i < y.size(); ++i)
+    m = std::max(m, std::abs(y[i] - ref[i]) / (ratio + std::abs(ref[i])));
   return -std::log10(m);
 }
 
@@ -69,8 +81,10 @@ double mescd(CVecRef y, CVecRef ref, double ratio) {
 WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream* progress) {
   WorkPrecisionSpec spec = s;
   require_input(!spec.integrators.empty(), "--integrators: no integrator given");
-  require_input(spec.levels >= 2, "--levels must be >= 2 (got " + std::to_string(spec.levels) + ")");
-  require_input(spec.tol_levels >= 2, "--tol-levels must be >= 2 (got " + std::to_string(spec.tol_levels) + ")");
+  require_input(spec.levels >= 2,
+                "--levels must be >= 2 (got " + std::to_string(spec.levels) + ")");
+  require_input(spec.tol_levels >= 2,
+                "--tol-levels must be >= 2 (got " + std::to_string(spec.tol_levels) + ")");
   require_input(spec.refine > 1, "--refine must be > 1");
   require_input(spec.repeats >= 1, "--repeats must be >= 1");
   require_input(spec.rtol_max > 0 && spec.rtol_max < 1, "--rtol-max must be in (0, 1)");
@@ -80,7 +94,8 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
   const double t0 = sys.initial_time();
   if (spec.t_end == 0) {
     const auto literature = sys.end_time();
-    require_input(literature.has_value(), "--t-end is required: model '" + spec.model + "' has no default end time");
+    require_input(literature.has_value(),
+                  "--t-end is required: model '" + spec.model + "' has no default end time");
     spec.t_end = *literature;
   }
   require_input(spec.t_end > t0, "--t-end must be > the model's initial time");
@@ -97,7 +112,8 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
   if (progress) *progress << "reference: " << res.reference_description << "\n";
 
   std::size_t total = 0, done = 0;
-  for (const auto& integ : setup.integrators) total += integ->supports_adaptive() ? tols.size() : hs.size();
+  for (const auto& integ : setup.integrators)
+    total += integ->supports_adaptive() ? tols.size() : hs.size();
   for (std::size_t i = 0; i < setup.integrators.size(); ++i) {
     const std::string name = spec.integrators[i];
     const bool adaptive = setup.integrators[i]->supports_adaptive();
@@ -133,9 +149,10 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
       row.mescd = ok ? mescd(r.y, ref, spec.atol_factor) : std::numeric_limits<double>::quiet_NaN();
       res.rows.push_back(row);
       if (progress) {
-        *progress << "[" << ++done << "/" << total << "] " << name << " " << row.setting << " error="
-                  << (ok ? format_short(row.error) : to_string(r.stats.status)) << " f_evals="
-                  << row.stats.f_evals << " (" << format_short(best_wall, 2) << " s)\n"
+        *progress << "[" << ++done << "/" << total << "] " << name << " " << row.setting
+                  << " error=" << (ok ? format_short(row.error) : to_string(r.stats.status))
+                  << " f_evals=" << row.stats.f_evals << " (" << format_short(best_wall, 2)
+                  << " s)\n"
                   << std::flush;
       }
     }
@@ -164,8 +181,9 @@ void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpe
   const Table t = work_precision_table(res);
   write_file_atomic(d / "work_precision.csv", t.to_csv());
   std::ostringstream md;
-  md << "# Work-precision: " << spec.model << "\n\nError: max-norm at t_end = " << format_full(res.t_end)
-     << " against " << res.reference_description << "; mescd with atol/rtol = " << format_full(spec.atol_factor)
+  md << "# Work-precision: " << spec.model
+     << "\n\nError: max-norm at t_end = " << format_full(res.t_end) << " against "
+     << res.reference_description << "; mescd with atol/rtol = " << format_full(spec.atol_factor)
      << "; wall time: minimum over " << spec.repeats << " runs.\n\n";
   Table short_t = t;
   for (auto& row : short_t.rows) {
@@ -173,7 +191,8 @@ void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpe
     row[8] = format_short(std::stod(row[8]), 2);
     if (!row[10].empty()) row[10] = format_fixed(std::stod(row[10]), 2);
   }
-  md << short_t.to_markdown() << "\nFull precision: `work_precision.csv`; metadata: `work_precision.json`.\n";
+  md << short_t.to_markdown()
+     << "\nFull precision: `work_precision.csv`; metadata: `work_precision.json`.\n";
   write_file_atomic(d / "work_precision.md", md.str());
   nlohmann::json meta = run_metadata("work-precision", spec.to_json());
   meta["reference"] = res.reference_description;

@@ -24,7 +24,7 @@ struct WorkPrecisionSpec {
   std::string model;
   Params params;
   std::vector<std::string> integrators;
-  double t_end = 0;       // 0: the model's literature end time
+  double t_end = 0;  // 0: the model's literature end time
   // Coarsest step; 0: (t_end - t0)/16000. Fixed steps on stiff problems are pre-asymptotic
   // for a long way (bdf2 on HIRES: the final-time error crosses zero near h = 0.04, so a ladder
   // through it is not monotone), so the default starts fine; choose --h for your problem.

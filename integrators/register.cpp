@@ -77,7 +77,8 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
   reg.add({SemiImplicitEuler({}).info(), linear_specs, [](const Params& p) {
              return std::make_unique<SemiImplicitEuler>(read_implicit_options(p, false));
            }});
-  const std::string ros_desc = "ROS2 Rosenbrock method (Verwer et al. 1999), gamma = 1 + 1/sqrt(2); L-stable";
+  const std::string ros_desc =
+      "ROS2 Rosenbrock method (Verwer et al. 1999), gamma = 1 + 1/sqrt(2); L-stable";
   reg.add({Rosenbrock(rosenbrock2_tableau(), ros_desc, {}).info(), linear_specs,
            [ros_desc](const Params& p) {
              return std::make_unique<Rosenbrock>(rosenbrock2_tableau(), ros_desc,

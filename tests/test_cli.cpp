@@ -193,9 +193,11 @@ TEST(Cli, ConvergenceWritesContractFiles) {
 TEST(Cli, ConvergenceRowsOfImplicitMethodsCountJacobiansAndSolves) {
   const auto dir = std::filesystem::temp_directory_path() / "sb_conv_implicit";
   std::filesystem::remove_all(dir);
-  const Outcome o = run(
-      "convergence --model harmonic_oscillator --integrators backward_euler,sdirk3,bdf2,rosenbrock2 --t-end 1 "
-      "--h 0.1 --levels 2 --out " + dir.string());
+  const Outcome o =
+      run("convergence --model harmonic_oscillator --integrators "
+          "backward_euler,sdirk3,bdf2,rosenbrock2 --t-end 1 "
+          "--h 0.1 --levels 2 --out " +
+          dir.string());
   ASSERT_EQ(o.code, 0) << o.err;
   std::ifstream f(dir / "convergence.csv");
   std::string line;
@@ -220,14 +222,18 @@ TEST(Cli, ConvergenceRowsOfImplicitMethodsCountJacobiansAndSolves) {
 TEST(Cli, WorkPrecisionOnHiresErrorFallsAsWorkRises) {
   const auto dir = std::filesystem::temp_directory_path() / "sb_wp_hires";
   std::filesystem::remove_all(dir);
-  const Outcome o = run(
-      "work-precision --model hires --integrators cvode_bdf,arkode_dirk,gsl_msbdf,gsl_bsimp,sdirk3,bdf2 "
-      "--repeats 1 --out " + dir.string());
+  const Outcome o =
+      run("work-precision --model hires --integrators "
+          "cvode_bdf,arkode_dirk,gsl_msbdf,gsl_bsimp,sdirk3,bdf2 "
+          "--repeats 1 --out " +
+          dir.string());
   ASSERT_EQ(o.code, 0) << o.err;
   std::ifstream f(dir / "work_precision.csv");
   std::string line;
   std::getline(f, line);
-  EXPECT_EQ(line, "model,integrator,setting,error,f_evals,jac_evals,lin_solves,steps,wall_s,status,mescd");
+  EXPECT_EQ(
+      line,
+      "model,integrator,setting,error,f_evals,jac_evals,lin_solves,steps,wall_s,status,mescd");
   std::map<std::string, std::vector<std::pair<long, double>>> by_method;
   while (std::getline(f, line)) {
     std::vector<std::string> c;
@@ -242,7 +248,8 @@ TEST(Cli, WorkPrecisionOnHiresErrorFallsAsWorkRises) {
     std::sort(points.begin(), points.end());
     EXPECT_GE(points.size(), 4u) << method;
     for (std::size_t i = 1; i < points.size(); ++i)
-      EXPECT_LT(points[i].second, points[i - 1].second) << method << " at f_evals " << points[i].first;
+      EXPECT_LT(points[i].second, points[i - 1].second)
+          << method << " at f_evals " << points[i].first;
   }
   std::filesystem::remove_all(dir);
 }

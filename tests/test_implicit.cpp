@@ -36,7 +36,8 @@ TEST_P(ImplicitTableauTest, RowSumsAndExactOrder) {
 // linear problem), including a very stiff z where R(z) → R(∞).
 TEST_P(ImplicitTableauTest, StabilityFunctionMatchesOneStep) {
   const ButcherTableau& t = GetParam();
-  for (const std::complex<double> z : {std::complex<double>(-0.7, 0.3), {-2.0, 1.5}, {0.2, -1.1}, {-1e6, 0.0}}) {
+  for (const std::complex<double> z :
+       {std::complex<double>(-0.7, 0.3), {-2.0, 1.5}, {0.2, -1.1}, {-1e6, 0.0}}) {
     Dahlquist sys(z, {1.0, 0.0});
     DirkIntegrator integ(t, "", {});
     Vec y = sys.initial_state();
@@ -58,7 +59,8 @@ INSTANTIATE_TEST_SUITE_P(Dirk, ImplicitTableauTest, ::testing::ValuesIn(implicit
 // methods documented as L-stable; |R(∞)| = 1 for implicit midpoint and trapezoidal.
 TEST(ImplicitStability, LStableMethodsDampInfinity) {
   for (const auto& t : implicit_tableaux()) {
-    for (double y = 0.1; y < 1e4; y *= 1.7) EXPECT_LE(std::abs(t.stability({0.0, y})), 1.0 + 1e-12) << t.name;
+    for (double y = 0.1; y < 1e4; y *= 1.7)
+      EXPECT_LE(std::abs(t.stability({0.0, y})), 1.0 + 1e-12) << t.name;
     // R(-1e6) stands for R(∞): (1 + z/2)/(1 - z/2) = -1 + 4e-6 for the A-stable pair, O(1/|z|)
     // for the L-stable ones. (Larger |z| loses digits to cancellation in 1 + z bᵀ(I - zA)⁻¹1.)
     const double r_inf = std::abs(t.stability(-1e6));
@@ -72,7 +74,8 @@ TEST(ImplicitStability, LStableMethodsDampInfinity) {
 
 // --- Stiff behaviour -----------------------------------------------------------------------
 
-double max_error_along(const OdeSystem& sys, Integrator& integ, double h, double t_end, Status* status) {
+double max_error_along(const OdeSystem& sys, Integrator& integ, double h, double t_end,
+                       Status* status) {
   FixedStepOptions opt;
   opt.t_end = t_end;
   opt.h = h;
@@ -134,7 +137,9 @@ TEST(Stiff, ImplicitMidpointKeepsQuadraticEnergy) {
 TEST(Newton, OneIterationPerStageOnLinearProblems) {
   auto sys = model("dahlquist", {"lambda_re=-3", "lambda_im=5"});
   const std::map<std::string, int> implicit_stages = {
-      {"backward_euler", 1}, {"implicit_midpoint", 1}, {"trapezoidal", 1}, {"sdirk2", 2}, {"sdirk3", 3}, {"bdf2", 1}};
+      {"backward_euler", 1}, {"implicit_midpoint", 1},
+      {"trapezoidal", 1},    {"sdirk2", 2},
+      {"sdirk3", 3},         {"bdf2", 1}};
   for (const auto& [name, stages] : implicit_stages) {
     for (const auto& mode : {"full", "modified", "frozen"}) {
       auto integ = make(name, {std::string("newton=") + mode});
@@ -230,13 +235,15 @@ TEST(Jacobian, ColoringOfTridiagonalPatternUsesThreeColours) {
   const Index n = 40;
   std::vector<Eigen::Triplet<double>> t;
   for (Index i = 0; i < n; ++i)
-    for (Index j = std::max<Index>(0, i - 1); j <= std::min(n - 1, i + 1); ++j) t.emplace_back(i, j, 1.0);
+    for (Index j = std::max<Index>(0, i - 1); j <= std::min(n - 1, i + 1); ++j)
+      t.emplace_back(i, j, 1.0);
   SparseMat p(n, n);
   p.setFromTriplets(t.begin(), t.end());
   int colors = 0;
   const auto c = color_columns(p, &colors);
   EXPECT_EQ(colors, 3);
-  for (Index j = 0; j + 1 < n; ++j) EXPECT_NE(c[static_cast<std::size_t>(j)], c[static_cast<std::size_t>(j + 1)]);
+  for (Index j = 0; j + 1 < n; ++j)
+    EXPECT_NE(c[static_cast<std::size_t>(j)], c[static_cast<std::size_t>(j + 1)]);
 }
 
 // --- Linear solvers ------------------------------------------------------------------------
@@ -295,16 +302,24 @@ TEST(LinearSolvers, AllChoicesGiveTheSameStep) {
     opt.t_end = 1e-3;
     opt.h = 1e-3;
     const RunResult r = run_fixed_step(sys, *integ, opt);
-    EXPECT_EQ(r.stats.status, Status::ok) << params[0] << " " << params[1] << ": " << r.stats.message;
+    EXPECT_EQ(r.stats.status, Status::ok)
+        << params[0] << " " << params[1] << ": " << r.stats.message;
     return r.y;
   };
   const Vec ref = one_step({"linear_solver=sparse_lu"});
   for (const auto& solver : {"dense_lu", "ldlt", "cg", "bicgstab", "gmres"}) {
-    EXPECT_LT(max_abs_diff(one_step({std::string("linear_solver=") + solver}), ref), 1e-10) << solver;
-    if (std::string(solver) == "cg" || std::string(solver) == "bicgstab" || std::string(solver) == "gmres") {
-      EXPECT_LT(max_abs_diff(one_step({std::string("linear_solver=") + solver, "preconditioner=none"}), ref), 1e-10)
+    EXPECT_LT(max_abs_diff(one_step({std::string("linear_solver=") + solver}), ref), 1e-10)
+        << solver;
+    if (std::string(solver) == "cg" || std::string(solver) == "bicgstab" ||
+        std::string(solver) == "gmres") {
+      EXPECT_LT(max_abs_diff(
+                    one_step({std::string("linear_solver=") + solver, "preconditioner=none"}), ref),
+                1e-10)
           << solver << " unpreconditioned";
-      EXPECT_LT(max_abs_diff(one_step({std::string("linear_solver=") + solver, "jacobian=matrix_free"}), ref), 1e-8)
+      EXPECT_LT(
+          max_abs_diff(one_step({std::string("linear_solver=") + solver, "jacobian=matrix_free"}),
+                       ref),
+          1e-8)
           << solver << " matrix-free";  // finite-difference products: ~√eps relative per product
     }
   }
@@ -319,7 +334,8 @@ TEST(LinearSolvers, ImpossibleCombinationsAreBadInput) {
   auto a = make("backward_euler", {"jacobian=matrix_free", "linear_solver=sparse_lu"});
   FixedStepOptions opt;
   EXPECT_THROW(run_fixed_step(sys, *a, opt), BadInput);
-  auto b = make("backward_euler", {"jacobian=matrix_free", "linear_solver=gmres", "preconditioner=jacobi"});
+  auto b = make("backward_euler",
+                {"jacobian=matrix_free", "linear_solver=gmres", "preconditioner=jacobi"});
   EXPECT_THROW(run_fixed_step(sys, *b, opt), BadInput);
   EXPECT_THROW(make("backward_euler", {"linear_solver=qr"}), BadInput);
 }

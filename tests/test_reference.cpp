@@ -61,15 +61,18 @@ TEST(ReferenceCounts, SundialsCountsAgreeWithTheBoundary) {
     std::string integ, model;
     std::vector<std::string> params;
   };
-  for (const Case& c : std::vector<Case>{{"cvode_bdf", "kepler", {}},
-                                         {"cvode_bdf", "kepler", {"jacobian=dq"}},
-                                         {"cvode_adams", "kepler", {"linear_solver=spgmr", "jacobian=dq"}},
-                                         {"cvode_bdf", "kepler", {"linear_solver=klu"}},
-                                         {"arkode_erk", "kepler", {}},
-                                         {"arkode_dirk", "kepler", {"jacobian=dq"}},
-                                         {"arkode_imex", "prothero_robinson", {"lambda=-100"}}}) {
-    auto sys = model(c.model, c.model == "prothero_robinson" ? c.params : std::vector<std::string>{});
-    auto integ = make(c.integ, c.model == "prothero_robinson" ? std::vector<std::string>{} : c.params);
+  for (const Case& c :
+       std::vector<Case>{{"cvode_bdf", "kepler", {}},
+                         {"cvode_bdf", "kepler", {"jacobian=dq"}},
+                         {"cvode_adams", "kepler", {"linear_solver=spgmr", "jacobian=dq"}},
+                         {"cvode_bdf", "kepler", {"linear_solver=klu"}},
+                         {"arkode_erk", "kepler", {}},
+                         {"arkode_dirk", "kepler", {"jacobian=dq"}},
+                         {"arkode_imex", "prothero_robinson", {"lambda=-100"}}}) {
+    auto sys =
+        model(c.model, c.model == "prothero_robinson" ? c.params : std::vector<std::string>{});
+    auto integ =
+        make(c.integ, c.model == "prothero_robinson" ? std::vector<std::string>{} : c.params);
     const RunResult r = run_adaptive(*sys, *integ, {2.0, 4});
     ASSERT_EQ(r.stats.status, Status::ok) << c.integ << ": " << r.stats.message;
     EXPECT_EQ(r.stats.library_f_evals, r.stats.f_evals) << c.integ << " " << c.params.size();
@@ -133,7 +136,8 @@ TEST(ReferenceLinearSolvers, CvodeDenseBandKluSpgmrAgreeOnCloth) {
   auto sys = cloth ? model("cloth", {"n=5"}) : model("hires");
   Vec ref;
   for (const auto& ls : {"dense", "band", "klu", "spgmr"}) {
-    auto integ = make("cvode_bdf", {"rtol=1e-10", "atol=1e-12", std::string("linear_solver=") + ls});
+    auto integ =
+        make("cvode_bdf", {"rtol=1e-10", "atol=1e-12", std::string("linear_solver=") + ls});
     const RunResult r = run_adaptive(*sys, *integ, {0.5, 0});
     ASSERT_EQ(r.stats.status, Status::ok) << ls << ": " << r.stats.message;
     if (ref.size() == 0) {
@@ -177,7 +181,8 @@ TEST(ReferenceErrors, ImpossibleRunIsSolverErrorAndTheSweepGoesOn) {
   ASSERT_EQ(res.rows.size(), 4u);
   for (int i = 0; i < 2; ++i) {
     EXPECT_EQ(res.rows[i].stats.status, Status::solver_error);
-    EXPECT_NE(res.rows[i].stats.message.find("CV_TOO_MUCH_WORK"), std::string::npos) << res.rows[i].stats.message;
+    EXPECT_NE(res.rows[i].stats.message.find("CV_TOO_MUCH_WORK"), std::string::npos)
+        << res.rows[i].stats.message;
   }
   for (int i = 2; i < 4; ++i) EXPECT_EQ(res.rows[i].stats.status, Status::ok);
 }

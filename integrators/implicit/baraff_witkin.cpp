@@ -14,8 +14,10 @@ std::vector<SparseTerm> BaraffWitkin::terms(double h) const {
 
 void BaraffWitkin::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   check_compatible(info(), sys);
-  require_input(opt_.jacobian == JacobianSource::automatic || opt_.jacobian == JacobianSource::analytic,
-                "baraff_witkin uses the model's K and D blocks: parameter 'jacobian' must be auto or analytic");
+  require_input(
+      opt_.jacobian == JacobianSource::automatic || opt_.jacobian == JacobianSource::analytic,
+      "baraff_witkin uses the model's K and D blocks: parameter 'jacobian' must be auto or "
+      "analytic");
   mech_ = sys.as_mechanical();
   const Index n = mech_->dofs();
   m_ = mech_->masses();

@@ -31,7 +31,8 @@ std::vector<ButcherTableau> build() {
     const double tau = (1.0 + g) / 2.0;
     const double b1 = -(6 * g * g - 16 * g + 1) / 4.0;
     const double b2 = (6 * g * g - 20 * g + 5) / 4.0;
-    all.push_back(make("sdirk3", 3, Mat{{g, 0.0, 0.0}, {tau - g, g, 0.0}, {b1, b2, g}}, Vec{{b1, b2, g}}));
+    all.push_back(
+        make("sdirk3", 3, Mat{{g, 0.0, 0.0}, {tau - g, g, 0.0}, {b1, b2, g}}, Vec{{b1, b2, g}}));
   }
   return all;
 }
@@ -84,7 +85,12 @@ Status DirkStepper::step(ImplicitCore& core, const OdeSystem& sys, double t, Vec
 }
 
 DirkIntegrator::DirkIntegrator(ButcherTableau tableau, std::string description, ImplicitOptions opt)
-    : Integrator({tableau.name, Family::implicit, tableau.order, tableau.stages(), {}, std::move(description)}),
+    : Integrator({tableau.name,
+                  Family::implicit,
+                  tableau.order,
+                  tableau.stages(),
+                  {},
+                  std::move(description)}),
       stepper_(std::move(tableau)),
       core_(std::move(opt)) {}
 
@@ -99,7 +105,11 @@ Status DirkIntegrator::step(const OdeSystem& sys, double t, VecRef y, double h, 
 }
 
 Bdf2Integrator::Bdf2Integrator(ImplicitOptions opt)
-    : Integrator({"bdf2", Family::implicit, 2, 1, {},
+    : Integrator({"bdf2",
+                  Family::implicit,
+                  2,
+                  1,
+                  {},
                   "two-step backward differentiation formula; sdirk2 start-up step"}),
       core_(std::move(opt)),
       startup_(implicit_tableau("sdirk2")) {}

@@ -23,7 +23,9 @@ std::vector<ParamSpec> implicit_param_specs(bool with_newton) {
   using P = ParamType;
   std::vector<ParamSpec> specs;
   if (with_newton) {
-    specs.push_back({"newton", P::text, "modified",
+    specs.push_back({"newton",
+                     P::text,
+                     "modified",
                      "Jacobian reuse in Newton: full (every iterate), modified (once per step), "
                      "frozen (across steps until a failure)",
                      {"full", "modified", "frozen"}});
@@ -32,15 +34,20 @@ std::vector<ParamSpec> implicit_param_specs(bool with_newton) {
                      "carry an error of this order"});
     specs.push_back({"newton_max_iter", P::integer, "10", "Newton iterations per stage"});
   }
-  specs.push_back({"jacobian", P::text, "auto",
+  specs.push_back({"jacobian",
+                   P::text,
+                   "auto",
                    "analytic, fd_dense, fd_colored (column-grouped over the model's pattern) or "
                    "matrix_free (Krylov solvers only); auto: analytic where provided",
                    {"auto", "analytic", "fd_dense", "fd_colored", "matrix_free"}});
-  specs.push_back({"linear_solver", P::text, "auto",
-                   "auto (dense_lu up to 200 unknowns, sparse_lu above), dense_lu, sparse_lu, ldlt, "
-                   "cg, bicgstab, gmres",
-                   linear_solver_names()});
-  specs.push_back({"preconditioner", P::text, "auto",
+  specs.push_back(
+      {"linear_solver", P::text, "auto",
+       "auto (dense_lu up to 200 unknowns, sparse_lu above), dense_lu, sparse_lu, ldlt, "
+       "cg, bicgstab, gmres",
+       linear_solver_names()});
+  specs.push_back({"preconditioner",
+                   P::text,
+                   "auto",
                    "Krylov preconditioner: jacobi, none; auto: jacobi (none when matrix-free)",
                    {"auto", "jacobi", "none"}});
   specs.push_back({"krylov_tol", P::real, "1e-12",
@@ -54,7 +61,9 @@ ImplicitOptions read_implicit_options(const Params& p, bool with_newton) {
   ImplicitOptions o;
   if (with_newton) {
     const std::string& n = p.text("newton");
-    o.newton = n == "full" ? NewtonMode::full : n == "frozen" ? NewtonMode::frozen : NewtonMode::modified;
+    o.newton = n == "full"     ? NewtonMode::full
+               : n == "frozen" ? NewtonMode::frozen
+                               : NewtonMode::modified;
     o.newton_tol = p.real("newton_tol");
     require_input(o.newton_tol > 0, "parameter 'newton_tol' must be > 0");
     o.newton_max_iter = static_cast<int>(p.integer("newton_max_iter"));
@@ -94,7 +103,8 @@ std::vector<int> color_columns(const SparseMat& pattern, int* n_colors) {
       for (Index other : cols_of_row[static_cast<std::size_t>(it.row())]) {
         const int oc = color[static_cast<std::size_t>(other)];
         if (oc >= 0) {
-          if (static_cast<std::size_t>(oc) >= mark.size()) mark.resize(static_cast<std::size_t>(oc) + 1, -1);
+          if (static_cast<std::size_t>(oc) >= mark.size())
+            mark.resize(static_cast<std::size_t>(oc) + 1, -1);
           mark[static_cast<std::size_t>(oc)] = c;
         }
       }
@@ -117,10 +127,11 @@ void ImplicitCore::reset(const OdeSystem& sys) {
                                            : JacobianSource::fd_dense;
   }
   if (source_ == JacobianSource::analytic)
-    require_input(sys.has_jacobian(), "parameter 'jacobian': model '" + sys.name() + "' has no analytic Jacobian");
+    require_input(sys.has_jacobian(),
+                  "parameter 'jacobian': model '" + sys.name() + "' has no analytic Jacobian");
   if (source_ == JacobianSource::fd_colored)
-    require_input(sys.has_jacobian_pattern(),
-                  "parameter 'jacobian': model '" + sys.name() + "' gives no sparsity pattern for fd_colored");
+    require_input(sys.has_jacobian_pattern(), "parameter 'jacobian': model '" + sys.name() +
+                                                  "' gives no sparsity pattern for fd_colored");
   LinearSolverOptions lin = opt_.linear;
   if (source_ == JacobianSource::matrix_free) {
     require_input(is_krylov(lin.kind),
@@ -179,7 +190,8 @@ void ImplicitCore::fd_jacobian(const OdeSystem& sys, double t, CVecRef y, CVecRe
   tmp_ = y;
   for (int color = 0; color < n_colors_; ++color) {
     for (Index j = 0; j < n; ++j)
-      if (colors_[static_cast<std::size_t>(j)] == color) tmp_[j] = y[j] + fd_increment(y[j], y_norm);
+      if (colors_[static_cast<std::size_t>(j)] == color)
+        tmp_[j] = y[j] + fd_increment(y[j], y_norm);
     sys.rhs(t, tmp_, tmp2_);
     for (Index j = 0; j < n; ++j)
       if (colors_[static_cast<std::size_t>(j)] == color) tmp_[j] = 2.0 * y[j] - tmp_[j];
@@ -275,8 +287,8 @@ Status ImplicitCore::solve_stage(const OdeSystem& sys, double t, CVecRef psi, do
   // the predictor with full Newton (J at every iterate): the fixed-step driver cannot shrink
   // the step, so this is the only remedy before reporting newton_failed.
   for (int attempt = 0; attempt < 2; ++attempt) {
-    const bool full = attempt == 1 || opt_.newton == NewtonMode::full ||
-                      source_ == JacobianSource::matrix_free;
+    const bool full =
+        attempt == 1 || opt_.newton == NewtonMode::full || source_ == JacobianSource::matrix_free;
     if (attempt == 1) {
       if (opt_.newton == NewtonMode::full || source_ == JacobianSource::matrix_free) break;
       z = z0_;
@@ -290,7 +302,8 @@ Status ImplicitCore::solve_stage(const OdeSystem& sys, double t, CVecRef psi, do
       if (!g_.allFinite()) break;
       // At least one iteration: a predictor whose residual is already below tol can still be
       // off by ‖W⁻¹‖·tol, and fixed-step studies accumulate such errors over every step.
-      if (it > 0 && (weighted_norm(g_, z) <= opt_.newton_tol || dnorm <= opt_.newton_tol)) return Status::ok;
+      if (it > 0 && (weighted_norm(g_, z) <= opt_.newton_tol || dnorm <= opt_.newton_tol))
+        return Status::ok;
       if (it == opt_.newton_max_iter) break;
       const bool need_j = full || refresh || !have_jac_ ||
                           (opt_.newton == NewtonMode::modified && !jac_fresh_in_step_);
@@ -310,8 +323,8 @@ Status ImplicitCore::solve_stage(const OdeSystem& sys, double t, CVecRef psi, do
   }
   ++stats.newton_fails;
   std::ostringstream msg;
-  msg << "Newton did not converge at t = " << t << " (hγ = " << hg << ", "
-      << opt_.newton_max_iter << " iterations max, tol " << opt_.newton_tol << ")";
+  msg << "Newton did not converge at t = " << t << " (hγ = " << hg << ", " << opt_.newton_max_iter
+      << " iterations max, tol " << opt_.newton_tol << ")";
   stats.message = msg.str();
   return Status::newton_failed;
 }

@@ -12,8 +12,8 @@
 // Convergence: after at least one iteration, ‖G(z)‖ ≤ tol or ‖Δz‖ ≤ tol in the norm
 // max_i |·_i| / (1 + |z_i|), where G(z) = z - ψ - hγ f(t, z). Each step can carry an error of
 // order tol, so a fixed-step run has an error floor of about N·tol: tighten newton_tol for
-// convergence studies at very small h. A linear problem with an exact J converges after one iteration
-// (one linear solve), confirmed by the residual at the next iterate.
+// convergence studies at very small h. A linear problem with an exact J converges after one
+// iteration (one linear solve), confirmed by the residual at the next iterate.
 //
 // Counting: every f evaluation (Newton residuals, finite-difference columns, matrix-free
 // products) goes through OdeSystem::rhs and is counted there. stats.jac_evals gets +1 for each

@@ -55,8 +55,10 @@ namespace {
 
 // out = M⁻¹ in for the Jacobi preconditioner M = diag(W); identity when diag is empty.
 void apply_jacobi(const Vec& diag, CVecRef in, Vec& out) {
-  if (diag.size()) out = in.cwiseQuotient(diag);
-  else out = in;
+  if (diag.size())
+    out = in.cwiseQuotient(diag);
+  else
+    out = in;
 }
 
 // Preconditioned conjugate gradients (Saad, Iterative Methods, Alg. 9.1).

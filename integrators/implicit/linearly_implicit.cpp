@@ -5,7 +5,11 @@
 namespace stiffbench {
 
 SemiImplicitEuler::SemiImplicitEuler(ImplicitOptions opt)
-    : Integrator({"semi_implicit_euler", Family::implicit, 1, 1, {},
+    : Integrator({"semi_implicit_euler",
+                  Family::implicit,
+                  1,
+                  1,
+                  {},
                   "linearly implicit Euler (I - hJ) dy = h f(t, y): one linear solve, no Newton"}),
       core_(std::move(opt)) {}
 
@@ -15,7 +19,8 @@ void SemiImplicitEuler::reset(const OdeSystem& sys, double, CVecRef) {
   for (Vec* v : {&f_, &dy_, &ft_, &rhs_}) v->resize(sys.dimension());
 }
 
-Status SemiImplicitEuler::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) {
+Status SemiImplicitEuler::step(const OdeSystem& sys, double t, VecRef y, double h,
+                               SolveStats& stats) {
   sys.rhs(t, y, f_);
   core_.update_jacobian(sys, t, y, f_, stats);
   if (!core_.prepare(h, stats)) {
@@ -54,7 +59,11 @@ const RosenbrockTableau& rosenbrock2_tableau() {
 }
 
 Rosenbrock::Rosenbrock(RosenbrockTableau tableau, std::string description, ImplicitOptions opt)
-    : Integrator({tableau.name, Family::implicit, tableau.order, static_cast<int>(tableau.b.size()), {},
+    : Integrator({tableau.name,
+                  Family::implicit,
+                  tableau.order,
+                  static_cast<int>(tableau.b.size()),
+                  {},
                   std::move(description)}),
       tab_(std::move(tableau)),
       core_(std::move(opt)) {}

@@ -9,7 +9,8 @@ void SparseCombination::build(const std::vector<SparseTerm>& terms) {
   std::vector<Eigen::Triplet<double>> trips;
   for (const auto& t : terms)
     for (Index c = 0; c < t.matrix->outerSize(); ++c)
-      for (SparseMat::InnerIterator it(*t.matrix, c); it; ++it) trips.emplace_back(it.row(), it.col(), 1.0);
+      for (SparseMat::InnerIterator it(*t.matrix, c); it; ++it)
+        trips.emplace_back(it.row(), it.col(), 1.0);
   w_.resize(n, terms.front().matrix->cols());
   w_.setFromTriplets(trips.begin(), trips.end());  // duplicates summed: structure is the union
   w_.makeCompressed();

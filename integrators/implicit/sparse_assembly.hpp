@@ -30,8 +30,8 @@ class SparseCombination {
 
  private:
   SparseMat w_;
-  std::vector<std::vector<Index>> maps_;           // per term: position in w_ of each nonzero
-  std::vector<std::vector<int>> outer_, inner_;    // per term: the pattern seen by build()
+  std::vector<std::vector<Index>> maps_;         // per term: position in w_ of each nonzero
+  std::vector<std::vector<int>> outer_, inner_;  // per term: the pattern seen by build()
 };
 
 }  // namespace stiffbench

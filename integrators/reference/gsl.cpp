@@ -13,7 +13,7 @@ namespace {
 struct GslMethod {
   const char* name;
   const gsl_odeiv2_step_type* const* type;  // address of the GSL global (initialised at load)
-  int order;                                 // 0: variable order
+  int order;                                // 0: variable order
   bool needs_jacobian;
   bool fixed_ok;
   const char* description;
@@ -21,16 +21,22 @@ struct GslMethod {
 
 const std::vector<GslMethod>& gsl_methods() {
   static const std::vector<GslMethod> all = {
-      {"gsl_rk4", &gsl_odeiv2_step_rk4, 4, false, true, "GSL classic RK4 (step doubling for the error)"},
+      {"gsl_rk4", &gsl_odeiv2_step_rk4, 4, false, true,
+       "GSL classic RK4 (step doubling for the error)"},
       {"gsl_rkf45", &gsl_odeiv2_step_rkf45, 5, false, true, "GSL Runge-Kutta-Fehlberg 4(5)"},
       {"gsl_rkck", &gsl_odeiv2_step_rkck, 5, false, true, "GSL Cash-Karp 4(5)"},
       {"gsl_rk8pd", &gsl_odeiv2_step_rk8pd, 8, false, true, "GSL Prince-Dormand 8(7)"},
-      {"gsl_rk2imp", &gsl_odeiv2_step_rk2imp, 2, true, true, "GSL implicit Gauss-Legendre, 1 stage (midpoint)"},
-      {"gsl_rk4imp", &gsl_odeiv2_step_rk4imp, 4, true, true, "GSL implicit Gauss-Legendre, 2 stages"},
+      {"gsl_rk2imp", &gsl_odeiv2_step_rk2imp, 2, true, true,
+       "GSL implicit Gauss-Legendre, 1 stage (midpoint)"},
+      {"gsl_rk4imp", &gsl_odeiv2_step_rk4imp, 4, true, true,
+       "GSL implicit Gauss-Legendre, 2 stages"},
       {"gsl_bsimp", &gsl_odeiv2_step_bsimp, 0, true, false,
-       "GSL Bader-Deuflhard semi-implicit extrapolation (order set by the tolerance); adaptive only"},
-      {"gsl_msadams", &gsl_odeiv2_step_msadams, 0, false, false, "GSL variable-order Adams (1-12); adaptive only"},
-      {"gsl_msbdf", &gsl_odeiv2_step_msbdf, 0, true, false, "GSL variable-order BDF (1-5); adaptive only"},
+       "GSL Bader-Deuflhard semi-implicit extrapolation (order set by the tolerance); adaptive "
+       "only"},
+      {"gsl_msadams", &gsl_odeiv2_step_msadams, 0, false, false,
+       "GSL variable-order Adams (1-12); adaptive only"},
+      {"gsl_msbdf", &gsl_odeiv2_step_msbdf, 0, true, false,
+       "GSL variable-order BDF (1-5); adaptive only"},
   };
   return all;
 }
@@ -63,7 +69,8 @@ class GslIntegrator final : public Integrator {
   }
 
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override {
-    require_input(method_.fixed_ok, "integrator '" + info().name + "' is adaptive only: give --param rtol=R, not --h");
+    require_input(method_.fixed_ok, "integrator '" + info().name +
+                                        "' is adaptive only: give --param rtol=R, not --h");
     sync(sys, t, y);
     if (h != fixed_h_) {
       make_driver(h);
@@ -71,8 +78,8 @@ class GslIntegrator final : public Integrator {
     }
     // The bare stepper: the driver's fixed-step function still applies the error control and
     // refuses steps whose estimate exceeds the tolerance.
-    const int status = gsl_odeiv2_step_apply(driver_->s, t_, h, y.data(), yerr_.data(), nullptr,
-                                             nullptr, &gsys_);
+    const int status =
+        gsl_odeiv2_step_apply(driver_->s, t_, h, y.data(), yerr_.data(), nullptr, nullptr, &gsys_);
     if (status == GSL_SUCCESS) ++fixed_steps_;
     return finish(status, t_ + h, y, stats, true);
   }
@@ -98,7 +105,8 @@ class GslIntegrator final : public Integrator {
     auto* self = static_cast<GslIntegrator*>(p);
     const Index n = self->n_;
     Eigen::Map<const Vec> yv(y, n);
-    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> jm(dfdy, n, n);
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> jm(dfdy, n,
+                                                                                          n);
     if (self->sys_->has_jacobian()) {
       self->sys_->jacobian(t, yv, self->jac_);
       jm = Mat(self->jac_);
@@ -126,7 +134,8 @@ class GslIntegrator final : public Integrator {
   void make_driver(double h) {
     free_driver();
     driver_ = gsl_odeiv2_driver_alloc_y_new(&gsys_, *method_.type, h, atol_, rtol_);
-    if (!driver_) throw std::runtime_error("gsl_odeiv2_driver_alloc_y_new failed for " + info().name);
+    if (!driver_)
+      throw std::runtime_error("gsl_odeiv2_driver_alloc_y_new failed for " + info().name);
   }
 
   // GSL keeps its steppers' history inside the driver: a state changed from outside (or a new
@@ -181,7 +190,8 @@ void register_gsl_integrators(IntegratorRegistry& reg) {
     const MethodInfo info{m.name, Family::reference, m.order, 0, {}, m.description};
     reg.add({info, specs, [info, m](const Params& p) {
                const double rtol = p.real("rtol"), atol = p.real("atol"), h0 = p.real("h0");
-               require_input(rtol >= 0 && atol >= 0 && rtol + atol > 0, "parameters 'rtol'/'atol' must be >= 0, not both 0");
+               require_input(rtol >= 0 && atol >= 0 && rtol + atol > 0,
+                             "parameters 'rtol'/'atol' must be >= 0, not both 0");
                require_input(h0 > 0, "parameter 'h0' must be > 0");
                return std::make_unique<GslIntegrator>(info, m, rtol, atol, h0);
              }});

@@ -31,7 +31,7 @@ struct Settings {
   Lin lin = Lin::dense;
   std::string jacobian = "auto";  // auto | analytic | dq
   long max_steps = 100000;
-  int max_order = 0;  // 0: the library's default
+  int max_order = 0;          // 0: the library's default
   long lsetup_frequency = 1;  // ARKODE: steps between linear-solver setups
   std::string explicit_table, implicit_table;
 };
@@ -68,10 +68,12 @@ class SundialsIntegrator final : public Integrator {
     sys_ = &sys;
     n_ = sys.dimension();
     use_analytic_ = set_.jacobian == "analytic" || (set_.jacobian == "auto" && sys.has_jacobian());
-    require_input(!use_analytic_ || sys.has_jacobian(),
-                  "integrator '" + info().name + "': model '" + sys.name() + "' has no analytic Jacobian");
+    require_input(
+        !use_analytic_ || sys.has_jacobian(),
+        "integrator '" + info().name + "': model '" + sys.name() + "' has no analytic Jacobian");
     require_input(set_.lin != Lin::klu || use_analytic_,
-                  "integrator '" + info().name + "': linear_solver=klu needs the model's analytic sparse Jacobian");
+                  "integrator '" + info().name +
+                      "': linear_solver=klu needs the model's analytic sparse Jacobian");
     if (use_analytic_ && needs_linear_solver()) {
       jac_ = sys.jacobian_pattern();
       jac_.makeCompressed();
@@ -84,10 +86,12 @@ class SundialsIntegrator final : public Integrator {
   }
 
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override {
-    require_input(!is_cvode(), "integrator '" + info().name + "' is adaptive only: give --param rtol=R, not --h");
+    require_input(!is_cvode(), "integrator '" + info().name +
+                                   "' is adaptive only: give --param rtol=R, not --h");
     sync(sys, t, y);
     if (h != fixed_h_) {
-      if (!check(ARKStepSetFixedStep(mem_, h), "ARKStepSetFixedStep", stats)) return Status::solver_error;
+      if (!check(ARKStepSetFixedStep(mem_, h), "ARKStepSetFixedStep", stats))
+        return Status::solver_error;
       fixed_h_ = h;
     }
     // One internal step of exactly h (ARK_ONE_STEP with a fixed step size).
@@ -110,8 +114,10 @@ class SundialsIntegrator final : public Integrator {
 
   void free_memory() {
     if (mem_) {
-      if (is_cvode()) CVodeFree(&mem_);
-      else ARKStepFree(&mem_);
+      if (is_cvode())
+        CVodeFree(&mem_);
+      else
+        ARKStepFree(&mem_);
     }
     if (ls_) SUNLinSolFree(ls_);
     if (a_) SUNMatDestroy(a_);
@@ -152,23 +158,28 @@ class SundialsIntegrator final : public Integrator {
     sys_->jacobian(t, yv, jac_);
     jac_.makeCompressed();
   }
-  static int jac_dense_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector, N_Vector, N_Vector) {
+  static int jac_dense_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector,
+                          N_Vector, N_Vector) {
     auto* self = static_cast<SundialsIntegrator*>(ud);
     self->eval_jac(t, y);
     SUNMatZero(j);
     for (Index c = 0; c < self->jac_.outerSize(); ++c)
-      for (SparseMat::InnerIterator it(self->jac_, c); it; ++it) SM_ELEMENT_D(j, it.row(), c) = it.value();
+      for (SparseMat::InnerIterator it(self->jac_, c); it; ++it)
+        SM_ELEMENT_D(j, it.row(), c) = it.value();
     return 0;
   }
-  static int jac_band_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector, N_Vector, N_Vector) {
+  static int jac_band_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector,
+                         N_Vector, N_Vector) {
     auto* self = static_cast<SundialsIntegrator*>(ud);
     self->eval_jac(t, y);
     SUNMatZero(j);
     for (Index c = 0; c < self->jac_.outerSize(); ++c)
-      for (SparseMat::InnerIterator it(self->jac_, c); it; ++it) SM_ELEMENT_B(j, it.row(), c) = it.value();
+      for (SparseMat::InnerIterator it(self->jac_, c); it; ++it)
+        SM_ELEMENT_B(j, it.row(), c) = it.value();
     return 0;
   }
-  static int jac_sparse_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector, N_Vector, N_Vector) {
+  static int jac_sparse_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector,
+                           N_Vector, N_Vector) {
     auto* self = static_cast<SundialsIntegrator*>(ud);
     self->eval_jac(t, y);
     const SparseMat& m = self->jac_;
@@ -187,7 +198,8 @@ class SundialsIntegrator final : public Integrator {
     static_cast<SundialsIntegrator*>(ud)->eval_jac(t, y);
     return 0;
   }
-  static int jtimes_cb(N_Vector v, N_Vector jv, sunrealtype, N_Vector, N_Vector, void* ud, N_Vector) {
+  static int jtimes_cb(N_Vector v, N_Vector jv, sunrealtype, N_Vector, N_Vector, void* ud,
+                       N_Vector) {
     auto* self = static_cast<SundialsIntegrator*>(ud);
     Eigen::Map<const Vec> vv(N_VGetArrayPointer(v), self->n_);
     Eigen::Map<Vec> out(N_VGetArrayPointer(jv), self->n_);
@@ -237,7 +249,8 @@ class SundialsIntegrator final : public Integrator {
       ok(ARKStepSetErrHandlerFn(mem_, err_cb, this), "ARKStepSetErrHandlerFn");
       ok(ARKStepSStolerances(mem_, set_.rtol, set_.atol), "ARKStepSStolerances");
       ok(ARKStepSetMaxNumSteps(mem_, set_.max_steps), "ARKStepSetMaxNumSteps");
-      const char* itab = kind_ == Kind::arkode_erk ? "ARKODE_DIRK_NONE" : set_.implicit_table.c_str();
+      const char* itab =
+          kind_ == Kind::arkode_erk ? "ARKODE_DIRK_NONE" : set_.implicit_table.c_str();
       const char* etab = kind_ == Kind::arkode_dirk || (kind_ == Kind::arkode_imex && !imex)
                              ? "ARKODE_ERK_NONE"
                              : set_.explicit_table.c_str();
@@ -282,17 +295,24 @@ class SundialsIntegrator final : public Integrator {
       ok(CVodeSetLinearSolver(mem_, ls_, a_), "CVodeSetLinearSolver");
     } else {
       ok(ARKStepSetLinearSolver(mem_, ls_, a_), "ARKStepSetLinearSolver");
-      ok(ARKStepSetLSetupFrequency(mem_, static_cast<int>(set_.lsetup_frequency)), "ARKStepSetLSetupFrequency");
+      ok(ARKStepSetLSetupFrequency(mem_, static_cast<int>(set_.lsetup_frequency)),
+         "ARKStepSetLSetupFrequency");
     }
     if (!use_analytic_) return;  // the library's difference quotients
     if (set_.lin == Lin::spgmr) {
-      if (cv) ok(CVodeSetJacTimes(mem_, jtsetup_cb, jtimes_cb), "CVodeSetJacTimes");
-      else ok(ARKStepSetJacTimes(mem_, jtsetup_cb, jtimes_cb), "ARKStepSetJacTimes");
+      if (cv)
+        ok(CVodeSetJacTimes(mem_, jtsetup_cb, jtimes_cb), "CVodeSetJacTimes");
+      else
+        ok(ARKStepSetJacTimes(mem_, jtsetup_cb, jtimes_cb), "ARKStepSetJacTimes");
       return;
     }
-    auto fn = set_.lin == Lin::dense ? jac_dense_cb : set_.lin == Lin::band ? jac_band_cb : jac_sparse_cb;
-    if (cv) ok(CVodeSetJacFn(mem_, fn), "CVodeSetJacFn");
-    else ok(ARKStepSetJacFn(mem_, fn), "ARKStepSetJacFn");
+    auto fn = set_.lin == Lin::dense  ? jac_dense_cb
+              : set_.lin == Lin::band ? jac_band_cb
+                                      : jac_sparse_cb;
+    if (cv)
+      ok(CVodeSetJacFn(mem_, fn), "CVodeSetJacFn");
+    else
+      ok(ARKStepSetJacFn(mem_, fn), "ARKStepSetJacFn");
   }
 
   // Re-initialises the library when the state was changed from outside (e.g. a constraint
@@ -302,11 +322,18 @@ class SundialsIntegrator final : public Integrator {
     // The driver computes t0 + k·h while the library accumulates: equal up to rounding.
     if (std::abs(t - t_) <= 1e-13 * std::max(1.0, std::abs(t)) && y == y_last_) return;
     N_Vector yw = N_VMake_Serial(n_, const_cast<double*>(y.data()), ctx_);
-    if (is_cvode()) CVodeReInit(mem_, t, yw);
+    if (is_cvode())
+      CVodeReInit(mem_, t, yw);
     else {
       const bool imex = kind_ == Kind::arkode_imex && sys_->has_imex_split();
-      ARKStepReInit(mem_, kind_ == Kind::arkode_erk ? rhs_cb : imex ? rhs_explicit_cb : nullptr,
-                    kind_ == Kind::arkode_erk ? nullptr : imex ? rhs_implicit_cb : rhs_cb, t, yw);
+      ARKStepReInit(mem_,
+                    kind_ == Kind::arkode_erk ? rhs_cb
+                    : imex                    ? rhs_explicit_cb
+                                              : nullptr,
+                    kind_ == Kind::arkode_erk ? nullptr
+                    : imex                    ? rhs_implicit_cb
+                                              : rhs_cb,
+                    t, yw);
     }
     N_VDestroy(yw);
     t_ = t;
@@ -317,7 +344,8 @@ class SundialsIntegrator final : public Integrator {
     callback_error_.clear();
     N_Vector yout = N_VMake_Serial(n_, y.data(), ctx_);  // the driver's storage: no copy
     sunrealtype tret = t_;
-    const int flag = is_cvode() ? CVode(mem_, t_out, yout, &tret, mode) : ARKStepEvolve(mem_, t_out, yout, &tret, mode);
+    const int flag = is_cvode() ? CVode(mem_, t_out, yout, &tret, mode)
+                                : ARKStepEvolve(mem_, t_out, yout, &tret, mode);
     N_VDestroy(yout);
     read_counters(stats);
     if (!check(flag, is_cvode() ? "CVode" : "ARKStepEvolve", stats)) return Status::solver_error;
@@ -327,7 +355,8 @@ class SundialsIntegrator final : public Integrator {
   }
 
   void read_counters(SolveStats& s) {
-    long steps = 0, etf = 0, nni = 0, ncf = 0, nsetups = 0, nje = 0, nli = 0, nfe = 0, nfi = 0, nfels = 0;
+    long steps = 0, etf = 0, nni = 0, ncf = 0, nsetups = 0, nje = 0, nli = 0, nfe = 0, nfi = 0,
+         nfels = 0;
     if (is_cvode()) {
       CVodeGetNumSteps(mem_, &steps);
       CVodeGetNumErrTestFails(mem_, &etf);
@@ -338,7 +367,8 @@ class SundialsIntegrator final : public Integrator {
       CVodeGetNumJacEvals(mem_, &nje);
       CVodeGetNumLinIters(mem_, &nli);
       CVodeGetNumLinRhsEvals(mem_, &nfels);
-      s.library_report = capture([&](FILE* f) { CVodePrintAllStats(mem_, f, SUN_OUTPUTFORMAT_TABLE); });
+      s.library_report =
+          capture([&](FILE* f) { CVodePrintAllStats(mem_, f, SUN_OUTPUTFORMAT_TABLE); });
     } else {
       ARKStepGetNumSteps(mem_, &steps);
       ARKStepGetNumErrTestFails(mem_, &etf);
@@ -351,7 +381,8 @@ class SundialsIntegrator final : public Integrator {
         ARKStepGetNumLinIters(mem_, &nli);
         ARKStepGetNumLinRhsEvals(mem_, &nfels);
       }
-      s.library_report = capture([&](FILE* f) { ARKStepPrintAllStats(mem_, f, SUN_OUTPUTFORMAT_TABLE); });
+      s.library_report =
+          capture([&](FILE* f) { ARKStepPrintAllStats(mem_, f, SUN_OUTPUTFORMAT_TABLE); });
     }
     if (!fixed_mode_) s.steps = steps;  // the fixed-step driver counts its own steps
     s.rejected_steps = etf;
@@ -384,14 +415,21 @@ class SundialsIntegrator final : public Integrator {
 std::vector<ParamSpec> common_specs(bool linear) {
   using P = ParamType;
   std::vector<ParamSpec> s = {
-      {"rtol", P::real, "1e-6", "relative tolerance (adaptive mode; also scales Newton's tolerance)"},
+      {"rtol", P::real, "1e-6",
+       "relative tolerance (adaptive mode; also scales Newton's tolerance)"},
       {"atol", P::real, "1e-10", "absolute tolerance"},
       {"max_steps", P::integer, "100000", "maximum internal steps per output interval"},
   };
   if (linear) {
-    s.push_back({"linear_solver", P::text, "dense", "dense, band, klu (sparse, needs the analytic Jacobian) or spgmr",
+    s.push_back({"linear_solver",
+                 P::text,
+                 "dense",
+                 "dense, band, klu (sparse, needs the analytic Jacobian) or spgmr",
                  {"dense", "band", "klu", "spgmr"}});
-    s.push_back({"jacobian", P::text, "auto", "analytic, dq (library difference quotients); auto: analytic where provided",
+    s.push_back({"jacobian",
+                 P::text,
+                 "auto",
+                 "analytic, dq (library difference quotients); auto: analytic where provided",
                  {"auto", "analytic", "dq"}});
   }
   return s;
@@ -407,7 +445,10 @@ Settings read_common(const Params& p, bool linear) {
   require_input(s.max_steps >= 1, "parameter 'max_steps' must be >= 1");
   if (linear) {
     const std::string& l = p.text("linear_solver");
-    s.lin = l == "band" ? Lin::band : l == "klu" ? Lin::klu : l == "spgmr" ? Lin::spgmr : Lin::dense;
+    s.lin = l == "band"    ? Lin::band
+            : l == "klu"   ? Lin::klu
+            : l == "spgmr" ? Lin::spgmr
+                           : Lin::dense;
     s.jacobian = p.text("jacobian");
   }
   return s;
@@ -416,14 +457,16 @@ Settings read_common(const Params& p, bool linear) {
 // Order of an ARKODE table by name (BadInput for an unknown name).
 int erk_order(const std::string& name) {
   ARKodeButcherTable t = ARKodeButcherTable_LoadERKByName(name.c_str());
-  require_input(t != nullptr, "parameter 'explicit_table': unknown ARKODE explicit table '" + name + "'");
+  require_input(t != nullptr,
+                "parameter 'explicit_table': unknown ARKODE explicit table '" + name + "'");
   const int q = t->q;
   ARKodeButcherTable_Free(t);
   return q;
 }
 int dirk_order(const std::string& name) {
   ARKodeButcherTable t = ARKodeButcherTable_LoadDIRKByName(name.c_str());
-  require_input(t != nullptr, "parameter 'implicit_table': unknown ARKODE implicit table '" + name + "'");
+  require_input(t != nullptr,
+                "parameter 'implicit_table': unknown ARKODE implicit table '" + name + "'");
   const int q = t->q;
   ARKodeButcherTable_Free(t);
   return q;
@@ -434,10 +477,13 @@ int dirk_order(const std::string& name) {
 void register_sundials_integrators(IntegratorRegistry& reg) {
   using P = ParamType;
   auto cvode_specs = common_specs(true);
-  cvode_specs.push_back({"max_order", P::integer, "0", "maximum order (0: CVODE default, 5 for BDF, 12 for Adams)"});
+  cvode_specs.push_back(
+      {"max_order", P::integer, "0", "maximum order (0: CVODE default, 5 for BDF, 12 for Adams)"});
   for (const auto& [name, kind, desc] :
-       {std::tuple{"cvode_bdf", Kind::cvode_bdf, "SUNDIALS CVODE, variable-order BDF (1-5) with Newton; adaptive"},
-        std::tuple{"cvode_adams", Kind::cvode_adams, "SUNDIALS CVODE, variable-order Adams-Moulton (1-12) with Newton; adaptive"}}) {
+       {std::tuple{"cvode_bdf", Kind::cvode_bdf,
+                   "SUNDIALS CVODE, variable-order BDF (1-5) with Newton; adaptive"},
+        std::tuple{"cvode_adams", Kind::cvode_adams,
+                   "SUNDIALS CVODE, variable-order Adams-Moulton (1-12) with Newton; adaptive"}}) {
     const MethodInfo info{name, Family::reference, 0, 0, {}, desc};
     reg.add({info, cvode_specs, [info, kind = kind](const Params& p) {
                Settings s = read_common(p, true);
@@ -447,49 +493,82 @@ void register_sundials_integrators(IntegratorRegistry& reg) {
              }});
   }
   auto erk_specs = common_specs(false);
-  erk_specs.push_back({"explicit_table", P::text, "ARKODE_DORMAND_PRINCE_7_4_5", "ARKODE explicit Butcher table name"});
-  reg.add({{"arkode_erk", Family::reference, erk_order("ARKODE_DORMAND_PRINCE_7_4_5"), 7, {},
+  erk_specs.push_back({"explicit_table", P::text, "ARKODE_DORMAND_PRINCE_7_4_5",
+                       "ARKODE explicit Butcher table name"});
+  reg.add({{"arkode_erk",
+            Family::reference,
+            erk_order("ARKODE_DORMAND_PRINCE_7_4_5"),
+            7,
+            {},
             "SUNDIALS ARKODE ARKStep, explicit table by name; adaptive or fixed step"},
-           erk_specs, [](const Params& p) {
+           erk_specs,
+           [](const Params& p) {
              Settings s = read_common(p, false);
              s.explicit_table = p.text("explicit_table");
-             MethodInfo info{"arkode_erk", Family::reference, erk_order(s.explicit_table), 0, {},
+             MethodInfo info{"arkode_erk",
+                             Family::reference,
+                             erk_order(s.explicit_table),
+                             0,
+                             {},
                              "ARKODE ERK " + s.explicit_table};
              return std::make_unique<SundialsIntegrator>(info, Kind::arkode_erk, s);
            }});
   // ARKODE's default reuses M - γJ for up to 20 steps; with ARKODE_SDIRK_5_3_4 and a matrix
   // solver that gave errors of 2e-6 at rtol = 1e-8 on y' = (-1+3i)y (SPGMR: 5e-11), measured
   // with a standalone ARKODE 5.4.1 program. A setup every step restores the accuracy.
-  const ParamSpec lsetup{"lsetup_frequency", P::integer, "1",
-                         "steps between linear-solver setups (ARKODE's own default is 20; see sundials.cpp)"};
+  const ParamSpec lsetup{
+      "lsetup_frequency", P::integer, "1",
+      "steps between linear-solver setups (ARKODE's own default is 20; see sundials.cpp)"};
   auto dirk_specs = common_specs(true);
   dirk_specs.push_back(lsetup);
-  dirk_specs.push_back({"implicit_table", P::text, "ARKODE_SDIRK_5_3_4", "ARKODE implicit Butcher table name"});
-  reg.add({{"arkode_dirk", Family::reference, dirk_order("ARKODE_SDIRK_5_3_4"), 5, {},
-            "SUNDIALS ARKODE ARKStep, DIRK table by name (default L-stable SDIRK order 4); adaptive or fixed step"},
-           dirk_specs, [](const Params& p) {
+  dirk_specs.push_back(
+      {"implicit_table", P::text, "ARKODE_SDIRK_5_3_4", "ARKODE implicit Butcher table name"});
+  reg.add({{"arkode_dirk",
+            Family::reference,
+            dirk_order("ARKODE_SDIRK_5_3_4"),
+            5,
+            {},
+            "SUNDIALS ARKODE ARKStep, DIRK table by name (default L-stable SDIRK order 4); "
+            "adaptive or fixed step"},
+           dirk_specs,
+           [](const Params& p) {
              Settings s = read_common(p, true);
              s.lsetup_frequency = p.integer("lsetup_frequency");
              require_input(s.lsetup_frequency >= 1, "parameter 'lsetup_frequency' must be >= 1");
              s.implicit_table = p.text("implicit_table");
-             MethodInfo info{"arkode_dirk", Family::reference, dirk_order(s.implicit_table), 0, {},
+             MethodInfo info{"arkode_dirk",
+                             Family::reference,
+                             dirk_order(s.implicit_table),
+                             0,
+                             {},
                              "ARKODE DIRK " + s.implicit_table};
              return std::make_unique<SundialsIntegrator>(info, Kind::arkode_dirk, s);
            }});
   auto imex_specs = common_specs(true);
   imex_specs.push_back(lsetup);
-  imex_specs.push_back({"explicit_table", P::text, "ARKODE_ARK436L2SA_ERK_6_3_4", "explicit table of the ARK pair"});
-  imex_specs.push_back({"implicit_table", P::text, "ARKODE_ARK436L2SA_DIRK_6_3_4", "implicit table of the ARK pair"});
-  reg.add({{"arkode_imex", Family::reference, dirk_order("ARKODE_ARK436L2SA_DIRK_6_3_4"), 6, {},
+  imex_specs.push_back(
+      {"explicit_table", P::text, "ARKODE_ARK436L2SA_ERK_6_3_4", "explicit table of the ARK pair"});
+  imex_specs.push_back({"implicit_table", P::text, "ARKODE_ARK436L2SA_DIRK_6_3_4",
+                        "implicit table of the ARK pair"});
+  reg.add({{"arkode_imex",
+            Family::reference,
+            dirk_order("ARKODE_ARK436L2SA_DIRK_6_3_4"),
+            6,
+            {},
             "SUNDIALS ARKODE ARKStep IMEX with the model's split (all-implicit without one)"},
-           imex_specs, [](const Params& p) {
+           imex_specs,
+           [](const Params& p) {
              Settings s = read_common(p, true);
              s.lsetup_frequency = p.integer("lsetup_frequency");
              require_input(s.lsetup_frequency >= 1, "parameter 'lsetup_frequency' must be >= 1");
              s.explicit_table = p.text("explicit_table");
              s.implicit_table = p.text("implicit_table");
              const int q = std::min(erk_order(s.explicit_table), dirk_order(s.implicit_table));
-             MethodInfo info{"arkode_imex", Family::reference, q, 0, {},
+             MethodInfo info{"arkode_imex",
+                             Family::reference,
+                             q,
+                             0,
+                             {},
                              "ARKODE IMEX " + s.explicit_table + " / " + s.implicit_table};
              return std::make_unique<SundialsIntegrator>(info, Kind::arkode_imex, s);
            }});

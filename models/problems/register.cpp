@@ -102,15 +102,15 @@ void register_problem_models(ModelRegistry& reg) {
              p.text("form") == "scaled" ? VanDerPol::Form::scaled : VanDerPol::Form::mu;
          return std::make_unique<VanDerPol>(form, p.real("mu"));
        }});
-  reg.add({{"orego", "Oregonator (Belousov–Zhabotinskii reaction); literature end time t = 360",
-            false, false,
-            "Field & Noyes 1974; Hairer & Wanner II §IV.10 (OREGO); IVP test set 'orego'"},
-           {{"s", P::real, "77.27", "time-scale ratio s (> 0)"},
-            {"w", P::real, "0.161", "rate w (>= 0)"},
-            {"q", P::real, "8.375e-6", "rate q (>= 0)"}},
-           [](const Params& p) {
-             return std::make_unique<Orego>(p.real("s"), p.real("w"), p.real("q"));
-           }});
+  reg.add(
+      {{"orego", "Oregonator (Belousov–Zhabotinskii reaction); literature end time t = 360", false,
+        false, "Field & Noyes 1974; Hairer & Wanner II §IV.10 (OREGO); IVP test set 'orego'"},
+       {{"s", P::real, "77.27", "time-scale ratio s (> 0)"},
+        {"w", P::real, "0.161", "rate w (>= 0)"},
+        {"q", P::real, "8.375e-6", "rate q (>= 0)"}},
+       [](const Params& p) {
+         return std::make_unique<Orego>(p.real("s"), p.real("w"), p.real("q"));
+       }});
   reg.add({{"e5", "E5 chemical pyrolysis (4 species, badly scaled); literature end time t = 1e13",
             false, false, "Enright, Hull & Lindberg 1975; Hairer & Wanner II §IV.10 (E5)"},
            {{"a", P::real, "7.89e-10", "rate constant A (>= 0)"},
