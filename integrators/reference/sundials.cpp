@@ -158,24 +158,20 @@ class SundialsIntegrator final : public Integrator {
     sys_->jacobian(t, yv, jac_);
     jac_.makeCompressed();
   }
-  static int jac_dense_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector,
-                          N_Vector, N_Vector) {
+  // Dense or band SUNMatrix from the sparse J (entries outside the band are not in the pattern).
+  template <bool Band>
+  static int jac_matrix_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector,
+                           N_Vector, N_Vector) {
     auto* self = static_cast<SundialsIntegrator*>(ud);
     self->eval_jac(t, y);
     SUNMatZero(j);
     for (Index c = 0; c < self->jac_.outerSize(); ++c)
-      for (SparseMat::InnerIterator it(self->jac_, c); it; ++it)
-        SM_ELEMENT_D(j, it.row(), c) = it.value();
-    return 0;
-  }
-  static int jac_band_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector,
-                         N_Vector, N_Vector) {
-    auto* self = static_cast<SundialsIntegrator*>(ud);
-    self->eval_jac(t, y);
-    SUNMatZero(j);
-    for (Index c = 0; c < self->jac_.outerSize(); ++c)
-      for (SparseMat::InnerIterator it(self->jac_, c); it; ++it)
-        SM_ELEMENT_B(j, it.row(), c) = it.value();
+      for (SparseMat::InnerIterator it(self->jac_, c); it; ++it) {
+        if constexpr (Band)
+          SM_ELEMENT_B(j, it.row(), c) = it.value();
+        else
+          SM_ELEMENT_D(j, it.row(), c) = it.value();
+      }
     return 0;
   }
   static int jac_sparse_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector,
@@ -306,8 +302,8 @@ class SundialsIntegrator final : public Integrator {
         ok(ARKStepSetJacTimes(mem_, jtsetup_cb, jtimes_cb), "ARKStepSetJacTimes");
       return;
     }
-    auto fn = set_.lin == Lin::dense  ? jac_dense_cb
-              : set_.lin == Lin::band ? jac_band_cb
+    auto fn = set_.lin == Lin::dense  ? jac_matrix_cb<false>
+              : set_.lin == Lin::band ? jac_matrix_cb<true>
                                       : jac_sparse_cb;
     if (cv)
       ok(CVodeSetJacFn(mem_, fn), "CVodeSetJacFn");
