@@ -6,17 +6,13 @@
 
 #include "core/driver.hpp"
 #include "experiments/catalog.hpp"
+#include "tests/test_support.hpp"
 
 namespace stiffbench {
 namespace {
 
-std::unique_ptr<Integrator> make(const std::string& name) {
-  return integrator_registry().create(name, Params{});
-}
-
-std::unique_ptr<OdeSystem> model(const std::string& name, std::vector<std::string> params = {}) {
-  return model_registry().create(name, Params::from_assignments(params));
-}
+using testing_support::make;
+using testing_support::model;
 
 // N = round(T/h) steps of exactly T/N: h = 0.3 over [0, 1] gives 3 steps of 1/3, ending at 1.
 TEST(Driver, StepCountRuleAndExactEndTime) {

@@ -9,17 +9,14 @@
 #include "integrators/implicit/dirk.hpp"
 #include "integrators/implicit/implicit_core.hpp"
 #include "models/problems/dahlquist.hpp"
+#include "tests/test_support.hpp"
 
 namespace stiffbench {
 inline void PrintTo(const ButcherTableau& t, std::ostream* os) { *os << t.name; }
 namespace {
 
-std::unique_ptr<Integrator> make(const std::string& name, std::vector<std::string> params = {}) {
-  return integrator_registry().create(name, Params::from_assignments(params));
-}
-std::unique_ptr<OdeSystem> model(const std::string& name, std::vector<std::string> params = {}) {
-  return model_registry().create(name, Params::from_assignments(params));
-}
+using testing_support::make;
+using testing_support::model;
 
 // --- Tableaux -----------------------------------------------------------------------------
 

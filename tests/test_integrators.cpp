@@ -9,16 +9,13 @@
 #include "core/driver.hpp"
 #include "experiments/catalog.hpp"
 #include "integrators/explicit/tableaux.hpp"
+#include "tests/test_support.hpp"
 
 namespace stiffbench {
 namespace {
 
-std::unique_ptr<Integrator> make(const std::string& name) {
-  return integrator_registry().create(name, Params{});
-}
-std::unique_ptr<OdeSystem> model(const std::string& name, std::vector<std::string> params = {}) {
-  return model_registry().create(name, Params::from_assignments(params));
-}
+using testing_support::make;
+using testing_support::model;
 
 // f evaluations = steps × stages for every explicit tableau (no FSAL tableau is registered).
 TEST(EvaluationCount, ExplicitIsStepsTimesStages) {

@@ -20,13 +20,12 @@
 #include "experiments/catalog.hpp"
 #include "models/mass_spring/builders.hpp"
 #include "models/mass_spring/network.hpp"
+#include "tests/test_support.hpp"
 
 namespace stiffbench {
 namespace {
 
-std::unique_ptr<OdeSystem> model(const std::string& name, std::vector<std::string> params = {}) {
-  return model_registry().create(name, Params::from_assignments(params));
-}
+using testing_support::model;
 
 const MassSpringNetwork& net(const OdeSystem& sys) {
   const auto* n = dynamic_cast<const MassSpringNetwork*>(&sys);

@@ -9,16 +9,13 @@
 #include "experiments/catalog.hpp"
 #include "experiments/convergence.hpp"
 #include "experiments/work_precision.hpp"
+#include "tests/test_support.hpp"
 
 namespace stiffbench {
 namespace {
 
-std::unique_ptr<Integrator> make(const std::string& name, std::vector<std::string> params = {}) {
-  return integrator_registry().create(name, Params::from_assignments(params));
-}
-std::unique_ptr<OdeSystem> model(const std::string& name, std::vector<std::string> params = {}) {
-  return model_registry().create(name, Params::from_assignments(params));
-}
+using testing_support::make;
+using testing_support::model;
 
 std::vector<std::string> references() {
   std::vector<std::string> out;

@@ -21,17 +21,16 @@
 #include "core/ode_system.hpp"
 #include "experiments/catalog.hpp"
 #include "models/problems/van_der_pol.hpp"
+#include "tests/test_support.hpp"
 
 namespace stiffbench {
 namespace {
 
+using testing_support::model;
+
 using Assignments = std::vector<std::string>;
 
 constexpr double kEps = 2.220446049250313e-16;  // machine epsilon (double)
-
-std::unique_ptr<OdeSystem> model(const std::string& name, const Assignments& params = {}) {
-  return model_registry().create(name, Params::from_assignments(params));
-}
 
 Vec rhs_at(const OdeSystem& sys, const Vec& y) {
   Vec f(sys.dimension());
