@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <type_traits>
 
 namespace stiffbench {
 
@@ -41,6 +42,18 @@ double end_sign(const DistanceConstraint& c, Index p) { return p == c.i ? -1.0 :
 
 std::string item(const char* what, std::size_t index) {
   return std::string(what) + " " + std::to_string(index);
+}
+
+// Calls f(std::integral_constant<int, D>{}) for the network's dimension D ∈ {1, 2, 3}: one
+// virtual-free dispatch per whole-vector call, static code inside the per-point loops.
+template <class F>
+void with_dim(int dim, F&& f) {
+  if (dim == 1)
+    f(std::integral_constant<int, 1>{});
+  else if (dim == 2)
+    f(std::integral_constant<int, 2>{});
+  else
+    f(std::integral_constant<int, 3>{});
 }
 
 }  // namespace
@@ -241,17 +254,9 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
 }
 
 void MassSpringNetwork::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a) const {
-  switch (dim_) {
-    case 1:
-      acceleration_impl<1>(x.data(), v.data(), a.data());
-      break;
-    case 2:
-      acceleration_impl<2>(x.data(), v.data(), a.data());
-      break;
-    default:
-      acceleration_impl<3>(x.data(), v.data(), a.data());
-      break;
-  }
+  with_dim(dim_, [&](auto dim) {
+    acceleration_impl<decltype(dim)::value>(x.data(), v.data(), a.data());
+  });
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -340,17 +345,7 @@ void MassSpringNetwork::fill_blocks(CVecRef x, CVecRef v, SparseMat* k, SparseMa
   }
   double* kv = k ? k->valuePtr() : nullptr;
   double* dv = d ? d->valuePtr() : nullptr;
-  switch (dim_) {
-    case 1:
-      blocks_impl<1>(x.data(), v.data(), kv, dv);
-      break;
-    case 2:
-      blocks_impl<2>(x.data(), v.data(), kv, dv);
-      break;
-    default:
-      blocks_impl<3>(x.data(), v.data(), kv, dv);
-      break;
-  }
+  with_dim(dim_, [&](auto dim) { blocks_impl<decltype(dim)::value>(x.data(), v.data(), kv, dv); });
 }
 
 void MassSpringNetwork::stiffness_block(double, CVecRef x, CVecRef v, SparseMat& k) const {
@@ -522,17 +517,9 @@ std::pair<double, double> MassSpringNetwork::stiffness_eigen_range(CVecRef x) co
   for (Index i = 0; i < nf; ++i) inv_sqrt_m[i] = 1.0 / std::sqrt(dof_mass_[free_dofs[i]]);
   auto apply = [&](const Vec& u, Vec& out) {
     for (Index i = 0; i < nf; ++i) z[free_dofs[i]] = inv_sqrt_m[i] * u[i];
-    switch (dim_) {
-      case 1:
-        stiffness_matvec<1>(x.data(), z.data(), hz.data());
-        break;
-      case 2:
-        stiffness_matvec<2>(x.data(), z.data(), hz.data());
-        break;
-      default:
-        stiffness_matvec<3>(x.data(), z.data(), hz.data());
-        break;
-    }
+    with_dim(dim_, [&](auto dim) {
+      stiffness_matvec<decltype(dim)::value>(x.data(), z.data(), hz.data());
+    });
     for (Index i = 0; i < nf; ++i) out[i] = inv_sqrt_m[i] * hz[free_dofs[i]];
   };
 
