@@ -28,6 +28,27 @@ struct Invariant {
 
 class MechanicalSystem;
 
+// A model's suggested fixed step (its CFL or diffusion limit) and the rule that gave it, e.g.
+// "CFL 0.4 h/c, h = 0.0114 (support radius), c = 23.9 m/s". Fixed-step commands and studies run
+// at it when they are given no --h, and say so.
+struct SuggestedStep {
+  double h = 0.0;
+  std::string rule;
+};
+
+// One snapshot of a particle model for frame output (VTK): positions and per-point fields.
+// Points are the model's particles (fluid first, then fixed boundary particles, for SPH).
+struct ParticleFrame {
+  struct Field {
+    std::string name;
+    int components = 1;          // 1 (scalar) or 3 (vector)
+    std::vector<double> values;  // components per point, interleaved
+  };
+  std::vector<double> positions;  // 3 per point (unused components 0)
+  std::vector<Field> fields;
+  Index points() const { return static_cast<Index>(positions.size() / 3); }
+};
+
 class OdeSystem {
  public:
   virtual ~OdeSystem() = default;
@@ -86,6 +107,17 @@ class OdeSystem {
   virtual std::optional<double> stiffness(double /*t*/, CVecRef /*y*/) const {
     return std::nullopt;
   }
+
+  // Suggested fixed step (see SuggestedStep). Empty when the model has none.
+  virtual std::optional<SuggestedStep> suggested_step() const { return std::nullopt; }
+
+  // Monitored quantities that are not conserved (a dam break's surge front, the largest density
+  // error), recorded beside the invariants by `solve --frames` in observables.csv.
+  virtual std::vector<Invariant> observables() const { return {}; }
+
+  // Particle view for frame output (`solve --frames N --out DIR` writes VTK files from it).
+  virtual bool has_particles() const { return false; }
+  virtual ParticleFrame particles(double /*t*/, CVecRef /*y*/) const { return {}; }
 
   // Optional holonomic constraints C(y) = 0 enforced strictly, not by forces. The fixed-step
   // driver calls project() after every accepted step of every integrator; the model projects

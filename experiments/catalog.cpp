@@ -12,6 +12,7 @@ const ModelRegistry& model_registry() {
     ModelRegistry r("model");
     register_problem_models(r);
     register_mass_spring_models(r);
+    register_sph_models(r);
     return r;
   }();
   return reg;

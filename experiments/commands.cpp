@@ -11,6 +11,7 @@
 #include "core/driver.hpp"
 #include "experiments/build_info.hpp"
 #include "experiments/catalog.hpp"
+#include "experiments/frames.hpp"
 #include "experiments/work_precision.hpp"
 
 namespace stiffbench {
@@ -98,6 +99,11 @@ void cmd_describe(const std::string& name, std::ostream& out) {
     for (const auto& i : sys->invariants()) inv.push_back(i.name);
     out << "invariants: " << (inv.empty() ? "none" : join(inv)) << "\n";
     out << "analytic Jacobian: " << (sys->has_jacobian() ? "yes" : "no") << "\n";
+    if (const auto s = sys->suggested_step())
+      out << "suggested step (defaults): " << format_short(s->h, 4) << " (" << s->rule << ")\n";
+    std::vector<std::string> obs;
+    for (const auto& o : sys->observables()) obs.push_back(o.name);
+    if (!obs.empty()) out << "observables: " << join(obs) << "\n";
     print_params(m->params, out);
     return;
   }
@@ -129,42 +135,75 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
                   "--t-end is required: model '" + opt.model + "' has no default end time");
     t_end = *literature;
   }
-  // Fixed step with --h; without it the integrator's own step control (references only).
-  const bool adaptive = std::isnan(opt.h);
-  require_input(!adaptive || integ.supports_adaptive(),
-                "--h is required: integrator '" + opt.integrator + "' is fixed-step");
+  // Fixed step with --h. Without it: the integrator's own step control where it has one, else
+  // the model's suggested step (its CFL limit), else an error.
+  double h = opt.h;
+  std::optional<SuggestedStep> suggested;
+  bool adaptive = false;
+  if (std::isnan(h)) {
+    if (integ.supports_adaptive()) {
+      adaptive = true;
+    } else if ((suggested = sys.suggested_step())) {
+      h = suggested->h;
+    } else {
+      throw BadInput("--h is required: integrator '" + opt.integrator +
+                     "' is fixed-step and model '" + opt.model + "' offers no suggested step");
+    }
+  }
   require_input(adaptive || integ.supports_fixed_step(),
                 "integrator '" + opt.integrator +
                     "' has no fixed-step mode: omit --h and set --param rtol=R");
+  require_input(opt.frames >= 0, "--frames must be >= 0 (got " + std::to_string(opt.frames) + ")");
+  const bool frames = opt.frames > 0;
+  require_input(!frames || !opt.out_csv.empty(), "--frames needs --out DIR (the output directory)");
   FixedStepOptions fo;
   fo.t_end = t_end;
-  fo.h = opt.h;
-  fo.outputs = opt.outputs;
+  fo.h = h;
+  fo.outputs = frames ? opt.frames : opt.outputs;
+  long n_steps = 0;
   if (!adaptive) {
-    const long n = fixed_step_count(sys.initial_time(), t_end, opt.h, fo.max_steps);
-    if (n > 10'000'000) err << "solve: " << n << " steps; this may take a while\n";
+    n_steps = fixed_step_count(sys.initial_time(), t_end, h, fo.max_steps);
+    if (n_steps > 10'000'000) err << "solve: " << n_steps << " steps; this may take a while\n";
+    if (suggested)
+      err << "solve: no --h given: using the model's suggested step h = " << format_full(h) << " ("
+          << suggested->rule << ")\n";
   }
 
+  // Trajectory CSV: the --out file, or DIR/trajectory.csv with --frames for models without
+  // particles (particle models write VTK frames instead).
+  std::unique_ptr<FrameWriter> frame_writer;
+  std::string traj_path = opt.out_csv;
+  if (frames) {
+    frame_writer = std::make_unique<FrameWriter>(sys, opt.out_csv);
+    traj_path = sys.has_particles() ? "" : (frame_writer->dir() / "trajectory.csv").string();
+  }
   std::ostringstream traj;
-  if (!opt.out_csv.empty()) {
+  if (!traj_path.empty()) {
     traj << "t";
     for (Index i = 0; i < sys.dimension(); ++i) traj << ",y" << i;
     traj << "\n";
   }
   Observer obs;
-  if (!opt.out_csv.empty()) {
-    obs = [&traj](double t, CVecRef y) {
-      traj << format_full(t);
-      for (Index i = 0; i < y.size(); ++i) traj << "," << format_full(y[i]);
-      traj << "\n";
+  if (!traj_path.empty() || frame_writer) {
+    obs = [&](double t, CVecRef y) {
+      if (!traj_path.empty()) {
+        traj << format_full(t);
+        for (Index i = 0; i < y.size(); ++i) traj << "," << format_full(y[i]);
+        traj << "\n";
+      }
+      if (frame_writer) {
+        frame_writer->write(t, y);
+        err << "solve: frame " << frame_writer->frames() - 1 << "/" << opt.frames
+            << " at t = " << format_short(t, 4) << "\n";
+      }
     };
   }
   const Vec y0 = sys.initial_state();
   const RunResult r = adaptive ? run_adaptive(sys, integ, {t_end, opt.outputs}, obs)
                                : run_fixed_step(sys, integ, fo, obs);
-  if (!opt.out_csv.empty()) {
+  if (!traj_path.empty()) {
     // Written whatever the status: the trajectory up to a blow-up is part of the result.
-    write_file_atomic(opt.out_csv, traj.str());
+    write_file_atomic(traj_path, traj.str());
   }
 
   out << std::setprecision(17);
@@ -178,6 +217,7 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   } else {
     out << "h            " << format_full(r.h) << " (" << r.n_steps
         << " steps to t = " << format_full(t_end) << ")\n";
+    if (suggested) out << "             the model's suggested step: " << suggested->rule << "\n";
   }
   if (const auto rho = sys.stiffness(sys.initial_time(), y0)) {
     out << "stiffness    spectral radius ~ " << format_short(*rho) << " at t0";
@@ -208,9 +248,25 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
           << format_short(a != 0 ? (b - a) / std::abs(a) : b - a) << "\n";
     }
   }
+  const auto observables = sys.observables();
+  if (!observables.empty()) {
+    out << "\nobservables         initial                  final\n";
+    for (const auto& o : observables) {
+      out << "  " << std::left << std::setw(18) << o.name << std::setw(25)
+          << format_full(o.value(sys.initial_time(), y0)) << format_full(o.value(r.t, r.y))
+          << std::right << "\n";
+    }
+  }
   out << "\nstatistics:\n";
   print_stats_table(out, r.stats);
-  if (!opt.out_csv.empty()) out << "\ntrajectory: " << opt.out_csv << "\n";
+  if (!traj_path.empty()) out << "\ntrajectory: " << traj_path << "\n";
+  if (frame_writer) {
+    out << "\nframes: " << frame_writer->frames() << " rows in "
+        << (frame_writer->dir() / "observables.csv").string();
+    if (sys.has_particles())
+      out << ", VTK frames in " << (frame_writer->dir() / "frames.pvd").string();
+    out << "\n";
+  }
 }
 
 namespace {

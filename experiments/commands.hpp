@@ -20,7 +20,8 @@ struct SolveOptions {
   double h = std::numeric_limits<double>::quiet_NaN();
   double t_end = std::numeric_limits<double>::quiet_NaN();
   long outputs = 100;
-  std::string out_csv;  // empty: no trajectory file
+  std::string out_csv;  // empty: no trajectory file; with frames > 0, the output directory
+  long frames = 0;      // > 0: write frames + observables.csv into the directory out_csv
 };
 void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err);
 

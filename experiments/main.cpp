@@ -56,7 +56,7 @@ int main(int argc, char** argv) {
   solve->add_option("--integrator", solve_opt.integrator, "integrator name")->required();
   solve->add_option("--h", solve_opt.h,
                     "step size (the run takes N = round(T/h) steps of T/N); omit for the adaptive "
-                    "mode of a reference integrator");
+                    "mode of a reference integrator or the model's suggested step");
   solve->add_option("--t-end", solve_opt.t_end,
                     "final time (default: the model's literature end time)");
   solve->add_option("--outputs", solve_opt.outputs, "number of output intervals in the trajectory")
@@ -64,7 +64,13 @@ int main(int argc, char** argv) {
   solve->add_option("--param", solve_params, "model/integrator parameter key=value (repeatable)")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  solve->add_option("--out", solve_opt.out_csv, "trajectory CSV file (columns t,y0,y1,...)");
+  solve->add_option("--out", solve_opt.out_csv,
+                    "trajectory CSV file (columns t,y0,y1,...); with --frames, the output "
+                    "directory");
+  solve->add_option("--frames", solve_opt.frames,
+                    "write N+1 equally spaced frames into the --out directory: VTK particle "
+                    "frames (frame_NNNN.vtu, frames.pvd) for particle models, trajectory.csv "
+                    "otherwise, and observables.csv");
 
   ConvergenceSpec conv;
   std::string conv_integrators, conv_out = "results";

@@ -1,0 +1,79 @@
+#include "experiments/frames.hpp"
+
+#include <cstdio>
+#include <sstream>
+
+#include "experiments/output.hpp"
+
+namespace stiffbench {
+
+std::string vtu_text(const ParticleFrame& frame) {
+  const Index n = frame.points();
+  std::ostringstream os;
+  os << "<?xml version=\"1.0\"?>\n"
+     << "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+     << "  <UnstructuredGrid>\n"
+     << "    <Piece NumberOfPoints=\"" << n << "\" NumberOfCells=\"" << n << "\">\n"
+     << "      <PointData>\n";
+  for (const auto& f : frame.fields) {
+    os << "        <DataArray type=\"Float64\" Name=\"" << f.name << "\" NumberOfComponents=\""
+       << f.components << "\" format=\"ascii\">\n";
+    for (std::size_t k = 0; k < f.values.size(); ++k)
+      os << (k % static_cast<std::size_t>(f.components) ? " " : "\n") << format_full(f.values[k]);
+    os << "\n        </DataArray>\n";
+  }
+  os << "      </PointData>\n      <Points>\n"
+     << "        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">";
+  for (std::size_t k = 0; k < frame.positions.size(); ++k)
+    os << (k % 3 ? " " : "\n") << format_full(frame.positions[k]);
+  os << "\n        </DataArray>\n      </Points>\n      <Cells>\n"
+     << "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  for (Index i = 0; i < n; ++i) os << i << (i + 1 < n ? " " : "\n");
+  os << "        </DataArray>\n"
+     << "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+  for (Index i = 0; i < n; ++i) os << i + 1 << (i + 1 < n ? " " : "\n");
+  os << "        </DataArray>\n"
+     << "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";  // 1 = VTK_VERTEX
+  for (Index i = 0; i < n; ++i) os << 1 << (i + 1 < n ? " " : "\n");
+  os << "        </DataArray>\n      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
+  return os.str();
+}
+
+FrameWriter::FrameWriter(const OdeSystem& sys, std::filesystem::path dir)
+    : sys_(sys), dir_(std::move(dir)) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(dir_, ec);
+  require_input(!ec && fs::is_directory(dir_),
+                "--out '" + dir_.string() + "': cannot create the output directory" +
+                    (ec ? " (" + ec.message() + ")" : std::string()));
+  for (auto& q : sys.invariants()) quantities_.push_back(std::move(q));
+  for (auto& q : sys.observables()) quantities_.push_back(std::move(q));
+  csv_ = "t";
+  for (const auto& q : quantities_) {
+    columns_.push_back(q.name);
+    csv_ += "," + q.name;
+  }
+  csv_ += "\n";
+}
+
+void FrameWriter::write(double t, CVecRef y) {
+  csv_ += format_full(t);
+  for (const auto& q : quantities_) csv_ += "," + format_full(q.value(t, y));
+  csv_ += "\n";
+  write_file_atomic(dir_ / "observables.csv", csv_);
+  if (sys_.has_particles()) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%04ld.vtu", frames_);
+    write_file_atomic(dir_ / name, vtu_text(sys_.particles(t, y)));
+    pvd_entries_ += "    <DataSet timestep=\"" + format_full(t) + "\" part=\"0\" file=\"" +
+                    std::string(name) + "\"/>\n";
+    write_file_atomic(dir_ / "frames.pvd",
+                      "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n"
+                      "  <Collection>\n" +
+                          pvd_entries_ + "  </Collection>\n</VTKFile>\n");
+  }
+  ++frames_;
+}
+
+}  // namespace stiffbench

@@ -1,0 +1,145 @@
+// Neighbour search on a uniform grid of cubic cells, stored as a hashed cell list built by a
+// counting sort (O(n) time and memory whatever the spread of the points).
+//
+// build() maps each point to the integer cell floor(x / cell) (per coordinate, clamped to
+// ±kCellLimit so that points far away or non-finite never overflow; clamping only merges cells,
+// never separates true neighbours), hashes the cell to one of B buckets (B a power of two >= 2n)
+// and sorts the points by bucket with a stable counting sort, so within a bucket the points stay
+// in index order. Each sorted entry keeps its cell key and a copy of its coordinates.
+//
+// for_each_neighbour(q, radius) visits the 3^D cells around q's cell in a fixed order, and in
+// each the entries of the cell's bucket whose key is that cell (other cells hashed to the same
+// bucket are skipped), calling f(j, r², d) for every point j with r² = |q - x_j|² < radius² and
+// d = q - x_j. Requires radius <= cell. The visiting order depends only on the positions, so a
+// sum over the neighbours of one point is the same, bit for bit, whichever thread computes it.
+// Coincident points (r = 0) and the query point itself, when it is in the set, are visited.
+//
+// order() lists the points cell by cell (bucket order): iterating in that order touches memory
+// of nearby points together. The caller's own arrays are never reordered.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace stiffbench::sph {
+
+template <int D>
+class NeighbourGrid {
+ public:
+  static constexpr std::int64_t kCellLimit = (std::int64_t{1} << 20) - 2;
+
+  // x: n points, D coordinates each (interleaved). cell > 0.
+  void build(const double* x, Index n, double cell) {
+    inv_cell_ = 1.0 / cell;
+    n_ = n;
+    std::size_t buckets = 16;
+    shift_ = 60;
+    while (buckets < 2 * static_cast<std::size_t>(n)) {
+      buckets *= 2;
+      --shift_;
+    }
+    start_.assign(buckets + 1, 0);
+    keys_.resize(static_cast<std::size_t>(n));
+    point_key_.resize(static_cast<std::size_t>(n));
+    order_.resize(static_cast<std::size_t>(n));
+    pos_.resize(static_cast<std::size_t>(n) * D);
+    for (Index i = 0; i < n; ++i) {
+      const auto c = cell_of(x + D * i);
+      const std::uint64_t key = pack(c);
+      point_key_[static_cast<std::size_t>(i)] = key;
+      ++start_[bucket(key) + 1];
+    }
+    for (std::size_t b = 0; b < buckets; ++b) start_[b + 1] += start_[b];
+    fill_ = start_;
+    for (Index i = 0; i < n; ++i) {
+      const std::uint64_t key = point_key_[static_cast<std::size_t>(i)];
+      const std::size_t slot = fill_[bucket(key)]++;
+      order_[slot] = i;
+      keys_[slot] = key;
+      for (int d = 0; d < D; ++d) pos_[slot * D + d] = x[D * i + d];
+    }
+  }
+
+  Index size() const { return n_; }
+  const std::vector<Index>& order() const { return order_; }
+
+  template <class F>
+  void for_each_neighbour(const double* q, double radius, F&& f) const {
+    const double r2max = radius * radius;
+    const auto c = cell_of(q);
+    // Near the clamp limit two offsets can name the same (clamped) cell: visit it once.
+    bool near_limit = false;
+    for (int d = 0; d < D; ++d) near_limit |= std::abs(c[d]) >= kCellLimit - 1;
+    std::array<std::uint64_t, ipow3()> visited{};
+    int n_visited = 0;
+    std::array<std::int64_t, D> o{};
+    for (int k = 0; k < ipow3(); ++k) {
+      int rest = k;
+      for (int d = 0; d < D; ++d) {
+        o[d] = std::clamp<std::int64_t>(c[d] + rest % 3 - 1, -kCellLimit, kCellLimit);
+        rest /= 3;
+      }
+      const std::uint64_t key = pack(o);
+      if (near_limit) {
+        if (std::find(visited.begin(), visited.begin() + n_visited, key) !=
+            visited.begin() + n_visited)
+          continue;
+        visited[static_cast<std::size_t>(n_visited++)] = key;
+      }
+      const std::size_t b = bucket(key);
+      for (std::size_t s = start_[b]; s < start_[b + 1]; ++s) {
+        if (keys_[s] != key) continue;
+        std::array<double, D> dx;
+        double r2 = 0.0;
+        for (int d = 0; d < D; ++d) {
+          dx[d] = q[d] - pos_[s * D + d];
+          r2 += dx[d] * dx[d];
+        }
+        if (r2 < r2max) f(order_[s], r2, dx);
+      }
+    }
+  }
+
+ private:
+  static constexpr int ipow3() { return D == 1 ? 3 : D == 2 ? 9 : 27; }
+
+  std::array<std::int64_t, D> cell_of(const double* x) const {
+    std::array<std::int64_t, D> c;
+    for (int d = 0; d < D; ++d) {
+      const double s = std::floor(x[d] * inv_cell_);
+      // NaN and ±inf land in the limit cell; their distance test always fails.
+      c[d] = !(s > -static_cast<double>(kCellLimit)) ? -kCellLimit
+             : !(s < static_cast<double>(kCellLimit)) ? kCellLimit
+                                                      : static_cast<std::int64_t>(s);
+    }
+    return c;
+  }
+
+  static std::uint64_t pack(const std::array<std::int64_t, D>& c) {
+    std::uint64_t key = 0;
+    for (int d = 0; d < D; ++d)
+      key = (key << 21) | static_cast<std::uint64_t>(c[d] + kCellLimit + 1);
+    return key;
+  }
+
+  std::size_t bucket(std::uint64_t key) const {
+    // Fibonacci hashing: the top log2(B) bits of key·2^64/φ spread neighbouring cells across
+    // the buckets.
+    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_);
+  }
+
+  double inv_cell_ = 1.0;
+  Index n_ = 0;
+  int shift_ = 60;
+  std::vector<std::size_t> start_, fill_;
+  std::vector<std::uint64_t> keys_, point_key_;
+  std::vector<Index> order_;
+  std::vector<double> pos_;
+};
+
+}  // namespace stiffbench::sph

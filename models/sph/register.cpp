@@ -1,0 +1,215 @@
+// Registration of the SPH scenes (models/sph/scenes.hpp) with their parameters. The physics and
+// its options are documented in models/sph/sph_fluid.hpp.
+#include <cmath>
+
+#include "models/register.hpp"
+#include "models/sph/scenes.hpp"
+
+namespace stiffbench {
+
+namespace {
+
+using P = ParamType;
+
+struct SceneDefaults {
+  std::string n, c0, gravity, eos = "linear", clamp = "true", viscosity = "artificial",
+                           alpha = "0.05", form = "variational";
+  bool walls = true;
+};
+
+std::vector<ParamSpec> fluid_specs(const SceneDefaults& d, std::vector<ParamSpec> scene) {
+  std::vector<ParamSpec> s = std::move(scene);
+  const auto& kernels = sph::kernel_names();
+  std::vector<std::string> smooth_kernels;
+  for (const auto& k : kernels)
+    if (k != "viscosity") smooth_kernels.push_back(k);
+  s.push_back({"support", P::real, "2.5", "kernel support radius h in particle spacings (h/dx)"});
+  s.push_back({"rho0", P::real, "1000", "rest density (kg/m^3)"});
+  s.push_back({"c0", P::real, d.c0,
+               "speed of sound (m/s); 0: 10 x sqrt(2 g H), the speed of a free fall from the "
+               "fluid height H"});
+  s.push_back({"k", P::real, "-1", "linear EOS constant k in p = k (rho - rho0) (m^2/s^2); < 0: c0^2"});
+  s.push_back({"eos", P::text, d.eos, "equation of state", {"linear", "tait"}});
+  s.push_back({"clamp", P::boolean, d.clamp, "clamp the pressure at 0 (no tension)"});
+  s.push_back({"tait_gamma", P::real, "7", "Tait exponent gamma"});
+  s.push_back({"form", P::text, d.form,
+               "pressure force: symmetric (Mueller 2003) or variational (p_i/rho_i^2 + "
+               "p_j/rho_j^2; energy-conserving)",
+               {"symmetric", "variational"}});
+  s.push_back({"density_kernel", P::text, "wendland_c2", "kernel of the density sum",
+               smooth_kernels});
+  s.push_back({"gradient_kernel", P::text, "wendland_c2", "kernel of the pressure gradient",
+               smooth_kernels});
+  s.push_back({"viscosity", P::text, d.viscosity,
+               "viscosity: Mueller's Laplacian form (mu) or Monaghan's artificial viscosity "
+               "(alpha)",
+               {"none", "muller", "artificial"}});
+  s.push_back({"mu", P::real, "0", "dynamic viscosity of the Mueller form (Pa s)"});
+  s.push_back({"alpha", P::real, d.alpha, "Monaghan artificial viscosity alpha"});
+  s.push_back({"gravity", P::real, d.gravity, "gravitational acceleration along -y (m/s^2)"});
+  if (d.walls) {
+    s.push_back({"boundary", P::text, "particles",
+                 "walls: boundary particles (Akinci et al. 2012) or a smooth penalty force",
+                 {"particles", "penalty"}});
+    s.push_back({"boundary_layers", P::integer, "3", "layers of boundary particles"});
+  }
+  s.push_back({"parallel_threshold", P::integer, "512",
+               "fluid particles from which the right-hand side runs with OpenMP (results do not "
+               "depend on it)"});
+  return s;
+}
+
+// Reads the fluid parameters; `fall_height` sets the automatic sound speed.
+SphOptions read_fluid(const Params& p, int dim, double spacing, double fall_height,
+                      const std::string& model, bool walls) {
+  const std::string who = model + ": parameter ";
+  SphOptions o;
+  o.spacing = spacing;
+  const double support = p.real("support");
+  require_input(std::isfinite(support) && support > 1.0, who + "'support' must be > 1");
+  o.support = support * spacing;
+  o.rho0 = p.real("rho0");
+  const double g = p.real("gravity");
+  require_input(std::isfinite(g), who + "'gravity' must be finite");
+  o.gravity = {0.0, -g, 0.0};
+  double c0 = p.real("c0");
+  require_input(std::isfinite(c0) && c0 >= 0, who + "'c0' must be >= 0");
+  if (c0 == 0) {
+    require_input(g != 0, who + "'c0' = 0 (automatic) needs gravity != 0");
+    c0 = 10.0 * std::sqrt(2.0 * std::abs(g) * fall_height);
+  }
+  o.c0 = c0;
+  o.k = p.real("k");
+  o.eos = p.text("eos") == "tait" ? SphEos::tait : SphEos::linear;
+  o.clamp = p.boolean("clamp");
+  o.tait_gamma = p.real("tait_gamma");
+  o.form = p.text("form") == "symmetric" ? SphPressureForm::symmetric : SphPressureForm::variational;
+  o.density_kernel = sph::kernel_from_string(p.text("density_kernel"));
+  o.gradient_kernel = sph::kernel_from_string(p.text("gradient_kernel"));
+  const std::string& visc = p.text("viscosity");
+  o.viscosity = visc == "muller"       ? SphViscosity::muller
+                : visc == "artificial" ? SphViscosity::artificial
+                                       : SphViscosity::none;
+  o.mu = p.real("mu");
+  o.alpha = p.real("alpha");
+  if (walls) o.boundary = p.text("boundary") == "penalty" ? SphBoundary::penalty : SphBoundary::particles;
+  const long threshold = p.integer("parallel_threshold");
+  require_input(threshold >= 0, who + "'parallel_threshold' must be >= 0");
+  o.parallel_threshold = threshold;
+  (void)dim;
+  return o;
+}
+
+int int_param(const Params& p, const std::string& key, const std::string& model, long lo,
+              long hi) {
+  const long v = p.integer(key);
+  require_input(v >= lo && v <= hi, model + ": parameter '" + key + "' must be in [" +
+                                        std::to_string(lo) + ", " + std::to_string(hi) +
+                                        "] (got " + std::to_string(v) + ")");
+  return static_cast<int>(v);
+}
+
+// "2D ..." / "3D ..." (appended, not concatenated: g++ 12 warns falsely on operator+ here).
+std::string describe_dim(int dim, const char* text) {
+  std::string s = dim == 2 ? "2D" : "3D";
+  s.append(text);
+  return s;
+}
+
+void add_dam_break(ModelRegistry& reg, int dim) {
+  const std::string name = dim == 2 ? "sph_dam_break_2d" : "sph_dam_break_3d";
+  const SceneDefaults d{std::to_string(dim == 2 ? 32 : 12), "0", "9.81"};
+  std::vector<ParamSpec> scene = {
+      {"a", P::real, "0.146", "column width a (m); the column is a x 2a, the tank 4a long"},
+      {"n", P::integer, d.n, "particles across the column width a"},
+      {"wall_height", P::real, "4", "height of the tank walls in units of a"}};
+  if (dim == 3) scene.push_back({"depth", P::real, "0", "tank depth (m); 0: a/2"});
+  reg.add({{name,
+            describe_dim(dim,
+                         " SPH dam break: water column a x 2a released in a tank of length 4a; "
+                         "observables front, height_left"),
+            true, false,
+            "Koshizuka & Oka 1996 (surge front Z = front/a vs T = t sqrt(2g/a), "
+            "REFERENCES.md); Martin & Moyce 1952"},
+           fluid_specs(d, scene), [dim, name](const Params& p) {
+             DamBreakOptions o;
+             o.dim = dim;
+             o.a = p.real("a");
+             o.n = int_param(p, "n", name, 2, 2000);
+             o.wall_height_factor = p.real("wall_height");
+             require_input(std::isfinite(o.wall_height_factor) && o.wall_height_factor >= 2,
+                           name + ": parameter 'wall_height' must be >= 2");
+             if (dim == 3) o.depth = p.real("depth");
+             o.layers = int_param(p, "boundary_layers", name, 1, 10);
+             const SphOptions f = read_fluid(p, dim, o.a / o.n, 2.0 * o.a, name, true);
+             return std::make_unique<SphFluid>(name, make_dam_break_scene(o), f);
+           }});
+}
+
+void add_tank(ModelRegistry& reg, int dim) {
+  const std::string name = dim == 2 ? "sph_tank_2d" : "sph_tank_3d";
+  const SceneDefaults d{std::to_string(dim == 2 ? 20 : 10), "0", "9.81"};
+  std::vector<ParamSpec> scene = {
+      {"width", P::real, "0.2", "tank width (m), rounded to a multiple of the spacing"},
+      {"height", P::real, "0.1", "fluid height H (m)"},
+      {"n", P::integer, d.n, "particles across the fluid height"}};
+  if (dim == 3) scene.push_back({"depth", P::real, "0", "tank depth (m); 0: the width"});
+  reg.add({{name,
+            describe_dim(dim,
+                         " SPH tank: fluid at rest under gravity; pressure probes at depths H/4, "
+                         "H/2, 3H/4"),
+            true, false, "hydrostatic pressure p = rho0 g (H - y) (REFERENCES.md)"},
+           fluid_specs(d, scene), [dim, name](const Params& p) {
+             TankOptions o;
+             o.dim = dim;
+             o.width = p.real("width");
+             o.height = p.real("height");
+             o.n = int_param(p, "n", name, 2, 2000);
+             if (dim == 3) o.depth = p.real("depth");
+             o.layers = int_param(p, "boundary_layers", name, 1, 10);
+             const SphOptions f = read_fluid(p, dim, o.height / o.n, o.height, name, true);
+             return std::make_unique<SphFluid>(name, make_tank_scene(o), f);
+           }});
+}
+
+void add_drop(ModelRegistry& reg) {
+  const std::string name = "sph_drop_2d";
+  const SceneDefaults d{"20", "10", "0", "linear", "false", "none", "0", "variational", false};
+  std::vector<ParamSpec> scene = {
+      {"radius", P::real, "0.1", "drop radius R (m)"},
+      {"n", P::integer, d.n, "particles across the diameter"},
+      {"velocity", P::text, "oscillation",
+       "initial velocity about the centre: oscillation A(x, -y), rotation A(-y, x), none",
+       {"oscillation", "rotation", "none"}},
+      {"rate", P::real, "1", "A (1/s)"},
+      {"drift", P::real, "0", "uniform initial velocity along x (m/s)"}};
+  reg.add({{name,
+            "2D SPH drop: no gravity, no walls, inviscid by default, oscillating or rotating "
+            "(momentum, energy and convergence tests)",
+            true, false, "Monaghan's elliptic drop; invariants energy and momentum"},
+           fluid_specs(d, scene), [name](const Params& p) {
+             DropOptions o;
+             o.radius = p.real("radius");
+             o.n = int_param(p, "n", name, 2, 4000);
+             const std::string& v = p.text("velocity");
+             o.velocity = v == "rotation"      ? DropOptions::Velocity::rotation
+                          : v == "oscillation" ? DropOptions::Velocity::oscillation
+                                               : DropOptions::Velocity::none;
+             o.rate = p.real("rate");
+             o.drift = p.real("drift");
+             const SphOptions f = read_fluid(p, 2, 2.0 * o.radius / o.n, 2.0 * o.radius, name, false);
+             return std::make_unique<SphFluid>(name, make_drop_scene(o), f);
+           }});
+}
+
+}  // namespace
+
+void register_sph_models(ModelRegistry& reg) {
+  add_dam_break(reg, 2);
+  add_dam_break(reg, 3);
+  add_tank(reg, 2);
+  add_tank(reg, 3);
+  add_drop(reg);
+}
+
+}  // namespace stiffbench

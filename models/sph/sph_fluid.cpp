@@ -1,0 +1,490 @@
+#include "models/sph/sph_fluid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace stiffbench {
+
+namespace {
+
+template <class F>
+void with_dim(int dim, F&& f) {
+  if (dim == 2)
+    f(std::integral_constant<int, 2>{});
+  else
+    f(std::integral_constant<int, 3>{});
+}
+
+std::string short_num(double x) {
+  std::ostringstream os;
+  os.precision(4);
+  os << x;
+  return os.str();
+}
+
+// Σ_{k ∈ Z^D} W(|k| Δx): the kernel summed over a full lattice around one of its points.
+double lattice_sum(const sph::Kernel& w, int dim, double dx) {
+  const int r = static_cast<int>(std::ceil(w.support() / dx)) + 1;
+  double sum = 0.0;
+  for (int i = -r; i <= r; ++i)
+    for (int j = -r; j <= r; ++j)
+      for (int k = (dim == 3 ? -r : 0); k <= (dim == 3 ? r : 0); ++k)
+        sum += w.w(dx * std::sqrt(double(i * i + j * j + k * k)));
+  return sum;
+}
+
+}  // namespace
+
+SphFluid::SphFluid(std::string name, SphScene scene, SphOptions options)
+    : name_(std::move(name)), scene_(std::move(scene)), opt_(options), dim_(scene_.dim) {
+  const std::string who = "model '" + name_ + "': ";
+  require_input(dim_ == 2 || dim_ == 3, who + "dimension must be 2 or 3");
+  require_input(std::isfinite(opt_.spacing) && opt_.spacing > 0, who + "spacing must be > 0");
+  require_input(std::isfinite(opt_.support) && opt_.support > opt_.spacing,
+                who + "support radius must exceed the particle spacing (support > 1)");
+  require_input(std::isfinite(opt_.rho0) && opt_.rho0 > 0, who + "rho0 must be > 0");
+  require_input(std::isfinite(opt_.c0) && opt_.c0 >= 0, who + "c0 must be >= 0");
+  require_input(std::isfinite(opt_.k), who + "k must be finite");
+  require_input(std::isfinite(opt_.tait_gamma) && opt_.tait_gamma > 1,
+                who + "tait_gamma must be > 1");
+  require_input(std::isfinite(opt_.mu) && opt_.mu >= 0, who + "mu must be >= 0");
+  require_input(std::isfinite(opt_.alpha) && opt_.alpha >= 0, who + "alpha must be >= 0");
+  require_input(opt_.density_kernel != sph::KernelType::viscosity,
+                who + "the viscosity kernel is singular at r = 0: not a density kernel");
+  require_input(opt_.gradient_kernel != sph::KernelType::viscosity,
+                who + "the viscosity kernel's gradient is singular at r = 0: not a gradient "
+                      "kernel");
+  require_input(!scene_.fluid_x.empty(), who + "the scene has no fluid particles");
+  require_input(scene_.fluid_v.size() == scene_.fluid_x.size(),
+                who + "one velocity per fluid particle is required");
+
+  n_ = static_cast<Index>(scene_.fluid_x.size());
+  wd_ = sph::Kernel(opt_.density_kernel, dim_, opt_.support);
+  wg_ = sph::Kernel(opt_.gradient_kernel, dim_, opt_.support);
+  wv_ = sph::Kernel(sph::KernelType::viscosity, dim_, opt_.support);
+  hs_ = 0.5 * opt_.support;
+  mass_ = opt_.rho0 / lattice_sum(wd_, dim_, opt_.spacing);
+
+  if (opt_.eos == SphEos::linear) {
+    k_ = opt_.k >= 0 ? opt_.k : opt_.c0 * opt_.c0;
+    c_ = std::sqrt(k_);
+  } else {
+    c_ = opt_.c0;
+    tait_b_ = opt_.rho0 * c_ * c_ / opt_.tait_gamma;
+  }
+  switch (opt_.viscosity) {
+    case SphViscosity::none:
+      nu_ = 0.0;
+      break;
+    case SphViscosity::muller:
+      nu_ = opt_.mu / opt_.rho0;
+      break;
+    case SphViscosity::artificial:
+      nu_ = opt_.alpha * c_ * hs_ / 8.0;
+      break;
+  }
+  viscous_ = (opt_.viscosity == SphViscosity::muller && opt_.mu > 0) ||
+             (opt_.viscosity == SphViscosity::artificial && opt_.alpha > 0);
+  parallel_ = n_ >= opt_.parallel_threshold;
+
+  y0_.resize(2 * dofs());
+  for (Index i = 0; i < n_; ++i)
+    for (int d = 0; d < dim_; ++d) {
+      y0_[dim_ * i + d] = scene_.fluid_x[static_cast<std::size_t>(i)][static_cast<std::size_t>(d)];
+      y0_[dofs() + dim_ * i + d] =
+          scene_.fluid_v[static_cast<std::size_t>(i)][static_cast<std::size_t>(d)];
+    }
+  require_input(y0_.allFinite(), who + "non-finite initial state");
+
+  if (opt_.boundary == SphBoundary::particles) {
+    const Index nb = static_cast<Index>(scene_.boundary_x.size());
+    bx_.resize(static_cast<std::size_t>(nb * dim_));
+    for (Index b = 0; b < nb; ++b)
+      for (int d = 0; d < dim_; ++d)
+        bx_[static_cast<std::size_t>(dim_ * b + d)] =
+            scene_.boundary_x[static_cast<std::size_t>(b)][static_cast<std::size_t>(d)];
+    bvol_.assign(static_cast<std::size_t>(nb), 0.0);
+    with_dim(dim_, [&](auto dc) {
+      constexpr int D = decltype(dc)::value;
+      auto& g = const_cast<sph::NeighbourGrid<D>&>(boundary_grid<D>());
+      g.build(bx_.data(), nb, opt_.support);
+      // Akinci et al. 2012: V_b = 1 / Σ_k W(x_b - x_k) over the boundary particles (self
+      // included), so that densely sampled walls do not push harder than sparse ones.
+      for (Index b = 0; b < nb; ++b) {
+        double sum = 0.0;
+        g.for_each_neighbour(bx_.data() + D * b, opt_.support,
+                             [&](Index, double r2, const auto&) { sum += wd_.w(std::sqrt(r2)); });
+        bvol_[static_cast<std::size_t>(b)] = 1.0 / sum;
+      }
+    });
+  }
+  rho_.assign(static_cast<std::size_t>(n_), opt_.rho0);
+  p_.assign(static_cast<std::size_t>(n_), 0.0);
+}
+
+template <int D>
+const sph::NeighbourGrid<D>& SphFluid::fluid_grid() const {
+  if constexpr (D == 2)
+    return grid2_;
+  else
+    return grid3_;
+}
+
+template <int D>
+const sph::NeighbourGrid<D>& SphFluid::boundary_grid() const {
+  if constexpr (D == 2)
+    return bgrid2_;
+  else
+    return bgrid3_;
+}
+
+double SphFluid::pressure(double rho) const {
+  double p;
+  if (opt_.eos == SphEos::linear)
+    p = k_ * (rho - opt_.rho0);
+  else
+    p = tait_b_ * (std::pow(rho / opt_.rho0, opt_.tait_gamma) - 1.0);
+  return opt_.clamp ? std::max(0.0, p) : p;
+}
+
+double SphFluid::internal_energy(double rho) const {
+  if (opt_.clamp && rho < opt_.rho0) return 0.0;
+  const double r0 = opt_.rho0;
+  if (opt_.eos == SphEos::linear) return k_ * (std::log(rho / r0) + r0 / rho - 1.0);
+  const double g = opt_.tait_gamma;
+  return tait_b_ / (g - 1.0) *
+         (std::pow(rho, g - 1.0) / std::pow(r0, g) + (g - 1.0) / rho - g / r0);
+}
+
+template <int D, sph::KernelType KD>
+void SphFluid::density_pass(const double* x) const {
+  auto& grid = const_cast<sph::NeighbourGrid<D>&>(fluid_grid<D>());
+  grid.build(x, n_, opt_.support);
+  const auto& order = grid.order();
+  const auto& bgrid = boundary_grid<D>();
+  const bool with_boundary = !bvol_.empty();
+  const double h = opt_.support, rho0 = opt_.rho0;
+  const std::size_t n = static_cast<std::size_t>(n_);
+  rho_.resize(n);
+  p_.resize(n);
+  pr2_.resize(n);
+  inv_rho_.resize(n);
+  nb_count_.resize(n);
+  // The fluid neighbours of each particle (self included) with their distances, kept for the
+  // force pass. Capacity per particle grows (and the pass repeats) when a particle has more.
+  while (true) {
+    const std::size_t cap = nb_capacity_;
+    nb_index_.resize(n * cap);
+    nb_dist_.resize(n * cap);
+    std::size_t most = 0;
+#pragma omp parallel for schedule(static) reduction(max : most) if (parallel_)
+    for (Index s = 0; s < n_; ++s) {
+      const Index i = order[static_cast<std::size_t>(s)];
+      const std::size_t iu = static_cast<std::size_t>(i);
+      const double* xi = x + D * i;
+      Index* idx = nb_index_.data() + iu * cap;
+      double* dist = nb_dist_.data() + iu * cap;
+      std::size_t count = 0;
+      double sum = 0.0;
+      grid.for_each_neighbour(xi, h, [&](Index j, double r2, const auto&) {
+        const double r = std::sqrt(r2);
+        sum += wd_.w_as<KD>(r);
+        if (count < cap) {
+          idx[count] = j;
+          dist[count] = r;
+        }
+        ++count;
+      });
+      double rho = mass_ * sum;
+      if (with_boundary) {
+        double bsum = 0.0;
+        bgrid.for_each_neighbour(xi, h, [&](Index b, double r2, const auto&) {
+          bsum += bvol_[static_cast<std::size_t>(b)] * wd_.w_as<KD>(std::sqrt(r2));
+        });
+        rho += rho0 * bsum;
+      }
+      nb_count_[iu] = count;
+      most = std::max(most, count);
+      const double p = pressure(rho);
+      rho_[iu] = rho;
+      p_[iu] = p;
+      inv_rho_[iu] = 1.0 / rho;
+      pr2_[iu] = p / (rho * rho);
+    }
+    if (most <= cap) break;
+    nb_capacity_ = most + most / 4;
+  }
+}
+
+template <int D, sph::KernelType KG>
+void SphFluid::force_pass(const double* x, const double* v, double* a) const {
+  const auto& order = fluid_grid<D>().order();
+  const auto& bgrid = boundary_grid<D>();
+  const std::size_t cap = nb_capacity_;
+  const bool with_boundary = !bvol_.empty();
+  const bool penalty = opt_.boundary == SphBoundary::penalty;
+  const bool variational = opt_.form == SphPressureForm::variational;
+  const bool muller = opt_.viscosity == SphViscosity::muller && opt_.mu > 0;
+  const bool artificial = opt_.viscosity == SphViscosity::artificial && opt_.alpha > 0;
+  const double h = opt_.support, rho0 = opt_.rho0, m = mass_, mu = opt_.mu;
+  const double av = opt_.alpha * c_ * hs_, eps2 = 0.01 * hs_ * hs_;
+  const double k_wall = c_ * c_ / h;
+#pragma omp parallel for schedule(static) if (parallel_)
+  for (Index s = 0; s < n_; ++s) {
+    const Index i = order[static_cast<std::size_t>(s)];
+    const std::size_t iu = static_cast<std::size_t>(i);
+    const double* xi = x + D * i;
+    const double* vi = v + D * i;
+    const double rhoi = rho_[iu], pi = p_[iu], pr2i = pr2_[iu], inv_rhoi = inv_rho_[iu];
+    std::array<double, D> acc;
+    for (int d = 0; d < D; ++d) acc[d] = opt_.gravity[static_cast<std::size_t>(d)];
+    const Index* idx = nb_index_.data() + iu * cap;
+    const double* dist = nb_dist_.data() + iu * cap;
+    for (std::size_t k = 0; k < nb_count_[iu]; ++k) {
+      const double r = dist[k];
+      if (r == 0.0) continue;  // self, or a coincident particle: no direction
+      const Index j = idx[k];
+      const std::size_t ju = static_cast<std::size_t>(j);
+      const double* xj = x + D * j;
+      const double* vj = v + D * j;
+      std::array<double, D> dx;
+      for (int d = 0; d < D; ++d) dx[d] = xi[d] - xj[d];
+      const double dwr = wg_.dw_over_r_as<KG>(r);  // ∇W_ij = dwr · (x_i - x_j)
+      double coef = variational ? m * (pr2i + pr2_[ju])
+                                : 0.5 * m * (pi + p_[ju]) * inv_rhoi * inv_rho_[ju];
+      if (artificial) {
+        double vr = 0.0;
+        for (int d = 0; d < D; ++d) vr += (vi[d] - vj[d]) * dx[d];
+        if (vr < 0.0) coef -= m * av * vr / (0.5 * (rhoi + rho_[ju]) * (r * r + eps2));
+      }
+      for (int d = 0; d < D; ++d) acc[d] -= coef * dwr * dx[d];
+      if (muller) {
+        const double cv = mu * inv_rhoi * m * inv_rho_[ju] * wv_.laplacian(r);
+        for (int d = 0; d < D; ++d) acc[d] += cv * (vj[d] - vi[d]);
+      }
+    }
+    if (with_boundary) {
+      bgrid.for_each_neighbour(xi, h, [&](Index b, double r2, const std::array<double, D>& dx) {
+        if (r2 == 0.0) return;
+        const double r = std::sqrt(r2);
+        const double vb = bvol_[static_cast<std::size_t>(b)];
+        const double dwr = wg_.dw_over_r_as<KG>(r);
+        double coef = rho0 * vb * pr2i;  // Akinci: -ρ0 V_b p_i/ρ_i² ∇W_ib
+        if (artificial) {
+          double vr = 0.0;
+          for (int d = 0; d < D; ++d) vr += vi[d] * dx[d];
+          if (vr < 0.0) coef -= rho0 * vb * av * vr / (0.5 * (rhoi + rho0) * (r2 + eps2));
+        }
+        for (int d = 0; d < D; ++d) acc[d] -= coef * dwr * dx[d];
+        if (muller) {
+          const double cv = mu * inv_rhoi * vb * wv_.laplacian(r);  // m_b/ρ_b = V_b, v_b = 0
+          for (int d = 0; d < D; ++d) acc[d] -= cv * vi[d];
+        }
+      });
+    }
+    if (penalty) {
+      for (const auto& wall : scene_.walls) {
+        double sd = -wall.offset;
+        for (int d = 0; d < D; ++d) sd += wall.normal[static_cast<std::size_t>(d)] * xi[d];
+        if (sd < h) {
+          const double q = 1.0 - sd / h;
+          for (int d = 0; d < D; ++d)
+            acc[d] += k_wall * q * q * wall.normal[static_cast<std::size_t>(d)];
+        }
+      }
+    }
+    for (int d = 0; d < D; ++d) a[D * i + d] = acc[d];
+  }
+}
+
+void SphFluid::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a) const {
+  with_dim(dim_, [&](auto dc) {
+    constexpr int D = decltype(dc)::value;
+    sph::with_kernel(opt_.density_kernel, [&](auto kd) {
+      density_pass<D, decltype(kd)::value>(x.data());
+    });
+    sph::with_kernel(opt_.gradient_kernel, [&](auto kg) {
+      force_pass<D, decltype(kg)::value>(x.data(), v.data(), a.data());
+    });
+  });
+}
+
+void SphFluid::compute_densities(CVecRef x) const {
+  with_dim(dim_, [&](auto dc) {
+    sph::with_kernel(opt_.density_kernel, [&](auto kd) {
+      density_pass<decltype(dc)::value, decltype(kd)::value>(x.data());
+    });
+  });
+}
+
+Vec SphFluid::densities(CVecRef x) const {
+  compute_densities(x);
+  return Eigen::Map<const Vec>(rho_.data(), n_);
+}
+
+double SphFluid::kinetic_energy(CVecRef y) const {
+  return 0.5 * mass_ * y.tail(dofs()).squaredNorm();
+}
+
+Vec SphFluid::linear_momentum(CVecRef y) const {
+  Vec p = Vec::Zero(dim_);
+  for (Index i = 0; i < n_; ++i)
+    for (int d = 0; d < dim_; ++d) p[d] += y[dofs() + dim_ * i + d];
+  return mass_ * p;
+}
+
+double SphFluid::energy(CVecRef y) const {
+  compute_densities(y.head(dofs()));
+  double internal = 0.0, potential = 0.0;
+  for (Index i = 0; i < n_; ++i) {
+    internal += internal_energy(rho_[static_cast<std::size_t>(i)]);
+    for (int d = 0; d < dim_; ++d)
+      potential -= opt_.gravity[static_cast<std::size_t>(d)] * y[dim_ * i + d];
+    if (opt_.boundary == SphBoundary::penalty) {
+      const double h = opt_.support, k_wall = c_ * c_ / h;
+      for (const auto& wall : scene_.walls) {
+        double sd = -wall.offset;
+        for (int d = 0; d < dim_; ++d)
+          sd += wall.normal[static_cast<std::size_t>(d)] * y[dim_ * i + d];
+        if (sd < h) potential += k_wall * h / 3.0 * std::pow(1.0 - sd / h, 3);
+      }
+    }
+  }
+  return kinetic_energy(y) + mass_ * (internal + potential);
+}
+
+double SphFluid::max_density_error(CVecRef y) const {
+  compute_densities(y.head(dofs()));
+  double e = 0.0;
+  for (double r : rho_) e = std::max(e, std::abs(r / opt_.rho0 - 1.0));
+  return e;
+}
+
+double SphFluid::max_compression(CVecRef y) const {
+  compute_densities(y.head(dofs()));
+  double e = -std::numeric_limits<double>::infinity();
+  for (double r : rho_) e = std::max(e, r / opt_.rho0 - 1.0);
+  return e;
+}
+
+double SphFluid::front(CVecRef y) const {
+  double f = -std::numeric_limits<double>::infinity();
+  for (Index i = 0; i < n_; ++i) f = std::max(f, y[dim_ * i]);
+  return f + 0.5 * opt_.spacing;
+}
+
+double SphFluid::height_left(CVecRef y) const {
+  double top = 0.0;
+  for (Index i = 0; i < n_; ++i)
+    if (y[dim_ * i] < opt_.support) top = std::max(top, y[dim_ * i + 1] + 0.5 * opt_.spacing);
+  return top;
+}
+
+double SphFluid::probe_pressure(CVecRef y, const std::array<double, 3>& point) const {
+  compute_densities(y.head(dofs()));
+  double num = 0.0, den = 0.0;
+  for (Index i = 0; i < n_; ++i) {
+    double r2 = 0.0;
+    for (int d = 0; d < dim_; ++d) {
+      const double dx = y[dim_ * i + d] - point[static_cast<std::size_t>(d)];
+      r2 += dx * dx;
+    }
+    const double w = wd_.w(std::sqrt(r2));
+    if (w <= 0) continue;
+    const double vol = mass_ / rho_[static_cast<std::size_t>(i)];
+    num += vol * p_[static_cast<std::size_t>(i)] * w;
+    den += vol * w;
+  }
+  return den > 0 ? num / den : 0.0;
+}
+
+std::vector<Invariant> SphFluid::invariants() const {
+  std::vector<Invariant> out;
+  out.push_back({"energy", [this](double, CVecRef y) { return energy(y); }});
+  const bool free = bvol_.empty() && opt_.boundary != SphBoundary::penalty;
+  if (free) {
+    static const char* names[] = {"momentum_x", "momentum_y", "momentum_z"};
+    for (int d = 0; d < dim_; ++d)
+      if (opt_.gravity[static_cast<std::size_t>(d)] == 0.0)
+        out.push_back({names[d], [this, d](double, CVecRef y) { return linear_momentum(y)[d]; }});
+  }
+  return out;
+}
+
+std::vector<Invariant> SphFluid::observables() const {
+  std::vector<Invariant> out;
+  out.push_back({"mass", [this](double, CVecRef) { return mass_ * static_cast<double>(n_); }});
+  out.push_back({"kinetic_energy", [this](double, CVecRef y) { return kinetic_energy(y); }});
+  out.push_back({"max_density_error", [this](double, CVecRef y) { return max_density_error(y); }});
+  out.push_back({"max_compression", [this](double, CVecRef y) { return max_compression(y); }});
+  if (scene_.dam_break) {
+    out.push_back({"front", [this](double, CVecRef y) { return front(y); }});
+    out.push_back({"height_left", [this](double, CVecRef y) { return height_left(y); }});
+  }
+  for (std::size_t k = 0; k < scene_.probes.size(); ++k) {
+    out.push_back({"p_probe" + std::to_string(k + 1), [this, k](double, CVecRef y) {
+                     return probe_pressure(y, scene_.probes[k]);
+                   }});
+  }
+  return out;
+}
+
+std::optional<double> SphFluid::stiffness(double, CVecRef) const {
+  const double rate = c_ / opt_.support + 8.0 * nu_ / (hs_ * hs_);
+  if (!(rate > 0)) return std::nullopt;
+  return rate;
+}
+
+std::optional<SuggestedStep> SphFluid::suggested_step() const {
+  const double acoustic = c_ > 0 ? 0.4 * opt_.support / c_ : std::numeric_limits<double>::infinity();
+  const double viscous = nu_ > 0 ? 0.125 * hs_ * hs_ / nu_ : std::numeric_limits<double>::infinity();
+  if (!std::isfinite(acoustic) && !std::isfinite(viscous)) return std::nullopt;
+  SuggestedStep s;
+  if (acoustic <= viscous) {
+    s.h = acoustic;
+    s.rule = "CFL 0.4 h/c with support radius h = " + short_num(opt_.support) +
+             ", sound speed c = " + short_num(c_);
+  } else {
+    s.h = viscous;
+    s.rule = "viscous limit 0.125 h_s^2/nu with h_s = " + short_num(hs_) +
+             ", nu = " + short_num(nu_);
+  }
+  return s;
+}
+
+ParticleFrame SphFluid::particles(double, CVecRef y) const {
+  compute_densities(y.head(dofs()));
+  const Index nb = boundary_particles();
+  const Index total = n_ + nb;
+  ParticleFrame f;
+  f.positions.assign(static_cast<std::size_t>(3 * total), 0.0);
+  ParticleFrame::Field rho{"density", 1, std::vector<double>(static_cast<std::size_t>(total))};
+  ParticleFrame::Field p{"pressure", 1, std::vector<double>(static_cast<std::size_t>(total), 0.0)};
+  ParticleFrame::Field vel{"velocity", 3,
+                           std::vector<double>(static_cast<std::size_t>(3 * total), 0.0)};
+  ParticleFrame::Field fluid{"fluid", 1, std::vector<double>(static_cast<std::size_t>(total), 0.0)};
+  for (Index i = 0; i < n_; ++i) {
+    const std::size_t iu = static_cast<std::size_t>(i);
+    for (int d = 0; d < dim_; ++d) {
+      f.positions[3 * iu + static_cast<std::size_t>(d)] = y[dim_ * i + d];
+      vel.values[3 * iu + static_cast<std::size_t>(d)] = y[dofs() + dim_ * i + d];
+    }
+    rho.values[iu] = rho_[iu];
+    p.values[iu] = p_[iu];
+    fluid.values[iu] = 1.0;
+  }
+  // Boundary particles: at rest, density ρ0 and pressure 0 (Akinci's particles carry a volume,
+  // not a state).
+  for (Index b = 0; b < nb; ++b) {
+    const std::size_t iu = static_cast<std::size_t>(n_ + b);
+    for (int d = 0; d < dim_; ++d)
+      f.positions[3 * iu + static_cast<std::size_t>(d)] = bx_[static_cast<std::size_t>(dim_ * b + d)];
+    rho.values[iu] = opt_.rho0;
+  }
+  f.fields = {std::move(rho), std::move(p), std::move(vel), std::move(fluid)};
+  return f;
+}
+
+}  // namespace stiffbench

@@ -1,0 +1,185 @@
+// SphFluid: a weakly compressible SPH fluid (2D or 3D) as a MechanicalSystem y = [x; v] over the
+// fluid particles, so every integrator of the testbed runs on it unchanged. Formulas from
+// ../shared/REFERENCES.md (SPH); h is the kernel SUPPORT radius throughout, Δx the initial
+// particle spacing.
+//
+// Density by summation, self term included, fluid and boundary particles (Akinci et al. 2012):
+//   ρ_i = Σ_j m W_d(x_i - x_j) + Σ_b ρ0 V_b W_d(x_i - x_b),   V_b = 1 / Σ_{k ∈ boundary} W_d(x_b - x_k)
+// Every fluid particle has the same mass m = ρ0 / Σ_{k ∈ Z^D} W_d(|k| Δx): the density of a
+// particle inside a full lattice of spacing Δx is exactly ρ0 at the start.
+// Equation of state: linear p = k(ρ - ρ0) (sound speed c = √k) or Tait p = B((ρ/ρ0)^γ - 1),
+// B = ρ0 c0²/γ; either clamped p = max(0, ·) (no tension) or unclamped.
+// Accelerations of fluid particle i (∇W = ∇W_g, the gradient kernel; r_ij = x_i - x_j):
+//   pressure, symmetric (Müller 2003):  -Σ_j m (p_i + p_j)/(2 ρ_i ρ_j) ∇W_ij
+//   pressure, variational:              -Σ_j m (p_i/ρ_i² + p_j/ρ_j²) ∇W_ij
+//   boundary pressure (Akinci 2012):    -Σ_b ρ0 V_b p_i/ρ_i² ∇W_ib
+//   viscosity, Müller:                  (μ/ρ_i) Σ_j m (v_j - v_i)/ρ_j ∇²W_visc(r_ij)
+//                                       (boundary particles: v_b = 0, m_b = ρ0 V_b, ρ_b = ρ0)
+//     The lecture summary's "element-wise absolute value" |v_j - v_i| is a notation slip: with it
+//     the pair force is not antisymmetric (momentum is not conserved) and does not oppose the
+//     relative velocity (kinetic energy can grow). The difference v_j - v_i is Müller's form.
+//   viscosity, artificial (Monaghan 1992): -Σ_j m Π_ij ∇W_ij with, for v_ij·r_ij < 0,
+//     Π_ij = -α c h_s (v_ij·r_ij) / (ρ̄_ij (|r_ij|² + 0.01 h_s²)), h_s = h/2 (the smoothing
+//     length of a kernel with support 2h_s), ρ̄_ij = (ρ_i + ρ_j)/2; boundary particles as above.
+//   gravity g; wall penalty (boundary=penalty, instead of boundary particles): for each wall
+//     plane n·x = d with the fluid on the side n·x > d and distance s = n·x - d < h,
+//     +K (1 - s/h)² n with K = c²/h (potential K h/3 (1 - s/h)³, C¹ at s = h).
+// The symmetric and variational pair terms and both viscosities are antisymmetric per pair, so
+// without gravity and boundaries total linear momentum is conserved; both viscosities dissipate
+// kinetic energy (each pair's term is -w|v_ij|² or -w (v_ij·r_ij)²/… with w >= 0).
+// Energy E = Σ ½ m|v|² + Σ m u(ρ_i) - Σ m g·x (+ the penalty potential), u(ρ) the EOS internal
+// energy: linear u = k[ln(ρ/ρ0) + ρ0/ρ - 1], Tait u = B/(γ-1)[ρ^(γ-1)/ρ0^γ + (γ-1)/ρ - γ/ρ0];
+// clamped EOS: u = 0 for ρ < ρ0 (then du/dρ = max(0, p)/ρ² still holds). du/dρ = p/ρ², so with
+// the variational form, the same kernel for density and gradient, no viscosity, the Akinci
+// boundary force (the gradient of the boundary's share of Σ m u(ρ_i)) and the penalty force,
+// E is conserved in continuous time: energy drift then measures the integrator.
+//
+// Neighbour search (neighbour_grid.hpp): a hashed uniform grid with cell size h, rebuilt from the
+// positions at every right-hand-side evaluation (stage positions differ); the boundary particles'
+// grid is built once. Both passes (density, then forces) gather per particle in cell order with
+// OpenMP when there are at least `parallel_threshold` particles; every particle's sums run in an
+// order fixed by the positions alone, so results are bitwise identical for any thread count. The
+// state vector's order never changes. Nothing edits positions or velocities outside the
+// right-hand side: boundaries are forces, and there is no velocity clamping.
+//
+// velocity_dependent() is true exactly when a viscosity is on (μ > 0 or α > 0).
+// stiffness(): c/h (acoustic) + 8ν/h_s² (viscous, ν = μ/ρ0 or Monaghan's effective
+// α c h_s/8), a rough spectral-radius scale. suggested_step(): min(0.4 h/c, 0.125 h_s²/ν).
+// No analytic Jacobian: implicit methods and CVODE/ARKODE use finite-difference
+// Jacobian-vector products (matrix-free Krylov), which their `auto` settings choose for it.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "core/ode_system.hpp"
+#include "models/sph/kernels.hpp"
+#include "models/sph/neighbour_grid.hpp"
+
+namespace stiffbench {
+
+enum class SphEos { linear, tait };
+enum class SphPressureForm { symmetric, variational };
+enum class SphViscosity { none, muller, artificial };
+enum class SphBoundary { particles, penalty };
+
+struct SphOptions {
+  double spacing = 0.01;  // Δx
+  double support = 0.025;  // h, the kernel support radius
+  double rho0 = 1000.0;
+  sph::KernelType density_kernel = sph::KernelType::wendland_c2;
+  sph::KernelType gradient_kernel = sph::KernelType::wendland_c2;
+  SphEos eos = SphEos::linear;
+  bool clamp = true;
+  double c0 = 10.0;   // sound speed (Tait's c0; linear: k = c0² unless k >= 0 is given)
+  double k = -1.0;    // linear EOS constant (< 0: c0²)
+  double tait_gamma = 7.0;
+  SphPressureForm form = SphPressureForm::variational;
+  SphViscosity viscosity = SphViscosity::artificial;
+  double mu = 0.0;      // Müller dynamic viscosity
+  double alpha = 0.0;   // Monaghan's α
+  std::array<double, 3> gravity{};
+  SphBoundary boundary = SphBoundary::particles;
+  Index parallel_threshold = 512;  // particles; below this the passes run serially
+};
+
+// A wall plane n·x = offset; the fluid is on the side n·x > offset.
+struct SphWall {
+  std::array<double, 3> normal{};
+  double offset = 0.0;
+};
+
+// Geometry of a scene: particles, walls, and what its observables measure.
+struct SphScene {
+  int dim = 2;
+  std::vector<std::array<double, 3>> fluid_x, fluid_v;
+  std::vector<std::array<double, 3>> boundary_x;  // used when boundary = particles
+  std::vector<SphWall> walls;                     // used when boundary = penalty
+  // Observables: surge front (largest x of fluid, from the left wall at x = 0) and water height
+  // at the left wall; pressure at probe points.
+  bool dam_break = false;
+  std::vector<std::array<double, 3>> probes;
+  std::string description;
+};
+
+class SphFluid final : public MechanicalSystem {
+ public:
+  SphFluid(std::string name, SphScene scene, SphOptions options);
+
+  std::string name() const override { return name_; }
+  Index dofs() const override { return dim_ * n_; }
+  Vec initial_state() const override { return y0_; }
+  bool autonomous() const override { return true; }
+  bool velocity_dependent() const override { return viscous_; }
+  Vec masses() const override { return Vec::Constant(dofs(), mass_); }
+
+  std::vector<Invariant> invariants() const override;
+  std::vector<Invariant> observables() const override;
+  std::optional<double> stiffness(double t, CVecRef y) const override;
+  std::optional<SuggestedStep> suggested_step() const override;
+  bool has_particles() const override { return true; }
+  ParticleFrame particles(double t, CVecRef y) const override;
+
+  // Data.
+  int dim() const { return dim_; }
+  Index fluid_particles() const { return n_; }
+  Index boundary_particles() const { return static_cast<Index>(bvol_.size()); }
+  double particle_mass() const { return mass_; }
+  double sound_speed() const { return c_; }
+  const SphOptions& options() const { return opt_; }
+  const SphScene& scene() const { return scene_; }
+  const std::vector<double>& boundary_volumes() const { return bvol_; }
+
+  // Observables at y = [x; v].
+  Vec densities(CVecRef x) const;  // ρ_i of every fluid particle
+  double pressure(double rho) const;
+  double internal_energy(double rho) const;  // u(ρ) per unit mass
+  double energy(CVecRef y) const;
+  double kinetic_energy(CVecRef y) const;
+  Vec linear_momentum(CVecRef y) const;
+  double max_density_error(CVecRef y) const;  // max_i |ρ_i/ρ0 - 1| (free surfaces included)
+  double max_compression(CVecRef y) const;    // max_i (ρ_i/ρ0 - 1), the WCSPH accuracy measure
+  double front(CVecRef y) const;              // max_i x_i + Δx/2 (dam break)
+  double height_left(CVecRef y) const;  // max y (+Δx/2) of fluid within h of the left wall
+  // Shepard-normalised SPH interpolation of the pressure at a point (0 when no fluid is near).
+  double probe_pressure(CVecRef y, const std::array<double, 3>& point) const;
+
+ protected:
+  void eval_acceleration(double t, CVecRef x, CVecRef v, VecRef a) const override;
+
+ private:
+  template <int D, sph::KernelType KD>
+  void density_pass(const double* x) const;
+  template <int D, sph::KernelType KG>
+  void force_pass(const double* x, const double* v, double* a) const;
+  template <int D>
+  const sph::NeighbourGrid<D>& fluid_grid() const;
+  template <int D>
+  const sph::NeighbourGrid<D>& boundary_grid() const;
+  void compute_densities(CVecRef x) const;  // fills rho_ and p_
+
+  std::string name_;
+  SphScene scene_;
+  SphOptions opt_;
+  int dim_ = 2;
+  Index n_ = 0;
+  double mass_ = 0.0, c_ = 0.0, k_ = 0.0, tait_b_ = 0.0, hs_ = 0.0, nu_ = 0.0;
+  bool viscous_ = false, parallel_ = false;
+  sph::Kernel wd_, wg_, wv_;  // density, gradient and viscosity-Laplacian kernels
+  Vec y0_;
+  std::vector<double> bx_, bvol_;  // boundary positions (dim each) and Akinci volumes
+
+  // Scratch of one evaluation (the right-hand side allocates nothing after the first call).
+  mutable std::vector<double> rho_, p_, pr2_, inv_rho_;  // ρ, p, p/ρ², 1/ρ per particle
+  // Fluid neighbours (self included) of each particle from the density pass: slots
+  // [i·capacity, i·capacity + count_i) of the index and distance arrays.
+  mutable std::size_t nb_capacity_ = 32;
+  mutable std::vector<std::size_t> nb_count_;
+  mutable std::vector<Index> nb_index_;
+  mutable std::vector<double> nb_dist_;
+  mutable sph::NeighbourGrid<2> grid2_, bgrid2_;
+  mutable sph::NeighbourGrid<3> grid3_, bgrid3_;
+};
+
+}  // namespace stiffbench
