@@ -1,6 +1,8 @@
 #include "experiments/commands.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <iomanip>
@@ -120,6 +122,11 @@ void cmd_describe(const std::string& name, std::ostream& out) {
                  ") nor an integrator (" + join(integrator_registry().names()) + ")");
 }
 
+namespace {
+bool run_gnuplot(const std::string& script,
+                 const std::vector<std::pair<std::string, std::string>>& vars, std::ostream& err);
+}  // namespace
+
 void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   require_input(!opt.model.empty(), "--model is required");
   require_input(!opt.integrator.empty(), "--integrator is required");
@@ -174,7 +181,10 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   std::unique_ptr<FrameWriter> frame_writer;
   std::string traj_path = opt.out_csv;
   if (frames) {
-    frame_writer = std::make_unique<FrameWriter>(sys, opt.out_csv);
+    require_input(opt.frame_format == "vtu" || opt.frame_format == "vtk",
+                  "--frame-format must be vtu or vtk (got '" + opt.frame_format + "')");
+    frame_writer = std::make_unique<FrameWriter>(
+        sys, opt.out_csv, opt.frame_format == "vtk" ? FrameFormat::vtk : FrameFormat::vtu);
     traj_path = sys.has_particles() ? "" : (frame_writer->dir() / "trajectory.csv").string();
   }
   std::ostringstream traj;
@@ -261,11 +271,33 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   print_stats_table(out, r.stats);
   if (!traj_path.empty()) out << "\ntrajectory: " << traj_path << "\n";
   if (frame_writer) {
+    const auto& dir = frame_writer->dir();
     out << "\nframes: " << frame_writer->frames() << " rows in "
-        << (frame_writer->dir() / "observables.csv").string();
+        << (dir / "observables.csv").string();
     if (sys.has_particles())
-      out << ", VTK frames in " << (frame_writer->dir() / "frames.pvd").string();
+      out << ", VTK frames in " << dir.string() << "/frame_*."
+          << (opt.frame_format == "vtk" ? "vtk" : "vtu (frames.pvd)");
     out << "\n";
+    // Plots of the last frame (pressure) and, for a dam break, of the front against K&O.
+    if (sys.has_particles() && frame_writer->frames() > 0) {
+      char last[32];
+      std::snprintf(last, sizeof last, "frame_%04ld.csv", frame_writer->frames() - 1);
+      const std::string title = opt.model + ", " + opt.integrator + ", t = " + format_short(r.t, 4);
+      if (run_gnuplot("sph_frame.gp",
+                      {{"csvfile", (dir / last).string()},
+                       {"outfile", (dir / "frame_last.png").string()},
+                       {"ttl", title}},
+                      err))
+        out << "plot: " << (dir / "frame_last.png").string() << "\n";
+    }
+    const auto cols = frame_writer->columns();
+    if (std::find(cols.begin(), cols.end(), "Z") != cols.end() &&
+        run_gnuplot("dam_break_front.gp",
+                    {{"csvfile", (dir / "observables.csv").string()},
+                     {"outfile", (dir / "front.png").string()},
+                     {"ttl", opt.model + ", " + opt.integrator}},
+                    err))
+      out << "plot: " << (dir / "front.png").string() << "\n";
   }
 }
 

@@ -22,6 +22,7 @@ struct SolveOptions {
   long outputs = 100;
   std::string out_csv;  // empty: no trajectory file; with frames > 0, the output directory
   long frames = 0;      // > 0: write frames + observables.csv into the directory out_csv
+  std::string frame_format = "vtu";  // vtu (+ frames.pvd) or vtk (legacy)
 };
 void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err);
 

@@ -13,7 +13,8 @@ namespace stiffbench {
 void ConvergenceSpec::validate() const {
   require_input(std::isfinite(t_end) && t_end > 0,
                 "--t-end must be > 0 (got " + format_full(t_end) + ")");
-  require_input(std::isfinite(h) && h > 0, "--h must be > 0 (got " + format_full(h) + ")");
+  require_input(std::isnan(h) || (std::isfinite(h) && h > 0),
+                "--h must be > 0 (got " + format_full(h) + ")");
   require_input(levels >= 2, "--levels must be >= 2 (got " + std::to_string(levels) + ")");
   require_input(std::isfinite(refine) && refine > 1,
                 "--refine must be > 1 (got " + format_full(refine) + ")");
@@ -102,10 +103,22 @@ std::string progress_line(std::size_t k, std::size_t n, const ConvergenceRow& r)
   return os.str();
 }
 
-ConvergenceResult run_study(const ConvergenceSpec& spec, std::ostream* progress, bool local) {
-  spec.validate();
-  Setup setup = make_setup(spec.model, spec.integrators, spec.params);
+ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress, bool local) {
+  given.validate();
+  Setup setup = make_setup(given.model, given.integrators, given.params);
   const OdeSystem& sys = *setup.model;
+  ConvergenceSpec spec = given;
+  std::string h_source = "--h";
+  if (std::isnan(spec.h)) {
+    const auto suggested = sys.suggested_step();
+    require_input(suggested.has_value(),
+                  "--h is required: model '" + spec.model + "' offers no suggested step");
+    spec.h = suggested->h;
+    h_source = "suggested step: " + suggested->rule;
+    if (progress)
+      *progress << "no --h given: starting from the model's suggested step h = "
+                << format_full(spec.h) << " (" << suggested->rule << ")\n";
+  }
   const double t0 = sys.initial_time();
   require_input(spec.t_end > t0, "--t-end must be > the model's initial time");
   for (const auto& integ : setup.integrators)
@@ -123,6 +136,8 @@ ConvergenceResult run_study(const ConvergenceSpec& spec, std::ostream* progress,
   Reference ref(spec, sys, hs.back());
   ConvergenceResult result;
   result.reference_description = ref.description();
+  result.h = spec.h;
+  result.h_source = h_source;
 
   std::vector<Vec> ref_values;  // per level for local, one value for global
   if (local) {
@@ -277,7 +292,10 @@ void write_convergence_outputs(const std::string& dir, const std::string& name,
   const Table t = local ? local_error_table(res) : convergence_table(res);
   write_file_atomic(d / (name + ".csv"), t.to_csv());
   write_file_atomic(d / (name + ".md"), markdown_report(name, spec, res, local));
-  nlohmann::json meta = run_metadata(local ? "local-error" : "convergence", spec.to_json());
+  nlohmann::json spec_json = spec.to_json();
+  spec_json["h"] = res.h;
+  spec_json["h_source"] = res.h_source;
+  nlohmann::json meta = run_metadata(local ? "local-error" : "convergence", spec_json);
   meta["reference"] = res.reference_description;
   meta["error_norm"] = "max-norm of the absolute error";
   write_file_atomic(d / (name + ".json"), meta.dump(2) + "\n");

@@ -28,7 +28,8 @@ struct ConvergenceSpec {
   Params params;
   std::vector<std::string> integrators;
   double t_end = 1.0;
-  double h = 0.1;  // coarsest step
+  // Coarsest step; NaN: the model's suggested step (SuggestedStep), an error if it has none.
+  double h = 0.1;
   int levels = 5;
   double refine = 2.0;
   std::string reference = "auto";  // auto | exact | METHOD
@@ -50,6 +51,8 @@ struct ConvergenceRow {
 struct ConvergenceResult {
   std::vector<ConvergenceRow> rows;
   std::string reference_description;  // "exact" or "rk4 with h = ..."
+  double h = 0;            // the coarsest step requested (spec.h, or the suggested step)
+  std::string h_source;    // "--h" or "suggested step: <the model's rule>"
 };
 
 // Progress lines go to `progress` when non-null.

@@ -39,8 +39,57 @@ std::string vtu_text(const ParticleFrame& frame) {
   return os.str();
 }
 
-FrameWriter::FrameWriter(const OdeSystem& sys, std::filesystem::path dir)
-    : sys_(sys), dir_(std::move(dir)) {
+std::string legacy_vtk_text(const ParticleFrame& frame, double t) {
+  const Index n = frame.points();
+  std::ostringstream os;
+  os << "# vtk DataFile Version 3.0\nstiffbench particle frame t = " << format_full(t)
+     << "\nASCII\nDATASET POLYDATA\nPOINTS " << n << " double\n";
+  for (std::size_t k = 0; k < frame.positions.size(); ++k)
+    os << format_full(frame.positions[k]) << (k % 3 == 2 ? "\n" : " ");
+  os << "VERTICES " << n << " " << 2 * n << "\n";
+  for (Index i = 0; i < n; ++i) os << "1 " << i << "\n";
+  os << "POINT_DATA " << n << "\n";
+  for (const auto& f : frame.fields) {
+    if (f.components == 3)
+      os << "VECTORS " << f.name << " double\n";
+    else
+      os << "SCALARS " << f.name << " double 1\nLOOKUP_TABLE default\n";
+    for (std::size_t k = 0; k < f.values.size(); ++k)
+      os << format_full(f.values[k])
+         << (k % static_cast<std::size_t>(f.components) ==
+                     static_cast<std::size_t>(f.components) - 1
+                 ? "\n"
+                 : " ");
+  }
+  return os.str();
+}
+
+std::string frame_csv_text(const ParticleFrame& frame) {
+  std::ostringstream os;
+  os << "x,y,z";
+  for (const auto& f : frame.fields) {
+    if (f.components == 1)
+      os << "," << f.name;
+    else
+      for (const char* c : {"_x", "_y", "_z"}) os << "," << f.name << c;
+  }
+  os << "\n";
+  const Index n = frame.points();
+  for (Index i = 0; i < n; ++i) {
+    const std::size_t iu = static_cast<std::size_t>(i);
+    os << format_full(frame.positions[3 * iu]) << "," << format_full(frame.positions[3 * iu + 1])
+       << "," << format_full(frame.positions[3 * iu + 2]);
+    for (const auto& f : frame.fields) {
+      const std::size_t nc = static_cast<std::size_t>(f.components);
+      for (std::size_t c = 0; c < nc; ++c) os << "," << format_full(f.values[nc * iu + c]);
+    }
+    os << "\n";
+  }
+  return os.str();
+}
+
+FrameWriter::FrameWriter(const OdeSystem& sys, std::filesystem::path dir, FrameFormat format)
+    : sys_(sys), dir_(std::move(dir)), format_(format) {
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(dir_, ec);
@@ -63,15 +112,22 @@ void FrameWriter::write(double t, CVecRef y) {
   csv_ += "\n";
   write_file_atomic(dir_ / "observables.csv", csv_);
   if (sys_.has_particles()) {
-    char name[32];
-    std::snprintf(name, sizeof name, "frame_%04ld.vtu", frames_);
-    write_file_atomic(dir_ / name, vtu_text(sys_.particles(t, y)));
-    pvd_entries_ += "    <DataSet timestep=\"" + format_full(t) + "\" part=\"0\" file=\"" +
-                    std::string(name) + "\"/>\n";
-    write_file_atomic(dir_ / "frames.pvd",
-                      "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n"
-                      "  <Collection>\n" +
-                          pvd_entries_ + "  </Collection>\n</VTKFile>\n");
+    const ParticleFrame frame = sys_.particles(t, y);
+    char stem[32];
+    std::snprintf(stem, sizeof stem, "frame_%04ld", frames_);
+    const std::string name = std::string(stem) + (format_ == FrameFormat::vtu ? ".vtu" : ".vtk");
+    write_file_atomic(dir_ / (std::string(stem) + ".csv"), frame_csv_text(frame));
+    if (format_ == FrameFormat::vtk) {
+      write_file_atomic(dir_ / name, legacy_vtk_text(frame, t));
+    } else {
+      write_file_atomic(dir_ / name, vtu_text(frame));
+      pvd_entries_ +=
+          "    <DataSet timestep=\"" + format_full(t) + "\" part=\"0\" file=\"" + name + "\"/>\n";
+      write_file_atomic(dir_ / "frames.pvd",
+                        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n"
+                        "  <Collection>\n" +
+                            pvd_entries_ + "  </Collection>\n</VTKFile>\n");
+    }
   }
   ++frames_;
 }

@@ -2,6 +2,7 @@
 // stderr naming what is wrong), 1 anything else.
 #include <CLI/CLI.hpp>
 #include <iostream>
+#include <limits>
 
 #include "experiments/catalog.hpp"
 #include "experiments/commands.hpp"
@@ -19,7 +20,8 @@ void add_study_flags(CLI::App* cmd, ConvergenceSpec& spec, std::string& integrat
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--t-end", spec.t_end, "final time")->required();
-  cmd->add_option("--h", spec.h, "coarsest step size")->required();
+  cmd->add_option("--h", spec.h,
+                  "coarsest step size (default: the model's suggested step, where it has one)");
   cmd->add_option("--levels", spec.levels, "number of step sizes (>= 2)")->capture_default_str();
   cmd->add_option("--refine", spec.refine, "ratio between consecutive step sizes (> 1)")
       ->capture_default_str();
@@ -71,8 +73,15 @@ int main(int argc, char** argv) {
                     "write N+1 equally spaced frames into the --out directory: VTK particle "
                     "frames (frame_NNNN.vtu, frames.pvd) for particle models, trajectory.csv "
                     "otherwise, and observables.csv");
+  solve
+      ->add_option("--frame-format", solve_opt.frame_format,
+                   "particle frame files: vtu (VTK XML + frames.pvd) or vtk (legacy); a CSV "
+                   "copy of each frame is always written for gnuplot")
+      ->check(CLI::IsMember({"vtu", "vtk"}))
+      ->capture_default_str();
 
   ConvergenceSpec conv;
+  conv.h = std::numeric_limits<double>::quiet_NaN();
   std::string conv_integrators, conv_out = "results";
   std::vector<std::string> conv_params;
   auto* convergence = app.add_subcommand(
@@ -87,6 +96,7 @@ int main(int argc, char** argv) {
       "local-error",
       "error of one step from the initial state against h; writes local_error.{csv,md,json}");
   local.t_end = 1.0;
+  local.h = std::numeric_limits<double>::quiet_NaN();
   add_study_flags(local_error, local, local_integrators, local_params, local_out);
   local_error->get_option("--t-end")->required(false)->description(
       "unused by the local study's error; kept for symmetry");
@@ -108,7 +118,8 @@ int main(int argc, char** argv) {
   work_precision->add_option("--t-end", wp.t_end,
                              "final time (default: the model's literature end time)");
   work_precision->add_option("--h", wp.h,
-                             "coarsest step of fixed-step methods (default: (t_end - t0)/16000)");
+                             "coarsest step of fixed-step methods (default: the model's suggested "
+                             "step, else (t_end - t0)/16000)");
   work_precision->add_option("--levels", wp.levels, "number of step sizes")->capture_default_str();
   work_precision->add_option("--refine", wp.refine, "ratio between step sizes")
       ->capture_default_str();

@@ -99,7 +99,18 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
     spec.t_end = *literature;
   }
   require_input(spec.t_end > t0, "--t-end must be > the model's initial time");
-  if (spec.h == 0) spec.h = (spec.t_end - t0) / 16000;
+  std::string h_source = "--h";
+  if (spec.h == 0) {
+    // The model's suggested step (its CFL limit) where it has one, else a fine default.
+    if (const auto suggested = sys.suggested_step()) {
+      spec.h = suggested->h;
+      h_source = "suggested step: " + suggested->rule;
+    } else {
+      spec.h = (spec.t_end - t0) / 16000;
+      h_source = "(t_end - t0)/16000";
+    }
+    if (progress) *progress << "coarsest h = " << format_full(spec.h) << " (" << h_source << ")\n";
+  }
   require_input(spec.h > 0, "--h must be > 0");
   std::vector<double> hs, tols;
   for (int k = 0; k < spec.levels; ++k) hs.push_back(spec.h / std::pow(spec.refine, k));
@@ -108,6 +119,8 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
 
   WorkPrecisionResult res;
   res.t_end = spec.t_end;
+  res.h = spec.h;
+  res.h_source = h_source;
   const Vec ref = reference_state(spec, sys, spec.t_end, hs.back(), &res.reference_description);
   if (progress) *progress << "reference: " << res.reference_description << "\n";
 
@@ -197,6 +210,8 @@ void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpe
   nlohmann::json meta = run_metadata("work-precision", spec.to_json());
   meta["reference"] = res.reference_description;
   meta["t_end_used"] = res.t_end;
+  meta["h_used"] = res.h;
+  meta["h_source"] = res.h_source;
   meta["error_norm"] = "max-norm of the absolute error at t_end";
   write_file_atomic(d / "work_precision.json", meta.dump(2) + "\n");
 }

@@ -55,6 +55,8 @@ struct WorkPrecisionResult {
   std::vector<WorkPrecisionRow> rows;
   std::string reference_description;
   double t_end = 0;
+  double h = 0;          // coarsest step of the fixed-step methods
+  std::string h_source;  // where it came from
 };
 
 WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& spec, std::ostream* progress);

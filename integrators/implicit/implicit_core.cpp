@@ -38,7 +38,9 @@ std::vector<ParamSpec> implicit_param_specs(bool with_newton) {
                    P::text,
                    "auto",
                    "analytic, fd_dense, fd_colored (column-grouped over the model's pattern) or "
-                   "matrix_free (Krylov solvers only); auto: analytic where provided",
+                   "matrix_free (Krylov solvers only); auto: analytic where provided, else "
+                   "fd_colored over the model's pattern, else fd_dense up to 200 unknowns and "
+                   "matrix_free with gmres above",
                    {"auto", "analytic", "fd_dense", "fd_colored", "matrix_free"}});
   specs.push_back(
       {"linear_solver", P::text, "auto",
@@ -121,10 +123,17 @@ void ImplicitCore::reset(const OdeSystem& sys) {
   sys_ = &sys;
   const Index n = sys.dimension();
   source_ = opt_.jacobian;
+  LinearSolverOptions lin = opt_.linear;
   if (source_ == JacobianSource::automatic) {
+    // Without an analytic Jacobian or a pattern, a dense finite-difference Jacobian costs 2n f
+    // evaluations and n² memory: above the dense limit (e.g. an SPH fluid of 2,000 particles,
+    // n = 8,192), auto takes matrix-free products with GMRES instead.
+    const bool large = n > lin.dense_max && lin.kind == LinearSolverKind::automatic;
     source_ = sys.has_jacobian()           ? JacobianSource::analytic
               : sys.has_jacobian_pattern() ? JacobianSource::fd_colored
+              : large                      ? JacobianSource::matrix_free
                                            : JacobianSource::fd_dense;
+    if (source_ == JacobianSource::matrix_free) lin.kind = LinearSolverKind::gmres;
   }
   if (source_ == JacobianSource::analytic)
     require_input(sys.has_jacobian(),
@@ -132,7 +141,6 @@ void ImplicitCore::reset(const OdeSystem& sys) {
   if (source_ == JacobianSource::fd_colored)
     require_input(sys.has_jacobian_pattern(), "parameter 'jacobian': model '" + sys.name() +
                                                   "' gives no sparsity pattern for fd_colored");
-  LinearSolverOptions lin = opt_.linear;
   if (source_ == JacobianSource::matrix_free) {
     require_input(is_krylov(lin.kind),
                   "jacobian=matrix_free needs a Krylov linear_solver (cg, bicgstab or gmres)");

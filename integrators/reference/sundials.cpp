@@ -23,12 +23,17 @@ namespace stiffbench {
 
 namespace {
 
-enum class Lin { dense, band, klu, spgmr };
+enum class Lin { automatic, dense, band, klu, spgmr };
+
+// linear_solver=auto: a dense matrix up to this many unknowns (18 MB at 1500), matrix-free SPGMR
+// above, where a dense n² matrix would cost gigabytes (24,576 unknowns: 4.8 GB) and banded or
+// sparse factorisations of particle and network problems fill in.
+constexpr Index kAutoDenseMax = 2000;
 enum class Kind { cvode_bdf, cvode_adams, arkode_erk, arkode_dirk, arkode_imex };
 
 struct Settings {
   double rtol = 1e-6, atol = 1e-10;
-  Lin lin = Lin::dense;
+  Lin lin = Lin::automatic;
   std::string jacobian = "auto";  // auto | analytic | dq
   long max_steps = 100000;
   int max_order = 0;          // 0: the library's default
@@ -71,7 +76,8 @@ class SundialsIntegrator final : public Integrator {
     require_input(
         !use_analytic_ || sys.has_jacobian(),
         "integrator '" + info().name + "': model '" + sys.name() + "' has no analytic Jacobian");
-    require_input(set_.lin != Lin::klu || use_analytic_,
+    lin_ = set_.lin != Lin::automatic ? set_.lin : n_ <= kAutoDenseMax ? Lin::dense : Lin::spgmr;
+    require_input(lin_ != Lin::klu || use_analytic_,
                   "integrator '" + info().name +
                       "': linear_solver=klu needs the model's analytic sparse Jacobian");
     if (use_analytic_ && needs_linear_solver()) {
@@ -259,7 +265,8 @@ class SundialsIntegrator final : public Integrator {
   template <class Ok>
   void attach_linear_solver(N_Vector y, Ok&& ok) {
     const bool cv = is_cvode();
-    switch (set_.lin) {
+    switch (lin_) {
+      case Lin::automatic:  // resolved in reset()
       case Lin::dense:
         a_ = SUNDenseMatrix(n_, n_, ctx_);
         ls_ = SUNLinSol_Dense(y, a_, ctx_);
@@ -295,16 +302,16 @@ class SundialsIntegrator final : public Integrator {
          "ARKStepSetLSetupFrequency");
     }
     if (!use_analytic_) return;  // the library's difference quotients
-    if (set_.lin == Lin::spgmr) {
+    if (lin_ == Lin::spgmr) {
       if (cv)
         ok(CVodeSetJacTimes(mem_, jtsetup_cb, jtimes_cb), "CVodeSetJacTimes");
       else
         ok(ARKStepSetJacTimes(mem_, jtsetup_cb, jtimes_cb), "ARKStepSetJacTimes");
       return;
     }
-    auto fn = set_.lin == Lin::dense  ? jac_matrix_cb<false>
-              : set_.lin == Lin::band ? jac_matrix_cb<true>
-                                      : jac_sparse_cb;
+    auto fn = lin_ == Lin::dense  ? jac_matrix_cb<false>
+              : lin_ == Lin::band ? jac_matrix_cb<true>
+                                  : jac_sparse_cb;
     if (cv)
       ok(CVodeSetJacFn(mem_, fn), "CVodeSetJacFn");
     else
@@ -401,6 +408,7 @@ class SundialsIntegrator final : public Integrator {
   const OdeSystem* sys_ = nullptr;
   Index n_ = 0;
   bool use_analytic_ = false;
+  Lin lin_ = Lin::dense;  // the linear solver of this run (auto resolved)
   SparseMat jac_;
   Vec y_last_;
   double t_ = 0, fixed_h_ = 0;
@@ -419,9 +427,10 @@ std::vector<ParamSpec> common_specs(bool linear) {
   if (linear) {
     s.push_back({"linear_solver",
                  P::text,
-                 "dense",
-                 "dense, band, klu (sparse, needs the analytic Jacobian) or spgmr",
-                 {"dense", "band", "klu", "spgmr"}});
+                 "auto",
+                 "dense, band, klu (sparse, needs the analytic Jacobian) or spgmr (matrix-free "
+                 "GMRES); auto: dense up to 2000 unknowns, spgmr above",
+                 {"auto", "dense", "band", "klu", "spgmr"}});
     s.push_back({"jacobian",
                  P::text,
                  "auto",
@@ -444,7 +453,8 @@ Settings read_common(const Params& p, bool linear) {
     s.lin = l == "band"    ? Lin::band
             : l == "klu"   ? Lin::klu
             : l == "spgmr" ? Lin::spgmr
-                           : Lin::dense;
+            : l == "dense" ? Lin::dense
+                           : Lin::automatic;
     s.jacobian = p.text("jacobian");
   }
   return s;

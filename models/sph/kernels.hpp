@@ -5,11 +5,12 @@
 // ∇W(x_i - x_j) = dw(r) (x_i - x_j)/r. Normalisations (∫ W dV = 1 over the support):
 //
 //   kernel         3D                                      2D
-//   poly6          315/(64π h⁹) (h² - r²)³                 4/(π h⁸) (h² - r²)³           Müller 2003
-//   spiky          15/(π h⁶) (h - r)³                      10/(π h⁵) (h - r)³            Müller 2003
-//   viscosity      15/(2π h³) (-q³/2 + q² + 1/(2q) - 1)    10/(3π h²) (same bracket)     Müller 2003
-//   cubic spline   k (6q³ - 6q² + 1), q <= ½;  2k (1-q)³   k = 8/(π h³), 40/(7π h²)      Monaghan
-//   wendland_c2    21/(2π h³) (1-q)⁴ (4q + 1)              7/(π h²) (1-q)⁴ (4q + 1)      Wendland 1995
+//   poly6          315/(64π h⁹) (h² - r²)³                 4/(π h⁸) (h² - r²)³           Müller
+//   2003 spiky          15/(π h⁶) (h - r)³                      10/(π h⁵) (h - r)³ Müller 2003
+//   viscosity      15/(2π h³) (-q³/2 + q² + 1/(2q) - 1)    10/(3π h²) (same bracket)     Müller
+//   2003 cubic spline   k (6q³ - 6q² + 1), q <= ½;  2k (1-q)³   k = 8/(π h³), 40/(7π h²) Monaghan
+//   wendland_c2    21/(2π h³) (1-q)⁴ (4q + 1)              7/(π h²) (1-q)⁴ (4q + 1)      Wendland
+//   1995
 //
 // The viscosity kernel exists for its Laplacian, which Müller's viscosity force uses:
 //   3D: ∇²W = 45/(π h⁶) (h - r), which is W'' + 2W'/r of the kernel above (derivation: with the

@@ -1,16 +1,17 @@
 // Neighbour search on a uniform grid of cubic cells, stored as a hashed cell list built by a
 // counting sort (O(n) time and memory whatever the spread of the points).
 //
-// build() maps each point to the integer cell floor(x / cell) (per coordinate, clamped to
-// ±kCellLimit so that points far away or non-finite never overflow; clamping only merges cells,
-// never separates true neighbours), hashes the cell to one of B buckets (B a power of two >= 2n)
-// and sorts the points by bucket with a stable counting sort, so within a bucket the points stay
-// in index order. Each sorted entry keeps its cell key and a copy of its coordinates.
+// build(x, n, radius) maps each point to the integer cell floor(x / cell), cell = radius (1 + 1e-6)
+// (per coordinate, clamped to ±kCellLimit so that points far away or non-finite never overflow;
+// clamping only merges cells, never separates true neighbours), hashes the cell to one of B buckets
+// (B a power of two >= 2n) and sorts the points by bucket with a stable counting sort, so within a
+// bucket the points stay in index order. Each sorted entry keeps its cell key and a copy of its
+// coordinates.
 //
-// for_each_neighbour(q, radius) visits the 3^D cells around q's cell in a fixed order, and in
-// each the entries of the cell's bucket whose key is that cell (other cells hashed to the same
-// bucket are skipped), calling f(j, r², d) for every point j with r² = |q - x_j|² < radius² and
-// d = q - x_j. Requires radius <= cell. The visiting order depends only on the positions, so a
+// for_each_neighbour(q, radius), radius <= the radius given to build(), visits the 3^D cells around
+// q's cell in a fixed order, and in each the entries of the cell's bucket whose key is that cell
+// (other cells hashed to the same bucket are skipped), calling f(j, r², d) for every point j with
+// r² = |q - x_j|² < radius² and d = q - x_j. The visiting order depends only on the positions, so a
 // sum over the neighbours of one point is the same, bit for bit, whichever thread computes it.
 // Coincident points (r = 0) and the query point itself, when it is in the set, are visited.
 //
@@ -33,9 +34,14 @@ class NeighbourGrid {
  public:
   static constexpr std::int64_t kCellLimit = (std::int64_t{1} << 20) - 2;
 
-  // x: n points, D coordinates each (interleaved). cell > 0.
-  void build(const double* x, Index n, double cell) {
-    inv_cell_ = 1.0 / cell;
+  // x: n points, D coordinates each (interleaved); radius > 0 the largest search radius. The
+  // cells are a hair larger than the radius (factor 1 + 1e-6): floor(x / cell) is computed as
+  // floor(x · (1/cell)), whose rounding could otherwise put two points just under one cell
+  // apart into cells two apart (found by the brute-force test), and the 3^D search would miss
+  // them. The margin exceeds that rounding for every coordinate below the clamp limit.
+  void build(const double* x, Index n, double radius) {
+    radius_ = radius;
+    inv_cell_ = 1.0 / (radius * (1.0 + 1e-6));
     n_ = n;
     std::size_t buckets = 16;
     shift_ = 60;
@@ -66,6 +72,7 @@ class NeighbourGrid {
   }
 
   Index size() const { return n_; }
+  double radius() const { return radius_; }
   const std::vector<Index>& order() const { return order_; }
 
   template <class F>
@@ -113,7 +120,7 @@ class NeighbourGrid {
     for (int d = 0; d < D; ++d) {
       const double s = std::floor(x[d] * inv_cell_);
       // NaN and ±inf land in the limit cell; their distance test always fails.
-      c[d] = !(s > -static_cast<double>(kCellLimit)) ? -kCellLimit
+      c[d] = !(s > -static_cast<double>(kCellLimit))  ? -kCellLimit
              : !(s < static_cast<double>(kCellLimit)) ? kCellLimit
                                                       : static_cast<std::int64_t>(s);
     }
@@ -133,7 +140,7 @@ class NeighbourGrid {
     return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_);
   }
 
-  double inv_cell_ = 1.0;
+  double inv_cell_ = 1.0, radius_ = 0.0;
   Index n_ = 0;
   int shift_ = 60;
   std::vector<std::size_t> start_, fill_;

@@ -13,8 +13,9 @@ using P = ParamType;
 
 struct SceneDefaults {
   std::string n, c0, gravity, eos = "linear", clamp = "true", viscosity = "artificial",
-                           alpha = "0.05", form = "variational";
+                              alpha = "0.05", form = "variational";
   bool walls = true;
+  std::string masses = "lattice";
 };
 
 std::vector<ParamSpec> fluid_specs(const SceneDefaults& d, std::vector<ParamSpec> scene) {
@@ -24,23 +25,34 @@ std::vector<ParamSpec> fluid_specs(const SceneDefaults& d, std::vector<ParamSpec
   for (const auto& k : kernels)
     if (k != "viscosity") smooth_kernels.push_back(k);
   s.push_back({"support", P::real, "2.5", "kernel support radius h in particle spacings (h/dx)"});
+  s.push_back({"masses",
+               P::text,
+               d.masses,
+               "particle masses: lattice (rho0 / kernel sum over a full lattice) or equilibrium "
+               "(every particle starts at exactly rho0)",
+               {"lattice", "equilibrium"}});
   s.push_back({"rho0", P::real, "1000", "rest density (kg/m^3)"});
   s.push_back({"c0", P::real, d.c0,
                "speed of sound (m/s); 0: 10 x sqrt(2 g H), the speed of a free fall from the "
                "fluid height H"});
-  s.push_back({"k", P::real, "-1", "linear EOS constant k in p = k (rho - rho0) (m^2/s^2); < 0: c0^2"});
+  s.push_back(
+      {"k", P::real, "-1", "linear EOS constant k in p = k (rho - rho0) (m^2/s^2); < 0: c0^2"});
   s.push_back({"eos", P::text, d.eos, "equation of state", {"linear", "tait"}});
   s.push_back({"clamp", P::boolean, d.clamp, "clamp the pressure at 0 (no tension)"});
   s.push_back({"tait_gamma", P::real, "7", "Tait exponent gamma"});
-  s.push_back({"form", P::text, d.form,
+  s.push_back({"form",
+               P::text,
+               d.form,
                "pressure force: symmetric (Mueller 2003) or variational (p_i/rho_i^2 + "
                "p_j/rho_j^2; energy-conserving)",
                {"symmetric", "variational"}});
-  s.push_back({"density_kernel", P::text, "wendland_c2", "kernel of the density sum",
-               smooth_kernels});
+  s.push_back(
+      {"density_kernel", P::text, "wendland_c2", "kernel of the density sum", smooth_kernels});
   s.push_back({"gradient_kernel", P::text, "wendland_c2", "kernel of the pressure gradient",
                smooth_kernels});
-  s.push_back({"viscosity", P::text, d.viscosity,
+  s.push_back({"viscosity",
+               P::text,
+               d.viscosity,
                "viscosity: Mueller's Laplacian form (mu) or Monaghan's artificial viscosity "
                "(alpha)",
                {"none", "muller", "artificial"}});
@@ -48,7 +60,9 @@ std::vector<ParamSpec> fluid_specs(const SceneDefaults& d, std::vector<ParamSpec
   s.push_back({"alpha", P::real, d.alpha, "Monaghan artificial viscosity alpha"});
   s.push_back({"gravity", P::real, d.gravity, "gravitational acceleration along -y (m/s^2)"});
   if (d.walls) {
-    s.push_back({"boundary", P::text, "particles",
+    s.push_back({"boundary",
+                 P::text,
+                 "particles",
                  "walls: boundary particles (Akinci et al. 2012) or a smooth penalty force",
                  {"particles", "penalty"}});
     s.push_back({"boundary_layers", P::integer, "3", "layers of boundary particles"});
@@ -68,6 +82,7 @@ SphOptions read_fluid(const Params& p, int dim, double spacing, double fall_heig
   const double support = p.real("support");
   require_input(std::isfinite(support) && support > 1.0, who + "'support' must be > 1");
   o.support = support * spacing;
+  o.equilibrium_masses = p.text("masses") == "equilibrium";
   o.rho0 = p.real("rho0");
   const double g = p.real("gravity");
   require_input(std::isfinite(g), who + "'gravity' must be finite");
@@ -83,7 +98,8 @@ SphOptions read_fluid(const Params& p, int dim, double spacing, double fall_heig
   o.eos = p.text("eos") == "tait" ? SphEos::tait : SphEos::linear;
   o.clamp = p.boolean("clamp");
   o.tait_gamma = p.real("tait_gamma");
-  o.form = p.text("form") == "symmetric" ? SphPressureForm::symmetric : SphPressureForm::variational;
+  o.form =
+      p.text("form") == "symmetric" ? SphPressureForm::symmetric : SphPressureForm::variational;
   o.density_kernel = sph::kernel_from_string(p.text("density_kernel"));
   o.gradient_kernel = sph::kernel_from_string(p.text("gradient_kernel"));
   const std::string& visc = p.text("viscosity");
@@ -92,7 +108,8 @@ SphOptions read_fluid(const Params& p, int dim, double spacing, double fall_heig
                                        : SphViscosity::none;
   o.mu = p.real("mu");
   o.alpha = p.real("alpha");
-  if (walls) o.boundary = p.text("boundary") == "penalty" ? SphBoundary::penalty : SphBoundary::particles;
+  if (walls)
+    o.boundary = p.text("boundary") == "penalty" ? SphBoundary::penalty : SphBoundary::particles;
   const long threshold = p.integer("parallel_threshold");
   require_input(threshold >= 0, who + "'parallel_threshold' must be >= 0");
   o.parallel_threshold = threshold;
@@ -100,12 +117,11 @@ SphOptions read_fluid(const Params& p, int dim, double spacing, double fall_heig
   return o;
 }
 
-int int_param(const Params& p, const std::string& key, const std::string& model, long lo,
-              long hi) {
+int int_param(const Params& p, const std::string& key, const std::string& model, long lo, long hi) {
   const long v = p.integer(key);
   require_input(v >= lo && v <= hi, model + ": parameter '" + key + "' must be in [" +
-                                        std::to_string(lo) + ", " + std::to_string(hi) +
-                                        "] (got " + std::to_string(v) + ")");
+                                        std::to_string(lo) + ", " + std::to_string(hi) + "] (got " +
+                                        std::to_string(v) + ")");
   return static_cast<int>(v);
 }
 
@@ -131,7 +147,8 @@ void add_dam_break(ModelRegistry& reg, int dim) {
             true, false,
             "Koshizuka & Oka 1996 (surge front Z = front/a vs T = t sqrt(2g/a), "
             "REFERENCES.md); Martin & Moyce 1952"},
-           fluid_specs(d, scene), [dim, name](const Params& p) {
+           fluid_specs(d, scene),
+           [dim, name](const Params& p) {
              DamBreakOptions o;
              o.dim = dim;
              o.a = p.real("a");
@@ -159,7 +176,8 @@ void add_tank(ModelRegistry& reg, int dim) {
                          " SPH tank: fluid at rest under gravity; pressure probes at depths H/4, "
                          "H/2, 3H/4"),
             true, false, "hydrostatic pressure p = rho0 g (H - y) (REFERENCES.md)"},
-           fluid_specs(d, scene), [dim, name](const Params& p) {
+           fluid_specs(d, scene),
+           [dim, name](const Params& p) {
              TankOptions o;
              o.dim = dim;
              o.width = p.real("width");
@@ -174,11 +192,14 @@ void add_tank(ModelRegistry& reg, int dim) {
 
 void add_drop(ModelRegistry& reg) {
   const std::string name = "sph_drop_2d";
-  const SceneDefaults d{"20", "10", "0", "linear", "false", "none", "0", "variational", false};
+  const SceneDefaults d{"20",   "10", "0",           "linear", "false",
+                        "none", "0",  "variational", false,    "equilibrium"};
   std::vector<ParamSpec> scene = {
       {"radius", P::real, "0.1", "drop radius R (m)"},
       {"n", P::integer, d.n, "particles across the diameter"},
-      {"velocity", P::text, "oscillation",
+      {"velocity",
+       P::text,
+       "oscillation",
        "initial velocity about the centre: oscillation A(x, -y), rotation A(-y, x), none",
        {"oscillation", "rotation", "none"}},
       {"rate", P::real, "1", "A (1/s)"},
@@ -187,7 +208,8 @@ void add_drop(ModelRegistry& reg) {
             "2D SPH drop: no gravity, no walls, inviscid by default, oscillating or rotating "
             "(momentum, energy and convergence tests)",
             true, false, "Monaghan's elliptic drop; invariants energy and momentum"},
-           fluid_specs(d, scene), [name](const Params& p) {
+           fluid_specs(d, scene),
+           [name](const Params& p) {
              DropOptions o;
              o.radius = p.real("radius");
              o.n = int_param(p, "n", name, 2, 4000);
@@ -197,7 +219,8 @@ void add_drop(ModelRegistry& reg) {
                                                : DropOptions::Velocity::none;
              o.rate = p.real("rate");
              o.drift = p.real("drift");
-             const SphOptions f = read_fluid(p, 2, 2.0 * o.radius / o.n, 2.0 * o.radius, name, false);
+             const SphOptions f =
+                 read_fluid(p, 2, 2.0 * o.radius / o.n, 2.0 * o.radius, name, false);
              return std::make_unique<SphFluid>(name, make_drop_scene(o), f);
            }});
 }

@@ -31,9 +31,9 @@ void add_tank_walls(const TankGeometry& t, SphScene& scene) {
         scene.boundary_x.push_back(p);
       }
   const double len = static_cast<double>(nx) * t.spacing;
-  scene.walls.push_back({{1, 0, 0}, 0.0});     // left
-  scene.walls.push_back({{-1, 0, 0}, -len});   // right
-  scene.walls.push_back({{0, 1, 0}, 0.0});     // floor
+  scene.walls.push_back({{1, 0, 0}, 0.0});    // left
+  scene.walls.push_back({{-1, 0, 0}, -len});  // right
+  scene.walls.push_back({{0, 1, 0}, 0.0});    // floor
   if (t.dim == 3) {
     const double dep = static_cast<double>(nz) * t.spacing;
     scene.walls.push_back({{0, 0, 1}, 0.0});
@@ -65,6 +65,7 @@ SphScene make_dam_break_scene(const DamBreakOptions& o) {
   SphScene s;
   s.dim = o.dim;
   s.dam_break = true;
+  s.column_width = o.a;
   const double dx = o.a / o.n;
   const double depth = o.dim == 3 ? (o.depth > 0 ? o.depth : 0.5 * o.a) : 0.0;
   const long nz = o.dim == 3 ? std::max(1L, cells(depth, dx)) : 0;

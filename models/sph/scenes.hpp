@@ -41,9 +41,9 @@ void add_tank_walls(const TankGeometry& tank, SphScene& scene);
 
 struct DamBreakOptions {
   int dim = 2;
-  double a = 0.146;  // column width (m)
-  int n = 32;        // particles across a
-  double depth = 0.0;  // 3D: depth (m); 0: a/2
+  double a = 0.146;                 // column width (m)
+  int n = 32;                       // particles across a
+  double depth = 0.0;               // 3D: depth (m); 0: a/2
   double wall_height_factor = 4.0;  // walls are this × a high
   int layers = 3;
 };
@@ -52,7 +52,7 @@ SphScene make_dam_break_scene(const DamBreakOptions& o);
 struct TankOptions {
   int dim = 2;
   double width = 0.2, height = 0.1, depth = 0.0;  // 3D depth 0: width
-  int n = 20;  // particles across the fluid height
+  int n = 20;                                     // particles across the fluid height
   int layers = 3;
 };
 SphScene make_tank_scene(const TankOptions& o);

@@ -5,6 +5,8 @@
 #include <limits>
 #include <sstream>
 
+#include <Eigen/IterativeLinearSolvers>
+
 namespace stiffbench {
 
 namespace {
@@ -54,8 +56,9 @@ SphFluid::SphFluid(std::string name, SphScene scene, SphOptions options)
   require_input(opt_.density_kernel != sph::KernelType::viscosity,
                 who + "the viscosity kernel is singular at r = 0: not a density kernel");
   require_input(opt_.gradient_kernel != sph::KernelType::viscosity,
-                who + "the viscosity kernel's gradient is singular at r = 0: not a gradient "
-                      "kernel");
+                who +
+                    "the viscosity kernel's gradient is singular at r = 0: not a gradient "
+                    "kernel");
   require_input(!scene_.fluid_x.empty(), who + "the scene has no fluid particles");
   require_input(scene_.fluid_v.size() == scene_.fluid_x.size(),
                 who + "one velocity per fluid particle is required");
@@ -66,6 +69,7 @@ SphFluid::SphFluid(std::string name, SphScene scene, SphOptions options)
   wv_ = sph::Kernel(sph::KernelType::viscosity, dim_, opt_.support);
   hs_ = 0.5 * opt_.support;
   mass_ = opt_.rho0 / lattice_sum(wd_, dim_, opt_.spacing);
+  m_.assign(static_cast<std::size_t>(n_), mass_);
 
   if (opt_.eos == SphEos::linear) {
     k_ = opt_.k >= 0 ? opt_.k : opt_.c0 * opt_.c0;
@@ -120,8 +124,47 @@ SphFluid::SphFluid(std::string name, SphScene scene, SphOptions options)
       }
     });
   }
+  if (opt_.equilibrium_masses) solve_equilibrium_masses();
   rho_.assign(static_cast<std::size_t>(n_), opt_.rho0);
   p_.assign(static_cast<std::size_t>(n_), 0.0);
+}
+
+void SphFluid::solve_equilibrium_masses() {
+  // Σ_j m_j W(x_i - x_j) = ρ0 - ρ0 Σ_b V_b W(x_i - x_b) for every fluid particle i: the kernel
+  // matrix of a Wendland or poly6 kernel is symmetric positive definite, so CG solves it.
+  const Vec x = y0_.head(dofs());
+  std::vector<Eigen::Triplet<double>> trips;
+  Vec rhs = Vec::Constant(n_, opt_.rho0);
+  with_dim(dim_, [&](auto dc) {
+    constexpr int D = decltype(dc)::value;
+    auto& grid = const_cast<sph::NeighbourGrid<D>&>(fluid_grid<D>());
+    grid.build(x.data(), n_, opt_.support);
+    for (Index i = 0; i < n_; ++i) {
+      grid.for_each_neighbour(x.data() + D * i, opt_.support, [&](Index j, double r2, const auto&) {
+        trips.emplace_back(i, j, wd_.w(std::sqrt(r2)));
+      });
+      if (!bvol_.empty()) {
+        double bsum = 0.0;
+        boundary_grid<D>().for_each_neighbour(
+            x.data() + D * i, opt_.support, [&](Index b, double r2, const auto&) {
+              bsum += bvol_[static_cast<std::size_t>(b)] * wd_.w(std::sqrt(r2));
+            });
+        rhs[i] -= opt_.rho0 * bsum;
+      }
+    }
+  });
+  SparseMat a(n_, n_);
+  a.setFromTriplets(trips.begin(), trips.end());
+  Eigen::ConjugateGradient<SparseMat, Eigen::Lower | Eigen::Upper> cg;
+  cg.setTolerance(1e-14);
+  cg.setMaxIterations(10 * static_cast<int>(n_));
+  cg.compute(a);
+  const Vec m = cg.solveWithGuess(rhs, Vec::Constant(n_, mass_));
+  require_input(cg.info() == Eigen::Success && m.allFinite() && m.minCoeff() > 0,
+                "model '" + name_ +
+                    "': masses=equilibrium found no positive particle masses (min " +
+                    short_num(m.minCoeff()) + "); use masses=lattice");
+  for (Index i = 0; i < n_; ++i) m_[static_cast<std::size_t>(i)] = m[i];
 }
 
 template <int D>
@@ -190,14 +233,14 @@ void SphFluid::density_pass(const double* x) const {
       double sum = 0.0;
       grid.for_each_neighbour(xi, h, [&](Index j, double r2, const auto&) {
         const double r = std::sqrt(r2);
-        sum += wd_.w_as<KD>(r);
+        sum += m_[static_cast<std::size_t>(j)] * wd_.w_as<KD>(r);
         if (count < cap) {
           idx[count] = j;
           dist[count] = r;
         }
         ++count;
       });
-      double rho = mass_ * sum;
+      double rho = sum;
       if (with_boundary) {
         double bsum = 0.0;
         bgrid.for_each_neighbour(xi, h, [&](Index b, double r2, const auto&) {
@@ -228,7 +271,7 @@ void SphFluid::force_pass(const double* x, const double* v, double* a) const {
   const bool variational = opt_.form == SphPressureForm::variational;
   const bool muller = opt_.viscosity == SphViscosity::muller && opt_.mu > 0;
   const bool artificial = opt_.viscosity == SphViscosity::artificial && opt_.alpha > 0;
-  const double h = opt_.support, rho0 = opt_.rho0, m = mass_, mu = opt_.mu;
+  const double h = opt_.support, rho0 = opt_.rho0, mu = opt_.mu;
   const double av = opt_.alpha * c_ * hs_, eps2 = 0.01 * hs_ * hs_;
   const double k_wall = c_ * c_ / h;
 #pragma omp parallel for schedule(static) if (parallel_)
@@ -247,13 +290,14 @@ void SphFluid::force_pass(const double* x, const double* v, double* a) const {
       if (r == 0.0) continue;  // self, or a coincident particle: no direction
       const Index j = idx[k];
       const std::size_t ju = static_cast<std::size_t>(j);
+      const double m = m_[ju];
       const double* xj = x + D * j;
       const double* vj = v + D * j;
       std::array<double, D> dx;
       for (int d = 0; d < D; ++d) dx[d] = xi[d] - xj[d];
       const double dwr = wg_.dw_over_r_as<KG>(r);  // ∇W_ij = dwr · (x_i - x_j)
-      double coef = variational ? m * (pr2i + pr2_[ju])
-                                : 0.5 * m * (pi + p_[ju]) * inv_rhoi * inv_rho_[ju];
+      double coef =
+          variational ? m * (pr2i + pr2_[ju]) : 0.5 * m * (pi + p_[ju]) * inv_rhoi * inv_rho_[ju];
       if (artificial) {
         double vr = 0.0;
         for (int d = 0; d < D; ++d) vr += (vi[d] - vj[d]) * dx[d];
@@ -302,9 +346,8 @@ void SphFluid::force_pass(const double* x, const double* v, double* a) const {
 void SphFluid::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a) const {
   with_dim(dim_, [&](auto dc) {
     constexpr int D = decltype(dc)::value;
-    sph::with_kernel(opt_.density_kernel, [&](auto kd) {
-      density_pass<D, decltype(kd)::value>(x.data());
-    });
+    sph::with_kernel(opt_.density_kernel,
+                     [&](auto kd) { density_pass<D, decltype(kd)::value>(x.data()); });
     sph::with_kernel(opt_.gradient_kernel, [&](auto kg) {
       force_pass<D, decltype(kg)::value>(x.data(), v.data(), a.data());
     });
@@ -324,35 +367,53 @@ Vec SphFluid::densities(CVecRef x) const {
   return Eigen::Map<const Vec>(rho_.data(), n_);
 }
 
+Vec SphFluid::masses() const {
+  Vec m(dofs());
+  for (Index i = 0; i < n_; ++i)
+    m.segment(dim_ * i, dim_).setConstant(m_[static_cast<std::size_t>(i)]);
+  return m;
+}
+
+double SphFluid::total_mass() const {
+  double total = 0.0;
+  for (double m : m_) total += m;
+  return total;
+}
+
 double SphFluid::kinetic_energy(CVecRef y) const {
-  return 0.5 * mass_ * y.tail(dofs()).squaredNorm();
+  double ke = 0.0;
+  for (Index i = 0; i < n_; ++i)
+    ke += 0.5 * m_[static_cast<std::size_t>(i)] * y.segment(dofs() + dim_ * i, dim_).squaredNorm();
+  return ke;
 }
 
 Vec SphFluid::linear_momentum(CVecRef y) const {
   Vec p = Vec::Zero(dim_);
   for (Index i = 0; i < n_; ++i)
-    for (int d = 0; d < dim_; ++d) p[d] += y[dofs() + dim_ * i + d];
-  return mass_ * p;
+    for (int d = 0; d < dim_; ++d)
+      p[d] += m_[static_cast<std::size_t>(i)] * y[dofs() + dim_ * i + d];
+  return p;
 }
 
 double SphFluid::energy(CVecRef y) const {
   compute_densities(y.head(dofs()));
-  double internal = 0.0, potential = 0.0;
+  double e = kinetic_energy(y);
+  const double h = opt_.support, k_wall = c_ * c_ / h;
   for (Index i = 0; i < n_; ++i) {
-    internal += internal_energy(rho_[static_cast<std::size_t>(i)]);
+    double per_mass = internal_energy(rho_[static_cast<std::size_t>(i)]);
     for (int d = 0; d < dim_; ++d)
-      potential -= opt_.gravity[static_cast<std::size_t>(d)] * y[dim_ * i + d];
+      per_mass -= opt_.gravity[static_cast<std::size_t>(d)] * y[dim_ * i + d];
     if (opt_.boundary == SphBoundary::penalty) {
-      const double h = opt_.support, k_wall = c_ * c_ / h;
       for (const auto& wall : scene_.walls) {
         double sd = -wall.offset;
         for (int d = 0; d < dim_; ++d)
           sd += wall.normal[static_cast<std::size_t>(d)] * y[dim_ * i + d];
-        if (sd < h) potential += k_wall * h / 3.0 * std::pow(1.0 - sd / h, 3);
+        if (sd < h) per_mass += k_wall * h / 3.0 * std::pow(1.0 - sd / h, 3);
       }
     }
+    e += m_[static_cast<std::size_t>(i)] * per_mass;
   }
-  return kinetic_energy(y) + mass_ * (internal + potential);
+  return e;
 }
 
 double SphFluid::max_density_error(CVecRef y) const {
@@ -393,7 +454,7 @@ double SphFluid::probe_pressure(CVecRef y, const std::array<double, 3>& point) c
     }
     const double w = wd_.w(std::sqrt(r2));
     if (w <= 0) continue;
-    const double vol = mass_ / rho_[static_cast<std::size_t>(i)];
+    const double vol = m_[static_cast<std::size_t>(i)] / rho_[static_cast<std::size_t>(i)];
     num += vol * p_[static_cast<std::size_t>(i)] * w;
     den += vol * w;
   }
@@ -415,18 +476,24 @@ std::vector<Invariant> SphFluid::invariants() const {
 
 std::vector<Invariant> SphFluid::observables() const {
   std::vector<Invariant> out;
-  out.push_back({"mass", [this](double, CVecRef) { return mass_ * static_cast<double>(n_); }});
+  out.push_back({"mass", [this](double, CVecRef) { return total_mass(); }});
   out.push_back({"kinetic_energy", [this](double, CVecRef y) { return kinetic_energy(y); }});
   out.push_back({"max_density_error", [this](double, CVecRef y) { return max_density_error(y); }});
   out.push_back({"max_compression", [this](double, CVecRef y) { return max_compression(y); }});
   if (scene_.dam_break) {
     out.push_back({"front", [this](double, CVecRef y) { return front(y); }});
     out.push_back({"height_left", [this](double, CVecRef y) { return height_left(y); }});
+    // Koshizuka & Oka's dimensionless front Z = front/a and time T = t √(2|g|/a).
+    const double a = scene_.column_width;
+    const double g =
+        std::sqrt(opt_.gravity[0] * opt_.gravity[0] + opt_.gravity[1] * opt_.gravity[1] +
+                  opt_.gravity[2] * opt_.gravity[2]);
+    out.push_back({"Z", [this, a](double, CVecRef y) { return front(y) / a; }});
+    out.push_back({"T", [a, g](double t, CVecRef) { return t * std::sqrt(2.0 * g / a); }});
   }
   for (std::size_t k = 0; k < scene_.probes.size(); ++k) {
-    out.push_back({"p_probe" + std::to_string(k + 1), [this, k](double, CVecRef y) {
-                     return probe_pressure(y, scene_.probes[k]);
-                   }});
+    out.push_back({"p_probe" + std::to_string(k + 1),
+                   [this, k](double, CVecRef y) { return probe_pressure(y, scene_.probes[k]); }});
   }
   return out;
 }
@@ -438,8 +505,10 @@ std::optional<double> SphFluid::stiffness(double, CVecRef) const {
 }
 
 std::optional<SuggestedStep> SphFluid::suggested_step() const {
-  const double acoustic = c_ > 0 ? 0.4 * opt_.support / c_ : std::numeric_limits<double>::infinity();
-  const double viscous = nu_ > 0 ? 0.125 * hs_ * hs_ / nu_ : std::numeric_limits<double>::infinity();
+  const double acoustic =
+      c_ > 0 ? 0.4 * opt_.support / c_ : std::numeric_limits<double>::infinity();
+  const double viscous =
+      nu_ > 0 ? 0.125 * hs_ * hs_ / nu_ : std::numeric_limits<double>::infinity();
   if (!std::isfinite(acoustic) && !std::isfinite(viscous)) return std::nullopt;
   SuggestedStep s;
   if (acoustic <= viscous) {
@@ -448,8 +517,8 @@ std::optional<SuggestedStep> SphFluid::suggested_step() const {
              ", sound speed c = " + short_num(c_);
   } else {
     s.h = viscous;
-    s.rule = "viscous limit 0.125 h_s^2/nu with h_s = " + short_num(hs_) +
-             ", nu = " + short_num(nu_);
+    s.rule =
+        "viscous limit 0.125 h_s^2/nu with h_s = " + short_num(hs_) + ", nu = " + short_num(nu_);
   }
   return s;
 }
@@ -480,7 +549,8 @@ ParticleFrame SphFluid::particles(double, CVecRef y) const {
   for (Index b = 0; b < nb; ++b) {
     const std::size_t iu = static_cast<std::size_t>(n_ + b);
     for (int d = 0; d < dim_; ++d)
-      f.positions[3 * iu + static_cast<std::size_t>(d)] = bx_[static_cast<std::size_t>(dim_ * b + d)];
+      f.positions[3 * iu + static_cast<std::size_t>(d)] =
+          bx_[static_cast<std::size_t>(dim_ * b + d)];
     rho.values[iu] = opt_.rho0;
   }
   f.fields = {std::move(rho), std::move(p), std::move(vel), std::move(fluid)};

@@ -4,9 +4,17 @@
 // particle spacing.
 //
 // Density by summation, self term included, fluid and boundary particles (Akinci et al. 2012):
-//   ρ_i = Σ_j m W_d(x_i - x_j) + Σ_b ρ0 V_b W_d(x_i - x_b),   V_b = 1 / Σ_{k ∈ boundary} W_d(x_b - x_k)
-// Every fluid particle has the same mass m = ρ0 / Σ_{k ∈ Z^D} W_d(|k| Δx): the density of a
-// particle inside a full lattice of spacing Δx is exactly ρ0 at the start.
+//   ρ_i = Σ_j m W_d(x_i - x_j) + Σ_b ρ0 V_b W_d(x_i - x_b),   V_b = 1 / Σ_{k ∈ boundary} W_d(x_b -
+//   x_k)
+// Particle masses (parameter `masses`): `lattice` gives every particle m = ρ0 / Σ_{k ∈ Z^D}
+// W_d(|k| Δx), so the density of a particle inside a full lattice of spacing Δx is exactly ρ0 at
+// the start, while particles near a free surface are deficient and those next to boundary
+// particles slightly over-dense (Akinci's volumes over-weight the outer layer: +5% for the
+// first row of a 3-layer wall with the default kernel); `equilibrium` solves the kernel system
+// Σ_j m_j W_d(x_i - x_j) = ρ0 - ρ0 Σ_b V_b W_d(x_i - x_b) for all i (CG; the Wendland and poly6
+// kernel matrices are positive definite), so every particle starts at exactly ρ0 and p = 0: a
+// free drop with an unclamped EOS then starts without surface tension instead of collapsing
+// (the drop's default). Masses are fixed after that; all sums use m_j.
 // Equation of state: linear p = k(ρ - ρ0) (sound speed c = √k) or Tait p = B((ρ/ρ0)^γ - 1),
 // B = ρ0 c0²/γ; either clamped p = max(0, ·) (no tension) or unclamped.
 // Accelerations of fluid particle i (∇W = ∇W_g, the gradient kernel; r_ij = x_i - x_j):
@@ -65,22 +73,25 @@ enum class SphViscosity { none, muller, artificial };
 enum class SphBoundary { particles, penalty };
 
 struct SphOptions {
-  double spacing = 0.01;  // Δx
+  double spacing = 0.01;   // Δx
   double support = 0.025;  // h, the kernel support radius
   double rho0 = 1000.0;
   sph::KernelType density_kernel = sph::KernelType::wendland_c2;
   sph::KernelType gradient_kernel = sph::KernelType::wendland_c2;
   SphEos eos = SphEos::linear;
   bool clamp = true;
-  double c0 = 10.0;   // sound speed (Tait's c0; linear: k = c0² unless k >= 0 is given)
-  double k = -1.0;    // linear EOS constant (< 0: c0²)
+  double c0 = 10.0;  // sound speed (Tait's c0; linear: k = c0² unless k >= 0 is given)
+  double k = -1.0;   // linear EOS constant (< 0: c0²)
   double tait_gamma = 7.0;
   SphPressureForm form = SphPressureForm::variational;
   SphViscosity viscosity = SphViscosity::artificial;
-  double mu = 0.0;      // Müller dynamic viscosity
-  double alpha = 0.0;   // Monaghan's α
+  double mu = 0.0;     // Müller dynamic viscosity
+  double alpha = 0.0;  // Monaghan's α
   std::array<double, 3> gravity{};
   SphBoundary boundary = SphBoundary::particles;
+  // false: every particle has the lattice mass ρ0/Σ_lattice W; true: masses solve
+  // Σ_j m_j W_ij + ρ0 Σ_b V_b W_ib = ρ0 at the initial positions (see the header comment).
+  bool equilibrium_masses = false;
   Index parallel_threshold = 512;  // particles; below this the passes run serially
 };
 
@@ -99,6 +110,7 @@ struct SphScene {
   // Observables: surge front (largest x of fluid, from the left wall at x = 0) and water height
   // at the left wall; pressure at probe points.
   bool dam_break = false;
+  double column_width = 0.0;  // dam break: a, for the dimensionless Z = front/a, T = t √(2g/a)
   std::vector<std::array<double, 3>> probes;
   std::string description;
 };
@@ -112,7 +124,7 @@ class SphFluid final : public MechanicalSystem {
   Vec initial_state() const override { return y0_; }
   bool autonomous() const override { return true; }
   bool velocity_dependent() const override { return viscous_; }
-  Vec masses() const override { return Vec::Constant(dofs(), mass_); }
+  Vec masses() const override;
 
   std::vector<Invariant> invariants() const override;
   std::vector<Invariant> observables() const override;
@@ -125,7 +137,9 @@ class SphFluid final : public MechanicalSystem {
   int dim() const { return dim_; }
   Index fluid_particles() const { return n_; }
   Index boundary_particles() const { return static_cast<Index>(bvol_.size()); }
-  double particle_mass() const { return mass_; }
+  double lattice_mass() const { return mass_; }  // ρ0 / Σ_lattice W
+  const std::vector<double>& particle_masses() const { return m_; }
+  double total_mass() const;
   double sound_speed() const { return c_; }
   const SphOptions& options() const { return opt_; }
   const SphScene& scene() const { return scene_; }
@@ -141,7 +155,7 @@ class SphFluid final : public MechanicalSystem {
   double max_density_error(CVecRef y) const;  // max_i |ρ_i/ρ0 - 1| (free surfaces included)
   double max_compression(CVecRef y) const;    // max_i (ρ_i/ρ0 - 1), the WCSPH accuracy measure
   double front(CVecRef y) const;              // max_i x_i + Δx/2 (dam break)
-  double height_left(CVecRef y) const;  // max y (+Δx/2) of fluid within h of the left wall
+  double height_left(CVecRef y) const;        // max y (+Δx/2) of fluid within h of the left wall
   // Shepard-normalised SPH interpolation of the pressure at a point (0 when no fluid is near).
   double probe_pressure(CVecRef y, const std::array<double, 3>& point) const;
 
@@ -158,6 +172,7 @@ class SphFluid final : public MechanicalSystem {
   template <int D>
   const sph::NeighbourGrid<D>& boundary_grid() const;
   void compute_densities(CVecRef x) const;  // fills rho_ and p_
+  void solve_equilibrium_masses();
 
   std::string name_;
   SphScene scene_;
@@ -168,6 +183,7 @@ class SphFluid final : public MechanicalSystem {
   bool viscous_ = false, parallel_ = false;
   sph::Kernel wd_, wg_, wv_;  // density, gradient and viscosity-Laplacian kernels
   Vec y0_;
+  std::vector<double> m_;          // particle masses
   std::vector<double> bx_, bvol_;  // boundary positions (dim each) and Akinci volumes
 
   // Scratch of one evaluation (the right-hand side allocates nothing after the first call).

@@ -1,0 +1,1 @@
+// SPH model physics tests (in progress).
