@@ -66,6 +66,7 @@ SphScene make_dam_break_scene(const DamBreakOptions& o) {
   s.dim = o.dim;
   s.dam_break = true;
   s.column_width = o.a;
+  s.rest_height = 2.0 * o.a;
   const double dx = o.a / o.n;
   const double depth = o.dim == 3 ? (o.depth > 0 ? o.depth : 0.5 * o.a) : 0.0;
   const long nz = o.dim == 3 ? std::max(1L, cells(depth, dx)) : 0;
@@ -95,6 +96,7 @@ SphScene make_tank_scene(const TankOptions& o) {
   const double depth = o.dim == 3 ? (o.depth > 0 ? o.depth : o.width) : 0.0;
   const long nz = o.dim == 3 ? std::max(1L, cells(depth, dx)) : 0;
   fill_block(s, dx, nx, o.n, nz);
+  s.rest_height = o.height;
   TankGeometry t;
   t.dim = o.dim;
   t.spacing = dx;

@@ -134,7 +134,16 @@ void SphFluid::solve_equilibrium_masses() {
   // matrix of a Wendland or poly6 kernel is symmetric positive definite, so CG solves it.
   const Vec x = y0_.head(dofs());
   std::vector<Eigen::Triplet<double>> trips;
-  Vec rhs = Vec::Constant(n_, opt_.rho0);
+  Vec rhs(n_);
+  const double g = std::abs(opt_.gravity[1]);
+  for (Index i = 0; i < n_; ++i) {
+    const double depth = scene_.rest_height - x[dim_ * i + 1];
+    const double p = scene_.rest_height > 0 && depth > 0 ? opt_.rho0 * g * depth : 0.0;
+    // The EOS solved for ρ at pressure p >= 0.
+    rhs[i] = opt_.eos == SphEos::linear
+                 ? (k_ > 0 ? opt_.rho0 + p / k_ : opt_.rho0)
+                 : opt_.rho0 * std::pow(1.0 + p / tait_b_, 1.0 / opt_.tait_gamma);
+  }
   with_dim(dim_, [&](auto dc) {
     constexpr int D = decltype(dc)::value;
     auto& grid = const_cast<sph::NeighbourGrid<D>&>(fluid_grid<D>());
@@ -274,6 +283,7 @@ void SphFluid::force_pass(const double* x, const double* v, double* a) const {
   const double h = opt_.support, rho0 = opt_.rho0, mu = opt_.mu;
   const double av = opt_.alpha * c_ * hs_, eps2 = 0.01 * hs_ * hs_;
   const double k_wall = c_ * c_ / h;
+  const double bfac = opt_.mirror_boundary_pressure ? 2.0 : 1.0;
 #pragma omp parallel for schedule(static) if (parallel_)
   for (Index s = 0; s < n_; ++s) {
     const Index i = order[static_cast<std::size_t>(s)];
@@ -315,7 +325,7 @@ void SphFluid::force_pass(const double* x, const double* v, double* a) const {
         const double r = std::sqrt(r2);
         const double vb = bvol_[static_cast<std::size_t>(b)];
         const double dwr = wg_.dw_over_r_as<KG>(r);
-        double coef = rho0 * vb * pr2i;  // Akinci: -ρ0 V_b p_i/ρ_i² ∇W_ib
+        double coef = bfac * rho0 * vb * pr2i;  // -f ρ0 V_b p_i/ρ_i² ∇W_ib, f = 2 or 1
         if (artificial) {
           double vr = 0.0;
           for (int d = 0; d < D; ++d) vr += vi[d] * dx[d];

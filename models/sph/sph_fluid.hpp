@@ -11,16 +11,29 @@
 // the start, while particles near a free surface are deficient and those next to boundary
 // particles slightly over-dense (Akinci's volumes over-weight the outer layer: +5% for the
 // first row of a 3-layer wall with the default kernel); `equilibrium` solves the kernel system
-// Σ_j m_j W_d(x_i - x_j) = ρ0 - ρ0 Σ_b V_b W_d(x_i - x_b) for all i (CG; the Wendland and poly6
-// kernel matrices are positive definite), so every particle starts at exactly ρ0 and p = 0: a
-// free drop with an unclamped EOS then starts without surface tension instead of collapsing
-// (the drop's default). Masses are fixed after that; all sums use m_j.
+// Σ_j m_j W_d(x_i - x_j) = ρ_i⁰ - ρ0 Σ_b V_b W_d(x_i - x_b) for all i (CG; the Wendland and poly6
+// kernel matrices are positive definite), so every particle starts at exactly its target
+// density ρ_i⁰: ρ0 (p = 0), or for fluid at rest under gravity (scenes with a rest height H) the
+// hydrostatic density, the EOS inverse of p = ρ0 |g| (H - y_i), so that a tank starts settled
+// and a dam-break column starts with the hydrostatic pressure it has behind the gate. A
+// free drop with an unclamped EOS then starts without surface tension instead of collapsing,
+// and fluid next to walls starts without the over-density kick (the default of every scene;
+// free-surface particles are then up to ~2× heavier than the lattice mass, interior ones equal
+// to it). Masses are fixed after that; all sums use m_j.
 // Equation of state: linear p = k(ρ - ρ0) (sound speed c = √k) or Tait p = B((ρ/ρ0)^γ - 1),
 // B = ρ0 c0²/γ; either clamped p = max(0, ·) (no tension) or unclamped.
 // Accelerations of fluid particle i (∇W = ∇W_g, the gradient kernel; r_ij = x_i - x_j):
 //   pressure, symmetric (Müller 2003):  -Σ_j m (p_i + p_j)/(2 ρ_i ρ_j) ∇W_ij
 //   pressure, variational:              -Σ_j m (p_i/ρ_i² + p_j/ρ_j²) ∇W_ij
-//   boundary pressure (Akinci 2012):    -Σ_b ρ0 V_b p_i/ρ_i² ∇W_ib
+//   boundary pressure (Akinci 2012):    -f Σ_b ρ0 V_b p_i/ρ_i² ∇W_ib with f = 1 (default,
+//     `boundary_pressure=akinci`: Akinci's force, the gradient of the boundary's share of
+//     Σ m u(ρ_i), so energy-consistent) or f = 2 (`mirrored`: the pair term of a boundary
+//     particle of mass ρ0 V_b carrying the fluid particle's own p/ρ²). Neither holds fluid at rest
+//     exactly: a wall of Akinci particles pushes with half the pair repulsion of the fluid above
+//     (f = 1) or, with the outer layer's over-weighted volumes, too much (f = 2): measured on
+//     sph_tank_2d started hydrostatic, the bottom row accelerates at -7.8 g (f = 1) or +3.1 g
+//     (f = 2). With f = 1 the fluid settles to a state with a denser first row; the interior is
+//     hydrostatic (tested).
 //   viscosity, Müller:                  (μ/ρ_i) Σ_j m (v_j - v_i)/ρ_j ∇²W_visc(r_ij)
 //                                       (boundary particles: v_b = 0, m_b = ρ0 V_b, ρ_b = ρ0)
 //     The lecture summary's "element-wise absolute value" |v_j - v_i| is a notation slip: with it
@@ -39,8 +52,9 @@
 // energy: linear u = k[ln(ρ/ρ0) + ρ0/ρ - 1], Tait u = B/(γ-1)[ρ^(γ-1)/ρ0^γ + (γ-1)/ρ - γ/ρ0];
 // clamped EOS: u = 0 for ρ < ρ0 (then du/dρ = max(0, p)/ρ² still holds). du/dρ = p/ρ², so with
 // the variational form, the same kernel for density and gradient, no viscosity, the Akinci
-// boundary force (the gradient of the boundary's share of Σ m u(ρ_i)) and the penalty force,
-// E is conserved in continuous time: energy drift then measures the integrator.
+// boundary force with f = 1 (the gradient of the boundary's share of Σ m u(ρ_i)) or no walls,
+// and the penalty force, E is conserved in continuous time: energy drift then measures the
+// integrator. The mirrored wall (f = 2) does work that is not the gradient of E.
 //
 // Neighbour search (neighbour_grid.hpp): a hashed uniform grid with cell size h, rebuilt from the
 // positions at every right-hand-side evaluation (stage positions differ); the boundary particles'
@@ -92,7 +106,8 @@ struct SphOptions {
   // false: every particle has the lattice mass ρ0/Σ_lattice W; true: masses solve
   // Σ_j m_j W_ij + ρ0 Σ_b V_b W_ib = ρ0 at the initial positions (see the header comment).
   bool equilibrium_masses = false;
-  Index parallel_threshold = 512;  // particles; below this the passes run serially
+  bool mirror_boundary_pressure = false;  // f = 2 in the boundary pressure force (see above)
+  Index parallel_threshold = 512;         // particles; below this the passes run serially
 };
 
 // A wall plane n·x = offset; the fluid is on the side n·x > offset.
@@ -111,6 +126,9 @@ struct SphScene {
   // at the left wall; pressure at probe points.
   bool dam_break = false;
   double column_width = 0.0;  // dam break: a, for the dimensionless Z = front/a, T = t √(2g/a)
+  // Free-surface height H of fluid at rest (tank, dam-break column): with equilibrium masses the
+  // particles start at the hydrostatic density, p = ρ0 |g| (H - y). 0: start at ρ0.
+  double rest_height = 0.0;
   std::vector<std::array<double, 3>> probes;
   std::string description;
 };
