@@ -53,6 +53,24 @@ inline KernelType kernel_from_string(const std::string& name) {
   throw std::invalid_argument("unknown SPH kernel '" + name + "'");
 }
 
+// Calls f(std::integral_constant<KernelType, T>{}) with T = t, so that a whole pass is compiled
+// for one kernel type.
+template <class F>
+void with_kernel(KernelType t, F&& f) {
+  switch (t) {
+    case KernelType::poly6:
+      return f(std::integral_constant<KernelType, KernelType::poly6>{});
+    case KernelType::spiky:
+      return f(std::integral_constant<KernelType, KernelType::spiky>{});
+    case KernelType::viscosity:
+      return f(std::integral_constant<KernelType, KernelType::viscosity>{});
+    case KernelType::cubic_spline:
+      return f(std::integral_constant<KernelType, KernelType::cubic_spline>{});
+    case KernelType::wendland_c2:
+      return f(std::integral_constant<KernelType, KernelType::wendland_c2>{});
+  }
+}
+
 class Kernel {
  public:
   Kernel() = default;
@@ -90,36 +108,16 @@ class Kernel {
 
   // W(r) for r >= 0.
   double w(double r) const {
-    switch (type_) {
-      case KernelType::poly6:
-        return w_as<KernelType::poly6>(r);
-      case KernelType::spiky:
-        return w_as<KernelType::spiky>(r);
-      case KernelType::viscosity:
-        return w_as<KernelType::viscosity>(r);
-      case KernelType::cubic_spline:
-        return w_as<KernelType::cubic_spline>(r);
-      case KernelType::wendland_c2:
-        return w_as<KernelType::wendland_c2>(r);
-    }
-    return 0.0;
+    double out = 0.0;
+    with_kernel(type_, [&](auto t) { out = w_as<decltype(t)::value>(r); });
+    return out;
   }
 
   // dW/dr for r >= 0 (the spiky and viscosity kernels' one-sided limits at r = 0).
   double dw(double r) const {
-    switch (type_) {
-      case KernelType::poly6:
-        return dw_as<KernelType::poly6>(r);
-      case KernelType::spiky:
-        return dw_as<KernelType::spiky>(r);
-      case KernelType::viscosity:
-        return dw_as<KernelType::viscosity>(r);
-      case KernelType::cubic_spline:
-        return dw_as<KernelType::cubic_spline>(r);
-      case KernelType::wendland_c2:
-        return dw_as<KernelType::wendland_c2>(r);
-    }
-    return 0.0;
+    double out = 0.0;
+    with_kernel(type_, [&](auto t) { out = dw_as<decltype(t)::value>(r); });
+    return out;
   }
 
   // The same with the kernel type fixed at compile time (T must equal type()): the per-pair
@@ -202,23 +200,5 @@ class Kernel {
   double lap_norm_ = 0.0;
   double inv_h_ = 1.0;
 };
-
-// Calls f(std::integral_constant<KernelType, T>{}) with T = t, so that a whole pass is compiled
-// for one kernel type.
-template <class F>
-void with_kernel(KernelType t, F&& f) {
-  switch (t) {
-    case KernelType::poly6:
-      return f(std::integral_constant<KernelType, KernelType::poly6>{});
-    case KernelType::spiky:
-      return f(std::integral_constant<KernelType, KernelType::spiky>{});
-    case KernelType::viscosity:
-      return f(std::integral_constant<KernelType, KernelType::viscosity>{});
-    case KernelType::cubic_spline:
-      return f(std::integral_constant<KernelType, KernelType::cubic_spline>{});
-    case KernelType::wendland_c2:
-      return f(std::integral_constant<KernelType, KernelType::wendland_c2>{});
-  }
-}
 
 }  // namespace stiffbench::sph

@@ -20,6 +20,7 @@ struct SceneDefaults {
   // dam break's front 30% ahead of Koshizuka & Oka at T = 1.16 (equilibrium: +3%) and up the
   // left wall; the 2D front leads by 8-14% instead of 9-16% for T in [1, 3].
   std::string masses = "equilibrium";
+  std::string support = "2.5";
 };
 
 std::vector<ParamSpec> fluid_specs(const SceneDefaults& d, std::vector<ParamSpec> scene) {
@@ -28,7 +29,8 @@ std::vector<ParamSpec> fluid_specs(const SceneDefaults& d, std::vector<ParamSpec
   std::vector<std::string> smooth_kernels;
   for (const auto& k : kernels)
     if (k != "viscosity") smooth_kernels.push_back(k);
-  s.push_back({"support", P::real, "2.5", "kernel support radius h in particle spacings (h/dx)"});
+  s.push_back(
+      {"support", P::real, d.support, "kernel support radius h in particle spacings (h/dx)"});
   s.push_back({"masses",
                P::text,
                d.masses,
@@ -204,8 +206,8 @@ void add_tank(ModelRegistry& reg, int dim) {
 
 void add_drop(ModelRegistry& reg) {
   const std::string name = "sph_drop_2d";
-  const SceneDefaults d{"20",   "10", "0",           "linear", "false",
-                        "none", "0",  "variational", false,    "equilibrium"};
+  const SceneDefaults d{"20", "10",          "0",   "linear",      "false", "none",
+                        "0",  "variational", false, "equilibrium", "2.5"};
   std::vector<ParamSpec> scene = {
       {"radius", P::real, "0.1", "drop radius R (m)"},
       {"n", P::integer, d.n, "particles across the diameter"},
