@@ -224,6 +224,7 @@ void SphFluid::density_pass(const double* x) const {
   pr2_.resize(n);
   inv_rho_.resize(n);
   nb_count_.resize(n);
+  nb_bcount_.resize(n);
   // The fluid neighbours of each particle (self included) with their distances, kept for the
   // force pass. Capacity per particle grows (and the pass repeats) when a particle has more.
   while (true) {
@@ -250,14 +251,23 @@ void SphFluid::density_pass(const double* x) const {
         ++count;
       });
       double rho = sum;
+      const std::size_t fluid_count = count;
       if (with_boundary) {
+        // Boundary neighbours follow the fluid ones in the same slots.
         double bsum = 0.0;
         bgrid.for_each_neighbour(xi, h, [&](Index b, double r2, const auto&) {
-          bsum += bvol_[static_cast<std::size_t>(b)] * wd_.w_as<KD>(std::sqrt(r2));
+          const double r = std::sqrt(r2);
+          bsum += bvol_[static_cast<std::size_t>(b)] * wd_.w_as<KD>(r);
+          if (count < cap) {
+            idx[count] = b;
+            dist[count] = r;
+          }
+          ++count;
         });
         rho += rho0 * bsum;
       }
-      nb_count_[iu] = count;
+      nb_count_[iu] = fluid_count;
+      nb_bcount_[iu] = count - fluid_count;
       most = std::max(most, count);
       const double p = pressure(rho);
       rho_[iu] = rho;
@@ -273,16 +283,14 @@ void SphFluid::density_pass(const double* x) const {
 template <int D, sph::KernelType KG>
 void SphFluid::force_pass(const double* x, const double* v, double* a) const {
   const auto& order = fluid_grid<D>().order();
-  const auto& bgrid = boundary_grid<D>();
   const std::size_t cap = nb_capacity_;
-  const bool with_boundary = !bvol_.empty();
   const bool penalty = opt_.boundary == SphBoundary::penalty;
   const bool variational = opt_.form == SphPressureForm::variational;
   const bool muller = opt_.viscosity == SphViscosity::muller && opt_.mu > 0;
   const bool artificial = opt_.viscosity == SphViscosity::artificial && opt_.alpha > 0;
-  const double h = opt_.support, rho0 = opt_.rho0, mu = opt_.mu;
+  const double rho0 = opt_.rho0, mu = opt_.mu;
   const double av = opt_.alpha * c_ * hs_, eps2 = 0.01 * hs_ * hs_;
-  const double k_wall = c_ * c_ / h;
+  const double d0 = wall_range(), k_wall = wall_strength();
   const double bfac = opt_.mirror_boundary_pressure ? 2.0 : 1.0;
 #pragma omp parallel for schedule(static) if (parallel_)
   for (Index s = 0; s < n_; ++s) {
@@ -319,31 +327,33 @@ void SphFluid::force_pass(const double* x, const double* v, double* a) const {
         for (int d = 0; d < D; ++d) acc[d] += cv * (vj[d] - vi[d]);
       }
     }
-    if (with_boundary) {
-      bgrid.for_each_neighbour(xi, h, [&](Index b, double r2, const std::array<double, D>& dx) {
-        if (r2 == 0.0) return;
-        const double r = std::sqrt(r2);
-        const double vb = bvol_[static_cast<std::size_t>(b)];
-        const double dwr = wg_.dw_over_r_as<KG>(r);
-        double coef = bfac * rho0 * vb * pr2i;  // -f ρ0 V_b p_i/ρ_i² ∇W_ib, f = 2 or 1
-        if (artificial) {
-          double vr = 0.0;
-          for (int d = 0; d < D; ++d) vr += vi[d] * dx[d];
-          if (vr < 0.0) coef -= rho0 * vb * av * vr / (0.5 * (rhoi + rho0) * (r2 + eps2));
-        }
-        for (int d = 0; d < D; ++d) acc[d] -= coef * dwr * dx[d];
-        if (muller) {
-          const double cv = mu * inv_rhoi * vb * wv_.laplacian(r);  // m_b/ρ_b = V_b, v_b = 0
-          for (int d = 0; d < D; ++d) acc[d] -= cv * vi[d];
-        }
-      });
+    const std::size_t end = nb_count_[iu] + nb_bcount_[iu];
+    for (std::size_t k = nb_count_[iu]; k < end; ++k) {
+      const double r = dist[k];
+      if (r == 0.0) continue;
+      const std::size_t b = static_cast<std::size_t>(idx[k]);
+      std::array<double, D> dx;
+      for (int d = 0; d < D; ++d) dx[d] = xi[d] - bx_[D * b + static_cast<std::size_t>(d)];
+      const double vb = bvol_[b];
+      const double dwr = wg_.dw_over_r_as<KG>(r);
+      double coef = bfac * rho0 * vb * pr2i;  // -f ρ0 V_b p_i/ρ_i² ∇W_ib, f = 2 or 1
+      if (artificial) {
+        double vr = 0.0;
+        for (int d = 0; d < D; ++d) vr += vi[d] * dx[d];
+        if (vr < 0.0) coef -= rho0 * vb * av * vr / (0.5 * (rhoi + rho0) * (r * r + eps2));
+      }
+      for (int d = 0; d < D; ++d) acc[d] -= coef * dwr * dx[d];
+      if (muller) {
+        const double cv = mu * inv_rhoi * vb * wv_.laplacian(r);  // m_b/ρ_b = V_b, v_b = 0
+        for (int d = 0; d < D; ++d) acc[d] -= cv * vi[d];
+      }
     }
     if (penalty) {
       for (const auto& wall : scene_.walls) {
         double sd = -wall.offset;
         for (int d = 0; d < D; ++d) sd += wall.normal[static_cast<std::size_t>(d)] * xi[d];
-        if (sd < h) {
-          const double q = 1.0 - sd / h;
+        if (sd < d0) {
+          const double q = 1.0 - sd / d0;
           for (int d = 0; d < D; ++d)
             acc[d] += k_wall * q * q * wall.normal[static_cast<std::size_t>(d)];
         }
@@ -408,7 +418,7 @@ Vec SphFluid::linear_momentum(CVecRef y) const {
 double SphFluid::energy(CVecRef y) const {
   compute_densities(y.head(dofs()));
   double e = kinetic_energy(y);
-  const double h = opt_.support, k_wall = c_ * c_ / h;
+  const double d0 = wall_range(), k_wall = wall_strength();
   for (Index i = 0; i < n_; ++i) {
     double per_mass = internal_energy(rho_[static_cast<std::size_t>(i)]);
     for (int d = 0; d < dim_; ++d)
@@ -418,7 +428,7 @@ double SphFluid::energy(CVecRef y) const {
         double sd = -wall.offset;
         for (int d = 0; d < dim_; ++d)
           sd += wall.normal[static_cast<std::size_t>(d)] * y[dim_ * i + d];
-        if (sd < h) per_mass += k_wall * h / 3.0 * std::pow(1.0 - sd / h, 3);
+        if (sd < d0) per_mass += k_wall * d0 / 3.0 * std::pow(1.0 - sd / d0, 3);
       }
     }
     e += m_[static_cast<std::size_t>(i)] * per_mass;
