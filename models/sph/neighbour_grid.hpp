@@ -15,6 +15,13 @@
 // sum over the neighbours of one point is the same, bit for bit, whichever thread computes it.
 // Coincident points (r = 0) and the query point itself, when it is in the set, are visited.
 //
+// When the cells' bounding box holds at most 8n + 64 cells (the usual case: a fluid in a tank),
+// build() uses a dense row-major grid over the box instead of the hash, so that each row of 3
+// cells is one contiguous range of slots (one look-up instead of three, no key checks: the 2D
+// dam break's right-hand side went from 0.62-0.68 to 0.47-0.50 µs per particle on one thread).
+// Within a cell, points stay in index order in both modes, and the mode depends on the positions
+// only.
+//
 // order() lists the points cell by cell (bucket order): iterating in that order touches memory
 // of nearby points together. The caller's own arrays are never reordered.
 #pragma once
@@ -43,29 +50,61 @@ class NeighbourGrid {
     radius_ = radius;
     inv_cell_ = 1.0 / (radius * (1.0 + 1e-6));
     n_ = n;
-    std::size_t buckets = 16;
-    shift_ = 60;
-    while (buckets < 2 * static_cast<std::size_t>(n)) {
-      buckets *= 2;
-      --shift_;
+    const std::size_t nu = static_cast<std::size_t>(n);
+    keys_.resize(nu);
+    point_key_.resize(nu);
+    order_.resize(nu);
+    pos_.resize(nu * D);
+    point_cell_.resize(nu * D);
+    // Dense mode when the cells' bounding box is small (at most 8n + 64 cells): a cell is a
+    // row-major index into the box, so the 3 cells of a row are one contiguous range of slots.
+    // Otherwise (points far apart, non-finite coordinates) the hashed mode.
+    for (int d = 0; d < D; ++d) {
+      lo_[d] = kCellLimit;
+      hi_[d] = -kCellLimit;
     }
-    start_.assign(buckets + 1, 0);
-    keys_.resize(static_cast<std::size_t>(n));
-    point_key_.resize(static_cast<std::size_t>(n));
-    order_.resize(static_cast<std::size_t>(n));
-    pos_.resize(static_cast<std::size_t>(n) * D);
-    for (Index i = 0; i < n; ++i) {
+    for (std::size_t i = 0; i < nu; ++i) {
       const auto c = cell_of(x + D * i);
-      const std::uint64_t key = pack(c);
-      point_key_[static_cast<std::size_t>(i)] = key;
-      ++start_[bucket(key) + 1];
+      for (int d = 0; d < D; ++d) {
+        point_cell_[i * D + d] = c[d];
+        lo_[d] = std::min(lo_[d], c[d]);
+        hi_[d] = std::max(hi_[d], c[d]);
+      }
     }
-    for (std::size_t b = 0; b < buckets; ++b) start_[b + 1] += start_[b];
+    double box = 1.0;
+    for (int d = 0; d < D; ++d) box *= n > 0 ? static_cast<double>(hi_[d] - lo_[d] + 1) : 1.0;
+    dense_ = n > 0 && box <= 8.0 * static_cast<double>(n) + 64.0;
+    std::size_t slots_of_index = 0;
+    if (dense_) {
+      std::int64_t stride = 1;
+      for (int d = 0; d < D; ++d) {
+        stride_[d] = stride;
+        stride *= hi_[d] - lo_[d] + 1;
+      }
+      slots_of_index = static_cast<std::size_t>(stride);
+    } else {
+      std::size_t buckets = 16;
+      shift_ = 60;
+      while (buckets < 2 * nu) {
+        buckets *= 2;
+        --shift_;
+      }
+      slots_of_index = buckets;
+    }
+    start_.assign(slots_of_index + 1, 0);
+    for (std::size_t i = 0; i < nu; ++i) {
+      std::array<std::int64_t, D> c;
+      for (int d = 0; d < D; ++d) c[d] = point_cell_[i * D + d];
+      const std::uint64_t key = dense_ ? dense_index(c) : pack(c);
+      point_key_[i] = key;
+      ++start_[(dense_ ? static_cast<std::size_t>(key) : bucket(key)) + 1];
+    }
+    for (std::size_t b = 0; b < slots_of_index; ++b) start_[b + 1] += start_[b];
     fill_ = start_;
-    for (Index i = 0; i < n; ++i) {
-      const std::uint64_t key = point_key_[static_cast<std::size_t>(i)];
-      const std::size_t slot = fill_[bucket(key)]++;
-      order_[slot] = i;
+    for (std::size_t i = 0; i < nu; ++i) {
+      const std::uint64_t key = point_key_[i];
+      const std::size_t slot = fill_[dense_ ? static_cast<std::size_t>(key) : bucket(key)]++;
+      order_[slot] = static_cast<Index>(i);
       keys_[slot] = key;
       for (int d = 0; d < D; ++d) pos_[slot * D + d] = x[D * i + d];
     }
@@ -74,11 +113,43 @@ class NeighbourGrid {
   Index size() const { return n_; }
   double radius() const { return radius_; }
   const std::vector<Index>& order() const { return order_; }
+  // Coordinates in cell order (D per point): positions()[D·slot + d] = x[D·order()[slot] + d].
+  const double* positions() const { return pos_.data(); }
 
   template <class F>
   void for_each_neighbour(const double* q, double radius, F&& f) const {
+    for_each_neighbour_slot(
+        q, radius, [&](std::size_t slot, double r2, const auto& d) { f(order_[slot], r2, d); });
+  }
+
+  // The same, passing the neighbour's slot in cell order (order()[slot] is its index, and
+  // positions() + D·slot its coordinates): callers that keep their per-point data in cell order
+  // read neighbours from nearby memory.
+  template <class F>
+  void for_each_neighbour_slot(const double* q, double radius, F&& f) const {
     const double r2max = radius * radius;
     const auto c = cell_of(q);
+    if (dense_) {
+      // Rows of 3 cells along x, for each of the 3^(D-1) (y, z) offsets.
+      const std::int64_t xa = std::max(c[0] - 1, lo_[0]), xb = std::min(c[0] + 1, hi_[0]);
+      if (xa > xb) return;
+      for (int k = 0; k < ipow3() / 3; ++k) {
+        std::int64_t base = 0;
+        bool inside = true;
+        int rest = k;
+        for (int d = 1; d < D; ++d) {
+          const std::int64_t cd = c[d] + rest % 3 - 1;
+          rest /= 3;
+          inside = inside && cd >= lo_[d] && cd <= hi_[d];
+          base += (cd - lo_[d]) * stride_[d];
+        }
+        if (!inside) continue;
+        const std::size_t first = start_[static_cast<std::size_t>(base + xa - lo_[0])];
+        const std::size_t last = start_[static_cast<std::size_t>(base + xb - lo_[0]) + 1];
+        visit_range(q, r2max, first, last, f);
+      }
+      return;
+    }
     // Near the clamp limit two offsets can name the same (clamped) cell: visit it once.
     bool near_limit = false;
     for (int d = 0; d < D; ++d) near_limit |= std::abs(c[d]) >= kCellLimit - 1;
@@ -101,19 +172,35 @@ class NeighbourGrid {
       const std::size_t b = bucket(key);
       for (std::size_t s = start_[b]; s < start_[b + 1]; ++s) {
         if (keys_[s] != key) continue;
-        std::array<double, D> dx;
-        double r2 = 0.0;
-        for (int d = 0; d < D; ++d) {
-          dx[d] = q[d] - pos_[s * D + d];
-          r2 += dx[d] * dx[d];
-        }
-        if (r2 < r2max) f(order_[s], r2, dx);
+        visit_range(q, r2max, s, s + 1, f);
       }
     }
   }
 
+  // True when the last build used the dense bounding-box grid (else the hashed one).
+  bool dense() const { return dense_; }
+
  private:
   static constexpr int ipow3() { return D == 1 ? 3 : D == 2 ? 9 : 27; }
+
+  template <class F>
+  void visit_range(const double* q, double r2max, std::size_t first, std::size_t last, F& f) const {
+    for (std::size_t s = first; s < last; ++s) {
+      std::array<double, D> dx;
+      double r2 = 0.0;
+      for (int d = 0; d < D; ++d) {
+        dx[d] = q[d] - pos_[s * D + d];
+        r2 += dx[d] * dx[d];
+      }
+      if (r2 < r2max) f(s, r2, dx);
+    }
+  }
+
+  std::uint64_t dense_index(const std::array<std::int64_t, D>& c) const {
+    std::int64_t idx = 0;
+    for (int d = 0; d < D; ++d) idx += (c[d] - lo_[d]) * stride_[d];
+    return static_cast<std::uint64_t>(idx);
+  }
 
   std::array<std::int64_t, D> cell_of(const double* x) const {
     std::array<std::int64_t, D> c;
@@ -141,6 +228,9 @@ class NeighbourGrid {
   }
 
   double inv_cell_ = 1.0, radius_ = 0.0;
+  bool dense_ = false;
+  std::array<std::int64_t, D> lo_{}, hi_{}, stride_{};
+  std::vector<std::int64_t> point_cell_;
   Index n_ = 0;
   int shift_ = 60;
   std::vector<std::size_t> start_, fill_;

@@ -210,23 +210,37 @@ double SphFluid::internal_energy(double rho) const {
          (std::pow(rho, g - 1.0) / std::pow(r0, g) + (g - 1.0) / rho - g / r0);
 }
 
+// Both passes work in cell order: slot k is particle order[k], and every per-particle array
+// they use (positions, velocities, masses, densities, pressures, neighbour slots) is indexed by
+// slot, so the neighbours of consecutive particles sit in nearby memory. The state's order never
+// changes: densities and pressures are also written by particle index, accelerations by
+// particle index.
 template <int D, sph::KernelType KD>
 void SphFluid::density_pass(const double* x) const {
   auto& grid = const_cast<sph::NeighbourGrid<D>&>(fluid_grid<D>());
   grid.build(x, n_, opt_.support);
   const auto& order = grid.order();
+  const double* sx = grid.positions();
   const auto& bgrid = boundary_grid<D>();
   const bool with_boundary = !bvol_.empty();
   const double h = opt_.support, rho0 = opt_.rho0;
   const std::size_t n = static_cast<std::size_t>(n_);
   rho_.resize(n);
   p_.resize(n);
-  pr2_.resize(n);
-  inv_rho_.resize(n);
+  sm_.resize(n);
+  srho_.resize(n);
+  sp_.resize(n);
+  spr2_.resize(n);
+  sinv_rho_.resize(n);
   nb_count_.resize(n);
   nb_bcount_.resize(n);
-  // The fluid neighbours of each particle (self included) with their distances, kept for the
-  // force pass. Capacity per particle grows (and the pass repeats) when a particle has more.
+  for (std::size_t k = 0; k < n; ++k) sm_[k] = m_[static_cast<std::size_t>(order[k])];
+  // A local copy: the loop's stores through double pointers could alias the member kernel's
+  // constants, and the compiler would reload them for every pair.
+  const sph::Kernel wd = wd_;
+  // The fluid neighbours of each particle (self included) with their distances, then its
+  // boundary neighbours, kept for the force pass. Capacity per particle grows (and the pass
+  // repeats) when a particle has more.
   while (true) {
     const std::size_t cap = nb_capacity_;
     nb_index_.resize(n * cap);
@@ -234,18 +248,17 @@ void SphFluid::density_pass(const double* x) const {
     std::size_t most = 0;
 #pragma omp parallel for schedule(static) reduction(max : most) if (parallel_)
     for (Index s = 0; s < n_; ++s) {
-      const Index i = order[static_cast<std::size_t>(s)];
-      const std::size_t iu = static_cast<std::size_t>(i);
-      const double* xi = x + D * i;
-      Index* idx = nb_index_.data() + iu * cap;
-      double* dist = nb_dist_.data() + iu * cap;
+      const std::size_t k = static_cast<std::size_t>(s);
+      const double* xi = sx + D * k;
+      Index* idx = nb_index_.data() + k * cap;
+      double* dist = nb_dist_.data() + k * cap;
       std::size_t count = 0;
       double sum = 0.0;
-      grid.for_each_neighbour(xi, h, [&](Index j, double r2, const auto&) {
+      grid.for_each_neighbour_slot(xi, h, [&](std::size_t j, double r2, const auto&) {
         const double r = std::sqrt(r2);
-        sum += m_[static_cast<std::size_t>(j)] * wd_.w_as<KD>(r);
+        sum += sm_[j] * wd.w_as<KD>(r);
         if (count < cap) {
-          idx[count] = j;
+          idx[count] = static_cast<Index>(j);
           dist[count] = r;
         }
         ++count;
@@ -253,11 +266,10 @@ void SphFluid::density_pass(const double* x) const {
       double rho = sum;
       const std::size_t fluid_count = count;
       if (with_boundary) {
-        // Boundary neighbours follow the fluid ones in the same slots.
         double bsum = 0.0;
         bgrid.for_each_neighbour(xi, h, [&](Index b, double r2, const auto&) {
           const double r = std::sqrt(r2);
-          bsum += bvol_[static_cast<std::size_t>(b)] * wd_.w_as<KD>(r);
+          bsum += bvol_[static_cast<std::size_t>(b)] * wd.w_as<KD>(r);
           if (count < cap) {
             idx[count] = b;
             dist[count] = r;
@@ -266,14 +278,17 @@ void SphFluid::density_pass(const double* x) const {
         });
         rho += rho0 * bsum;
       }
-      nb_count_[iu] = fluid_count;
-      nb_bcount_[iu] = count - fluid_count;
+      nb_count_[k] = fluid_count;
+      nb_bcount_[k] = count - fluid_count;
       most = std::max(most, count);
       const double p = pressure(rho);
+      srho_[k] = rho;
+      sp_[k] = p;
+      sinv_rho_[k] = 1.0 / rho;
+      spr2_[k] = p / (rho * rho);
+      const std::size_t iu = static_cast<std::size_t>(order[k]);
       rho_[iu] = rho;
       p_[iu] = p;
-      inv_rho_[iu] = 1.0 / rho;
-      pr2_[iu] = p / (rho * rho);
     }
     if (most <= cap) break;
     nb_capacity_ = most + most / 4;
@@ -281,9 +296,11 @@ void SphFluid::density_pass(const double* x) const {
 }
 
 template <int D, sph::KernelType KG>
-void SphFluid::force_pass(const double* x, const double* v, double* a) const {
-  const auto& order = fluid_grid<D>().order();
-  const std::size_t cap = nb_capacity_;
+void SphFluid::force_pass(const double* v, double* a) const {
+  const auto& grid = fluid_grid<D>();
+  const auto& order = grid.order();
+  const double* sx = grid.positions();
+  const std::size_t n = static_cast<std::size_t>(n_), cap = nb_capacity_;
   const bool penalty = opt_.boundary == SphBoundary::penalty;
   const bool variational = opt_.form == SphPressureForm::variational;
   const bool muller = opt_.viscosity == SphViscosity::muller && opt_.mu > 0;
@@ -292,50 +309,53 @@ void SphFluid::force_pass(const double* x, const double* v, double* a) const {
   const double av = opt_.alpha * c_ * hs_, eps2 = 0.01 * hs_ * hs_;
   const double d0 = wall_range(), k_wall = wall_strength();
   const double bfac = opt_.mirror_boundary_pressure ? 2.0 : 1.0;
+  const sph::Kernel wg = wg_, wv = wv_;  // local copies (see density_pass)
+  sv_.resize(n * D);
+  for (std::size_t k = 0; k < n; ++k)
+    for (int d = 0; d < D; ++d)
+      sv_[D * k + static_cast<std::size_t>(d)] = v[D * order[k] + static_cast<Index>(d)];
 #pragma omp parallel for schedule(static) if (parallel_)
   for (Index s = 0; s < n_; ++s) {
-    const Index i = order[static_cast<std::size_t>(s)];
-    const std::size_t iu = static_cast<std::size_t>(i);
-    const double* xi = x + D * i;
-    const double* vi = v + D * i;
-    const double rhoi = rho_[iu], pi = p_[iu], pr2i = pr2_[iu], inv_rhoi = inv_rho_[iu];
+    const std::size_t k = static_cast<std::size_t>(s);
+    const double* xi = sx + D * k;
+    const double* vi = sv_.data() + D * k;
+    const double rhoi = srho_[k], pi = sp_[k], pr2i = spr2_[k], inv_rhoi = sinv_rho_[k];
     std::array<double, D> acc;
     for (int d = 0; d < D; ++d) acc[d] = opt_.gravity[static_cast<std::size_t>(d)];
-    const Index* idx = nb_index_.data() + iu * cap;
-    const double* dist = nb_dist_.data() + iu * cap;
-    for (std::size_t k = 0; k < nb_count_[iu]; ++k) {
-      const double r = dist[k];
+    const Index* idx = nb_index_.data() + k * cap;
+    const double* dist = nb_dist_.data() + k * cap;
+    for (std::size_t q = 0; q < nb_count_[k]; ++q) {
+      const double r = dist[q];
       if (r == 0.0) continue;  // self, or a coincident particle: no direction
-      const Index j = idx[k];
-      const std::size_t ju = static_cast<std::size_t>(j);
-      const double m = m_[ju];
-      const double* xj = x + D * j;
-      const double* vj = v + D * j;
+      const std::size_t j = static_cast<std::size_t>(idx[q]);
+      const double m = sm_[j];
+      const double* xj = sx + D * j;
+      const double* vj = sv_.data() + D * j;
       std::array<double, D> dx;
       for (int d = 0; d < D; ++d) dx[d] = xi[d] - xj[d];
-      const double dwr = wg_.dw_over_r_as<KG>(r);  // ∇W_ij = dwr · (x_i - x_j)
+      const double dwr = wg.dw_over_r_as<KG>(r);  // ∇W_ij = dwr · (x_i - x_j)
       double coef =
-          variational ? m * (pr2i + pr2_[ju]) : 0.5 * m * (pi + p_[ju]) * inv_rhoi * inv_rho_[ju];
+          variational ? m * (pr2i + spr2_[j]) : 0.5 * m * (pi + sp_[j]) * inv_rhoi * sinv_rho_[j];
       if (artificial) {
         double vr = 0.0;
         for (int d = 0; d < D; ++d) vr += (vi[d] - vj[d]) * dx[d];
-        if (vr < 0.0) coef -= m * av * vr / (0.5 * (rhoi + rho_[ju]) * (r * r + eps2));
+        if (vr < 0.0) coef -= m * av * vr / (0.5 * (rhoi + srho_[j]) * (r * r + eps2));
       }
       for (int d = 0; d < D; ++d) acc[d] -= coef * dwr * dx[d];
       if (muller) {
-        const double cv = mu * inv_rhoi * m * inv_rho_[ju] * wv_.laplacian(r);
+        const double cv = mu * inv_rhoi * m * sinv_rho_[j] * wv.laplacian(r);
         for (int d = 0; d < D; ++d) acc[d] += cv * (vj[d] - vi[d]);
       }
     }
-    const std::size_t end = nb_count_[iu] + nb_bcount_[iu];
-    for (std::size_t k = nb_count_[iu]; k < end; ++k) {
-      const double r = dist[k];
+    const std::size_t end = nb_count_[k] + nb_bcount_[k];
+    for (std::size_t q = nb_count_[k]; q < end; ++q) {
+      const double r = dist[q];
       if (r == 0.0) continue;
-      const std::size_t b = static_cast<std::size_t>(idx[k]);
+      const std::size_t b = static_cast<std::size_t>(idx[q]);
       std::array<double, D> dx;
       for (int d = 0; d < D; ++d) dx[d] = xi[d] - bx_[D * b + static_cast<std::size_t>(d)];
       const double vb = bvol_[b];
-      const double dwr = wg_.dw_over_r_as<KG>(r);
+      const double dwr = wg.dw_over_r_as<KG>(r);
       double coef = bfac * rho0 * vb * pr2i;  // -f ρ0 V_b p_i/ρ_i² ∇W_ib, f = 2 or 1
       if (artificial) {
         double vr = 0.0;
@@ -344,7 +364,7 @@ void SphFluid::force_pass(const double* x, const double* v, double* a) const {
       }
       for (int d = 0; d < D; ++d) acc[d] -= coef * dwr * dx[d];
       if (muller) {
-        const double cv = mu * inv_rhoi * vb * wv_.laplacian(r);  // m_b/ρ_b = V_b, v_b = 0
+        const double cv = mu * inv_rhoi * vb * wv.laplacian(r);  // m_b/ρ_b = V_b, v_b = 0
         for (int d = 0; d < D; ++d) acc[d] -= cv * vi[d];
       }
     }
@@ -353,12 +373,13 @@ void SphFluid::force_pass(const double* x, const double* v, double* a) const {
         double sd = -wall.offset;
         for (int d = 0; d < D; ++d) sd += wall.normal[static_cast<std::size_t>(d)] * xi[d];
         if (sd < d0) {
-          const double q = 1.0 - sd / d0;
+          const double qw = 1.0 - sd / d0;
           for (int d = 0; d < D; ++d)
-            acc[d] += k_wall * q * q * wall.normal[static_cast<std::size_t>(d)];
+            acc[d] += k_wall * qw * qw * wall.normal[static_cast<std::size_t>(d)];
         }
       }
     }
+    const Index i = order[k];
     for (int d = 0; d < D; ++d) a[D * i + d] = acc[d];
   }
 }
@@ -368,9 +389,8 @@ void SphFluid::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a) const {
     constexpr int D = decltype(dc)::value;
     sph::with_kernel(opt_.density_kernel,
                      [&](auto kd) { density_pass<D, decltype(kd)::value>(x.data()); });
-    sph::with_kernel(opt_.gradient_kernel, [&](auto kg) {
-      force_pass<D, decltype(kg)::value>(x.data(), v.data(), a.data());
-    });
+    sph::with_kernel(opt_.gradient_kernel,
+                     [&](auto kg) { force_pass<D, decltype(kg)::value>(v.data(), a.data()); });
   });
 }
 

@@ -191,7 +191,7 @@ class SphFluid final : public MechanicalSystem {
   template <int D, sph::KernelType KD>
   void density_pass(const double* x) const;
   template <int D, sph::KernelType KG>
-  void force_pass(const double* x, const double* v, double* a) const;
+  void force_pass(const double* v, double* a) const;
   template <int D>
   const sph::NeighbourGrid<D>& fluid_grid() const;
   template <int D>
@@ -212,10 +212,12 @@ class SphFluid final : public MechanicalSystem {
   std::vector<double> bx_, bvol_;  // boundary positions (dim each) and Akinci volumes
 
   // Scratch of one evaluation (the right-hand side allocates nothing after the first call).
-  mutable std::vector<double> rho_, p_, pr2_, inv_rho_;  // ρ, p, p/ρ², 1/ρ per particle
-  // Neighbours of each particle from the density pass: fluid (self included) in slots
-  // [i·capacity, i·capacity + count_i) of the index and distance arrays, then its boundary
-  // particles in the next bcount_i slots.
+  mutable std::vector<double> rho_, p_;  // ρ and p by particle index (observables)
+  // The same in cell order (slot k = particle order()[k]) with p/ρ², 1/ρ, masses, velocities.
+  mutable std::vector<double> srho_, sp_, spr2_, sinv_rho_, sm_, sv_;
+  // Neighbours of each slot from the density pass: fluid slots (self included) in
+  // [k·capacity, k·capacity + count_k) of the index and distance arrays, then boundary particle
+  // indices in the next bcount_k entries.
   mutable std::size_t nb_capacity_ = 32;
   mutable std::vector<std::size_t> nb_count_, nb_bcount_;  // fluid, then boundary neighbours
   mutable std::vector<Index> nb_index_;
