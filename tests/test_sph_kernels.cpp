@@ -514,6 +514,9 @@ void check_random_sets() {
       const std::vector<double> q = queries_for<D>(x, seed + 100, cell);
       const NeighbourGrid<D> g = built<D>(x, cell);
       EXPECT_EQ(g.size(), static_cast<Index>(x.size() / D));
+      // 13^D cells around 460 points: the dense bounding-box mode is the one tested here (the
+      // far sets below test the hashed mode).
+      EXPECT_TRUE(g.dense());
       for (double radius : {cell, 0.7 * cell, 0.3 * cell})
         EXPECT_TRUE(matches_brute_force(g, x, q, radius))
             << D << "D seed " << seed << " cell " << cell << " radius " << radius;
@@ -556,6 +559,7 @@ void check_far_sets() {
     for (std::size_t i = 0; i < x.size(); i += 3 * D)  // off-set queries near the points
       for (int d = 0; d < D; ++d) q.push_back(x[i + static_cast<std::size_t>(d)] + jitter(rng));
     const NeighbourGrid<D> g = built<D>(x, cell);
+    EXPECT_FALSE(g.dense());  // points 1e12 apart: the hashed mode
     for (double radius : {cell, 0.6 * cell})
       EXPECT_TRUE(matches_brute_force(g, x, q, radius)) << D << "D seed " << seed;
   }
