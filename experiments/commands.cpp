@@ -44,8 +44,10 @@ void list_integrators(std::ostream& out) {
 
 void list_experiments(std::ostream& out) {
   Table t{{"experiment", "writes", "description"}, {}};
-  t.rows.push_back(
-      {"solve", "trajectory CSV (t,y0,y1,...)", "one fixed-step run; final state and statistics"});
+  t.rows.push_back({"solve",
+                    "trajectory CSV (t,y0,y1,...); with --frames: VTK/CSV frames, observables.csv",
+                    "one run (fixed step, the model's suggested step, or adaptive); final state, "
+                    "invariants, observables and statistics"});
   t.rows.push_back(
       {"convergence", "convergence.{csv,md,json}", "global error at t_end vs h, observed orders"});
   t.rows.push_back(

@@ -53,7 +53,9 @@ int main(int argc, char** argv) {
   SolveOptions solve_opt;
   std::vector<std::string> solve_params;
   auto* solve =
-      app.add_subcommand("solve", "one fixed-step run: final state, invariants, statistics");
+      app.add_subcommand("solve",
+                         "one run: final state, invariants, observables, statistics; --frames "
+                         "writes particle frames");
   solve->add_option("--model", solve_opt.model, "model name")->required();
   solve->add_option("--integrator", solve_opt.integrator, "integrator name")->required();
   solve->add_option("--h", solve_opt.h,
