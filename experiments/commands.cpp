@@ -171,7 +171,17 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   fo.outputs = frames ? opt.frames : opt.outputs;
   long n_steps = 0;
   if (!adaptive) {
-    n_steps = fixed_step_count(sys.initial_time(), t_end, h, fo.max_steps);
+    if (suggested) {
+      // A stability limit must not be exceeded: N = ceil(T/h) steps of T/N <= h (the driver's
+      // round(T/h) could make the step up to 1/(2N) larger).
+      const double span = t_end - sys.initial_time();
+      require_input(span > 0, "--t-end must be > the model's initial time");
+      fo.h = span / std::ceil(span / h * (1.0 - 1e-12));
+    }
+    n_steps = fixed_step_count(sys.initial_time(), t_end, fo.h, fo.max_steps);
+    if (frames && opt.frames > n_steps)
+      err << "solve: " << opt.frames << " frames requested but the run has " << n_steps
+          << " steps: one frame per step\n";
     if (n_steps > 10'000'000) err << "solve: " << n_steps << " steps; this may take a while\n";
     if (suggested)
       err << "solve: no --h given: using the model's suggested step h = " << format_full(h) << " ("
@@ -205,13 +215,14 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
       }
       if (frame_writer) {
         frame_writer->write(t, y);
-        err << "solve: frame " << frame_writer->frames() - 1 << "/" << opt.frames
+        err << "solve: frame " << frame_writer->frames() - 1 << "/"
+            << (adaptive ? opt.frames : std::min(opt.frames, n_steps))
             << " at t = " << format_short(t, 4) << "\n";
       }
     };
   }
   const Vec y0 = sys.initial_state();
-  const RunResult r = adaptive ? run_adaptive(sys, integ, {t_end, opt.outputs}, obs)
+  const RunResult r = adaptive ? run_adaptive(sys, integ, {t_end, fo.outputs}, obs)
                                : run_fixed_step(sys, integ, fo, obs);
   if (!traj_path.empty()) {
     // Written whatever the status: the trajectory up to a blow-up is part of the result.
@@ -239,7 +250,13 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   out << "status       " << to_string(r.stats.status) << "\n";
   if (!r.stats.message.empty()) out << "message      " << r.stats.message << "\n";
   out << "\nfinal state at t = " << format_full(r.t) << ":\n";
-  for (Index i = 0; i < r.y.size(); ++i) out << "  y" << i << " = " << format_full(r.y[i]) << "\n";
+  // Large states (particle and network models) print their first components only.
+  constexpr Index kPrintMax = 24;
+  const Index shown = r.y.size() <= kPrintMax ? r.y.size() : kPrintMax / 2;
+  for (Index i = 0; i < shown; ++i) out << "  y" << i << " = " << format_full(r.y[i]) << "\n";
+  if (shown < r.y.size())
+    out << "  ... (" << r.y.size() - shown << " more of " << r.y.size()
+        << " components: --out writes them all)\n";
   if (sys.has_exact() && r.stats.status == Status::ok) {
     Vec ye(sys.dimension());
     sys.exact(r.t, ye);

@@ -104,6 +104,13 @@ FrameWriter::FrameWriter(const OdeSystem& sys, std::filesystem::path dir, FrameF
     csv_ += "," + q.name;
   }
   csv_ += "\n";
+  // Fail before the run, not at its first frame, when the directory is not writable.
+  try {
+    write_file_atomic(dir_ / "observables.csv", csv_);
+  } catch (const std::exception& e) {
+    throw BadInput("--out '" + dir_.string() + "': cannot write into the output directory (" +
+                   e.what() + ")");
+  }
 }
 
 void FrameWriter::write(double t, CVecRef y) {

@@ -123,7 +123,7 @@ void ImplicitCore::reset(const OdeSystem& sys) {
   sys_ = &sys;
   const Index n = sys.dimension();
   source_ = opt_.jacobian;
-  LinearSolverOptions lin = opt_.linear;
+  LinearSolverOptions lin = user_linear_;
   if (source_ == JacobianSource::automatic) {
     // Without an analytic Jacobian or a pattern, a dense finite-difference Jacobian costs 2n f
     // evaluations and n² memory: above the dense limit (e.g. an SPH fluid of 2,000 particles,

@@ -53,7 +53,7 @@ std::vector<int> color_columns(const SparseMat& pattern, int* n_colors);
 
 class ImplicitCore {
  public:
-  explicit ImplicitCore(ImplicitOptions opt) : opt_(std::move(opt)) {}
+  explicit ImplicitCore(ImplicitOptions opt) : opt_(std::move(opt)), user_linear_(opt_.linear) {}
 
   // Chooses the Jacobian source and linear solver for `sys`, computes the pattern of W and
   // runs the symbolic analysis. BadInput for impossible combinations (e.g. matrix_free with a
@@ -89,6 +89,9 @@ class ImplicitCore {
   void rebuild_w_pattern();
 
   ImplicitOptions opt_;
+  // The linear-solver options as the user gave them: every reset() resolves `automatic` choices
+  // from these (opt_.linear holds the resolved ones of the current run).
+  LinearSolverOptions user_linear_;
   JacobianSource source_ = JacobianSource::analytic;
   std::unique_ptr<LinearSolver> solver_;
   const OdeSystem* sys_ = nullptr;

@@ -25,9 +25,11 @@ namespace {
 
 enum class Lin { automatic, dense, band, klu, spgmr };
 
-// linear_solver=auto: a dense matrix up to this many unknowns (18 MB at 1500), matrix-free SPGMR
-// above, where a dense n² matrix would cost gigabytes (24,576 unknowns: 4.8 GB) and banded or
-// sparse factorisations of particle and network problems fill in.
+// linear_solver=auto: a dense matrix up to this many unknowns (32 MB at 2000), matrix-free SPGMR
+// above, where a dense n² matrix would cost gigabytes (24,576 unknowns: 4.8 GB). SPGMR also for
+// models with an analytic sparse Jacobian: KLU on the mass-spring cloth (no diagonal in the
+// x-block) made SUNDIALS 6's SUNMatScaleAddI rebuild the matrix quadratically (issue #10), and
+// SPH scenes have no Jacobian at all.
 constexpr Index kAutoDenseMax = 2000;
 enum class Kind { cvode_bdf, cvode_adams, arkode_erk, arkode_dirk, arkode_imex };
 

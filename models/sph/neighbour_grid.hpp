@@ -1,5 +1,5 @@
-// Neighbour search on a uniform grid of cubic cells, stored as a hashed cell list built by a
-// counting sort (O(n) time and memory whatever the spread of the points).
+// Neighbour search on a uniform grid of cubic cells (a dense box grid or a hashed cell list),
+// built by a counting sort (O(n) time; O(n) memory in the hashed mode).
 //
 // build(x, n, radius) maps each point to the integer cell floor(x / cell), cell = radius (1 + 1e-6)
 // (per coordinate, clamped to ±kCellLimit so that points far away or non-finite never overflow;

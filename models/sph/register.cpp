@@ -18,7 +18,7 @@ struct SceneDefaults {
   // Equilibrium masses by default: with lattice masses Akinci's volumes make the first fluid row
   // at a wall 5% over-dense at the start (7% in a corner), and the resulting kick sent the 3D
   // dam break's front 30% ahead of Koshizuka & Oka at T = 1.16 (equilibrium: +3%) and up the
-  // left wall; the 2D front leads by 8-14% instead of 9-16% for T in [1, 3].
+  // left wall (README, SPH fluid, for the measured 2D fronts).
   std::string masses = "equilibrium";
   std::string support = "2.5";
 };
@@ -35,7 +35,8 @@ std::vector<ParamSpec> fluid_specs(const SceneDefaults& d, std::vector<ParamSpec
                P::text,
                d.masses,
                "particle masses: lattice (rho0 / kernel sum over a full lattice) or equilibrium "
-               "(every particle starts at exactly rho0)",
+               "(every particle starts at exactly rho0, or at the hydrostatic density in scenes "
+               "at rest under gravity)",
                {"lattice", "equilibrium"}});
   s.push_back({"rho0", P::real, "1000", "rest density (kg/m^3)"});
   s.push_back({"c0", P::real, d.c0,

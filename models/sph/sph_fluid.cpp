@@ -169,10 +169,17 @@ void SphFluid::solve_equilibrium_masses() {
   cg.setMaxIterations(10 * static_cast<int>(n_));
   cg.compute(a);
   const Vec m = cg.solveWithGuess(rhs, Vec::Constant(n_, mass_));
-  require_input(cg.info() == Eigen::Success && m.allFinite() && m.minCoeff() > 0,
-                "model '" + name_ +
-                    "': masses=equilibrium found no positive particle masses (min " +
-                    short_num(m.minCoeff()) + "); use masses=lattice");
+  require_input(cg.info() == Eigen::Success && m.allFinite(),
+                "model '" + name_ + "': masses=equilibrium: CG did not solve the kernel system (" +
+                    std::to_string(cg.iterations()) + " iterations, error " +
+                    short_num(cg.error()) +
+                    "; the kernel may not be positive definite, e.g. cubic_spline); use "
+                    "masses=lattice");
+  require_input(m.minCoeff() > 0,
+                "model '" + name_ + "': masses=equilibrium gives negative particle masses (min " +
+                    short_num(m.minCoeff()) +
+                    "; large supports and kernels that are not positive definite do this); use "
+                    "masses=lattice");
   for (Index i = 0; i < n_; ++i) m_[static_cast<std::size_t>(i)] = m[i];
 }
 
@@ -520,6 +527,12 @@ std::vector<Invariant> SphFluid::observables() const {
   out.push_back({"kinetic_energy", [this](double, CVecRef y) { return kinetic_energy(y); }});
   out.push_back({"max_density_error", [this](double, CVecRef y) { return max_density_error(y); }});
   out.push_back({"max_compression", [this](double, CVecRef y) { return max_compression(y); }});
+  out.push_back({"max_speed", [this](double, CVecRef y) {
+                   double v2 = 0.0;
+                   for (Index i = 0; i < n_; ++i)
+                     v2 = std::max(v2, y.segment(dofs() + dim_ * i, dim_).squaredNorm());
+                   return std::sqrt(v2);
+                 }});
   if (scene_.dam_break) {
     out.push_back({"front", [this](double, CVecRef y) { return front(y); }});
     out.push_back({"height_left", [this](double, CVecRef y) { return height_left(y); }});
@@ -539,7 +552,8 @@ std::vector<Invariant> SphFluid::observables() const {
 }
 
 std::optional<double> SphFluid::stiffness(double, CVecRef) const {
-  const double rate = c_ / opt_.support + 8.0 * nu_ / (hs_ * hs_);
+  double rate = c_ / opt_.support + 8.0 * nu_ / (hs_ * hs_);
+  if (opt_.boundary == SphBoundary::penalty) rate = std::max(rate, penalty_frequency());
   if (!(rate > 0)) return std::nullopt;
   return rate;
 }
@@ -549,9 +563,18 @@ std::optional<SuggestedStep> SphFluid::suggested_step() const {
       c_ > 0 ? 0.4 * opt_.support / c_ : std::numeric_limits<double>::infinity();
   const double viscous =
       nu_ > 0 ? 0.125 * hs_ * hs_ / nu_ : std::numeric_limits<double>::infinity();
+  // Penalty walls: a particle against a wall oscillates at ω = √(2K/d0) = √2 c/Δx; at
+  // support/Δx above 3.5 that exceeds what 0.4 h/c resolves (symplectic Euler needs ω h < 2), so
+  // the step is also capped at 1/ω.
+  const double wall = opt_.boundary == SphBoundary::penalty && penalty_frequency() > 0
+                          ? 1.0 / penalty_frequency()
+                          : std::numeric_limits<double>::infinity();
   if (!std::isfinite(acoustic) && !std::isfinite(viscous)) return std::nullopt;
   SuggestedStep s;
-  if (acoustic <= viscous) {
+  if (wall < std::min(acoustic, viscous)) {
+    s.h = wall;
+    s.rule = "penalty-wall limit 1/omega, omega = sqrt(2) c/dx = " + short_num(penalty_frequency());
+  } else if (acoustic <= viscous) {
     s.h = acoustic;
     s.rule = "CFL 0.4 h/c with support radius h = " + short_num(opt_.support) +
              ", sound speed c = " + short_num(c_);

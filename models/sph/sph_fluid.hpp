@@ -46,8 +46,9 @@
 //     plane n·x = d with the fluid on the side n·x > d and distance s = n·x - d < d0 = Δx/2,
 //     +K (1 - s/d0)² n with K = c²/(4 d0) (potential K d0/3 (1 - s/d0)³, C¹ at s = d0). Fluid
 //     starting on the lattice (s = Δx/2) feels nothing; the wall's stiffness ω² = 2K/d0 gives
-//     ω·(0.4 h/c) = 1.41 at the suggested step (stable for symplectic Euler), and K d0/3 = c²/12
-//     per unit mass stops any particle slower than c/√6. (A range of h was tried first: fluid
+//     ω·(0.4 h/c) = 0.566 h/Δx (1.41 at the default support 2.5 Δx), so the suggested step is
+//     also capped at 1/ω and stiffness() includes ω; K d0/3 = c²/12 per unit mass stops any
+//     particle slower than c/√6. (A range of h was tried first: fluid
 //     within h of a wall was kicked at 0.6 c²/h and the dam break's front ran 2.6× too fast.)
 // The symmetric and variational pair terms and both viscosities are antisymmetric per pair, so
 // without gravity and boundaries total linear momentum is conserved; both viscosities dissipate
@@ -60,7 +61,8 @@
 // and the penalty force, E is conserved in continuous time: energy drift then measures the
 // integrator. The mirrored wall (f = 2) does work that is not the gradient of E.
 //
-// Neighbour search (neighbour_grid.hpp): a hashed uniform grid with cell size h, rebuilt from the
+// Neighbour search (neighbour_grid.hpp): a uniform grid of cells h (1 + 1e-6) — dense over the
+// particles' bounding box, hashed when that box is large — rebuilt from the
 // positions at every right-hand-side evaluation (stage positions differ); the boundary particles'
 // grid is built once. Both passes (density, then forces) gather per particle in cell order with
 // OpenMP when there are at least `parallel_threshold` particles; every particle's sums run in an
@@ -70,12 +72,14 @@
 //
 // velocity_dependent() is true exactly when a viscosity is on (μ > 0 or α > 0).
 // stiffness(): c/h (acoustic) + 8ν/h_s² (viscous, ν = μ/ρ0 or Monaghan's effective
-// α c h_s/8), a rough spectral-radius scale. suggested_step(): min(0.4 h/c, 0.125 h_s²/ν).
+// α c h_s/8), a rough spectral-radius scale (at least the penalty walls' ω). suggested_step():
+// min(0.4 h/c, 0.125 h_s²/ν, and 1/ω with penalty walls).
 // No analytic Jacobian: implicit methods and CVODE/ARKODE use finite-difference
 // Jacobian-vector products (matrix-free Krylov), which their `auto` settings choose for it.
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -108,7 +112,8 @@ struct SphOptions {
   std::array<double, 3> gravity{};
   SphBoundary boundary = SphBoundary::particles;
   // false: every particle has the lattice mass ρ0/Σ_lattice W; true: masses solve
-  // Σ_j m_j W_ij + ρ0 Σ_b V_b W_ib = ρ0 at the initial positions (see the header comment).
+  // Σ_j m_j W_ij + ρ0 Σ_b V_b W_ib = ρ_i⁰ at the initial positions, ρ_i⁰ = ρ0 or the
+  // hydrostatic density of scenes at rest (see the header comment).
   bool equilibrium_masses = false;
   bool mirror_boundary_pressure = false;  // f = 2 in the boundary pressure force (see above)
   Index parallel_threshold = 512;         // particles; below this the passes run serially
@@ -179,6 +184,8 @@ class SphFluid final : public MechanicalSystem {
   // Penalty wall range d0 = Δx/2 and strength K = c²/(4 d0) (see the header comment).
   double wall_range() const { return 0.5 * opt_.spacing; }
   double wall_strength() const { return 0.25 * c_ * c_ / wall_range(); }
+  // ω = √(2K/d0) of a particle against a penalty wall.
+  double penalty_frequency() const { return std::sqrt(2.0 * wall_strength() / wall_range()); }
   double front(CVecRef y) const;        // max_i x_i + Δx/2 (dam break)
   double height_left(CVecRef y) const;  // max y (+Δx/2) of fluid within h of the left wall
   // Shepard-normalised SPH interpolation of the pressure at a point (0 when no fluid is near).
