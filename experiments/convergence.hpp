@@ -51,8 +51,8 @@ struct ConvergenceRow {
 struct ConvergenceResult {
   std::vector<ConvergenceRow> rows;
   std::string reference_description;  // "exact" or "rk4 with h = ..."
-  double h = 0;            // the coarsest step requested (spec.h, or the suggested step)
-  std::string h_source;    // "--h" or "suggested step: <the model's rule>"
+  double h = 0;                       // the coarsest step requested (spec.h, or the suggested step)
+  std::string h_source;               // "--h" or "suggested step: <the model's rule>"
 };
 
 // Progress lines go to `progress` when non-null.

@@ -206,6 +206,25 @@ TEST(Cli, ConvergenceWritesContractFiles) {
   std::filesystem::remove_all(dir);
 }
 
+// The cells of every line of a CSV file (no quoting: stiffbench's numeric tables).
+std::vector<std::vector<std::string>> read_csv(const std::filesystem::path& file) {
+  std::vector<std::vector<std::string>> rows;
+  std::ifstream f(file);
+  for (std::string line; std::getline(f, line);) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+std::string join_cells(const std::vector<std::string>& cells) {
+  std::string line;
+  for (std::size_t i = 0; i < cells.size(); ++i) line += (i ? "," : "") + cells[i];
+  return line;
+}
+
 // Implicit rows of convergence.csv carry their Jacobian and linear-solve counts (issue #3).
 TEST(Cli, ConvergenceRowsOfImplicitMethodsCountJacobiansAndSolves) {
   const auto dir = std::filesystem::temp_directory_path() / "sb_conv_implicit";
@@ -216,14 +235,11 @@ TEST(Cli, ConvergenceRowsOfImplicitMethodsCountJacobiansAndSolves) {
           "--h 0.1 --levels 2 --out " +
           dir.string());
   ASSERT_EQ(o.code, 0) << o.err;
-  std::ifstream f(dir / "convergence.csv");
-  std::string line;
-  std::getline(f, line);
+  const auto table = read_csv(dir / "convergence.csv");
   int rows = 0;
-  while (std::getline(f, line)) {
-    std::vector<std::string> cells;
-    std::stringstream ss(line);
-    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+  for (std::size_t r = 1; r < table.size(); ++r) {
+    const auto& cells = table[r];
+    const std::string line = join_cells(cells);
     ASSERT_EQ(cells.size(), 12u) << line;
     EXPECT_GT(std::stol(cells[8]), 0) << line;  // jac_evals
     EXPECT_GT(std::stol(cells[9]), 0) << line;  // lin_solves
@@ -245,17 +261,15 @@ TEST(Cli, WorkPrecisionOnHiresErrorFallsAsWorkRises) {
           "--repeats 1 --out " +
           dir.string());
   ASSERT_EQ(o.code, 0) << o.err;
-  std::ifstream f(dir / "work_precision.csv");
-  std::string line;
-  std::getline(f, line);
+  const auto table = read_csv(dir / "work_precision.csv");
+  ASSERT_FALSE(table.empty());
   EXPECT_EQ(
-      line,
+      join_cells(table.front()),
       "model,integrator,setting,error,f_evals,jac_evals,lin_solves,steps,wall_s,status,mescd");
   std::map<std::string, std::vector<std::pair<long, double>>> by_method;
-  while (std::getline(f, line)) {
-    std::vector<std::string> c;
-    std::stringstream ss(line);
-    for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
+  for (std::size_t r = 1; r < table.size(); ++r) {
+    const auto& c = table[r];
+    const std::string line = join_cells(c);
     ASSERT_EQ(c.size(), 11u) << line;
     ASSERT_EQ(c[9], "ok") << line;
     by_method[c[1]].emplace_back(std::stol(c[4]), std::stod(c[3]));
@@ -269,18 +283,6 @@ TEST(Cli, WorkPrecisionOnHiresErrorFallsAsWorkRises) {
           << method << " at f_evals " << points[i].first;
   }
   std::filesystem::remove_all(dir);
-}
-
-std::vector<std::vector<std::string>> read_csv(const std::filesystem::path& file) {
-  std::vector<std::vector<std::string>> rows;
-  std::ifstream f(file);
-  for (std::string line; std::getline(f, line);) {
-    std::vector<std::string> cells;
-    std::stringstream ss(line);
-    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
-    rows.push_back(cells);
-  }
-  return rows;
 }
 
 // Issue #8: the five SPH scenes are listed, and describe prints every parameter and the

@@ -142,6 +142,24 @@ TEST(SphModel, DropConservesMomentum) {
 // ---------------------------------------------------------------------------------------------
 // Viscosity.
 
+// Four random velocity fields in [-1, 1]: two on the initial positions, two on positions
+// jittered by up to 0.2 Δx; calls check(y, label) for each.
+template <class Check>
+void for_random_states(const SphFluid& f, unsigned seed, Check&& check) {
+  const Index nd = f.dofs();
+  const double dx = f.options().spacing;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 4; ++trial) {
+    Vec y = f.initial_state();
+    for (Index k = 0; k < nd; ++k) {
+      if (trial >= 2) y[k] += 0.2 * dx * u(rng);
+      y[nd + k] = u(rng);
+    }
+    check(y, "random state " + std::to_string(trial));
+  }
+}
+
 // Müller's viscosity with the pressure off (k = 0, so p = k(ρ - ρ0) = 0), no gravity, no walls:
 // a_i = (μ/ρ_i) Σ_j m_j (v_j - v_i)/ρ_j L(r_ij), L = 40/(π h⁵)(h - r) ≥ 0 (REFERENCES.md), so
 //   dKE/dt = Σ_i m_i v_i·a_i = -(μ/2) Σ_{i,j} m_i m_j L_ij/(ρ_i ρ_j) |v_i - v_j|²  ≤ 0,
@@ -155,7 +173,7 @@ TEST(SphModel, ViscosityNeverIncreasesKineticEnergy) {
   const SphFluid& f = fluid(*sys);
   ASSERT_TRUE(f.velocity_dependent());
   const Index n = f.fluid_particles(), nd = f.dofs();
-  const double h = f.options().support, dx = f.options().spacing;
+  const double h = f.options().support;
   const auto& m = f.particle_masses();
   auto expected_power = [&](CVecRef y) {
     const Vec rho = f.densities(y.head(nd));
@@ -181,16 +199,7 @@ TEST(SphModel, ViscosityNeverIncreasesKineticEnergy) {
   };
 
   // Random velocity fields on the initial and on jittered positions.
-  std::mt19937_64 rng(42);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  for (int trial = 0; trial < 4; ++trial) {
-    Vec y = f.initial_state();
-    for (Index k = 0; k < nd; ++k) {
-      if (trial >= 2) y[k] += 0.2 * dx * u(rng);
-      y[nd + k] = u(rng);
-    }
-    check(y, "random state " + std::to_string(trial));
-  }
+  for_random_states(f, 42, check);
   // States along a trajectory from the drop's oscillating initial velocity (rk4 at the suggested
   // step, which is the viscous limit 0.125 h_s²/ν here since k = 0).
   auto integ = make("rk4");
@@ -226,7 +235,7 @@ TEST(SphModel, ArtificialViscosityNeverIncreasesKineticEnergy) {
   ASSERT_TRUE(f.velocity_dependent());
   ASSERT_FALSE(f0.velocity_dependent());
   const Index n = f.fluid_particles(), nd = f.dofs();
-  const double h = f.options().support, hs = 0.5 * h, dx = f.options().spacing;
+  const double h = f.options().support, hs = 0.5 * h;
   const double c = f.sound_speed();
   EXPECT_DOUBLE_EQ(c, f.options().c0);  // k = c0² by default
   const auto& m = f.particle_masses();
@@ -259,16 +268,7 @@ TEST(SphModel, ArtificialViscosityNeverIncreasesKineticEnergy) {
     EXPECT_LT(expect, 0.0);
     EXPECT_NEAR(p, expect, 1e-12 * std::abs(expect) + 1e-14 * scale);
   };
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  for (int trial = 0; trial < 4; ++trial) {
-    Vec y = f.initial_state();
-    for (Index k = 0; k < nd; ++k) {
-      if (trial >= 2) y[k] += 0.2 * dx * u(rng);
-      y[nd + k] = u(rng);
-    }
-    check(y, "random state " + std::to_string(trial));
-  }
+  for_random_states(f, 7, check);
   auto integ = make("symplectic_euler");
   const double hstep = f.suggested_step()->h;
   const RunResult r =

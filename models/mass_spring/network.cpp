@@ -1,5 +1,7 @@
 #include "models/mass_spring/network.hpp"
 
+#include "models/detail/with_dim.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
@@ -42,18 +44,6 @@ double end_sign(const DistanceConstraint& c, Index p) { return p == c.i ? -1.0 :
 
 std::string item(const char* what, std::size_t index) {
   return std::string(what) + " " + std::to_string(index);
-}
-
-// Calls f(std::integral_constant<int, D>{}) for the network's dimension D ∈ {1, 2, 3}: one
-// virtual-free dispatch per whole-vector call, static code inside the per-point loops.
-template <class F>
-void with_dim(int dim, F&& f) {
-  if (dim == 1)
-    f(std::integral_constant<int, 1>{});
-  else if (dim == 2)
-    f(std::integral_constant<int, 2>{});
-  else
-    f(std::integral_constant<int, 3>{});
 }
 
 }  // namespace
@@ -254,7 +244,7 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
 }
 
 void MassSpringNetwork::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a) const {
-  with_dim(dim_, [&](auto dim) {
+  detail::with_dim<1, 3>(dim_, [&](auto dim) {
     acceleration_impl<decltype(dim)::value>(x.data(), v.data(), a.data());
   });
 }
@@ -345,7 +335,8 @@ void MassSpringNetwork::fill_blocks(CVecRef x, CVecRef v, SparseMat* k, SparseMa
   }
   double* kv = k ? k->valuePtr() : nullptr;
   double* dv = d ? d->valuePtr() : nullptr;
-  with_dim(dim_, [&](auto dim) { blocks_impl<decltype(dim)::value>(x.data(), v.data(), kv, dv); });
+  detail::with_dim<1, 3>(
+      dim_, [&](auto dim) { blocks_impl<decltype(dim)::value>(x.data(), v.data(), kv, dv); });
 }
 
 void MassSpringNetwork::stiffness_block(double, CVecRef x, CVecRef v, SparseMat& k) const {
@@ -517,7 +508,7 @@ std::pair<double, double> MassSpringNetwork::stiffness_eigen_range(CVecRef x) co
   for (Index i = 0; i < nf; ++i) inv_sqrt_m[i] = 1.0 / std::sqrt(dof_mass_[free_dofs[i]]);
   auto apply = [&](const Vec& u, Vec& out) {
     for (Index i = 0; i < nf; ++i) z[free_dofs[i]] = inv_sqrt_m[i] * u[i];
-    with_dim(dim_, [&](auto dim) {
+    detail::with_dim<1, 3>(dim_, [&](auto dim) {
       stiffness_matvec<decltype(dim)::value>(x.data(), z.data(), hz.data());
     });
     for (Index i = 0; i < nf; ++i) out[i] = inv_sqrt_m[i] * hz[free_dofs[i]];

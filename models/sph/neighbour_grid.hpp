@@ -47,7 +47,6 @@ class NeighbourGrid {
   // apart into cells two apart (found by the brute-force test), and the 3^D search would miss
   // them. The margin exceeds that rounding for every coordinate below the clamp limit.
   void build(const double* x, Index n, double radius) {
-    radius_ = radius;
     inv_cell_ = 1.0 / (radius * (1.0 + 1e-6));
     n_ = n;
     const std::size_t nu = static_cast<std::size_t>(n);
@@ -111,7 +110,6 @@ class NeighbourGrid {
   }
 
   Index size() const { return n_; }
-  double radius() const { return radius_; }
   const std::vector<Index>& order() const { return order_; }
   // Coordinates in cell order (D per point): positions()[D·slot + d] = x[D·order()[slot] + d].
   const double* positions() const { return pos_.data(); }
@@ -227,7 +225,7 @@ class NeighbourGrid {
     return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_);
   }
 
-  double inv_cell_ = 1.0, radius_ = 0.0;
+  double inv_cell_ = 1.0;
   bool dense_ = false;
   std::array<std::int64_t, D> lo_{}, hi_{}, stride_{};
   std::vector<std::int64_t> point_cell_;

@@ -87,8 +87,8 @@ std::vector<ParamSpec> fluid_specs(const SceneDefaults& d, std::vector<ParamSpec
 }
 
 // Reads the fluid parameters; `fall_height` sets the automatic sound speed.
-SphOptions read_fluid(const Params& p, int dim, double spacing, double fall_height,
-                      const std::string& model, bool walls) {
+SphOptions read_fluid(const Params& p, double spacing, double fall_height, const std::string& model,
+                      bool walls) {
   const std::string who = model + ": parameter ";
   SphOptions o;
   o.spacing = spacing;
@@ -128,7 +128,6 @@ SphOptions read_fluid(const Params& p, int dim, double spacing, double fall_heig
   const long threshold = p.integer("parallel_threshold");
   require_input(threshold >= 0, who + "'parallel_threshold' must be >= 0");
   o.parallel_threshold = threshold;
-  (void)dim;
   return o;
 }
 
@@ -173,7 +172,7 @@ void add_dam_break(ModelRegistry& reg, int dim) {
                            name + ": parameter 'wall_height' must be >= 2");
              if (dim == 3) o.depth = p.real("depth");
              o.layers = int_param(p, "boundary_layers", name, 1, 10);
-             const SphOptions f = read_fluid(p, dim, o.a / o.n, 2.0 * o.a, name, true);
+             const SphOptions f = read_fluid(p, o.a / o.n, 2.0 * o.a, name, true);
              return std::make_unique<SphFluid>(name, make_dam_break_scene(o), f);
            }});
 }
@@ -200,7 +199,7 @@ void add_tank(ModelRegistry& reg, int dim) {
              o.n = int_param(p, "n", name, 2, 2000);
              if (dim == 3) o.depth = p.real("depth");
              o.layers = int_param(p, "boundary_layers", name, 1, 10);
-             const SphOptions f = read_fluid(p, dim, o.height / o.n, o.height, name, true);
+             const SphOptions f = read_fluid(p, o.height / o.n, o.height, name, true);
              return std::make_unique<SphFluid>(name, make_tank_scene(o), f);
            }});
 }
@@ -234,8 +233,7 @@ void add_drop(ModelRegistry& reg) {
                                                : DropOptions::Velocity::none;
              o.rate = p.real("rate");
              o.drift = p.real("drift");
-             const SphOptions f =
-                 read_fluid(p, 2, 2.0 * o.radius / o.n, 2.0 * o.radius, name, false);
+             const SphOptions f = read_fluid(p, 2.0 * o.radius / o.n, 2.0 * o.radius, name, false);
              return std::make_unique<SphFluid>(name, make_drop_scene(o), f);
            }});
 }

@@ -7,17 +7,11 @@
 
 #include <Eigen/IterativeLinearSolvers>
 
+#include "models/detail/with_dim.hpp"
+
 namespace stiffbench {
 
 namespace {
-
-template <class F>
-void with_dim(int dim, F&& f) {
-  if (dim == 2)
-    f(std::integral_constant<int, 2>{});
-  else
-    f(std::integral_constant<int, 3>{});
-}
 
 std::string short_num(double x) {
   std::ostringstream os;
@@ -110,7 +104,7 @@ SphFluid::SphFluid(std::string name, SphScene scene, SphOptions options)
         bx_[static_cast<std::size_t>(dim_ * b + d)] =
             scene_.boundary_x[static_cast<std::size_t>(b)][static_cast<std::size_t>(d)];
     bvol_.assign(static_cast<std::size_t>(nb), 0.0);
-    with_dim(dim_, [&](auto dc) {
+    detail::with_dim<2, 3>(dim_, [&](auto dc) {
       constexpr int D = decltype(dc)::value;
       auto& g = const_cast<sph::NeighbourGrid<D>&>(boundary_grid<D>());
       g.build(bx_.data(), nb, opt_.support);
@@ -144,7 +138,7 @@ void SphFluid::solve_equilibrium_masses() {
                  ? (k_ > 0 ? opt_.rho0 + p / k_ : opt_.rho0)
                  : opt_.rho0 * std::pow(1.0 + p / tait_b_, 1.0 / opt_.tait_gamma);
   }
-  with_dim(dim_, [&](auto dc) {
+  detail::with_dim<2, 3>(dim_, [&](auto dc) {
     constexpr int D = decltype(dc)::value;
     auto& grid = const_cast<sph::NeighbourGrid<D>&>(fluid_grid<D>());
     grid.build(x.data(), n_, opt_.support);
@@ -392,7 +386,7 @@ void SphFluid::force_pass(const double* v, double* a) const {
 }
 
 void SphFluid::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a) const {
-  with_dim(dim_, [&](auto dc) {
+  detail::with_dim<2, 3>(dim_, [&](auto dc) {
     constexpr int D = decltype(dc)::value;
     sph::with_kernel(opt_.density_kernel,
                      [&](auto kd) { density_pass<D, decltype(kd)::value>(x.data()); });
@@ -402,7 +396,7 @@ void SphFluid::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a) const {
 }
 
 void SphFluid::compute_densities(CVecRef x) const {
-  with_dim(dim_, [&](auto dc) {
+  detail::with_dim<2, 3>(dim_, [&](auto dc) {
     sph::with_kernel(opt_.density_kernel, [&](auto kd) {
       density_pass<decltype(dc)::value, decltype(kd)::value>(x.data());
     });
