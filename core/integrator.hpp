@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/linear_stability.hpp"
 #include "core/ode_system.hpp"
 #include "core/solve_stats.hpp"
 
@@ -65,6 +66,10 @@ class Integrator {
   virtual bool supports_fixed_step() const { return true; }
   virtual bool supports_adaptive() const { return false; }
   virtual Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats);
+
+  // The method's linear stability (core/linear_stability.hpp) from its coefficients, with the
+  // parameters it was created with; empty where it has none (variable-order library methods).
+  virtual std::optional<LinearStability> linear_stability() const { return std::nullopt; }
 
  private:
   MethodInfo info_;

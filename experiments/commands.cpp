@@ -14,6 +14,7 @@
 #include "experiments/build_info.hpp"
 #include "experiments/catalog.hpp"
 #include "experiments/frames.hpp"
+#include "experiments/plotting.hpp"
 #include "experiments/work_precision.hpp"
 
 namespace stiffbench {
@@ -123,11 +124,6 @@ void cmd_describe(const std::string& name, std::ostream& out) {
   throw BadInput("unknown name '" + name + "': not a model (" + join(model_registry().names()) +
                  ") nor an integrator (" + join(integrator_registry().names()) + ")");
 }
-
-namespace {
-bool run_gnuplot(const std::string& script,
-                 const std::vector<std::pair<std::string, std::string>>& vars, std::ostream& err);
-}  // namespace
 
 void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   require_input(!opt.model.empty(), "--model is required");
@@ -302,234 +298,18 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
       char last[32];
       std::snprintf(last, sizeof last, "frame_%04ld.csv", frame_writer->frames() - 1);
       const std::string title = opt.model + ", " + opt.integrator + ", t = " + format_short(r.t, 4);
-      if (run_gnuplot("sph_frame.gp",
-                      {{"csvfile", (dir / last).string()},
-                       {"outfile", (dir / "frame_last.png").string()},
-                       {"ttl", title}},
-                      err))
+      if (run_plot("sph_frame.gp", dir / "frame_last",
+                   {{"csvfile", (dir / last).string()}, {"ttl", title}}, {}, PlotOptions{}, err))
         out << "plot: " << (dir / "frame_last.png").string() << "\n";
     }
     const auto cols = frame_writer->columns();
     if (std::find(cols.begin(), cols.end(), "Z") != cols.end() &&
-        run_gnuplot("dam_break_front.gp",
-                    {{"csvfile", (dir / "observables.csv").string()},
-                     {"outfile", (dir / "front.png").string()},
-                     {"ttl", opt.model + ", " + opt.integrator}},
-                    err))
+        run_plot("dam_break_front.gp", dir / "front",
+                 {{"csvfile", (dir / "observables.csv").string()},
+                  {"ttl", opt.model + ", " + opt.integrator}},
+                 {}, PlotOptions{}, err))
       out << "plot: " << (dir / "front.png").string() << "\n";
   }
-}
-
-namespace {
-
-// Runs plots/SCRIPT with gnuplot, defining `vars` (name, value) as gnuplot strings. Values go
-// inside gnuplot single quotes inside a shell double-quoted argument: single quotes are
-// doubled, characters the shell would expand are dropped.
-bool run_gnuplot(const std::string& script,
-                 const std::vector<std::pair<std::string, std::string>>& vars, std::ostream& err) {
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
-    err << "gnuplot not found: plots skipped\n";
-    return false;
-  }
-  std::ostringstream cmd;
-  cmd << "gnuplot -e \"";
-  for (const auto& [name, value] : vars) {
-    std::string quoted;
-    for (char ch : value) {
-      if (ch == '"' || ch == '$' || ch == '`' || ch == '\\') continue;
-      if (ch == '\'') quoted += '\'';
-      quoted += ch;
-    }
-    cmd << name << "='" << quoted << "'; ";
-  }
-  cmd << "\" '" << STIFFBENCH_SOURCE_DIR << "/plots/" << script << "'";
-  if (std::system(cmd.str().c_str()) != 0) {
-    err << "gnuplot failed: " << cmd.str() << "\n";
-    return false;
-  }
-  return true;
-}
-
-}  // namespace
-
-bool plot_convergence(const std::string& csv, const std::string& png, const std::string& title,
-                      const std::vector<std::string>& integrators, bool local, std::ostream& err) {
-  return run_gnuplot(
-      "convergence.gp",
-      {{"csvfile", csv},
-       {"outfile", png},
-       {"methods", join(integrators, " ")},
-       {"ttl", title},
-       {"ycolumn", local ? "5" : "6"},
-       {"ylab", local ? "local error (max-norm)" : "global error at t_end (max-norm)"}},
-      err);
-}
-
-bool plot_work_precision(const std::string& csv, const std::string& png, const std::string& title,
-                         const std::vector<std::string>& integrators, std::ostream& err) {
-  return run_gnuplot(
-      "work_precision.gp",
-      {{"csvfile", csv}, {"outfile", png}, {"methods", join(integrators, " ")}, {"ttl", title}},
-      err);
-}
-
-namespace {
-
-struct SuiteItem {
-  std::string name;
-  std::string title;
-  ConvergenceSpec spec;
-  bool local = false;
-};
-
-std::vector<SuiteItem> default_suite(bool quick) {
-  // The hand-written methods (the references are adaptive or have no fixed order: they appear
-  // in the work-precision studies).
-  std::vector<std::string> all, general;  // general: methods for first-order systems
-  for (const auto& e : integrator_registry().entries()) {
-    if (e.info.family == Family::reference) continue;
-    all.push_back(e.info.name);
-    if (!e.info.requires_.mechanical) general.push_back(e.info.name);
-  }
-  const int levels = quick ? 4 : 6;
-  auto spec = [&](std::string model, std::vector<std::string> integ, double t_end, double h,
-                  std::vector<std::string> params = {}, std::string reference = "auto") {
-    ConvergenceSpec s;
-    s.model = std::move(model);
-    s.integrators = std::move(integ);
-    s.t_end = t_end;
-    s.h = h;
-    s.levels = levels;
-    s.params = Params::from_assignments(params);
-    s.reference = std::move(reference);
-    return s;
-  };
-  return {
-      {"harmonic_oscillator", "Undamped harmonic oscillator (k = m = 1), t_end = 10",
-       spec("harmonic_oscillator", all, 10.0, 0.1), false},
-      {"harmonic_oscillator_local", "Local error, undamped harmonic oscillator",
-       spec("harmonic_oscillator", all, 10.0, 0.1), true},
-      // t_end = 5 is not a period: after exactly one period of this reversible orbit the
-      // first-order errors of symplectic Euler cancel and it would show order 2.
-      {"kepler_e05", "Kepler orbit, e = 0.5, t_end = 5 (exact via Kepler's equation)",
-       spec("kepler", all, 5.0, 0.02, {"e=0.5"}), false},
-      {"pendulum", "Nonlinear pendulum, θ0 = 1, t_end = 10 (reference rk4)",
-       spec("pendulum", all, 10.0, 0.1, {}, "rk4"), false},
-      {"prothero_robinson_l50",
-       "Prothero-Robinson, λ = -50: explicit methods unstable for h|λ| beyond their limit",
-       spec("prothero_robinson", general, 10.0, 0.1, {"lambda=-50"}), false},
-      {"prothero_robinson_stiff",
-       "Prothero-Robinson, λ = -1e6 (h|λ| up to 1e5): explicit methods unstable, L-stable "
-       "methods track φ",
-       spec("prothero_robinson", general, 10.0, 0.1, {"lambda=-1e6"}), false},
-  };
-}
-
-}  // namespace
-
-void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) {
-  namespace fs = std::filesystem;
-  const auto suite = default_suite(opt.quick);
-  std::ostringstream md;
-  md << "# stiffbench report\n\n";
-  md << "stiffbench " << STIFFBENCH_VERSION << ", revision " << git_revision() << ", "
-     << (opt.quick ? "quick" : "full") << " suite. Each section links its full-precision CSV, "
-     << "Markdown table and JSON metadata (spec, versions, compiler, flags, date).\n\n";
-  md << "Errors are max-norms against the exact solution or the named reference; 'observed order' "
-        "is "
-        "log(e_k/e_{k+1})/log(h_k/h_{k+1}) between consecutive step sizes.\n\n";
-  for (std::size_t i = 0; i < suite.size(); ++i) {
-    const SuiteItem& item = suite[i];
-    err << "== [" << i + 1 << "/" << suite.size() << "] " << item.name << "\n";
-    const ConvergenceResult res =
-        item.local ? run_local_error(item.spec, &err) : run_convergence(item.spec, &err);
-    const std::string name = item.local ? "local_error" : "convergence";
-    const fs::path dir = fs::path(opt.out_dir) / item.name;
-    write_convergence_outputs(dir.string(), name, item.spec, res, item.local);
-    const bool plotted =
-        plot_convergence((dir / (name + ".csv")).string(), (dir / (name + ".png")).string(),
-                         item.title, item.spec.integrators, item.local, err);
-    md << "## " << item.title << "\n\n";
-    md << "[" << name << ".csv](" << item.name << "/" << name << ".csv) · [" << name << ".md]("
-       << item.name << "/" << name << ".md) · [" << name << ".json](" << item.name << "/" << name
-       << ".json)\n\n";
-    if (plotted) md << "![" << item.title << "](" << item.name << "/" << name << ".png)\n\n";
-    md << "Reference: " << res.reference_description << ".\n\n";
-    Table summary{{"integrator", item.local ? "expected slope" : "order", "last observed order",
-                   "status of finest run"},
-                  {}};
-    for (const auto& integ : item.spec.integrators) {
-      const auto last = last_observed_order(res.rows, integ);
-      std::string status;
-      int order = 0;
-      for (const auto& r : res.rows)
-        if (r.integrator == integ) {
-          status = to_string(r.stats.status);
-          order = r.order + (item.local ? 1 : 0);
-        }
-      summary.rows.push_back(
-          {integ, std::to_string(order), last ? format_fixed(*last) : "-", status});
-    }
-    md << summary.to_markdown() << "\n";
-  }
-  // Work-precision: hand-written implicit methods against the library references.
-  struct WpItem {
-    std::string name, title;
-    WorkPrecisionSpec spec;
-  };
-  std::vector<WpItem> wp_items;
-  {
-    WorkPrecisionSpec w;
-    w.model = "hires";
-    w.integrators = {"cvode_bdf", "arkode_dirk", "gsl_msbdf",  "gsl_bsimp",
-                     "sdirk3",    "bdf2",        "rosenbrock2"};
-    w.levels = opt.quick ? 3 : 4;
-    w.tol_levels = opt.quick ? 4 : 7;
-    w.repeats = opt.quick ? 1 : 3;
-    wp_items.push_back(
-        {"hires_work_precision", "HIRES (t_end = 321.8122): work against precision", w});
-  }
-  for (std::size_t i = 0; i < wp_items.size(); ++i) {
-    const WpItem& item = wp_items[i];
-    err << "== [work-precision " << i + 1 << "/" << wp_items.size() << "] " << item.name << "\n";
-    const WorkPrecisionResult res = run_work_precision(item.spec, &err);
-    const fs::path dir = fs::path(opt.out_dir) / item.name;
-    write_work_precision_outputs(dir.string(), item.spec, res);
-    const bool plotted = plot_work_precision((dir / "work_precision.csv").string(),
-                                             (dir / "work_precision.png").string(), item.title,
-                                             item.spec.integrators, err);
-    md << "## " << item.title << "\n\n";
-    md << "[work_precision.csv](" << item.name << "/work_precision.csv) · [work_precision.md]("
-       << item.name << "/work_precision.md) · [work_precision.json](" << item.name
-       << "/work_precision.json)\n\n";
-    if (plotted) md << "![" << item.title << "](" << item.name << "/work_precision.png)\n\n";
-    md << "Reference: " << res.reference_description
-       << ". Fixed-step methods over h, references over "
-       << "rtol (atol = " << format_full(item.spec.atol_factor) << "·rtol).\n\n";
-    Table summary{{"integrator", "settings", "best error", "f_evals at best", "status"}, {}};
-    for (const auto& name : item.spec.integrators) {
-      int n = 0;
-      double best = std::numeric_limits<double>::infinity();
-      long fe = 0;
-      std::string status = "ok";
-      for (const auto& r : res.rows) {
-        if (r.integrator != name) continue;
-        ++n;
-        if (r.stats.status != Status::ok)
-          status = to_string(r.stats.status);
-        else if (r.error < best) {
-          best = r.error;
-          fe = r.stats.f_evals;
-        }
-      }
-      summary.rows.push_back({name, std::to_string(n),
-                              std::isfinite(best) ? format_short(best) : "-", std::to_string(fe),
-                              status});
-    }
-    md << summary.to_markdown() << "\n";
-  }
-  write_file_atomic(fs::path(opt.out_dir) / "REPORT.md", md.str());
-  out << "wrote " << (fs::path(opt.out_dir) / "REPORT.md").string() << "\n";
 }
 
 }  // namespace stiffbench

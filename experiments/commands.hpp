@@ -29,15 +29,8 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err);
 struct ReportOptions {
   std::string out_dir = "results";
   bool quick = false;
+  bool svg = false;
 };
 void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err);
-
-// Writes gnuplot's PNG of error against h for one study; returns false (and says why on `err`)
-// when gnuplot is not available.
-bool plot_convergence(const std::string& csv, const std::string& png, const std::string& title,
-                      const std::vector<std::string>& integrators, bool local, std::ostream& err);
-
-bool plot_work_precision(const std::string& csv, const std::string& png, const std::string& title,
-                         const std::vector<std::string>& integrators, std::ostream& err);
 
 }  // namespace stiffbench

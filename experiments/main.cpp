@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "experiments/catalog.hpp"
+#include "experiments/cli.hpp"
 #include "experiments/commands.hpp"
 #include "experiments/work_precision.hpp"
 
@@ -30,6 +31,8 @@ void add_study_flags(CLI::App* cmd, ConvergenceSpec& spec, std::string& integrat
       ->capture_default_str();
   cmd->add_option("--out", out_dir, "output directory")->capture_default_str();
 }
+
+PlotOptions g_plot;  // --svg of convergence, local-error and work-precision
 
 }  // namespace
 
@@ -90,6 +93,7 @@ int main(int argc, char** argv) {
       "convergence",
       "global error at t_end against h = H/refine^k; writes convergence.{csv,md,json}");
   add_study_flags(convergence, conv, conv_integrators, conv_params, conv_out);
+  convergence->add_flag("--svg", g_plot.svg, "also write the plot as SVG");
 
   ConvergenceSpec local;
   std::string local_integrators, local_out = "results";
@@ -102,6 +106,7 @@ int main(int argc, char** argv) {
   add_study_flags(local_error, local, local_integrators, local_params, local_out);
   local_error->get_option("--t-end")->required(false)->description(
       "unused by the local study's error; kept for symmetry");
+  local_error->add_flag("--svg", g_plot.svg, "also write the plot as SVG");
 
   WorkPrecisionSpec wp;
   std::string wp_integrators, wp_out = "results";
@@ -145,11 +150,18 @@ int main(int argc, char** argv) {
       ->add_option("--reference-atol", wp.reference_atol, "atol of an adaptive reference run")
       ->capture_default_str();
   work_precision->add_option("--out", wp_out, "output directory")->capture_default_str();
+  work_precision->add_flag("--svg", g_plot.svg, "also write the plot as SVG");
 
   ReportOptions report_opt;
   auto* report = app.add_subcommand("report", "run the default suite and write DIR/REPORT.md");
   report->add_option("--out", report_opt.out_dir, "output directory")->capture_default_str();
   report->add_flag("--quick", report_opt.quick, "fewer step sizes (a smoke run)");
+  report->add_flag("--svg", report_opt.svg, "also write each plot as SVG");
+
+  add_stability_command(app);
+  add_region_command(app);
+  add_energy_command(app);
+  add_plot_command(app);
 
   if (argc > 1 && argv[1][0] != '-') {
     bool known = false;
@@ -164,18 +176,10 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  // Subcommands registered by add_*_command run inside parse() (their callbacks), so one try
+  // covers parsing and running.
   try {
     app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "stiffbench: " << e.what() << "\n";
-    return 2;
-  }
-
-  try {
     if (*list) cmd_list(list_what, std::cout);
     if (*describe) cmd_describe(describe_name, std::cout);
     if (*solve) {
@@ -195,6 +199,10 @@ int main(int argc, char** argv) {
       write_convergence_outputs(dir, name, spec, res, is_local);
       std::cout << (is_local ? local_error_table(res) : convergence_table(res)).to_markdown();
       std::cout << "\nwrote " << dir << "/" << name << ".{csv,md,json}\n";
+      const std::filesystem::path csv = std::filesystem::path(dir) / (name + ".csv");
+      if (plot_convergence(csv, (is_local ? "Local error: " : "Global error: ") + spec.model,
+                           is_local, g_plot, std::cerr))
+        std::cout << "plot: " << dir << "/" << name << ".png\n";
     }
     if (*work_precision) {
       wp.integrators = split_list(wp_integrators, "--integrators");
@@ -203,8 +211,18 @@ int main(int argc, char** argv) {
       write_work_precision_outputs(wp_out, wp, res);
       std::cout << work_precision_table(res).to_markdown();
       std::cout << "\nwrote " << wp_out << "/work_precision.{csv,md,json}\n";
+      if (plot_work_precision(std::filesystem::path(wp_out) / "work_precision.csv",
+                              "Work-precision: " + wp.model, g_plot, std::cerr))
+        std::cout << "plot: " << wp_out << "/work_precision.png\n";
     }
     if (*report) cmd_report(report_opt, std::cout, std::cerr);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "stiffbench: " << e.what() << "\n";
+    return 2;
   } catch (const BadInput& e) {
     std::cerr << "stiffbench: " << e.what() << "\n";
     return 2;

@@ -1,24 +1,48 @@
-# Error against step size on log-log axes, one line per integrator, from a convergence.csv or
-# local_error.csv written by stiffbench. Reads only the CSV (measurement and drawing are
-# separate steps).
+# Error against step size on log-log axes from a convergence.csv or local_error.csv written by
+# stiffbench; one panel per integrator family, one line per integrator. The dashed line of the
+# same colour has the method's expected slope (order, or order + 1 for the local error) through
+# its finest point: where the measured line runs parallel to it, the method is in its
+# asymptotic range.
 #
-#   gnuplot -e "csvfile='DIR/convergence.csv'; outfile='DIR/convergence.png'; \
-#               methods='euler rk4'; ttl='title'; ycolumn='6'; ylab='error'" plots/convergence.gp
+#   gnuplot -e "csvfile='DIR/convergence.csv'; outfile='DIR/convergence.png'; npanels='1'; \
+#               pmethods1='euler rk4'; ptitle1='explicit'; ttl='title'; ycolumn='6'; \
+#               slope_offset='0'; plotdir='plots'" plots/convergence.gp
 #
-# ycolumn: 6 for convergence.csv (error), 5 for local_error.csv (local_error). Column 4 is h.
+# Columns: 2 integrator, 3 order, 4 h; ycolumn 6 (error, convergence.csv) or 5 (local_error,
+# local_error.csv); slope_offset 1 for the local error.
 ycol = exists("ycolumn") ? int(ycolumn) : 6
+soff = exists("slope_offset") ? int(slope_offset) : 0
 if (!exists("ylab")) ylab = "error (max-norm)"
-if (!exists("ttl")) ttl = ""
-set terminal pngcairo size 900,650 enhanced font ",10"
-set output outfile
-set datafile separator ","
+load plotdir."/common.gp"
 set logscale xy
 set format x "10^{%L}"
 set format y "10^{%L}"
 set xlabel "step size h"
 set ylabel ylab noenhanced
-set title ttl noenhanced
-set key outside right top noenhanced
-set grid
-plot for [m in methods] csvfile every ::1 using (strcol(2) eq m ? $4 : NaN):(column(ycol) > 0 ? column(ycol) : NaN) \
-     with linespoints title m
+set key outside right top
+eval panel_begin
+do for [K=1:np] {
+  m = methods(K)
+  n = words(m)
+  array H0[n > 0 ? n : 1]
+  array E0[n > 0 ? n : 1]
+  array P[n > 0 ? n : 1]
+  do for [j=1:n] {
+    H0[j] = NaN; E0[j] = NaN; P[j] = 0
+    stats csvfile every ::1 using (strcol(2) eq word(m, j) && column(ycol) > 0 ? $4 : NaN) nooutput
+    if (exists("STATS_min")) { H0[j] = STATS_min }
+    undefine STATS_*
+    stats csvfile every ::1 using (strcol(2) eq word(m, j) && $4 == H0[j] ? column(ycol) : NaN) nooutput
+    if (exists("STATS_min")) { E0[j] = STATS_min }
+    undefine STATS_*
+    stats csvfile every ::1 using (strcol(2) eq word(m, j) ? $3 : NaN) nooutput
+    if (exists("STATS_max")) { P[j] = STATS_max + soff }
+    undefine STATS_*
+  }
+  set title ptitle(K) noenhanced
+  plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) ? $4 : NaN):(column(ycol) > 0 ? column(ycol) : NaN) \
+         with linespoints lt j title word(m, j), \
+       for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) ? $4 : NaN):(E0[j] * ($4 / H0[j])**P[j]) \
+         with lines lt j dt 2 lw 1 notitle
+}
+unset multiplot

@@ -6,7 +6,11 @@
 #   gnuplot -e "csvfile='DIR/observables.csv'; outfile='front.png'; \
 #               ttl='sph_dam_break_2d, symplectic_euler'" plots/dam_break_front.gp
 if (!exists("ttl")) ttl = ""
-set terminal pngcairo size 800,560 enhanced font ",10"
+if (exists("term") && term eq "svg") {
+  set terminal svg size 800,560 enhanced font "Helvetica,11" background rgb "white"
+} else {
+  set terminal pngcairo size 800,560 enhanced font ",10"
+}
 set output outfile
 set datafile separator ","
 set datafile columnheaders

@@ -7,7 +7,11 @@
 #
 # 2D scenes are drawn in the x-y plane (3D scenes: their projection on it), equal axis scales.
 if (!exists("ttl")) ttl = ""
-set terminal pngcairo size 1000,560 enhanced font ",10"
+if (exists("term") && term eq "svg") {
+  set terminal svg size 1000,560 enhanced font "Helvetica,11" background rgb "white"
+} else {
+  set terminal pngcairo size 1000,560 enhanced font ",10"
+}
 set output outfile
 set datafile separator ","
 set size ratio -1

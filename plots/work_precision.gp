@@ -1,26 +1,37 @@
-# Work-precision diagram from a work_precision.csv written by stiffbench: error at t_end (x,
-# log) against f evaluations (left) and wall time (right), one line per integrator. Reads only
-# the CSV.
+# Work-precision diagram from a work_precision.csv written by stiffbench: error at t_end (x, log)
+# against f evaluations (left column) and wall time (right column), one row of panels per
+# integrator family, one line per integrator. Reads only the CSV.
 #
 #   gnuplot -e "csvfile='DIR/work_precision.csv'; outfile='DIR/work_precision.png'; \
-#               methods='cvode_bdf sdirk3'; ttl='title'" plots/work_precision.gp
+#               npanels='1'; pmethods1='cvode_bdf sdirk3'; ptitle1='implicit'; ttl='title'; \
+#               plotdir='plots'" plots/work_precision.gp
 #
 # Columns: 2 integrator, 4 error, 5 f_evals, 9 wall_s.
-if (!exists("ttl")) ttl = ""
-set terminal pngcairo size 1400,600 enhanced font ",10"
+panelh = 460
+load plotdir."/common.gp"
+# Two panels (f evaluations, wall time) per family: override the layout of common.gp.
+if (term eq "svg") {
+  set terminal svg size 1400, np*panelh + 40 enhanced font "Helvetica,11" background rgb "white"
+} else {
+  set terminal pngcairo size 1400, np*panelh + 40 enhanced font ",10"
+}
 set output outfile
-set datafile separator ","
 set logscale xy
 set format x "10^{%L}"
 set format y "10^{%L}"
-set grid
-set key outside right top noenhanced
-set multiplot layout 1,2 title ttl noenhanced
-set xlabel "error at t_{end} (max-norm)"
-set ylabel "f evaluations"
-plot for [m in methods] csvfile every ::1 using (strcol(2) eq m && column(4) > 0 ? $4 : NaN):5 \
-     with linespoints title m
-set ylabel "wall time [s] (minimum over repeats)"
-plot for [m in methods] csvfile every ::1 using (strcol(2) eq m && column(4) > 0 ? $4 : NaN):9 \
-     with linespoints title m
+set key outside right top
+set multiplot layout np,2 title ttl noenhanced
+do for [K=1:np] {
+  m = methods(K)
+  n = words(m)
+  set xlabel "error at t_{end} (max-norm)"
+  set ylabel "f evaluations"
+  set title ptitle(K)." - f evaluations" noenhanced
+  plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 ? $4 : NaN):5 \
+       with linespoints lt j title word(m, j)
+  set ylabel "wall time [s] (minimum over repeats)"
+  set title ptitle(K)." - wall time" noenhanced
+  plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 ? $4 : NaN):9 \
+       with linespoints lt j title word(m, j)
+}
 unset multiplot

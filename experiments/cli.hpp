@@ -1,0 +1,32 @@
+// Command-line registration of the experiment subcommands (linked into the stiffbench binary
+// only; the experiments themselves live in the stiffbench_experiments library so tests and
+// other programs call them directly). Each add_*_command adds one subcommand whose callback
+// runs the experiment; BadInput thrown there becomes exit code 2 in main().
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+
+#include "experiments/plotting.hpp"
+
+namespace stiffbench {
+
+// Flags every one-off experiment shares; `params` collects --param key=value.
+struct CommonFlags {
+  std::string model;
+  std::string integrators;
+  std::vector<std::string> params;
+  std::string out_dir = "results";
+  PlotOptions plot;
+};
+// Adds --model (when model_required is not null: required or not), --integrators, --param,
+// --out and --svg.
+void add_common_flags(CLI::App* cmd, CommonFlags& f, bool with_model, bool model_required);
+
+void add_stability_command(CLI::App& app);
+void add_region_command(CLI::App& app);
+void add_energy_command(CLI::App& app);
+void add_plot_command(CLI::App& app);
+
+}  // namespace stiffbench

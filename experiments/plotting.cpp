@@ -1,0 +1,153 @@
+#include "experiments/plotting.hpp"
+
+#include <cstdlib>
+#include <fstream>
+#include <ostream>
+#include <sstream>
+
+#include "experiments/build_info.hpp"
+#include "experiments/catalog.hpp"
+
+namespace stiffbench {
+
+namespace fs = std::filesystem;
+
+std::vector<PlotPanel> family_panels(const std::vector<std::string>& integrators) {
+  const std::vector<std::pair<std::string, std::string>> order = {
+      {"explicit", "explicit Runge-Kutta"},
+      {"symplectic", "symplectic"},
+      {"implicit", "implicit"},
+      {"reference", "library references"},
+      {"other", "other"}};
+  std::vector<PlotPanel> panels;
+  for (const auto& [family, title] : order) {
+    PlotPanel p{title, {}};
+    for (const auto& name : integrators) {
+      const auto* e = integrator_registry().find(name);
+      const std::string f = e ? to_string(e->info.family) : "other";
+      if (f == family) p.methods.push_back(name);
+    }
+    if (!p.methods.empty()) panels.push_back(std::move(p));
+  }
+  return panels;
+}
+
+fs::path plots_dir() {
+  if (const char* env = std::getenv("STIFFBENCH_PLOTS_DIR"); env && *env) return fs::path(env);
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const fs::path beside = exe.parent_path().parent_path() / "share" / "stiffbench" / "plots";
+    if (fs::exists(beside / "common.gp", ec)) return beside;
+  }
+  return fs::path(STIFFBENCH_SOURCE_DIR) / "plots";
+}
+
+namespace {
+
+std::vector<std::string> split_csv_line(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cell;
+  std::istringstream in(line);
+  while (std::getline(in, cell, ',')) out.push_back(cell);
+  if (!line.empty() && line.back() == ',') out.emplace_back();
+  return out;
+}
+
+// A value for a gnuplot single-quoted string inside a shell double-quoted argument: single
+// quotes are doubled, characters the shell would expand are dropped.
+std::string gnuplot_quote(const std::string& value) {
+  std::string quoted;
+  for (char ch : value) {
+    if (ch == '"' || ch == '$' || ch == '`' || ch == '\\') continue;
+    if (ch == '\'') quoted += '\'';
+    quoted += ch;
+  }
+  return quoted;
+}
+
+std::string join_spaces(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : " ") + x;
+  return s;
+}
+
+}  // namespace
+
+std::vector<std::string> csv_column_values(const fs::path& csv, const std::string& column) {
+  std::ifstream in(csv);
+  std::string line;
+  if (!in || !std::getline(in, line)) return {};
+  const auto header = split_csv_line(line);
+  std::size_t col = header.size();
+  for (std::size_t i = 0; i < header.size(); ++i)
+    if (header[i] == column) col = i;
+  if (col == header.size()) return {};
+  std::vector<std::string> values;
+  while (std::getline(in, line)) {
+    const auto cells = split_csv_line(line);
+    if (col >= cells.size()) continue;
+    bool seen = false;
+    for (const auto& v : values) seen = seen || v == cells[col];
+    if (!seen) values.push_back(cells[col]);
+  }
+  return values;
+}
+
+bool run_plot(const std::string& script, const fs::path& out_stem, const PlotVars& vars,
+              const std::vector<PlotPanel>& panels, const PlotOptions& opt, std::ostream& err) {
+  static bool warned = false;
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
+    if (!warned) err << "warning: gnuplot not found: tables written, plots skipped\n";
+    warned = true;
+    return false;
+  }
+  const fs::path dir = plots_dir();
+  PlotVars all = vars;
+  all.emplace_back("plotdir", dir.string());
+  all.emplace_back("npanels", std::to_string(panels.size()));
+  for (std::size_t k = 0; k < panels.size(); ++k) {
+    all.emplace_back("ptitle" + std::to_string(k + 1), panels[k].title);
+    all.emplace_back("pmethods" + std::to_string(k + 1), join_spaces(panels[k].methods));
+  }
+  std::vector<std::pair<std::string, std::string>> outputs = {{"png", "png"}};
+  if (opt.svg) outputs.emplace_back("svg", "svg");
+  bool ok = true;
+  for (const auto& [term, ext] : outputs) {
+    std::ostringstream cmd;
+    cmd << "gnuplot -e \"";
+    PlotVars with_out = all;
+    with_out.emplace_back("outfile", out_stem.string() + "." + ext);
+    with_out.emplace_back("term", term);
+    for (const auto& [name, value] : with_out) cmd << name << "='" << gnuplot_quote(value) << "'; ";
+    cmd << "\" '" << gnuplot_quote((dir / script).string()) << "'";
+    if (std::system(cmd.str().c_str()) != 0) {
+      err << "warning: gnuplot failed: " << cmd.str() << "\n";
+      ok = false;
+    }
+  }
+  return ok;
+}
+
+bool plot_convergence(const fs::path& csv, const std::string& title, bool local,
+                      const PlotOptions& opt, std::ostream& err) {
+  fs::path stem = csv;
+  stem.replace_extension();
+  return run_plot("convergence.gp", stem,
+                  {{"csvfile", csv.string()},
+                   {"ttl", title},
+                   {"ycolumn", local ? "5" : "6"},
+                   {"slope_offset", local ? "1" : "0"},
+                   {"ylab", local ? "local error (max-norm)" : "global error at t_end (max-norm)"}},
+                  family_panels(csv_column_values(csv, "integrator")), opt, err);
+}
+
+bool plot_work_precision(const fs::path& csv, const std::string& title, const PlotOptions& opt,
+                         std::ostream& err) {
+  fs::path stem = csv;
+  stem.replace_extension();
+  return run_plot("work_precision.gp", stem, {{"csvfile", csv.string()}, {"ttl", title}},
+                  family_panels(csv_column_values(csv, "integrator")), opt, err);
+}
+
+}  // namespace stiffbench
