@@ -1,10 +1,18 @@
 #include "experiments/plotting.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
+#include <map>
+
+#include <nlohmann/json.hpp>
 #include <ostream>
 #include <sstream>
 
+#include <unistd.h>
+
+#include "core/params.hpp"
 #include "experiments/build_info.hpp"
 #include "experiments/catalog.hpp"
 
@@ -121,10 +129,19 @@ bool run_plot(const std::string& script, const fs::path& out_stem, const PlotVar
     with_out.emplace_back("term", term);
     for (const auto& [name, value] : with_out) cmd << name << "='" << gnuplot_quote(value) << "'; ";
     cmd << "\" '" << gnuplot_quote((dir / script).string()) << "'";
-    if (std::system(cmd.str().c_str()) != 0) {
+    // gnuplot's own warnings (e.g. a method without finite points) go to a log that is shown
+    // only when the plot fails.
+    const fs::path log =
+        fs::temp_directory_path() / ("stiffbench_gnuplot_" + std::to_string(::getpid()) + ".log");
+    const std::string full = cmd.str() + " 2>'" + log.string() + "'";
+    if (std::system(full.c_str()) != 0) {
       err << "warning: gnuplot failed: " << cmd.str() << "\n";
+      std::ifstream in(log);
+      err << in.rdbuf();
       ok = false;
     }
+    std::error_code ec;
+    fs::remove(log, ec);
   }
   return ok;
 }
@@ -148,6 +165,71 @@ bool plot_work_precision(const fs::path& csv, const std::string& title, const Pl
   stem.replace_extension();
   return run_plot("work_precision.gp", stem, {{"csvfile", csv.string()}, {"ttl", title}},
                   family_panels(csv_column_values(csv, "integrator")), opt, err);
+}
+
+namespace {
+
+using Replotter = std::function<bool(const fs::path& csv, const std::string& title,
+                                     const PlotOptions& opt, std::ostream& err)>;
+
+// The plot of each table stiffbench writes, by file name, with a title prefix.
+const std::map<std::string, std::pair<std::string, Replotter>>& replotters() {
+  static const std::map<std::string, std::pair<std::string, Replotter>> table = {
+      {"convergence.csv",
+       {"Global error", [](const fs::path& csv, const std::string& t, const PlotOptions& o,
+                           std::ostream& e) { return plot_convergence(csv, t, false, o, e); }}},
+      {"local_error.csv",
+       {"Local error", [](const fs::path& csv, const std::string& t, const PlotOptions& o,
+                          std::ostream& e) { return plot_convergence(csv, t, true, o, e); }}},
+      {"work_precision.csv", {"Work-precision", plot_work_precision}},
+  };
+  return table;
+}
+
+// "PREFIX: MODEL" with the model from NAME.json beside the CSV (just PREFIX without one).
+std::string replot_title(const fs::path& csv, const std::string& prefix) {
+  fs::path json = csv;
+  json.replace_extension(".json");
+  std::ifstream in(json);
+  if (!in) return prefix;
+  try {
+    const auto meta = nlohmann::json::parse(in);
+    if (meta.contains("spec") && meta["spec"].contains("model") &&
+        meta["spec"]["model"].is_string())
+      return prefix + ": " + meta["spec"]["model"].get<std::string>();
+  } catch (const std::exception&) {
+  }
+  return prefix;
+}
+
+}  // namespace
+
+int replot_directory(const fs::path& dir, const PlotOptions& opt, std::ostream& out,
+                     std::ostream& err) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw BadInput("plot: '" + dir.string() + "' is not a directory");
+  std::vector<fs::path> found;
+  for (const auto& entry : fs::recursive_directory_iterator(dir, ec))
+    if (entry.is_regular_file() && replotters().count(entry.path().filename().string()))
+      found.push_back(entry.path());
+  if (found.empty()) {
+    std::string names;
+    for (const auto& [name, unused] : replotters()) names += (names.empty() ? "" : ", ") + name;
+    throw BadInput("plot: no stiffbench table under '" + dir.string() + "' (looked for " + names +
+                   ")");
+  }
+  std::sort(found.begin(), found.end());
+  int drawn = 0;
+  for (const auto& csv : found) {
+    const auto& [prefix, draw] = replotters().at(csv.filename().string());
+    if (draw(csv, replot_title(csv, prefix), opt, err)) {
+      fs::path png = csv;
+      png.replace_extension(".png");
+      out << "plot: " << png.string() << "\n";
+      ++drawn;
+    }
+  }
+  return drawn;
 }
 
 }  // namespace stiffbench

@@ -31,3 +31,11 @@ set linetype cycle 12
 methods(K) = exists("pmethods".K) ? value("pmethods".K) : ""
 ptitle(K) = exists("ptitle".K) ? value("ptitle".K) : ""
 panel_begin = "set multiplot layout prows,pcols title ttl noenhanced"
+# inlist(name, list): name is one of the space-separated words of list.
+inlist(s, l) = strstrt(" ".l." ", " ".s." ") > 0
+# A panel whose methods have no finite point (every run unstable) must not use autoscale: gnuplot
+# stops with "all points undefined". Scripts count the valid points with `stats` and, when
+# there are none, fix the ranges and say so in the panel:
+#   eval empty_panel_on   ...plot...   eval empty_panel_off
+empty_panel_on = "set xrange [1e-3:1]; set yrange [1e-3:1]; set label 99 'no finite values (every run unstable or empty)' at graph 0.5, 0.5 center"
+empty_panel_off = "set autoscale xy; unset label 99"

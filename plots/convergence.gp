@@ -40,9 +40,14 @@ do for [K=1:np] {
     undefine STATS_*
   }
   set title ptitle(K) noenhanced
+  stats csvfile every ::1 using (inlist(strcol(2), m) && column(ycol) > 0 ? $4 : NaN) nooutput
+  valid = exists("STATS_records") ? STATS_records : 0
+  undefine STATS_*
+  if (valid == 0) { eval empty_panel_on }
   plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) ? $4 : NaN):(column(ycol) > 0 ? column(ycol) : NaN) \
          with linespoints lt j title word(m, j), \
        for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) ? $4 : NaN):(E0[j] * ($4 / H0[j])**P[j]) \
          with lines lt j dt 2 lw 1 notitle
+  eval empty_panel_off
 }
 unset multiplot

@@ -24,6 +24,10 @@ set multiplot layout np,2 title ttl noenhanced
 do for [K=1:np] {
   m = methods(K)
   n = words(m)
+  stats csvfile every ::1 using (inlist(strcol(2), m) && column(4) > 0 ? $4 : NaN) nooutput
+  valid = exists("STATS_records") ? STATS_records : 0
+  undefine STATS_*
+  if (valid == 0) { eval empty_panel_on }
   set xlabel "error at t_{end} (max-norm)"
   set ylabel "f evaluations"
   set title ptitle(K)." - f evaluations" noenhanced
@@ -33,5 +37,6 @@ do for [K=1:np] {
   set title ptitle(K)." - wall time" noenhanced
   plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 ? $4 : NaN):9 \
        with linespoints lt j title word(m, j)
+  eval empty_panel_off
 }
 unset multiplot
