@@ -1,0 +1,373 @@
+#include "core/linear_stability.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <optional>
+#include <utility>
+
+namespace stiffbench {
+
+namespace {
+
+using cd = std::complex<double>;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// R(z) = 1 + z bᵀ(I − zA)⁻¹1 for a full (possibly implicit) stage matrix. Infinite where
+// I − zA is singular (a pole of R).
+double rk_amplification(const Mat& a, const Vec& b, cd z) {
+  const Index s = b.size();
+  const Eigen::MatrixXcd m = Eigen::MatrixXcd::Identity(s, s) - z * a.cast<cd>();
+  const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(m);
+  const Eigen::VectorXcd k = lu.solve(Eigen::VectorXcd::Ones(s));
+  const cd r = 1.0 + z * b.cast<cd>().dot(k);
+  return std::isfinite(r.real()) && std::isfinite(r.imag()) ? std::abs(r) : kInf;
+}
+
+// Spectral radius of a real 2×2 matrix [[p, q], [r, s]].
+double spectral_radius_2x2(double p, double q, double r, double s) {
+  const double half_tr = 0.5 * (p + s);
+  const double det = p * s - q * r;
+  const double disc = half_tr * half_tr - det;
+  if (disc >= 0.0) return std::abs(half_tr) + std::sqrt(disc);
+  return std::sqrt(det);  // complex pair, |μ|² = det
+}
+
+// The first crossing of g(r) > 1 + stability_tolerance for r in (0, cap], scanning outward with
+// steps of 0.2% (never more than 1e-6 absolute near the origin), then bisecting to ~1e-12.
+// An instability that starts within r < 0.05 and persists towards the origin (g > 1 strictly
+// at a tenth of the crossing) is "unstable arbitrarily close to 0": limit 0.
+template <class G>
+AxisLimit first_crossing(const G& g, double cap) {
+  auto unstable = [&](double r) {
+    const double v = g(r);
+    return !(v <= 1.0 + stability_tolerance);  // NaN counts as unstable
+  };
+  double lo = 0.0;
+  double r = 1e-6;
+  while (r <= cap && !unstable(r)) {
+    lo = r;
+    r += std::max(2e-3 * r, 1e-6);
+  }
+  if (r > cap) {
+    if (!unstable(cap)) return {cap, true};
+    r = cap;
+  }
+  double hi = r;
+  while (hi - lo > 1e-12 * hi) {
+    const double mid = 0.5 * (lo + hi);
+    (unstable(mid) ? hi : lo) = mid;
+  }
+  if (hi < 0.05 && g(0.1 * hi) > 1.0) return {0.0, false};
+  return {lo, false};
+}
+
+// Eigenvalues with Im >= 0 only (the methods have real coefficients, so the amplification is
+// symmetric under conjugation), sorted by decreasing modulus, near-duplicates removed.
+std::vector<cd> distinct_upper(const std::vector<cd>& eigenvalues) {
+  std::vector<cd> out;
+  for (const cd& l : eigenvalues)
+    if (std::isfinite(l.real()) && std::isfinite(l.imag()))
+      out.emplace_back(l.real(), std::abs(l.imag()));
+  std::sort(out.begin(), out.end(), [](const cd& a, const cd& b) {
+    if (std::abs(a) != std::abs(b)) return std::abs(a) > std::abs(b);
+    return a.real() < b.real();
+  });
+  std::vector<cd> unique;
+  for (const cd& l : out)
+    if (unique.empty() || std::abs(l - unique.back()) > 1e-12 * std::max(1.0, std::abs(l)))
+      unique.push_back(l);
+  return unique;
+}
+
+// Amplification on one eigenvalue λ at h = r/|λ|, for a first-order or a mechanical system.
+double amplification_on_ray(const LinearStability& s, cd unit, double r, bool mechanical) {
+  if (!mechanical && s.amplification) return s.amplification(r * unit);
+  // Mechanical: λ pairs with λ̄ as the oscillator a = −|λ|², b = 2 Re λ; a real λ (an
+  // overdamped or free mode) is taken as x'' = λ x' (eigenvalues 0 and λ).
+  if (unit.imag() > 0.0) return s.mechanical_amplification(-r * r, 2.0 * r * unit.real());
+  return s.mechanical_amplification(0.0, r * unit.real());
+}
+
+}  // namespace
+
+LinearStability tableau_stability(const ButcherTableau& t) {
+  LinearStability s;
+  s.kind = t.is_explicit() ? "explicit Runge-Kutta" : "implicit Runge-Kutta";
+  s.amplification = [a = t.a, b = t.b](cd z) { return rk_amplification(a, b, z); };
+  return with_mechanical_from_scalar(std::move(s));
+}
+
+LinearStability rosenbrock_stability(const Mat& alpha, const Mat& gamma, const Vec& b) {
+  // On y' = λy the stages (I − zγ)k_i = z(y + Σ α_ij k_j) + z Σ_{j<i} γ_ij k_j are those of a
+  // Runge–Kutta method with A = α + Γ (Hairer–Wanner II, §IV.7).
+  LinearStability s;
+  s.kind = "Rosenbrock";
+  s.amplification = [a = Mat(alpha + gamma), b](cd z) { return rk_amplification(a, b, z); };
+  return with_mechanical_from_scalar(std::move(s));
+}
+
+LinearStability multistep_stability(const std::vector<double>& alpha,
+                                    const std::vector<double>& beta) {
+  require_input(alpha.size() == beta.size() && alpha.size() >= 2,
+                "multistep_stability: alpha and beta need the same length k + 1 >= 2");
+  LinearStability s;
+  s.kind = "linear multistep";
+  s.amplification = [alpha, beta](cd z) {
+    // Largest root modulus of Σ (α_j − zβ_j) ζ^j, from the companion matrix.
+    const std::size_t k = alpha.size() - 1;
+    std::vector<cd> c(k + 1);
+    for (std::size_t j = 0; j <= k; ++j) c[j] = alpha[j] - z * beta[j];
+    if (std::abs(c[k]) <= 1e-14 * std::abs(c[0]) + 1e-300) return kInf;  // a root at infinity
+    Eigen::MatrixXcd comp = Eigen::MatrixXcd::Zero(static_cast<Index>(k), static_cast<Index>(k));
+    for (std::size_t j = 0; j < k; ++j) {
+      comp(0, static_cast<Index>(j)) = -c[k - 1 - j] / c[k];
+      if (j + 1 < k) comp(static_cast<Index>(j + 1), static_cast<Index>(j)) = 1.0;
+    }
+    if (k == 1) return std::abs(comp(0, 0));
+    const Eigen::ComplexEigenSolver<Eigen::MatrixXcd> es(comp, false);
+    return es.eigenvalues().cwiseAbs().maxCoeff();
+  };
+  s.boundary_locus = [alpha, beta](double theta) {
+    const cd zeta = std::polar(1.0, theta);
+    cd rho = 0.0, sigma = 0.0, p = 1.0;
+    for (std::size_t j = 0; j < alpha.size(); ++j, p *= zeta) {
+      rho += alpha[j] * p;
+      sigma += beta[j] * p;
+    }
+    return rho / sigma;
+  };
+  return with_mechanical_from_scalar(std::move(s));
+}
+
+LinearStability splitting_stability(const SplittingCoefficients& c) {
+  // On x'' = a x + b x' in the variables (x, u = h v): a kick u ← u + k(h²a x + hb u) and a
+  // drift x ← x + d u are 2×2 matrices depending only on (h²a, hb); the step is their product.
+  LinearStability s;
+  s.kind = "splitting";
+  s.mechanical_amplification = [kick = c.kick, drift = c.drift](double h2a, double hb) {
+    double m00 = 1, m01 = 0, m10 = 0, m11 = 1;  // accumulated step matrix
+    for (std::size_t j = 0; j < kick.size(); ++j) {
+      // kick: [[1, 0], [k h²a, 1 + k hb]] · M
+      const double k = kick[j];
+      const double n10 = k * h2a * m00 + (1 + k * hb) * m10;
+      const double n11 = k * h2a * m01 + (1 + k * hb) * m11;
+      m10 = n10;
+      m11 = n11;
+      // drift: [[1, d], [0, 1]] · M
+      m00 += drift[j] * m10;
+      m01 += drift[j] * m11;
+    }
+    return spectral_radius_2x2(m00, m01, m10, m11);
+  };
+  return s;
+}
+
+LinearStability with_mechanical_from_scalar(LinearStability s) {
+  if (!s.amplification) return s;
+  s.mechanical_amplification = [amp = s.amplification](double h2a, double hb) {
+    // hλ are the roots of μ² − hb μ − h²a = 0.
+    const cd root = std::sqrt(cd(0.25 * hb * hb + h2a, 0.0));
+    return std::max(amp(0.5 * hb + root), amp(0.5 * hb - root));
+  };
+  return s;
+}
+
+AxisLimit real_axis_limit(const LinearStability& s, double cap) {
+  if (!s.amplification) return {};
+  return first_crossing([&](double r) { return s.amplification(cd(-r, 0.0)); }, cap);
+}
+
+AxisLimit imaginary_axis_limit(const LinearStability& s, double cap) {
+  if (!s.amplification) return {};
+  return first_crossing([&](double r) { return s.amplification(cd(0.0, r)); }, cap);
+}
+
+AxisLimit oscillator_limit(const LinearStability& s, double cap) {
+  if (!s.mechanical_amplification) return {};
+  return first_crossing([&](double r) { return s.mechanical_amplification(-r * r, 0.0); }, cap);
+}
+
+double max_amplification(const LinearStability& s, double h,
+                         const std::vector<std::complex<double>>& eigenvalues, bool mechanical) {
+  double worst = 0.0;
+  for (const cd& l : distinct_upper(eigenvalues)) {
+    const double m = std::abs(l);
+    const double a = m == 0.0 ? 1.0 : amplification_on_ray(s, l / m, h * m, mechanical);
+    if (!(a <= worst)) worst = a;  // NaN propagates as "worst"
+  }
+  return worst;
+}
+
+StepLimit predicted_step_limit(const LinearStability& s,
+                               const std::vector<std::complex<double>>& eigenvalues,
+                               bool mechanical, double h_cap, double rel_tol) {
+  // The first h at which the largest amplification exceeds 1 is the smallest of the first
+  // crossings of the single eigenvalues; each ray is scanned only up to the best h so far
+  // (largest moduli first, so later scans are short).
+  StepLimit best{h_cap, true};
+  for (const cd& l : distinct_upper(eigenvalues)) {
+    const double m = std::abs(l);
+    if (m == 0.0) continue;
+    const cd unit = l / m;
+    const AxisLimit lim = first_crossing(
+        [&](double r) { return amplification_on_ray(s, unit, r, mechanical); }, best.h * m);
+    if (!lim.unbounded) best = {lim.limit / m, false};
+    if (best.h == 0.0) break;
+  }
+  (void)rel_tol;  // first_crossing bisects to ~1e-12 relative, finer than any rel_tol asked
+  return best;
+}
+
+std::vector<std::vector<std::complex<double>>> region_boundary(const LinearStability& s,
+                                                               double re_min, double re_max,
+                                                               double im_min, double im_max,
+                                                               int n) {
+  std::vector<std::vector<cd>> lines;
+  auto inside_box = [&](cd z) {
+    return z.real() >= re_min && z.real() <= re_max && z.imag() >= im_min && z.imag() <= im_max;
+  };
+  if (s.boundary_locus) {
+    // Multistep: the sampled locus, cut where it leaves the box or jumps (through infinity).
+    const int samples = std::max(8 * n, 2000);
+    std::vector<cd> cur;
+    cd prev{};
+    const double jump = 0.05 * std::max(re_max - re_min, im_max - im_min);
+    for (int i = 0; i <= samples; ++i) {
+      const cd z = s.boundary_locus(2.0 * std::numbers::pi * i / samples);
+      const bool ok = std::isfinite(z.real()) && std::isfinite(z.imag()) && inside_box(z);
+      if (!ok || (!cur.empty() && std::abs(z - prev) > jump)) {
+        if (cur.size() > 1) lines.push_back(std::move(cur));
+        cur.clear();
+      }
+      if (ok) cur.push_back(z);
+      prev = z;
+    }
+    if (cur.size() > 1) lines.push_back(std::move(cur));
+    return lines;
+  }
+  if (!s.amplification || n < 2) return lines;
+
+  // Marching squares on φ(z) = amplification(z) − 1 (poles and NaN count as +1: outside).
+  const double dx = (re_max - re_min) / n, dy = (im_max - im_min) / n;
+  auto at = [&](int i, int j) { return cd(re_min + i * dx, im_min + j * dy); };
+  auto phi = [&](cd z) {
+    const double v = s.amplification(z) - 1.0;
+    return std::isfinite(v) ? std::min(v, 1.0) : 1.0;
+  };
+  std::vector<double> grid(static_cast<std::size_t>((n + 1) * (n + 1)));
+  auto g = [&](int i, int j) -> double& { return grid[static_cast<std::size_t>(j * (n + 1) + i)]; };
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) g(i, j) = phi(at(i, j));
+
+  // Crossing on the edge between two grid nodes, refined by bisection on φ.
+  auto crossing = [&](cd za, double fa, cd zb) {
+    for (int it = 0; it < 40; ++it) {
+      const cd zm = 0.5 * (za + zb);
+      const double fm = phi(zm);
+      if ((fm > 0) == (fa > 0)) {
+        za = zm;
+        fa = fm;
+      } else {
+        zb = zm;
+      }
+    }
+    return 0.5 * (za + zb);
+  };
+  // Segments, each between crossings on two edges of one cell; then chained into polylines.
+  std::vector<std::pair<cd, cd>> segs;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const std::array<std::pair<int, int>, 4> corner = {
+          {{i, j}, {i + 1, j}, {i + 1, j + 1}, {i, j + 1}}};
+      std::vector<cd> pts;
+      for (int e = 0; e < 4; ++e) {
+        const auto [ia, ja] = corner[static_cast<std::size_t>(e)];
+        const auto [ib, jb] = corner[static_cast<std::size_t>((e + 1) % 4)];
+        const double fa = g(ia, ja), fb = g(ib, jb);
+        if ((fa > 0) != (fb > 0)) pts.push_back(crossing(at(ia, ja), fa, at(ib, jb)));
+      }
+      if (pts.size() == 2) {
+        segs.emplace_back(pts[0], pts[1]);
+      } else if (pts.size() == 4) {  // saddle: pair by the centre value
+        const bool centre_in = phi(at(i, j) + cd(0.5 * dx, 0.5 * dy)) > 0;
+        const bool first_in = g(i, j) > 0;
+        if (centre_in == first_in) {
+          segs.emplace_back(pts[0], pts[1]);
+          segs.emplace_back(pts[2], pts[3]);
+        } else {
+          segs.emplace_back(pts[0], pts[3]);
+          segs.emplace_back(pts[1], pts[2]);
+        }
+      }
+    }
+  }
+  // Chain: endpoints of neighbouring segments coincide (same edge, same bisection).
+  const double eps = 1e-9 * std::max(dx, dy);
+  std::vector<bool> used(segs.size(), false);
+  auto same = [&](cd a, cd b) { return std::abs(a - b) <= eps; };
+  // Index endpoints by a coarse key for O(n) chaining.
+  std::multimap<std::pair<long, long>, std::size_t> by_end;
+  auto key = [&](cd z) {
+    return std::make_pair(std::lround((z.real() - re_min) / (0.25 * dx)),
+                          std::lround((z.imag() - im_min) / (0.25 * dy)));
+  };
+  for (std::size_t k = 0; k < segs.size(); ++k) {
+    by_end.emplace(key(segs[k].first), k);
+    by_end.emplace(key(segs[k].second), k);
+  }
+  auto take_next = [&](cd end) -> std::optional<cd> {
+    const auto [lo, hi] = by_end.equal_range(key(end));
+    for (auto it = lo; it != hi; ++it) {
+      const std::size_t k = it->second;
+      if (used[k]) continue;
+      if (same(segs[k].first, end)) {
+        used[k] = true;
+        return segs[k].second;
+      }
+      if (same(segs[k].second, end)) {
+        used[k] = true;
+        return segs[k].first;
+      }
+    }
+    return std::nullopt;
+  };
+  for (std::size_t k = 0; k < segs.size(); ++k) {
+    if (used[k]) continue;
+    used[k] = true;
+    std::vector<cd> fwd = {segs[k].first, segs[k].second};
+    while (auto nx = take_next(fwd.back())) fwd.push_back(*nx);
+    std::vector<cd> back;
+    while (auto nx = take_next(back.empty() ? fwd.front() : back.back())) back.push_back(*nx);
+    std::vector<cd> line(back.rbegin(), back.rend());
+    line.insert(line.end(), fwd.begin(), fwd.end());
+    lines.push_back(std::move(line));
+  }
+  return lines;
+}
+
+bool a_stable_on_samples(const LinearStability& s, double r, int n) {
+  if (!s.amplification) return false;
+  auto ok = [&](cd z) { return s.amplification(z) <= 1.0 + stability_tolerance; };
+  for (int j = 0; j < n; ++j) {
+    const double im = -r + 2.0 * r * j / (n - 1);
+    if (!ok(cd(0.0, im))) return false;
+    for (int i = 0; i < n; ++i)
+      if (!ok(cd(-r * i / (n - 1), im))) return false;
+  }
+  // Near the origin on a log-polar grid (|z| from 1e-3 to r, arguments π/2..3π/2).
+  for (int i = 0; i < n; ++i) {
+    const double m = 1e-3 * std::pow(r / 1e-3, static_cast<double>(i) / (n - 1));
+    for (int j = 0; j < n; ++j) {
+      const double arg = std::numbers::pi * (0.5 + static_cast<double>(j) / (n - 1));
+      if (!ok(std::polar(m, arg))) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace stiffbench

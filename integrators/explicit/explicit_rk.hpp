@@ -15,6 +15,9 @@ class ExplicitRungeKutta final : public Integrator {
   const ButcherTableau& tableau() const { return tableau_; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
+  std::optional<LinearStability> linear_stability() const override {
+    return tableau_stability(tableau_);
+  }
 
  private:
   ButcherTableau tableau_;

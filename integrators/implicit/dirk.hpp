@@ -51,6 +51,9 @@ class DirkIntegrator final : public Integrator {
   DirkIntegrator(ButcherTableau tableau, std::string description, ImplicitOptions opt);
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
+  std::optional<LinearStability> linear_stability() const override {
+    return tableau_stability(stepper_.tableau());
+  }
   const ImplicitCore& core() const { return core_; }
 
  private:
@@ -63,6 +66,9 @@ class Bdf2Integrator final : public Integrator {
   explicit Bdf2Integrator(ImplicitOptions opt);
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
+  std::optional<LinearStability> linear_stability() const override {
+    return multistep_stability({1.0 / 3.0, -4.0 / 3.0, 1.0}, {0.0, 0.0, 2.0 / 3.0});
+  }
 
  private:
   ImplicitCore core_;

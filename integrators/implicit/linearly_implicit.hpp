@@ -26,6 +26,9 @@ class SemiImplicitEuler final : public Integrator {
   explicit SemiImplicitEuler(ImplicitOptions opt);
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
+  std::optional<LinearStability> linear_stability() const override {
+    return rosenbrock_stability(Mat::Zero(1, 1), Mat::Ones(1, 1), Vec::Ones(1));
+  }
 
  private:
   ImplicitCore core_;
@@ -48,6 +51,11 @@ class Rosenbrock final : public Integrator {
   Rosenbrock(RosenbrockTableau tableau, std::string description, ImplicitOptions opt);
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
+  std::optional<LinearStability> linear_stability() const override {
+    return rosenbrock_stability(
+        tab_.alpha, tab_.gamma_lower + tab_.gamma * Mat::Identity(tab_.b.size(), tab_.b.size()),
+        tab_.b);
+  }
 
  private:
   RosenbrockTableau tab_;

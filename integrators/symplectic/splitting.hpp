@@ -24,6 +24,9 @@ class SplittingIntegrator final : public Integrator {
   const SplittingCoefficients& coefficients() const { return coeffs_; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
+  std::optional<LinearStability> linear_stability() const override {
+    return splitting_stability(coeffs_);
+  }
 
  private:
   SplittingCoefficients coeffs_;

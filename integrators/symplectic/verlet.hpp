@@ -29,6 +29,9 @@ class PositionVerlet final : public Integrator {
   PositionVerlet();
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
+  std::optional<LinearStability> linear_stability() const override {
+    return splitting_stability({"velocity_verlet", {0.5, 0.5}, {1.0, 0.0}, 2});
+  }
 
  private:
   const MechanicalSystem* mech_ = nullptr;
@@ -42,6 +45,9 @@ class Leapfrog final : public Integrator {
   Leapfrog();
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
+  std::optional<LinearStability> linear_stability() const override {
+    return splitting_stability({"velocity_verlet", {0.5, 0.5}, {1.0, 0.0}, 2});
+  }
 
  private:
   const MechanicalSystem* mech_ = nullptr;

@@ -1,0 +1,205 @@
+// Linear stability from coefficients (core/linear_stability.hpp): axis limits against their
+// closed forms, A-stability, region boundaries, and — as an independent check of every
+// method's stability data — the spectral radius of the step map measured by stepping the
+// registered integrator on a 1-DOF oscillator.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <numbers>
+
+#include "core/linear_stability.hpp"
+#include "tests/test_support.hpp"
+
+namespace stiffbench {
+namespace {
+
+using testing_support::make;
+using testing_support::model;
+
+LinearStability stability_of(const std::string& name) {
+  auto integ = make(name);
+  auto s = integ->linear_stability();
+  if (!s) throw std::logic_error(name + " has no linear stability data");
+  return *s;
+}
+
+// Closed forms: rk4 |R(iy)|² = 1 − y⁶/72 + y⁸/576 → y = 2√2; kutta3 |R(iy)|² = 1 − y⁴/12 +
+// y⁶/36 → y = √3; heun R(−x) = 1 − x + x²/2 = 1 → x = 2; euler R(−x) = −1 → x = 2. The real
+// limits of rk4 and kutta3 are where |R(−x)| = 1 (rk4: R = +1, kutta3: R = −1), quoted in
+// REFERENCES.md as 2.7853 and 2.5127; refined here by bisection on the polynomial on [2, 3].
+double real_limit_of_polynomial(const std::vector<double>& taylor) {
+  auto g = [&](double x) {
+    double r = 0.0;
+    for (std::size_t k = 0; k < taylor.size(); ++k)
+      r += taylor[k] * std::pow(-x, static_cast<double>(k));
+    return std::abs(r) - 1.0;
+  };
+  double lo = 2.0, hi = 3.0;  // g(2) < 0 < g(3) for both polynomials
+  for (int it = 0; it < 60; ++it) (g(0.5 * (lo + hi)) < 0 ? lo : hi) = 0.5 * (lo + hi);
+  return lo;
+}
+
+TEST(LinearStability, ExplicitAxisLimitsMatchClosedForms) {
+  const double rk4_real = real_limit_of_polynomial({1, 1, 0.5, 1.0 / 6, 1.0 / 24});
+  const double kutta3_real = real_limit_of_polynomial({1, 1, 0.5, 1.0 / 6});
+  EXPECT_NEAR(rk4_real, 2.7853, 1e-4);  // the published figure
+  EXPECT_NEAR(kutta3_real, 2.5127, 1e-4);
+
+  const auto rk4 = stability_of("rk4");
+  EXPECT_NEAR(imaginary_axis_limit(rk4).limit, 2.0 * std::sqrt(2.0), 1e-6);
+  EXPECT_NEAR(real_axis_limit(rk4).limit, rk4_real, 1e-6);
+  const auto kutta3 = stability_of("kutta3");
+  EXPECT_NEAR(imaginary_axis_limit(kutta3).limit, std::sqrt(3.0), 1e-6);
+  EXPECT_NEAR(real_axis_limit(kutta3).limit, kutta3_real, 1e-6);
+  const auto heun = stability_of("heun");
+  EXPECT_NEAR(real_axis_limit(heun).limit, 2.0, 1e-6);
+  // Heun and Euler are unstable arbitrarily close to 0 on the imaginary axis
+  // (|R(iy)|² = 1 + y⁴/4 and 1 + y²).
+  EXPECT_EQ(imaginary_axis_limit(heun).limit, 0.0);
+  const auto euler = stability_of("euler");
+  EXPECT_NEAR(real_axis_limit(euler).limit, 2.0, 1e-6);
+  EXPECT_EQ(imaginary_axis_limit(euler).limit, 0.0);
+  EXPECT_EQ(oscillator_limit(euler).limit, 0.0);
+  EXPECT_FALSE(real_axis_limit(euler).unbounded);
+}
+
+TEST(LinearStability, SymplecticOscillatorIntervals) {
+  // Symplectic Euler and Störmer–Verlet on x'' = −ω²x: trace of the step map 2 − (hω)², stable
+  // for hω <= 2 (Hairer–Lubich–Wanner I.5); rk4 on the oscillator is its imaginary-axis limit.
+  for (const char* name :
+       {"symplectic_euler", "symplectic_euler_x", "velocity_verlet", "verlet", "leapfrog"}) {
+    SCOPED_TRACE(name);
+    const AxisLimit lim = oscillator_limit(stability_of(name));
+    EXPECT_NEAR(lim.limit, 2.0, 1e-6);
+    EXPECT_FALSE(lim.unbounded);
+  }
+  EXPECT_NEAR(oscillator_limit(stability_of("rk4")).limit, 2.0 * std::sqrt(2.0), 1e-6);
+  EXPECT_TRUE(oscillator_limit(stability_of("implicit_midpoint")).unbounded);
+}
+
+TEST(LinearStability, ImplicitMethodsAreAStableExplicitAreNot) {
+  for (const char* name :
+       {"backward_euler", "sdirk2", "sdirk3", "bdf2", "trapezoidal", "implicit_midpoint",
+        "semi_implicit_euler", "rosenbrock2", "baraff_witkin"}) {
+    SCOPED_TRACE(name);
+    const auto s = stability_of(name);
+    EXPECT_TRUE(a_stable_on_samples(s));
+    EXPECT_TRUE(real_axis_limit(s).unbounded);
+  }
+  for (const char* name : {"euler", "heun", "rk4", "kutta3"}) {
+    SCOPED_TRACE(name);
+    EXPECT_FALSE(a_stable_on_samples(stability_of(name)));
+  }
+}
+
+TEST(LinearStability, Bdf2BoundaryLocus) {
+  // ρ(ζ) = ζ² − 4/3 ζ + 1/3, σ(ζ) = 2/3 ζ²: z(π) = ρ(−1)/σ(−1) = (8/3)/(2/3) = 4, z(0) = 0; the
+  // largest root modulus at z = 4 is exactly 1, at z = 2 (inside the unstable bubble) above 1.
+  const auto s = stability_of("bdf2");
+  ASSERT_TRUE(s.boundary_locus);
+  EXPECT_NEAR(std::abs(s.boundary_locus(std::numbers::pi) - 4.0), 0.0, 1e-12);
+  EXPECT_NEAR(std::abs(s.boundary_locus(0.0)), 0.0, 1e-12);
+  EXPECT_NEAR(s.amplification(4.0), 1.0, 1e-9);
+  EXPECT_GT(s.amplification(2.0), 1.0);
+  EXPECT_LT(s.amplification(-2.0), 1.0);
+}
+
+TEST(LinearStability, RegionBoundaryLiesOnUnitModulus) {
+  const auto rk4 = stability_of("rk4");
+  const auto lines = region_boundary(rk4, -4, 1, -4, 4, 120);
+  ASSERT_FALSE(lines.empty());
+  std::size_t points = 0;
+  double best_real = 1e9, best_imag = 1e9;
+  for (const auto& line : lines) {
+    for (const auto& z : line) {
+      ++points;
+      EXPECT_NEAR(rk4.amplification(z), 1.0, 1e-8);
+      if (std::abs(z.imag()) < 0.05) best_real = std::min(best_real, z.real());
+      if (std::abs(z.real()) < 0.05)
+        best_imag = std::min(best_imag, std::abs(std::abs(z.imag()) - 2.0 * std::sqrt(2.0)));
+    }
+  }
+  EXPECT_GT(points, 200u);
+  // The closed curve crosses the negative real axis at −2.7853 and the imaginary axis near ±2√2.
+  EXPECT_NEAR(best_real, -2.7853, 0.01);
+  EXPECT_LT(best_imag, 0.05);
+  // The rk4 region is one closed curve (chained by the marching squares into few polylines).
+  EXPECT_LE(lines.size(), 4u);
+}
+
+// Step map of a registered integrator on m x'' + γ x' + k x = 0, measured by stepping from the
+// unit states; its spectral radius must match mechanical_amplification(−h²k/m, −hγ/m).
+double measured_radius(const std::string& name, double k, double gamma, double h) {
+  const std::vector<std::string> p = {"k=" + std::to_string(k), "gamma=" + std::to_string(gamma)};
+  auto sys = model("harmonic_oscillator", p);
+  double s[2][2];
+  for (int col = 0; col < 2; ++col) {
+    auto integ = make(name);
+    Vec y = Vec::Zero(2);
+    y(col) = 1.0;
+    integ->reset(*sys, 0.0, y);
+    SolveStats stats;
+    EXPECT_EQ(integ->step(*sys, 0.0, y, h, stats), Status::ok);
+    s[0][col] = y(0);
+    s[1][col] = y(1);
+  }
+  const double tr = s[0][0] + s[1][1], det = s[0][0] * s[1][1] - s[0][1] * s[1][0];
+  const double disc = tr * tr / 4 - det;
+  return disc >= 0 ? std::abs(tr) / 2 + std::sqrt(disc) : std::sqrt(det);
+}
+
+TEST(LinearStability, StepMapOfEveryOneStepMethodMatchesItsStabilityData) {
+  int checked = 0;
+  for (const auto& e : integrator_registry().entries()) {
+    const std::string& name = e.info.name;
+    auto integ = make(name);
+    const auto s = integ->linear_stability();
+    if (!s || name == "bdf2") continue;  // bdf2: a two-step map, checked by its locus above
+    for (const double gamma : {0.0, 0.7}) {
+      for (const double h : {0.1, 0.6, 0.75}) {  // ω = 3: hω = 0.3, 1.8, 2.25
+        const double k = 9.0;
+        double measured = 0.0;
+        try {
+          measured = measured_radius(name, k, gamma, h);
+        } catch (const BadInput&) {
+          continue;  // the method refuses damped systems (Verlet forms)
+        }
+        SCOPED_TRACE(name + " gamma=" + std::to_string(gamma) + " h=" + std::to_string(h));
+        EXPECT_NEAR(s->mechanical_amplification(-h * h * k, -h * gamma), measured, 1e-8);
+        ++checked;
+      }
+    }
+  }
+  // 8 explicit tableaux, 5 DIRK, semi-implicit Euler, rosenbrock2, Baraff-Witkin: 6 cases
+  // each; 3 symplectic splittings + verlet + leapfrog: at least the 3 undamped cases.
+  EXPECT_GE(checked, 16 * 6 + 5 * 3);
+}
+
+TEST(LinearStability, PredictedStepOnTheFixedChainSpectrum) {
+  // Fixed–fixed chain, k = m = 1, N = 10: ω_j = 2 sin(jπ/22), eigenvalues ±iω_j
+  // (REFERENCES.md, ω_max = 1.979643). Verlet-type methods: h = 2/ω_max; rk4: 2√2/ω_max.
+  std::vector<std::complex<double>> eig;
+  for (int j = 1; j <= 10; ++j) {
+    const double w = 2.0 * std::sin(j * std::numbers::pi / 22.0);
+    eig.emplace_back(0.0, w);
+    eig.emplace_back(0.0, -w);
+  }
+  const double wmax = 2.0 * std::sin(10 * std::numbers::pi / 22.0);
+  EXPECT_NEAR(wmax, 1.979643, 1e-6);
+  auto pred = [&](const char* name) {
+    return predicted_step_limit(stability_of(name), eig, true, 100.0);
+  };
+  EXPECT_NEAR(pred("velocity_verlet").h, 2.0 / wmax, 1e-8);
+  EXPECT_NEAR(pred("symplectic_euler").h, 2.0 / wmax, 1e-8);
+  EXPECT_NEAR(pred("rk4").h, 2.0 * std::sqrt(2.0) / wmax, 1e-8);
+  EXPECT_EQ(pred("euler").h, 0.0);
+  EXPECT_FALSE(pred("euler").unbounded);
+  EXPECT_TRUE(pred("backward_euler").unbounded);
+  // Same answer from the first-order view (amplification on hλ) for the one-step methods.
+  EXPECT_NEAR(predicted_step_limit(stability_of("rk4"), eig, false, 100.0).h,
+              2.0 * std::sqrt(2.0) / wmax, 1e-8);
+}
+
+}  // namespace
+}  // namespace stiffbench
