@@ -91,6 +91,18 @@ void write_file_atomic(const std::filesystem::path& path, const std::string& con
   std::filesystem::rename(tmp, path);
 }
 
+void require_output_dir(const std::filesystem::path& dir, const std::string& flag) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  const auto probe = dir / ".stiffbench_write_test";
+  {
+    std::ofstream f(probe, std::ios::binary | std::ios::trunc);
+    require_input(!ec && f.good(), flag + " " + dir.string() + ": cannot create or write there" +
+                                       (ec ? " (" + ec.message() + ")" : std::string()));
+  }
+  std::filesystem::remove(probe, ec);
+}
+
 void set_command_line(int argc, char** argv) {
   g_command_line.clear();
   for (int i = 0; i < argc; ++i) {

@@ -28,6 +28,10 @@ std::string format_fixed(double x, int digits = 3);
 
 void write_file_atomic(const std::filesystem::path& path, const std::string& content);
 
+// Creates DIR and checks that a file can be written there, before an experiment runs; BadInput
+// naming `flag` and the directory otherwise.
+void require_output_dir(const std::filesystem::path& dir, const std::string& flag = "--out");
+
 // Metadata common to every experiment: spec, versions, compiler, flags, git revision, thread
 // count, date, command line.
 nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json& spec);

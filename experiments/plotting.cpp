@@ -1,5 +1,7 @@
 #include "experiments/plotting.hpp"
 
+#include "experiments/stability.hpp"
+
 #include <algorithm>
 #include <cstdlib>
 #include <fstream>
@@ -182,6 +184,7 @@ const std::map<std::string, std::pair<std::string, Replotter>>& replotters() {
        {"Local error", [](const fs::path& csv, const std::string& t, const PlotOptions& o,
                           std::ostream& e) { return plot_convergence(csv, t, true, o, e); }}},
       {"work_precision.csv", {"Work-precision", plot_work_precision}},
+      {"stability.csv", {"Stability limit", plot_stability}},
   };
   return table;
 }

@@ -1,0 +1,610 @@
+#include "experiments/stability.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <functional>
+#include <limits>
+#include <numbers>
+#include <ostream>
+#include <random>
+#include <sstream>
+
+#include "core/driver.hpp"
+#include "core/linear_stability.hpp"
+#include "experiments/catalog.hpp"
+#include "experiments/progress.hpp"
+
+namespace stiffbench {
+
+namespace {
+
+using cd = std::complex<double>;
+
+std::string num(double x) { return format_short(x, 4); }
+
+double parse_number(const std::string& s, const std::string& what) {
+  std::size_t used = 0;
+  double v = std::numeric_limits<double>::quiet_NaN();
+  try {
+    v = std::stod(s, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  require_input(used == s.size() && !s.empty() && std::isfinite(v),
+                "--sweep: '" + s + "' in " + what + " is not a finite number");
+  return v;
+}
+
+// The spectrum linear theory is evaluated on.
+struct Spectrum {
+  std::vector<cd> eigenvalues;
+  double omega = 0;    // largest modulus (0: unknown)
+  std::string source;  // how it was obtained
+};
+
+Spectrum spectrum_of(const OdeSystem& sys, double t0, const Vec& y0, const StabilitySpec& spec) {
+  Spectrum s;
+  const Index n = sys.dimension();
+  const bool mechanical = sys.as_mechanical() != nullptr;
+  if (n <= spec.dense_limit) {
+    Mat j(n, n);
+    if (sys.has_jacobian()) {
+      SparseMat sj;
+      sys.jacobian(t0, y0, sj);
+      j = Mat(sj);
+      s.source = "eigenvalues of the analytic Jacobian at the perturbed initial state";
+    } else {
+      Vec f0(n), f1(n), y = y0;
+      sys.rhs(t0, y0, f0);
+      for (Index c = 0; c < n; ++c) {
+        const double d = 1e-7 * std::max(1.0, std::abs(y0(c)));
+        y(c) = y0(c) + d;
+        sys.rhs(t0, y, f1);
+        j.col(c) = (f1 - f0) / d;
+        y(c) = y0(c);
+      }
+      s.source = "eigenvalues of a finite-difference Jacobian at the perturbed initial state";
+    }
+    const Eigen::EigenSolver<Mat> es(j, false);
+    for (Index k = 0; k < n; ++k) s.eigenvalues.push_back(es.eigenvalues()(k));
+  } else if (auto rho = sys.stiffness(t0, y0)) {
+    const std::string ray = spec.ray == "auto" ? (mechanical ? "imag" : "real") : spec.ray;
+    if (ray == "imag") {
+      s.eigenvalues = {cd(0, *rho), cd(0, -*rho)};
+      s.source = "stiffness() estimate " + num(*rho) + " on the imaginary axis (undamped modes)";
+    } else {
+      s.eigenvalues = {cd(-*rho, 0)};
+      s.source = "stiffness() estimate " + num(*rho) + " on the negative real axis (decay)";
+    }
+  } else {
+    s.source = "none (dimension " + std::to_string(n) + " above the dense limit " +
+               std::to_string(spec.dense_limit) + " and no stiffness() estimate)";
+  }
+  for (const cd& l : s.eigenvalues) s.omega = std::max(s.omega, std::abs(l));
+  return s;
+}
+
+Vec perturbed_state(const OdeSystem& sys, const StabilitySpec& spec) {
+  Vec y = sys.initial_state();
+  std::mt19937_64 rng(spec.seed);
+  std::normal_distribution<double> xi(0.0, 1.0);
+  if (const MechanicalSystem* m = sys.as_mechanical()) {
+    auto x = y.head(m->dofs());
+    const double mean = x.size() ? x.mean() : 0.0;
+    double s = x.size() ? std::sqrt((x.array() - mean).square().mean()) : 0.0;
+    if (!(s > 0)) s = 1.0;
+    for (Index i = 0; i < x.size(); ++i) x(i) += spec.perturbation * s * xi(rng);
+  } else {
+    const double floor = 1e-3 * (y.size() ? y.cwiseAbs().maxCoeff() : 0.0);
+    for (Index i = 0; i < y.size(); ++i)
+      y(i) += spec.perturbation * std::max(std::abs(y(i)), floor) * xi(rng);
+  }
+  return y;
+}
+
+// Least-squares slope of log y against t.
+std::optional<double> semilog_slope(const std::vector<double>& t, const std::vector<double>& y) {
+  if (t.size() < 2) return std::nullopt;
+  double mt = 0, ml = 0;
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    mt += t[k];
+    ml += std::log(y[k]);
+  }
+  mt /= static_cast<double>(t.size());
+  ml /= static_cast<double>(t.size());
+  double sxy = 0, sxx = 0;
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    sxy += (t[k] - mt) * (std::log(y[k]) - ml);
+    sxx += (t[k] - mt) * (t[k] - mt);
+  }
+  if (!(sxx > 0)) return std::nullopt;
+  return sxy / sxx;
+}
+
+struct Probe {
+  bool stable = false;
+  Status status = Status::ok;
+  std::string message;
+  std::optional<double> growth_per_period;  // when unstable with enough samples
+};
+
+// Thrown by the observer to end a run whose energy crossed the threshold.
+struct EnergyGrowth {
+  double t;
+};
+
+// One run at step h over `mult` horizons; stable by the criterion of the header.
+Probe probe(const OdeSystem& sys, Integrator& integ, double t0, const Vec& y0, double h,
+            double horizon, double period, int mult, const StabilitySpec& spec,
+            const std::function<double(double, CVecRef)>& energy) {
+  const double want = std::ceil(mult * horizon / h);
+  const long steps = static_cast<long>(
+      std::min<double>(std::max<double>(want, static_cast<double>(spec.min_steps) * mult),
+                       static_cast<double>(spec.max_steps)));
+  FixedStepOptions opt;
+  opt.h = h;
+  opt.t_end = t0 + static_cast<double>(steps) * h;
+  opt.blowup_factor = spec.norm_growth;
+  opt.max_steps = spec.max_steps;
+  opt.outputs = steps;  // the observer sees every step
+  const double e0 = energy ? energy(t0, y0) : 0.0;
+  const double e_max = e0 + (spec.growth - 1.0) * std::abs(e0);
+  // The max-norm deviation from the start at (up to) 2000 equally spaced steps, for the growth
+  // rate of an unstable run.
+  const long every = std::max<long>(1, steps / 2000);
+  long k = 0;
+  std::vector<std::pair<double, double>> dev;
+  Probe p;
+  RunResult r;
+  bool energy_stop = false;
+  try {
+    r = run_fixed_step_from(sys, integ, t0, y0, opt, [&](double t, CVecRef y) {
+      if (k++ % every == 0) dev.emplace_back(t, (y - y0).cwiseAbs().maxCoeff());
+      if (energy && !(energy(t, y) <= e_max)) throw EnergyGrowth{t};
+    });
+  } catch (const EnergyGrowth& g) {
+    energy_stop = true;
+    p.status = Status::unstable;
+    p.message = "energy exceeded " + num(spec.growth) + " x |E0| at t = " + num(g.t);
+  }
+  if (!energy_stop) {
+    p.status = r.stats.status;
+    p.message = r.stats.message;
+  }
+  p.stable = p.status == Status::ok;
+  if (p.status == Status::unstable && period > 0) {
+    // Growth rate from a least-squares fit of log deviation against t over the last half of
+    // the samples (the unstable mode dominates there).
+    std::vector<double> ts, ls;
+    for (std::size_t i = dev.size() / 2; i < dev.size(); ++i)
+      if (dev[i].second > 0 && std::isfinite(dev[i].second)) {
+        ts.push_back(dev[i].first);
+        ls.push_back(dev[i].second);
+      }
+    if (auto slope = semilog_slope(ts, ls)) p.growth_per_period = std::exp(*slope * period);
+  }
+  return p;
+}
+
+StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& spec_sys,
+                     const Vec& y0, const StabilitySpec& spec) {
+  StabilityRow row;
+  row.model = spec.model;
+  row.integrator = integ.info().name;
+  const double t0 = sys.initial_time();
+  const bool mechanical = sys.as_mechanical() != nullptr;
+  const double omega = spec_sys.omega;
+  const double period = omega > 0 ? 2.0 * std::numbers::pi / omega : 0.0;
+  const double horizon = spec.horizon ? *spec.horizon : spec.periods * period;
+  const double h_ref =
+      omega > 0 ? 2.0 / omega : (spec.horizon ? *spec.horizon / spec.min_steps : 0.0);
+  const double h_cap = spec.h_cap_factor * h_ref;
+
+  if (auto ls = integ.linear_stability(); ls && !spec_sys.eigenvalues.empty()) {
+    const StepLimit lim = predicted_step_limit(*ls, spec_sys.eigenvalues, mechanical, h_cap);
+    if (lim.unbounded)
+      row.predicted_unbounded = true;
+    else
+      row.h_predicted = lim.h;
+  }
+
+  // First guess: 0.8 × the prediction (not the prediction itself, so the bracket never starts
+  // on the predicted value), else the model's suggested step, else 2/ω.
+  double h0 = h_ref;
+  if (row.h_predicted && *row.h_predicted > 0)
+    h0 = 0.8 * *row.h_predicted;
+  else if (auto sug = sys.suggested_step(); sug && !row.predicted_unbounded)
+    h0 = sug->h;
+  const double h_floor = 1e-3 * std::min(h0, h_ref);
+
+  // Mechanical systems with an energy invariant are judged by their energy.
+  std::function<double(double, CVecRef)> energy;
+  if (mechanical)
+    for (const auto& inv : sys.invariants())
+      if (inv.name == "energy") energy = inv.value;
+  auto run = [&](double h, int mult) {
+    ++row.probes;
+    return probe(sys, integ, t0, y0, h, horizon, period, mult, spec, energy);
+  };
+  auto all_unstable = [&](const Probe& p, double h) {
+    row.status = "unstable_for_all_h";
+    row.growth_per_period = p.growth_per_period;
+    row.growth_h = h;
+    row.message = p.message;
+  };
+
+  try {
+    double lo = 0, hi = 0;
+    Probe first = run(h0, 1);
+    if (first.stable) {
+      lo = h0;
+      while (hi == 0 && lo < h_cap) {
+        const double h = std::min(2.0 * lo, h_cap);
+        if (run(h, 1).stable)
+          lo = h;
+        else
+          hi = h;
+      }
+      if (hi == 0) {
+        row.status = "stable_up_to";
+        row.h_measured = lo;
+        row.horizon = std::max(horizon, static_cast<double>(spec.min_steps) * lo);
+        return row;
+      }
+    } else {
+      hi = h0;
+      Probe last = first;
+      double h_last = h0;
+      while (lo == 0) {
+        const double h = 0.5 * hi;
+        if (h < h_floor) {
+          all_unstable(last, h_last);
+          return row;
+        }
+        Probe p = run(h, 1);
+        if (p.stable) {
+          lo = h;
+        } else {
+          hi = h;
+          last = std::move(p);
+          h_last = h;
+        }
+      }
+    }
+    while (hi - lo > spec.rel_tol * lo) {
+      const double mid = std::sqrt(lo * hi);
+      (run(mid, 1).stable ? lo : hi) = mid;
+    }
+    // A method with a real stability interval is stable at 0.75 h_max on any horizon (linear
+    // theory); one whose limit only reflects the finite horizon is not.
+    const double h_check = 0.75 * lo;
+    Probe check = run(h_check, 8);
+    if (!check.stable && check.status == Status::unstable) {
+      all_unstable(check, h_check);
+      return row;
+    }
+    row.status = "ok";
+    row.h_measured = lo;
+    row.horizon = std::max(horizon, static_cast<double>(spec.min_steps) * lo);
+  } catch (const BadInput&) {
+    throw;
+  } catch (const std::exception& e) {
+    row.status = "failed";
+    row.message = e.what();
+  }
+  return row;
+}
+
+std::string cell(const std::optional<double>& x) { return x ? format_full(*x) : ""; }
+
+}  // namespace
+
+void StabilitySpec::validate() const {
+  require_input(!model.empty(), "stability: --model is required");
+  require_input(!integrators.empty(), "stability: --integrators is empty");
+  require_input(rel_tol > 0 && rel_tol < 0.5, "--rel-tol must be in (0, 0.5), got " + num(rel_tol));
+  require_input(periods > 0 && std::isfinite(periods), "--periods must be > 0");
+  require_input(min_steps >= 1, "--min-steps must be >= 1");
+  require_input(growth > 1 && std::isfinite(growth), "--growth must be a finite factor > 1");
+  require_input(norm_growth > 1 && std::isfinite(norm_growth),
+                "--norm-growth must be a finite factor > 1");
+  require_input(perturbation >= 0 && perturbation < 1, "--perturbation must be in [0, 1)");
+  require_input(h_cap_factor > 1, "--h-cap-factor must be > 1");
+  require_input(max_steps >= 10, "--max-steps must be >= 10");
+  require_input(ray == "auto" || ray == "imag" || ray == "real",
+                "--ray must be auto, imag or real, got '" + ray + "'");
+  require_input(!horizon || (*horizon > 0 && std::isfinite(*horizon)),
+                "--horizon must be a positive time");
+  if (!sweep_param.empty())
+    require_input(!sweep_values.empty(), "--sweep " + sweep_param + " has no values");
+}
+
+nlohmann::json StabilitySpec::to_json() const {
+  nlohmann::json j;
+  j["model"] = model;
+  j["params"] = params.values();
+  j["integrators"] = integrators;
+  if (!sweep_param.empty()) {
+    j["sweep"]["param"] = sweep_param;
+    j["sweep"]["values"] = sweep_values;
+  }
+  j["rel_tol"] = rel_tol;
+  j["periods"] = periods;
+  j["min_steps"] = min_steps;
+  j["growth"] = growth;
+  j["norm_growth"] = norm_growth;
+  j["perturbation"] = {{"epsilon", perturbation},
+                       {"seed", seed},
+                       {"generator", "std::mt19937_64, standard normal"},
+                       {"rule",
+                        "mechanical: x_i += eps*s*xi_i, s = RMS deviation of x0 from its mean; "
+                        "first-order: y_i += eps*max(|y0_i|, 1e-3*max|y0|)*xi_i"}};
+  j["h_cap_factor"] = h_cap_factor;
+  j["max_steps"] = max_steps;
+  j["ray"] = ray;
+  j["dense_limit"] = dense_limit;
+  if (horizon) j["horizon"] = *horizon;
+  return j;
+}
+
+void parse_sweep(const std::string& arg, std::string& name, std::vector<double>& values) {
+  const auto eq = arg.find('=');
+  require_input(eq != std::string::npos && eq > 0 && eq + 1 < arg.size(),
+                "--sweep expects NAME=v1,v2,... or NAME=lo:hi:n, got '" + arg + "'");
+  name = arg.substr(0, eq);
+  const std::string rest = arg.substr(eq + 1);
+  values.clear();
+  if (rest.find(':') != std::string::npos) {
+    std::vector<std::string> parts;
+    std::stringstream ss(rest);
+    for (std::string p; std::getline(ss, p, ':');) parts.push_back(p);
+    require_input(parts.size() == 3,
+                  "--sweep " + name + "=lo:hi:n needs three fields, got '" + rest + "'");
+    const double lo = parse_number(parts[0], arg), hi = parse_number(parts[1], arg);
+    const double n = parse_number(parts[2], arg);
+    require_input(n >= 2 && n <= 1000 && n == std::floor(n),
+                  "--sweep " + name + ": n must be an integer in 2..1000, got '" + parts[2] + "'");
+    require_input(lo != 0 && hi != 0 && (lo > 0) == (hi > 0),
+                  "--sweep " + name +
+                      ": lo and hi of a log-spaced range must be non-zero and of "
+                      "one sign, got " +
+                      parts[0] + " and " + parts[1]);
+    const double sign = lo > 0 ? 1.0 : -1.0;
+    const double a = std::log(std::abs(lo)), b = std::log(std::abs(hi));
+    for (int k = 0; k < static_cast<int>(n); ++k)
+      values.push_back(sign * std::exp(a + (b - a) * k / (n - 1)));
+  } else {
+    const auto items = split_list(rest, "--sweep");
+    for (const auto& it : items) values.push_back(parse_number(it, arg));
+  }
+}
+
+std::optional<double> loglog_slope(const std::vector<double>& x, const std::vector<double>& y) {
+  std::vector<double> lx, ly;
+  for (std::size_t k = 0; k < x.size() && k < y.size(); ++k)
+    if (x[k] != 0 && y[k] > 0 && std::isfinite(x[k]) && std::isfinite(y[k])) {
+      lx.push_back(std::log(std::abs(x[k])));
+      ly.push_back(std::log(y[k]));
+    }
+  if (lx.size() < 2) return std::nullopt;
+  double mx = 0, my = 0;
+  for (std::size_t k = 0; k < lx.size(); ++k) {
+    mx += lx[k];
+    my += ly[k];
+  }
+  mx /= static_cast<double>(lx.size());
+  my /= static_cast<double>(lx.size());
+  double sxy = 0, sxx = 0;
+  for (std::size_t k = 0; k < lx.size(); ++k) {
+    sxy += (lx[k] - mx) * (ly[k] - my);
+    sxx += (lx[k] - mx) * (lx[k] - mx);
+  }
+  if (!(sxx > 0)) return std::nullopt;
+  return sxy / sxx;
+}
+
+StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress) {
+  spec.validate();
+  StabilityResult res;
+  const bool sweep = !spec.sweep_param.empty();
+  const std::vector<double> values = sweep ? spec.sweep_values : std::vector<double>{0.0};
+  // Every set-up is created (and checked) before the first run, so a bad value of the swept
+  // parameter or an incompatible pair is reported at once.
+  std::vector<Setup> setups;
+  for (const double v : values) {
+    Params p = spec.params;
+    if (sweep) p.set(spec.sweep_param, format_full(v));
+    setups.push_back(make_setup(spec.model, spec.integrators, p));
+  }
+  Progress prog(progress, "stability", static_cast<long>(values.size() * spec.integrators.size()));
+  for (std::size_t iv = 0; iv < values.size(); ++iv) {
+    Setup& s = setups[iv];
+    const Vec y0 = perturbed_state(*s.model, spec);
+    const Spectrum sp = spectrum_of(*s.model, s.model->initial_time(), y0, spec);
+    res.spectrum_source = sp.source;
+    require_input(sp.omega > 0 || spec.horizon,
+                  "stability: model " + spec.model + " gives no spectrum (" + sp.source +
+                      "), so the horizon cannot be set in periods of its fastest mode: give "
+                      "--horizon T");
+    for (auto& integ : s.integrators) {
+      StabilityRow row = measure(*s.model, *integ, sp, y0, spec);
+      if (sweep) {
+        row.param = spec.sweep_param;
+        row.value = values[iv];
+      }
+      std::string what = row.integrator;
+      if (sweep) what += ", " + row.param + " = " + num(row.value);
+      what += ": " + row.status;
+      if (row.h_measured) what += ", h_max = " + num(*row.h_measured);
+      prog.tick(what);
+      res.rows.push_back(std::move(row));
+    }
+  }
+  if (sweep) {
+    for (const auto& name : spec.integrators) {
+      StabilityResult::Fit f;
+      f.integrator = name;
+      std::vector<double> xm, ym, xp, yp;
+      for (const auto& r : res.rows) {
+        if (r.integrator != name) continue;
+        if (r.status == "ok" && r.h_measured) {
+          xm.push_back(r.value);
+          ym.push_back(*r.h_measured);
+        }
+        if (r.h_predicted && *r.h_predicted > 0) {
+          xp.push_back(r.value);
+          yp.push_back(*r.h_predicted);
+        }
+      }
+      f.points = static_cast<int>(xm.size());
+      f.measured_slope = loglog_slope(xm, ym);
+      f.predicted_slope = loglog_slope(xp, yp);
+      res.fits.push_back(f);
+    }
+  }
+  return res;
+}
+
+Table stability_table(const StabilityResult& r) {
+  Table t;
+  t.columns = {"model",          "integrator",      "param", "value",
+               "h_max_measured", "h_max_predicted", "ratio", "status"};
+  // Grouped by integrator (in the order of the runs), so a plot draws each one as one line.
+  std::vector<const StabilityRow*> order;
+  for (const auto& row : r.rows) order.push_back(&row);
+  std::stable_sort(order.begin(), order.end(), [&](const StabilityRow* a, const StabilityRow* b) {
+    auto first = [&](const std::string& name) {
+      for (std::size_t k = 0; k < r.rows.size(); ++k)
+        if (r.rows[k].integrator == name) return k;
+      return r.rows.size();
+    };
+    return first(a->integrator) < first(b->integrator);
+  });
+  for (const StabilityRow* rp : order) {
+    const StabilityRow& row = *rp;
+    std::optional<double> ratio;
+    if (row.status == "ok" && row.h_measured && row.h_predicted && *row.h_predicted > 0)
+      ratio = *row.h_measured / *row.h_predicted;
+    t.rows.push_back({row.model, row.integrator, row.param,
+                      row.param.empty() ? "" : format_full(row.value), cell(row.h_measured),
+                      row.predicted_unbounded ? "inf" : cell(row.h_predicted), cell(ratio),
+                      row.status});
+  }
+  return t;
+}
+
+namespace {
+
+std::string markdown_report(const StabilitySpec& spec, const StabilityResult& r) {
+  std::ostringstream md;
+  md << "# Stability limit: " << spec.model << "\n\n";
+  md << "Largest stable fixed step h_max, measured by bisection to a relative tolerance of "
+     << num(spec.rel_tol)
+     << ", against linear theory. A run is stable when it stays finite and "
+        "its max-norm never exceeds "
+     << num(spec.norm_growth) << " x max(1, |y0|)"
+     << " (and, for mechanical systems, its energy never exceeds E0 + " << num(spec.growth - 1)
+     << " x |E0|), checked at every step over "
+     << (spec.horizon ? "a horizon of " + num(*spec.horizon)
+                      : num(spec.periods) + " periods of the fastest mode")
+     << " (at least " << spec.min_steps << " steps), from an initial state perturbed by a relative "
+     << num(spec.perturbation) << " (seed " << spec.seed
+     << ") so that every mode is excited. Predicted: " << r.spectrum_source
+     << ", scaled into each method's stability region. A ratio near 1 means linear theory "
+        "predicts the limit; `unstable_for_all_h` marks methods whose measured limit shrinks "
+        "with the horizon (no stable step), `stable_up_to` methods stable up to the largest step "
+        "tried.\n\n";
+  Table t;
+  t.columns = {"integrator", "param", "h_max measured", "h_max predicted", "ratio",
+               "status",     "note"};
+  for (const auto& row : r.rows) {
+    std::string note;
+    if (row.status == "unstable_for_all_h") {
+      note = row.growth_per_period ? "growth x" + num(*row.growth_per_period) +
+                                         " per period at h = " + num(row.growth_h)
+                                   : "unstable at every step down to h = " + num(row.growth_h);
+    } else if (row.status == "failed") {
+      note = row.message;
+    } else {
+      note = std::to_string(row.probes) + " runs";
+    }
+    std::string ratio;
+    if (row.status == "ok" && row.h_measured && row.h_predicted && *row.h_predicted > 0)
+      ratio = format_fixed(*row.h_measured / *row.h_predicted, 4);
+    t.rows.push_back(
+        {row.integrator, row.param.empty() ? "" : row.param + " = " + num(row.value),
+         row.h_measured ? num(*row.h_measured) : "",
+         row.predicted_unbounded ? "unbounded" : (row.h_predicted ? num(*row.h_predicted) : ""),
+         ratio, row.status, note});
+  }
+  md << t.to_markdown();
+  if (!r.fits.empty()) {
+    md << "\nLog-log slope of h_max against " << spec.sweep_param
+       << " (least squares over the rows with status ok):\n\n";
+    Table f;
+    f.columns = {"integrator", "measured slope", "predicted slope", "points"};
+    for (const auto& fit : r.fits)
+      f.rows.push_back({fit.integrator,
+                        fit.measured_slope ? format_fixed(*fit.measured_slope, 3) : "",
+                        fit.predicted_slope ? format_fixed(*fit.predicted_slope, 3) : "",
+                        std::to_string(fit.points)});
+    md << f.to_markdown();
+  }
+  return md.str();
+}
+
+}  // namespace
+
+void write_stability_outputs(const std::filesystem::path& dir, const StabilitySpec& spec,
+                             const StabilityResult& r) {
+  write_file_atomic(dir / "stability.csv", stability_table(r).to_csv());
+  write_file_atomic(dir / "stability.md", markdown_report(spec, r));
+  nlohmann::json meta = run_metadata("stability", spec.to_json());
+  meta["spectrum"] = r.spectrum_source;
+  meta["criterion"] =
+      "stable: status ok, finite, max-norm <= norm_growth * max(1, |y0|) and (mechanical "
+      "systems with an energy invariant) E <= E0 + (growth - 1) |E0| at every step of the "
+      "horizon; "
+      "unstable_for_all_h: unstable at 0.75 h_max over 8x the horizon";
+  for (const auto& row : r.rows) {
+    nlohmann::json j;
+    j["integrator"] = row.integrator;
+    if (!row.param.empty()) j[row.param] = row.value;
+    j["status"] = row.status;
+    j["probes"] = row.probes;
+    j["horizon"] = row.horizon;
+    if (row.growth_per_period) {
+      j["growth_per_period"] = *row.growth_per_period;
+      j["growth_at_h"] = row.growth_h;
+    }
+    if (!row.message.empty()) j["message"] = row.message;
+    meta["rows"].push_back(j);
+  }
+  for (const auto& f : r.fits) {
+    nlohmann::json j;
+    j["integrator"] = f.integrator;
+    j["points"] = f.points;
+    if (f.measured_slope) j["measured_slope"] = *f.measured_slope;
+    if (f.predicted_slope) j["predicted_slope"] = *f.predicted_slope;
+    meta["fits"].push_back(j);
+  }
+  write_file_atomic(dir / "stability.json", meta.dump(2) + "\n");
+}
+
+bool plot_stability(const std::filesystem::path& csv, const std::string& title,
+                    const PlotOptions& opt, std::ostream& err) {
+  std::filesystem::path stem = csv;
+  stem.replace_extension();
+  const auto params = csv_column_values(csv, "param");
+  const bool sweep = !params.empty() && !params.front().empty();
+  return run_plot("stability.gp", stem,
+                  {{"csvfile", csv.string()},
+                   {"ttl", title},
+                   {"sweep", sweep ? "1" : "0"},
+                   {"xlab", sweep ? params.front() : ""}},
+                  family_panels(csv_column_values(csv, "integrator")), opt, err);
+}
+
+}  // namespace stiffbench

@@ -1,0 +1,122 @@
+// Measured stability limits against linear theory (`stiffbench stability`).
+//
+// Measured: for each integrator the largest fixed step h_max at which a run is stable, found by
+// bracketing (doubling/halving from a first guess) and bisection until (hi − lo)/lo <= rel_tol.
+// A run at step h is STABLE when it completes with status ok (a Newton failure is not stable),
+// its state stays finite, its max-norm never exceeds `norm_growth` × max(1, ‖y0‖∞) (the
+// driver's blow-up check) and — for mechanical systems with an "energy" invariant — its energy
+// never exceeds E0 + (growth − 1)·|E0|, checked at every step over a horizon of `periods`
+// periods 2π/ω of the fastest mode (ω = the spectral radius below), and at least `min_steps`
+// steps. The energy matters: on nonlinear models an unstable mode can saturate (a 1D chain's
+// springs invert at amplitudes near the rest length) long before the norm grows tenfold. The
+// initial state is perturbed first so that every mode is excited (an unexcited fastest mode only
+// grows from round-off and hides the instability):
+//   mechanical systems: x_i += ε·s·ξ_i with s the RMS deviation of x0 from its mean (1 if 0);
+//   first-order systems: y_i += ε·max(|y0_i|, 1e-3·‖y0‖∞)·ξ_i;
+// ξ_i standard normal from `seed` (std::mt19937_64), ε = `perturbation`. Velocities of
+// mechanical systems are not perturbed (pinned points stay pinned).
+//
+// Statuses (stability.csv):
+//   ok                  h_max measured to rel_tol;
+//   stable_up_to        no instability up to the largest step tried (h_cap; A-stable methods):
+//                       h_max_measured is that step;
+//   unstable_for_all_h  the largest stable step shrinks with the horizon: a run at 0.75·h_max
+//                       over 8× the horizon is unstable (a method with a real stability
+//                       interval is stable there on a linear problem), or no step down to
+//                       h_floor is stable. h_max_measured is empty; the Markdown table gives the
+//                       growth per period at the last unstable probe instead.
+//   failed              the integrator cannot run at all (its message in the Markdown table).
+//
+// Predicted: the spectrum of ∂f/∂y at the perturbed initial state — exact (Eigen's eigensolver
+// of the dense Jacobian, analytic or by finite differences) when dimension <= dense_limit,
+// otherwise the model's stiffness() estimate ρ placed on the ray of `ray` (auto: the imaginary
+// axis ±iρ for mechanical systems, −ρ for first-order ones) — scaled into the method's region
+// (predicted_step_limit of core/linear_stability.hpp; mechanical systems through the oscillator
+// test, which is what kick/drift methods need). Empty where the method has no stability data.
+//
+// Sweep: `sweep_param` = values repeats everything per value (a fresh model each time) and fits
+// the log–log slope of h_max against |value| per integrator over the rows with status ok
+// (−½ expected for spring k and SPH EOS stiffness, −1 for λ); the same slope of the predicted
+// limits is reported beside it.
+#pragma once
+
+#include <filesystem>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/params.hpp"
+#include "experiments/output.hpp"
+#include "experiments/plotting.hpp"
+
+namespace stiffbench {
+
+struct StabilitySpec {
+  std::string model;
+  Params params;
+  std::vector<std::string> integrators;
+  std::string sweep_param;           // empty: no sweep
+  std::vector<double> sweep_values;  // the values of sweep_param
+  double rel_tol = 1e-3;             // bisection tolerance on h
+  double periods = 500;              // horizon in periods of the fastest mode
+  long min_steps = 200;              // and at least this many steps
+  double growth = 2;                 // energy factor (mechanical systems with an energy invariant)
+  double norm_growth = 10;           // blow-up factor on the max-norm (every system)
+  double perturbation = 1e-3;        // ε
+  unsigned long seed = 1;
+  double h_cap_factor = 1e3;      // largest step tried: h_cap_factor × 2/ω
+  long max_steps = 20'000'000;    // per probe run (also limits h_floor)
+  std::string ray = "auto";       // auto | imag | real (for the stiffness() estimate)
+  Index dense_limit = 600;        // eigen-decompose the Jacobian up to this dimension
+  std::optional<double> horizon;  // explicit horizon (time); else periods × 2π/ω
+
+  void validate() const;  // BadInput naming the bad flag
+  nlohmann::json to_json() const;
+};
+
+// Parses "--sweep NAME=v1,v2,..." or "NAME=lo:hi:n" (n log-spaced values, lo and hi of one
+// sign). BadInput naming --sweep on a malformed argument.
+void parse_sweep(const std::string& arg, std::string& name, std::vector<double>& values);
+
+struct StabilityRow {
+  std::string model, integrator, param;     // param empty without a sweep
+  double value = 0;                         // the swept value (unused without a sweep)
+  std::optional<double> h_measured;         // empty for unstable_for_all_h / failed
+  std::optional<double> h_predicted;        // empty without stability data or spectrum
+  bool predicted_unbounded = false;         // linear theory: stable for every h (A-stable)
+  std::string status;                       // ok | stable_up_to | unstable_for_all_h | failed
+  std::optional<double> growth_per_period;  // unstable_for_all_h: at the last unstable probe
+  double growth_h = 0;                      // the step of that probe
+  int probes = 0;                           // runs made
+  double horizon = 0;                       // time horizon used at h_max
+  std::string message;                      // failed: why
+};
+
+struct StabilityResult {
+  std::vector<StabilityRow> rows;
+  std::string spectrum_source;  // per model (last value of a sweep): how ω was obtained
+  struct Fit {
+    std::string integrator;
+    std::optional<double> measured_slope, predicted_slope;
+    int points = 0;
+  };
+  std::vector<Fit> fits;  // sweeps only
+};
+
+StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress);
+
+// Least-squares slope of log y against log x (at least two points, else empty).
+std::optional<double> loglog_slope(const std::vector<double>& x, const std::vector<double>& y);
+
+Table stability_table(const StabilityResult& r);  // the stability.csv contract
+void write_stability_outputs(const std::filesystem::path& dir, const StabilitySpec& spec,
+                             const StabilityResult& r);
+// The plot of DIR/stability.csv: with a sweep h_max against the parameter (log–log, measured
+// points, predicted lines), else measured and predicted h_max per integrator.
+bool plot_stability(const std::filesystem::path& csv, const std::string& title,
+                    const PlotOptions& opt, std::ostream& err);
+
+}  // namespace stiffbench

@@ -1,0 +1,129 @@
+// The stability-limit experiment (experiments/stability.hpp): measured h_max on the fixed-fixed
+// spring chain against the closed-form limits, the unstable-for-all-h and A-stable statuses,
+// the k^(-1/2) and 1/|λ| scalings of a sweep, and the sweep parser.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "core/types.hpp"
+#include "experiments/stability.hpp"
+
+namespace stiffbench {
+namespace {
+
+// Fixed-fixed chain, k = m = 1, N = 10: ω_max = 2 sin(10π/22) = 1.979643 (REFERENCES.md).
+const double kOmegaMax = 2.0 * std::sin(10.0 * std::numbers::pi / 22.0);
+
+const StabilityRow& row_of(const StabilityResult& r, const std::string& integrator,
+                           double value = 0.0) {
+  for (const auto& row : r.rows)
+    if (row.integrator == integrator && row.value == value) return row;
+  throw std::logic_error("no row for " + integrator);
+}
+
+TEST(Stability, SpringChainLimitsMatchLinearTheory) {
+  ASSERT_NEAR(kOmegaMax, 1.979643, 1e-6);
+  StabilitySpec spec;
+  spec.model = "spring_chain";
+  spec.integrators = {"symplectic_euler", "velocity_verlet", "rk4", "euler", "backward_euler"};
+  const StabilityResult r = run_stability(spec, nullptr);
+  // Symplectic Euler and Verlet: stable for hω <= 2; rk4: hω <= 2√2 (imaginary-axis limit).
+  for (const char* name : {"symplectic_euler", "velocity_verlet"}) {
+    SCOPED_TRACE(name);
+    const auto& row = row_of(r, name);
+    EXPECT_EQ(row.status, "ok");
+    ASSERT_TRUE(row.h_measured);
+    EXPECT_NEAR(*row.h_measured / (2.0 / kOmegaMax), 1.0, 0.02);
+    ASSERT_TRUE(row.h_predicted);
+    EXPECT_NEAR(*row.h_predicted, 2.0 / kOmegaMax, 1e-8);
+  }
+  const auto& rk4 = row_of(r, "rk4");
+  EXPECT_EQ(rk4.status, "ok");
+  ASSERT_TRUE(rk4.h_measured);
+  EXPECT_NEAR(*rk4.h_measured / (2.0 * std::sqrt(2.0) / kOmegaMax), 1.0, 0.02);
+  // Explicit Euler has |R(iy)| > 1 for every y > 0: no stable step on an undamped chain, with a
+  // measured growth per period above 1.
+  const auto& euler = row_of(r, "euler");
+  EXPECT_EQ(euler.status, "unstable_for_all_h");
+  EXPECT_FALSE(euler.h_measured);
+  ASSERT_TRUE(euler.growth_per_period);
+  EXPECT_GT(*euler.growth_per_period, 1.0);
+  // Backward Euler is A-stable: no instability up to the largest step tried.
+  const auto& be = row_of(r, "backward_euler");
+  EXPECT_EQ(be.status, "stable_up_to");
+  EXPECT_TRUE(be.predicted_unbounded);
+
+  const Table t = stability_table(r);
+  EXPECT_EQ(t.columns,
+            (std::vector<std::string>{"model", "integrator", "param", "value", "h_max_measured",
+                                      "h_max_predicted", "ratio", "status"}));
+}
+
+TEST(Stability, SweepOverSpringStiffnessHasSlopeMinusOneHalf) {
+  // ω_max ∝ √k, so h_max ∝ k^(-1/2) for a method with a finite imaginary-axis interval.
+  StabilitySpec spec;
+  spec.model = "spring_chain";
+  spec.integrators = {"symplectic_euler"};
+  parse_sweep("k=1:1000:4", spec.sweep_param, spec.sweep_values);
+  const StabilityResult r = run_stability(spec, nullptr);
+  ASSERT_EQ(r.rows.size(), 4u);
+  ASSERT_EQ(r.fits.size(), 1u);
+  EXPECT_EQ(r.fits[0].points, 4);
+  ASSERT_TRUE(r.fits[0].measured_slope);
+  EXPECT_NEAR(*r.fits[0].measured_slope, -0.5, 0.05);
+  ASSERT_TRUE(r.fits[0].predicted_slope);
+  EXPECT_NEAR(*r.fits[0].predicted_slope, -0.5, 1e-6);
+}
+
+TEST(Stability, DecaySweepOverLambdaHasSlopeMinusOne) {
+  // Prothero–Robinson y' = λ(y − φ) + φ': explicit Euler is stable for h|λ| <= 2 (real axis).
+  StabilitySpec spec;
+  spec.model = "prothero_robinson";
+  spec.integrators = {"euler"};
+  parse_sweep("lambda=-10,-100,-1000", spec.sweep_param, spec.sweep_values);
+  const StabilityResult r = run_stability(spec, nullptr);
+  for (const auto& row : r.rows) {
+    ASSERT_EQ(row.status, "ok");
+    EXPECT_NEAR(*row.h_measured * std::abs(row.value) / 2.0, 1.0, 0.02);
+  }
+  ASSERT_TRUE(r.fits.at(0).measured_slope);
+  EXPECT_NEAR(*r.fits[0].measured_slope, -1.0, 0.02);
+}
+
+TEST(Stability, SweepParser) {
+  std::string name;
+  std::vector<double> v;
+  parse_sweep("k=1:1000:4", name, v);
+  EXPECT_EQ(name, "k");
+  ASSERT_EQ(v.size(), 4u);
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(v[static_cast<std::size_t>(i)], std::pow(10.0, i), 1e-9);
+  parse_sweep("lambda=-1:-100:3", name, v);
+  EXPECT_NEAR(v[1], -10.0, 1e-12);
+  parse_sweep("k=2,5,9", name, v);
+  EXPECT_EQ(v, (std::vector<double>{2, 5, 9}));
+  for (const char* bad :
+       {"k", "k=", "=1,2", "k=1:10", "k=0:10:3", "k=-1:10:3", "k=1,x", "k=1:10:1", "k=1,,2"})
+    EXPECT_THROW(parse_sweep(bad, name, v), BadInput) << bad;
+}
+
+TEST(Stability, LogLogSlope) {
+  // y = 3 x^(-1/2) exactly.
+  const std::vector<double> x = {1, 10, 100}, y = {3, 3 / std::sqrt(10.0), 0.3};
+  EXPECT_NEAR(*loglog_slope(x, y), -0.5, 1e-12);
+  EXPECT_FALSE(loglog_slope({1}, {1}));
+}
+
+TEST(Stability, BadSpecIsRefused) {
+  StabilitySpec spec;
+  spec.model = "spring_chain";
+  spec.integrators = {"rk4"};
+  spec.rel_tol = 0;
+  EXPECT_THROW(spec.validate(), BadInput);
+  spec.rel_tol = 1e-3;
+  spec.ray = "diagonal";
+  EXPECT_THROW(spec.validate(), BadInput);
+}
+
+}  // namespace
+}  // namespace stiffbench
