@@ -48,7 +48,11 @@ Spectrum spectrum_of(const OdeSystem& sys, double t0, const Vec& y0, const Stabi
   Spectrum s;
   const Index n = sys.dimension();
   const bool mechanical = sys.as_mechanical() != nullptr;
-  if (n <= spec.dense_limit) {
+  // Exact spectrum from an analytic Jacobian; else the model's own stiffness estimate (a
+  // finite-difference spectrum of a particle model is dominated by its physical and round-off
+  // modes, e.g. SPH pairing, and predicts nothing useful); else finite differences.
+  const std::optional<double> rho = sys.stiffness(t0, y0);
+  if (n <= spec.dense_limit && (sys.has_jacobian() || !rho)) {
     Mat j(n, n);
     if (sys.has_jacobian()) {
       SparseMat sj;
@@ -69,7 +73,7 @@ Spectrum spectrum_of(const OdeSystem& sys, double t0, const Vec& y0, const Stabi
     }
     const Eigen::EigenSolver<Mat> es(j, false);
     for (Index k = 0; k < n; ++k) s.eigenvalues.push_back(es.eigenvalues()(k));
-  } else if (auto rho = sys.stiffness(t0, y0)) {
+  } else if (rho) {
     const std::string ray = spec.ray == "auto" ? (mechanical ? "imag" : "real") : spec.ray;
     if (ray == "imag") {
       s.eigenvalues = {cd(0, *rho), cd(0, -*rho)};

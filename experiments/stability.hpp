@@ -28,9 +28,10 @@
 //   failed              the integrator cannot run at all (its message in the Markdown table).
 //
 // Predicted: the spectrum of ∂f/∂y at the perturbed initial state — exact (Eigen's eigensolver
-// of the dense Jacobian, analytic or by finite differences) when dimension <= dense_limit,
-// otherwise the model's stiffness() estimate ρ placed on the ray of `ray` (auto: the imaginary
-// axis ±iρ for mechanical systems, −ρ for first-order ones) — scaled into the method's region
+// of the dense analytic Jacobian) when the model has one and dimension <= dense_limit, else the
+// model's stiffness() estimate ρ placed on the ray of `ray` (auto: the imaginary axis ±iρ for
+// mechanical systems, −ρ for first-order ones), else the eigenvalues of a finite-difference
+// Jacobian (dimension <= dense_limit) — scaled into the method's region
 // (predicted_step_limit of core/linear_stability.hpp; mechanical systems through the oscillator
 // test, which is what kick/drift methods need). Empty where the method has no stability data.
 //
