@@ -1,5 +1,6 @@
 // `stiffbench report`: the default suite, one folder per study and DIR/REPORT.md linking every
 // table and plot.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -10,6 +11,7 @@
 #include "experiments/catalog.hpp"
 #include "experiments/commands.hpp"
 #include "experiments/plotting.hpp"
+#include "experiments/stability.hpp"
 #include "experiments/work_precision.hpp"
 
 namespace stiffbench {
@@ -21,6 +23,7 @@ struct SuiteItem {
   std::string title;
   ConvergenceSpec spec;
   bool local = false;
+  std::string note;  // one sentence: what the section shows and what to look at
 };
 
 std::vector<SuiteItem> default_suite(bool quick) {
@@ -47,23 +50,111 @@ std::vector<SuiteItem> default_suite(bool quick) {
   };
   return {
       {"harmonic_oscillator", "Undamped harmonic oscillator (k = m = 1), t_end = 10",
-       spec("harmonic_oscillator", all, 10.0, 0.1), false},
+       spec("harmonic_oscillator", all, 10.0, 0.1), false,
+       "Global error against h: each method's line should run parallel to its dashed "
+       "expected-slope line once h is small enough (the observed order equals the order)."},
       {"harmonic_oscillator_local", "Local error, undamped harmonic oscillator",
-       spec("harmonic_oscillator", all, 10.0, 0.1), true},
+       spec("harmonic_oscillator", all, 10.0, 0.1), true,
+       "Error of one step from the initial state: the slope is the order plus one, the "
+       "check that a method's tableau and start-up step are what they claim."},
       // t_end = 5 is not a period: after exactly one period of this reversible orbit the
       // first-order errors of symplectic Euler cancel and it would show order 2.
       {"kepler_e05", "Kepler orbit, e = 0.5, t_end = 5 (exact via Kepler's equation)",
-       spec("kepler", all, 5.0, 0.02, {"e=0.5"}), false},
+       spec("kepler", all, 5.0, 0.02, {"e=0.5"}), false,
+       "A nonlinear orbit with a fast pericentre passage: the coarsest steps are "
+       "pre-asymptotic, look at the observed orders of the finest pairs."},
       {"pendulum", "Nonlinear pendulum, θ0 = 1, t_end = 10 (reference rk4)",
-       spec("pendulum", all, 10.0, 0.1, {}, "rk4"), false},
+       spec("pendulum", all, 10.0, 0.1, {}, "rk4"), false,
+       "Orders on a nonlinear problem without an exact solution, against an rk4 run at a 16 "
+       "times finer step."},
       {"prothero_robinson_l50",
        "Prothero-Robinson, λ = -50: explicit methods unstable for h|λ| beyond their limit",
-       spec("prothero_robinson", general, 10.0, 0.1, {"lambda=-50"}), false},
+       spec("prothero_robinson", general, 10.0, 0.1, {"lambda=-50"}), false,
+       "Explicit methods have no finite error until h|λ| is inside their stability interval; "
+       "implicit ones converge from the coarsest step."},
       {"prothero_robinson_stiff",
        "Prothero-Robinson, λ = -1e6 (h|λ| up to 1e5): explicit methods unstable, L-stable "
        "methods track φ",
-       spec("prothero_robinson", general, 10.0, 0.1, {"lambda=-1e6"}), false},
+       spec("prothero_robinson", general, 10.0, 0.1, {"lambda=-1e6"}), false,
+       "Order reduction on a very stiff problem: look for implicit methods whose observed "
+       "order falls below their classical order (stage order matters here)."},
   };
+}
+
+void stability_sections(const ReportOptions& opt, std::ostringstream& md, std::ostream& err) {
+  namespace fs = std::filesystem;
+  struct Item {
+    std::string name, title, note;
+    StabilitySpec spec;
+  };
+  std::vector<Item> items;
+  {
+    StabilitySpec s;
+    s.model = "spring_chain";
+    s.integrators = {"euler",           "heun",           "kutta3", "rk4", "symplectic_euler",
+                     "velocity_verlet", "backward_euler", "sdirk3", "bdf2"};
+    parse_sweep(opt.quick ? "k=1:100:3" : "k=1:10000:5", s.sweep_param, s.sweep_values);
+    items.push_back({"spring_chain_stability",
+                     "Stability limit against spring stiffness: chain of 10 masses, fixed ends",
+                     "Measured largest stable step (points) against linear theory from the "
+                     "exact spectrum (dashed): the lines coincide and fall as k^(-1/2); Euler "
+                     "and Heun have no stable step on undamped springs, the A-stable methods "
+                     "none of the limits.",
+                     s});
+  }
+  if (!opt.quick) {
+    StabilitySpec s;
+    s.model = "sph_drop_2d";
+    s.params = Params::from_assignments({"n=10"});
+    s.integrators = {"symplectic_euler", "velocity_verlet"};
+    parse_sweep("k=1000:100000:3", s.sweep_param, s.sweep_values);
+    items.push_back({"sph_drop_stability",
+                     "Stability limit against EOS stiffness: 2D SPH drop (n = 10)",
+                     "The measured limit scales as k^(-1/2) like the sound speed; the "
+                     "prediction uses the model's estimate c/h of the fastest rate, so the "
+                     "ratio (measured/predicted) says how conservative that estimate is.",
+                     s});
+  }
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const Item& item = items[i];
+    err << "== [stability " << i + 1 << "/" << items.size() << "] " << item.name << "\n";
+    const StabilityResult res = run_stability(item.spec, &err);
+    const fs::path dir = fs::path(opt.out_dir) / item.name;
+    write_stability_outputs(dir, item.spec, res);
+    const bool plotted = plot_stability(dir / "stability.csv", item.title, {opt.svg}, err);
+    md << "## " << item.title << "\n\n";
+    md << "[stability.csv](" << item.name << "/stability.csv) · [stability.md](" << item.name
+       << "/stability.md) · [stability.json](" << item.name << "/stability.json)\n\n";
+    if (plotted) md << "![" << item.title << "](" << item.name << "/stability.png)\n\n";
+    md << item.note << " Spectrum: " << res.spectrum_source << ".\n\n";
+    Table summary{{"integrator", "statuses", "h_max/predicted (range)", "slope of log h_max",
+                   "predicted slope"},
+                  {}};
+    for (const auto& name : item.spec.integrators) {
+      std::string statuses;
+      double rmin = 1e300, rmax = -1e300;
+      for (const auto& r : res.rows) {
+        if (r.integrator != name) continue;
+        if (statuses.find(r.status) == std::string::npos)
+          statuses += (statuses.empty() ? "" : ", ") + r.status;
+        if (r.status == "ok" && r.h_measured && r.h_predicted && *r.h_predicted > 0) {
+          rmin = std::min(rmin, *r.h_measured / *r.h_predicted);
+          rmax = std::max(rmax, *r.h_measured / *r.h_predicted);
+        }
+      }
+      std::string slope = "-", pslope = "-";
+      for (const auto& f : res.fits)
+        if (f.integrator == name) {
+          if (f.measured_slope) slope = format_fixed(*f.measured_slope, 3);
+          if (f.predicted_slope) pslope = format_fixed(*f.predicted_slope, 3);
+        }
+      summary.rows.push_back(
+          {name, statuses,
+           rmin <= rmax ? format_fixed(rmin, 4) + " - " + format_fixed(rmax, 4) : "-", slope,
+           pslope});
+    }
+    md << summary.to_markdown() << "\n";
+  }
 }
 
 }  // namespace
@@ -95,7 +186,7 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
        << item.name << "/" << name << ".md) · [" << name << ".json](" << item.name << "/" << name
        << ".json)\n\n";
     if (plotted) md << "![" << item.title << "](" << item.name << "/" << name << ".png)\n\n";
-    md << "Reference: " << res.reference_description << ".\n\n";
+    md << item.note << " Reference: " << res.reference_description << ".\n\n";
     Table summary{{"integrator", item.local ? "expected slope" : "order", "last observed order",
                    "status of finest run"},
                   {}};
@@ -113,10 +204,12 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
     }
     md << summary.to_markdown() << "\n";
   }
+  stability_sections(opt, md, err);
   // Work-precision: hand-written implicit methods against the library references.
   struct WpItem {
     std::string name, title;
     WorkPrecisionSpec spec;
+    std::string note;
   };
   std::vector<WpItem> wp_items;
   {
@@ -128,7 +221,31 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
     w.tol_levels = opt.quick ? 4 : 7;
     w.repeats = opt.quick ? 1 : 3;
     wp_items.push_back(
-        {"hires_work_precision", "HIRES (t_end = 321.8122): work against precision", w});
+        {"hires_work_precision", "HIRES (t_end = 321.8122): work against precision", w,
+         "Error against f evaluations and wall time on a stiff chemical system: the cheapest "
+         "method for a given error is the lowest line; fixed-step methods and tolerance "
+         "ladders share the axes."});
+  }
+  {
+    // Cloth: the mechanical model the testbed is about; fixed-step symplectic and implicit
+    // methods against CVODE (reference: cvode_bdf at rtol 1e-14).
+    WorkPrecisionSpec w;
+    w.model = "cloth";
+    w.params = Params::from_assignments({"n=8", "m=8"});
+    w.t_end = opt.quick ? 0.5 : 1.0;
+    w.h = 0.01;
+    w.integrators = {"symplectic_euler", "velocity_verlet", "rk4",
+                     "baraff_witkin",    "sdirk3",          "cvode_bdf"};
+    if (!opt.quick) w.integrators.insert(w.integrators.begin() + 4, "backward_euler");
+    w.levels = opt.quick ? 3 : 5;
+    w.tol_levels = opt.quick ? 3 : 5;
+    w.repeats = opt.quick ? 1 : 3;
+    wp_items.push_back({"cloth_work_precision",
+                        "Cloth 8 x 8 (pinned corners, gravity): work against precision", w,
+                        "The mechanical model of graphics: cheap explicit steps against "
+                        "implicit solves and CVODE; look at which family reaches a given error "
+                        "with the least work, and at how slowly the first-order implicit "
+                        "Euler variants converge."});
   }
   for (std::size_t i = 0; i < wp_items.size(); ++i) {
     const WpItem& item = wp_items[i];
@@ -142,7 +259,7 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
        << item.name << "/work_precision.md) · [work_precision.json](" << item.name
        << "/work_precision.json)\n\n";
     if (plotted) md << "![" << item.title << "](" << item.name << "/work_precision.png)\n\n";
-    md << "Reference: " << res.reference_description
+    md << item.note << " Reference: " << res.reference_description
        << ". Fixed-step methods over h, references over "
        << "rtol (atol = " << format_full(item.spec.atol_factor) << "·rtol).\n\n";
     Table summary{{"integrator", "settings", "best error", "f_evals at best", "status"}, {}};
