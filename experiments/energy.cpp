@@ -1,0 +1,402 @@
+#include "experiments/energy.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <ostream>
+#include <sstream>
+
+#include "experiments/catalog.hpp"
+#include "experiments/progress.hpp"
+
+namespace stiffbench {
+
+namespace fs = std::filesystem;
+
+void EnergySpec::validate() const {
+  require_input(std::isnan(h) || (std::isfinite(h) && h > 0),
+                "--h must be > 0 (got " + format_full(h) + ")");
+  require_input(std::isnan(t_end) || (std::isfinite(t_end) && t_end > 0),
+                "--t-end must be > 0 (got " + format_full(t_end) + ")");
+  require_input(samples >= 1, "--samples must be >= 1 (got " + std::to_string(samples) + ")");
+  require_input(!invariant.empty(), "--invariant: empty name");
+  require_input(!integrators.empty(), "--integrators: no integrator given");
+}
+
+nlohmann::json EnergySpec::to_json() const {
+  return {{"model", model}, {"params", params.values()}, {"integrators", integrators}, {"h", h},
+          {"t_end", t_end}, {"samples", samples},        {"invariant", invariant}};
+}
+
+namespace {
+
+// |v - v0| / |v0|, or |v - v0| when v0 is (round-off) zero; NaN counts as +inf so a maximum
+// cannot skip it.
+double relative_error(double v, double v0) {
+  const double d = std::abs(v - v0);
+  const double e = invariant_error_is_absolute(v0) ? d : d / std::abs(v0);
+  return std::isnan(e) ? std::numeric_limits<double>::infinity() : e;
+}
+
+// Online least-squares slope of e against t (Welford's centred updates: no cancellation between
+// large sums when e is nearly constant), so no per-step storage is needed.
+class SlopeAccumulator {
+ public:
+  void add(double t, double e) {
+    ++n_;
+    const double dt = t - mean_t_;
+    mean_t_ += dt / static_cast<double>(n_);
+    mean_e_ += (e - mean_e_) / static_cast<double>(n_);
+    c_te_ += dt * (e - mean_e_);
+    m2_t_ += dt * (t - mean_t_);
+  }
+  double slope() const { return m2_t_ > 0 ? c_te_ / m2_t_ : 0.0; }
+
+ private:
+  long n_ = 0;
+  double mean_t_ = 0, mean_e_ = 0, c_te_ = 0, m2_t_ = 0;
+};
+
+std::string names_of(const std::vector<Invariant>& invs) {
+  std::string s;
+  for (const auto& inv : invs) s += (s.empty() ? "" : ", ") + inv.name;
+  return s.empty() ? "none" : s;
+}
+
+}  // namespace
+
+EnergyRun measure_energy_drift(const OdeSystem& sys, Integrator& integ,
+                               const EnergyRunOptions& opt) {
+  require_input(opt.samples >= 1, "--samples must be >= 1");
+  const std::vector<Invariant> invs = sys.invariants();
+  std::size_t main_index = invs.size();
+  for (std::size_t i = 0; i < invs.size(); ++i)
+    if (invs[i].name == opt.invariant) main_index = i;
+  require_input(main_index < invs.size(), "model '" + sys.name() + "' has no invariant '" +
+                                              opt.invariant +
+                                              "' (its invariants: " + names_of(invs) + ")");
+  require_input(integ.supports_fixed_step(),
+                "integrator '" + integ.info().name +
+                    "' is adaptive only: the energy-drift study runs fixed steps (--h)");
+  check_compatible(integ.info(), sys);
+
+  const double t0 = sys.initial_time();
+  FixedStepOptions fopt;
+  fopt.t_end = opt.t_end;
+  fopt.h = opt.h;
+  const long n = fixed_step_count(t0, opt.t_end, opt.h, fopt.max_steps);
+  fopt.outputs = n;  // the observer sees every step
+  const long stride = (n + opt.samples - 1) / opt.samples;
+  // A step belongs to the first tenth when t <= t_tenth (with a little slack for the rounding of
+  // t0 + k·h).
+  const double span = opt.t_end - t0;
+  const double t_tenth = t0 + 0.1 * span + 1e-12 * std::abs(span);
+
+  const Invariant& main_inv = invs[main_index];
+  const Vec y0 = sys.initial_state();
+  const double v0 = main_inv.value(t0, y0);
+  std::vector<const Invariant*> others;
+  std::vector<double> others_v0, others_max;
+  for (std::size_t i = 0; i < invs.size(); ++i) {
+    if (i == main_index) continue;
+    others.push_back(&invs[i]);
+    others_v0.push_back(invs[i].value(t0, y0));
+    others_max.push_back(0.0);
+  }
+
+  EnergyRun run;
+  run.integrator = integ.info().name;
+  run.steps = n;
+  run.t_end = opt.t_end;
+  run.samples.reserve(static_cast<std::size_t>(n / stride + 3));
+
+  SlopeAccumulator slope;
+  double max_all = 0, max_tenth = 0, since_last = 0;
+  bool reached_tenth = false;
+  long k = 0;  // step index of the observer call (0: the initial state)
+  long last_sampled = -1;
+  EnergySample last{};
+  int tenths_reported = 0;
+  const Observer observer = [&](double t, CVecRef y) {
+    const double v = main_inv.value(t, y);
+    const double e = relative_error(v, v0);
+    since_last = std::max(since_last, e);
+    max_all = std::max(max_all, e);
+    if (t <= t_tenth) {
+      max_tenth = std::max(max_tenth, e);
+    } else {
+      reached_tenth = true;
+    }
+    slope.add(t, e);
+    for (std::size_t i = 0; i < others.size(); ++i)
+      others_max[i] = std::max(others_max[i], relative_error(others[i]->value(t, y), others_v0[i]));
+    last = {t, v, e, since_last};
+    if (k % stride == 0 || k == n) {
+      run.samples.push_back(last);
+      last_sampled = k;
+      since_last = 0;
+    }
+    if (opt.on_tenth && k > 0 && k * 10 >= (tenths_reported + 1) * n) {
+      while (k * 10 >= (tenths_reported + 1) * n) ++tenths_reported;
+      opt.on_tenth(tenths_reported, t);
+    }
+    ++k;
+  };
+
+  const RunResult r = run_fixed_step_from(sys, integ, t0, y0, fopt, observer);
+  // A run that stopped early ends its series at its last good step.
+  if (k > 0 && last_sampled != k - 1) run.samples.push_back(last);
+  run.h = r.h;
+  run.stats = r.stats;
+  run.t_reached = last.t;
+  run.max_rel_error = max_all;
+  run.final_rel_error = last.rel_error;
+  run.drift_rate = slope.slope();
+  if (reached_tenth || r.stats.status == Status::ok) {
+    if (max_tenth > 0)
+      run.growth = max_all / max_tenth;
+    else
+      run.growth = max_all > 0 ? std::numeric_limits<double>::infinity() : 1.0;
+  }
+  for (std::size_t i = 0; i < others.size(); ++i)
+    run.other_max_rel_error.emplace_back(others[i]->name, others_max[i]);
+  return run;
+}
+
+EnergyResult run_energy(const EnergySpec& given, std::ostream* progress) {
+  given.validate();
+  Setup setup = make_setup(given.model, given.integrators, given.params);
+  const OdeSystem& sys = *setup.model;
+
+  EnergyResult res;
+  res.model = given.model;
+  res.invariant = given.invariant;
+  const std::vector<Invariant> invs = sys.invariants();
+  bool found = false;
+  for (const auto& inv : invs) {
+    if (inv.name == given.invariant) {
+      found = true;
+      res.initial_value = inv.value(sys.initial_time(), sys.initial_state());
+    } else {
+      res.other_invariants.push_back(inv.name);
+      res.other_initial_values.push_back(inv.value(sys.initial_time(), sys.initial_state()));
+    }
+  }
+  require_input(found, "--invariant: model '" + given.model + "' has no invariant '" +
+                           given.invariant + "' (its invariants: " + names_of(invs) + ")");
+  for (const auto& integ : setup.integrators)
+    require_input(integ->supports_fixed_step(),
+                  "integrator '" + integ->info().name +
+                      "' is adaptive only: the energy-drift study runs fixed steps (--h)");
+
+  res.h = given.h;
+  res.h_source = "--h";
+  if (std::isnan(res.h)) {
+    const auto suggested = sys.suggested_step();
+    require_input(suggested.has_value(),
+                  "--h is required: model '" + given.model + "' offers no suggested step");
+    res.h = suggested->h;
+    res.h_source = "suggested step: " + suggested->rule;
+    if (progress)
+      *progress << "no --h given: the model's suggested step h = " << format_full(res.h) << " ("
+                << suggested->rule << ")\n";
+  }
+  res.t_end = given.t_end;
+  res.t_end_source = "--t-end";
+  if (std::isnan(res.t_end)) {
+    const auto literature = sys.end_time();
+    require_input(literature.has_value(),
+                  "--t-end is required: model '" + given.model + "' has no literature end time");
+    res.t_end = *literature;
+    res.t_end_source = "the model's literature end time";
+  }
+  // Checks h and t_end (and the step budget) before the first run.
+  fixed_step_count(sys.initial_time(), res.t_end, res.h, FixedStepOptions{}.max_steps);
+
+  const long total = 10 * static_cast<long>(setup.integrators.size());
+  Progress prog(progress, "energy", total);
+  for (auto& integ : setup.integrators) {
+    EnergyRunOptions opt;
+    opt.h = res.h;
+    opt.t_end = res.t_end;
+    opt.samples = given.samples;
+    opt.invariant = given.invariant;
+    const std::string name = integ->info().name;
+    int ticked = 0;
+    opt.on_tenth = [&](int tenth, double t) {
+      // The tenth tick comes after the run, with its result.
+      for (; ticked < std::min(tenth, 9); ++ticked) prog.tick(name + ", t = " + format_short(t, 3));
+    };
+    res.runs.push_back(measure_energy_drift(sys, *integ, opt));
+    const EnergyRun& run = res.runs.back();
+    // A run that stopped early still counts as done.
+    for (; ticked < 10; ++ticked)
+      prog.tick(name + " " + to_string(run.stats.status) +
+                ", max rel. error = " + format_short(run.max_rel_error, 3));
+  }
+  return res;
+}
+
+namespace {
+
+std::string optional_full(const std::optional<double>& x) { return x ? format_full(*x) : ""; }
+
+}  // namespace
+
+Table energy_table(const EnergyResult& r) {
+  Table t{{"model", "integrator", "h", "t", "energy", "rel_error", "max_rel_error_since_last"}, {}};
+  for (const auto& run : r.runs)
+    for (const auto& s : run.samples)
+      t.rows.push_back({r.model, run.integrator, format_full(run.h), format_full(s.t),
+                        format_full(s.value), format_full(s.rel_error),
+                        format_full(s.max_rel_error_since_last)});
+  return t;
+}
+
+Table energy_summary_table(const EnergyResult& r) {
+  Table t{{"model", "integrator", "h", "t_end", "max_rel_error", "final_rel_error", "drift_rate",
+           "growth", "status"},
+          {}};
+  for (const auto& run : r.runs)
+    t.rows.push_back({r.model, run.integrator, format_full(run.h), format_full(run.t_end),
+                      format_full(run.max_rel_error), format_full(run.final_rel_error),
+                      format_full(run.drift_rate), optional_full(run.growth),
+                      to_string(run.stats.status)});
+  return t;
+}
+
+Table energy_markdown_table(const EnergyResult& r) {
+  Table t{{"integrator", "h", "steps", "max rel. error", "final rel. error", "drift rate (1/t)",
+           "growth", "status"},
+          {}};
+  for (std::size_t i = 0; i < r.other_invariants.size(); ++i)
+    t.columns.push_back((invariant_error_is_absolute(r.other_initial_values.at(i))
+                             ? "max abs. error "
+                             : "max rel. error ") +
+                        r.other_invariants[i]);
+  t.columns.push_back("wall s");
+  for (const auto& run : r.runs) {
+    std::vector<std::string> row = {run.integrator,
+                                    format_short(run.h, 3),
+                                    std::to_string(run.steps),
+                                    format_short(run.max_rel_error, 2),
+                                    format_short(run.final_rel_error, 2),
+                                    format_short(run.drift_rate, 2),
+                                    run.growth ? format_short(*run.growth, 2) : "-",
+                                    to_string(run.stats.status)};
+    for (const auto& [name, value] : run.other_max_rel_error) row.push_back(format_short(value, 2));
+    row.push_back(format_short(run.stats.wall_s, 2));
+    t.rows.push_back(std::move(row));
+  }
+  return t;
+}
+
+namespace {
+
+std::string markdown_report(const EnergySpec& spec, const EnergyResult& r) {
+  std::ostringstream os;
+  os << "# Energy drift: " << r.model << "\n\n";
+  os << "Invariant: " << r.invariant << ", initial value " << format_full(r.initial_value)
+     << "; relative error |I(t) - I0|/|I0|"
+     << (invariant_error_is_absolute(r.initial_value)
+             ? " (here the absolute error |I(t) - I0|, since |I0| <= " +
+                   format_short(kZeroInvariant, 0) + ")"
+             : "")
+     << " evaluated after every step. h = " << format_full(r.h) << " (" << r.h_source
+     << "), t_end = " << format_full(r.t_end) << " (" << r.t_end_source << ").";
+  if (!spec.params.empty()) {
+    os << " Parameters:";
+    for (const auto& [k, v] : spec.params.values()) os << " " << k << "=" << v;
+    os << ".";
+  }
+  if (!r.other_invariants.empty()) {
+    os << " Other invariants:";
+    for (std::size_t i = 0; i < r.other_invariants.size(); ++i)
+      os << (i ? "," : "") << " " << r.other_invariants[i] << " (initial value "
+         << format_short(r.other_initial_values[i], 3) << ", "
+         << (invariant_error_is_absolute(r.other_initial_values[i]) ? "absolute" : "relative")
+         << " error)";
+    os << ".";
+  }
+  os << "\n\n";
+  os << "growth = max error over the run / max over its first tenth: about 1 means the error "
+        "oscillates within a bounded band (symplectic methods), about 10 means it grows "
+        "linearly in time (secular drift, e.g. rk4); drift rate is the least-squares slope of "
+        "the error against t.\n\n";
+  os << energy_markdown_table(r).to_markdown() << "\n";
+  for (const auto& run : r.runs)
+    if (run.stats.status != Status::ok)
+      os << "- " << run.integrator << ": " << run.stats.message
+         << "; rows end at t = " << format_full(run.t_reached) << ".\n";
+  os << "\nTime series (sampled, each row with the maximum since the previous one): "
+        "`energy.csv`; summary at full precision: `energy_summary.csv`; metadata: "
+        "`energy.json`; plot: `energy.png`.\n";
+  return os.str();
+}
+
+}  // namespace
+
+bool write_energy_outputs(const fs::path& dir, const EnergySpec& spec, const EnergyResult& r,
+                          const PlotOptions& opt, std::ostream& err) {
+  write_file_atomic(dir / "energy.csv", energy_table(r).to_csv());
+  write_file_atomic(dir / "energy_summary.csv", energy_summary_table(r).to_csv());
+  write_file_atomic(dir / "energy.md", markdown_report(spec, r));
+  nlohmann::json spec_json = spec.to_json();
+  spec_json["h"] = r.h;
+  spec_json["h_source"] = r.h_source;
+  spec_json["t_end"] = r.t_end;
+  spec_json["t_end_source"] = r.t_end_source;
+  nlohmann::json meta = run_metadata("energy", spec_json);
+  meta["invariant"] = r.invariant;
+  meta["initial_value"] = r.initial_value;
+  meta["other_invariants"] = r.other_invariants;
+  meta["other_initial_values"] = r.other_initial_values;
+  meta["relative_error"] =
+      "|I(t) - I0| / |I0| after every step (absolute |I(t) - I0| when |I0| <= " +
+      format_short(kZeroInvariant, 0) +
+      "); energy.csv rows "
+      "every ceil(N/samples) steps plus the first and last, each with the maximum since the "
+      "previous row";
+  meta["growth"] = "max over the run / max over t <= t0 + (t_end - t0)/10";
+  nlohmann::json runs = nlohmann::json::array();
+  for (const auto& run : r.runs) {
+    nlohmann::json j = {{"integrator", run.integrator},
+                        {"h", run.h},
+                        {"steps", run.steps},
+                        {"t_reached", run.t_reached},
+                        {"status", to_string(run.stats.status)},
+                        {"message", run.stats.message},
+                        {"f_evals", run.stats.f_evals},
+                        {"wall_s", run.stats.wall_s}};
+    for (const auto& [name, value] : run.other_max_rel_error) j["max_error_" + name] = value;
+    runs.push_back(std::move(j));
+  }
+  meta["runs"] = std::move(runs);
+  write_file_atomic(dir / "energy.json", meta.dump(2) + "\n");
+  return plot_energy(dir / "energy.csv", "Energy drift: " + r.model, opt, err);
+}
+
+bool plot_energy(const fs::path& csv, const std::string& title, const PlotOptions& opt,
+                 std::ostream& err) {
+  fs::path stem = csv;
+  stem.replace_extension();
+  // The invariant's name for the axis, from energy.json beside the CSV when there is one.
+  std::string invariant = "energy";
+  fs::path json = csv;
+  json.replace_extension(".json");
+  if (std::ifstream in(json); in) {
+    try {
+      const auto meta = nlohmann::json::parse(in);
+      if (meta.contains("invariant") && meta["invariant"].is_string())
+        invariant = meta["invariant"].get<std::string>();
+    } catch (const std::exception&) {
+    }
+  }
+  return run_plot("energy.gp", stem,
+                  {{"csvfile", csv.string()},
+                   {"ttl", title},
+                   {"ylab", "relative " + invariant + " error (max since previous sample)"}},
+                  family_panels(csv_column_values(csv, "integrator")), opt, err);
+}
+
+}  // namespace stiffbench
