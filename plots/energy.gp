@@ -25,10 +25,13 @@ do for [K=1:np] {
   stats csvfile every ::1 using (inlist(strcol(2), m) && $7 > 0 ? $4 : NaN) nooutput
   valid = exists("STATS_records") ? STATS_records : 0
   undefine STATS_*
+  # About ten markers per line (the rows per integrator follow --samples).
+  pint = (n > 0) ? int(valid / n / 10) : 1
+  pint = (pint < 1) ? 1 : pint
   set autoscale xfix
   if (valid == 0) { eval empty_panel_on }
   plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) ? $4 : NaN):($7 > 0 ? $7 : NaN) \
-         with linespoints lt j pi 100 title word(m, j)
+         with linespoints lt j pi pint title word(m, j)
   eval empty_panel_off
 }
 unset multiplot
