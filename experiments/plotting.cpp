@@ -1,5 +1,6 @@
 #include "experiments/plotting.hpp"
 
+#include "experiments/energy.hpp"
 #include "experiments/stability.hpp"
 
 #include <algorithm>
@@ -185,6 +186,7 @@ const std::map<std::string, std::pair<std::string, Replotter>>& replotters() {
                           std::ostream& e) { return plot_convergence(csv, t, true, o, e); }}},
       {"work_precision.csv", {"Work-precision", plot_work_precision}},
       {"stability.csv", {"Stability limit", plot_stability}},
+      {"energy.csv", {"Energy drift", plot_energy}},
   };
   return table;
 }

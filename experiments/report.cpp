@@ -4,12 +4,14 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <numbers>
 #include <ostream>
 #include <sstream>
 
 #include "experiments/build_info.hpp"
 #include "experiments/catalog.hpp"
 #include "experiments/commands.hpp"
+#include "experiments/energy.hpp"
 #include "experiments/plotting.hpp"
 #include "experiments/stability.hpp"
 #include "experiments/work_precision.hpp"
@@ -98,8 +100,8 @@ void stability_sections(const ReportOptions& opt, std::ostringstream& md, std::o
                      "Stability limit against spring stiffness: chain of 10 masses, fixed ends",
                      "Measured largest stable step (points) against linear theory from the "
                      "exact spectrum (dashed): the lines coincide and fall as k^(-1/2); Euler "
-                     "and Heun have no stable step on undamped springs, the A-stable methods "
-                     "none of the limits.",
+                     "and Heun have no stable step on undamped springs, the A-stable methods are "
+                     "stable at every step tried.",
                      s});
   }
   if (!opt.quick) {
@@ -157,6 +159,62 @@ void stability_sections(const ReportOptions& opt, std::ostringstream& md, std::o
   }
 }
 
+void energy_sections(const ReportOptions& opt, std::ostringstream& md, std::ostream& err) {
+  namespace fs = std::filesystem;
+  struct Item {
+    std::string name, title, note;
+    EnergySpec spec;
+  };
+  std::vector<Item> items;
+  {
+    EnergySpec s;
+    s.model = "kepler";
+    s.params = Params::from_assignments({"e=0.5"});
+    s.integrators = {"euler", "rk4", "velocity_verlet", "symplectic_euler"};
+    s.h = 0.01;
+    const int orbits = opt.quick ? 100 : 1000;
+    s.t_end = orbits * 2.0 * std::numbers::pi;
+    items.push_back(
+        {"kepler_energy",
+         "Energy drift: Kepler orbit, e = 0.5, h = 0.01, " + std::to_string(orbits) + " orbits",
+         "Relative energy error (largest since the previous sample, so pericentre "
+         "peaks are kept): the symplectic methods oscillate in a bounded band "
+         "(growth ~1), rk4 drifts linearly (growth ~10), explicit Euler spirals "
+         "out.",
+         s});
+  }
+  {
+    EnergySpec s;
+    s.model = "cloth";
+    s.params =
+        Params::from_assignments({"n=8", "gravity=0", "prestretch=1.1", "perturbation=0.01"});
+    s.integrators = {"symplectic_euler", "velocity_verlet", "rk4", "backward_euler"};
+    if (!opt.quick) s.integrators.push_back("sdirk3");
+    s.h = 0.01;
+    s.t_end = opt.quick ? 10.0 : 20.0;
+    items.push_back({"cloth_energy",
+                     "Energy drift: undamped cloth 8 x 8, prestretched 10%, no gravity, h = 0.01",
+                     "A stiff conservative network: symplectic methods keep the spring energy "
+                     "in a band, rk4 loses it slowly, and the implicit methods' numerical "
+                     "damping removes most of it (look at the implicit panel's level, not its "
+                     "shape).",
+                     s});
+  }
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const Item& item = items[i];
+    err << "== [energy " << i + 1 << "/" << items.size() << "] " << item.name << "\n";
+    const EnergyResult res = run_energy(item.spec, &err);
+    const fs::path dir = fs::path(opt.out_dir) / item.name;
+    const bool plotted = write_energy_outputs(dir, item.spec, res, {opt.svg}, err);
+    md << "## " << item.title << "\n\n";
+    md << "[energy.csv](" << item.name << "/energy.csv) · [energy_summary.csv](" << item.name
+       << "/energy_summary.csv) · [energy.md](" << item.name << "/energy.md) · [energy.json]("
+       << item.name << "/energy.json)\n\n";
+    if (plotted) md << "![" << item.title << "](" << item.name << "/energy.png)\n\n";
+    md << item.note << "\n\n" << energy_markdown_table(res).to_markdown() << "\n";
+  }
+}
+
 }  // namespace
 
 void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) {
@@ -204,6 +262,7 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
     }
     md << summary.to_markdown() << "\n";
   }
+  energy_sections(opt, md, err);
   stability_sections(opt, md, err);
   // Work-precision: hand-written implicit methods against the library references.
   struct WpItem {
