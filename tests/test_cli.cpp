@@ -377,4 +377,28 @@ TEST(Cli, CvodeOnSphRunsMatrixFree) {
   EXPECT_GT(std::stol(line.substr(line.find('=') + 1)), 0) << line;
 }
 
+// Issue #9, "done when" 2 (regions): the region command writes region.csv in the contract with
+// the limits table on stdout (rk4's imaginary-axis limit 2√2 = 2.8284, REFERENCES.md); an
+// integrator without stability data is bad input naming it.
+TEST(Cli, RegionWritesContractFiles) {
+  const auto dir = std::filesystem::temp_directory_path() / "sb_region_cli";
+  std::filesystem::remove_all(dir);
+  const Outcome o = run("region --integrators rk4,heun,kutta3,sdirk3 --out " + dir.string());
+  ASSERT_EQ(o.code, 0) << o.err;
+  const auto rows = read_csv(dir / "region.csv");
+  ASSERT_GT(rows.size(), 100u);
+  EXPECT_EQ(join_cells(rows.front()), "integrator,re,im");
+  EXPECT_NE(o.out.find("| rk4 | explicit Runge-Kutta | -2.7853 | 2.8284 |"), std::string::npos)
+      << o.out;
+  EXPECT_TRUE(std::filesystem::exists(dir / "region_limits.csv"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "region.md"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "region.json"));
+  const Outcome bad = run("region --integrators rk4,cvode_bdf --out " + dir.string());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("'cvode_bdf' has no fixed stability region"), std::string::npos)
+      << bad.err;
+  EXPECT_EQ(lines(bad.err), 1) << bad.err;
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
