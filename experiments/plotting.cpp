@@ -1,6 +1,7 @@
 #include "experiments/plotting.hpp"
 
 #include "experiments/energy.hpp"
+#include "experiments/region.hpp"
 #include "experiments/stability.hpp"
 
 #include <algorithm>
@@ -187,6 +188,7 @@ const std::map<std::string, std::pair<std::string, Replotter>>& replotters() {
       {"work_precision.csv", {"Work-precision", plot_work_precision}},
       {"stability.csv", {"Stability limit", plot_stability}},
       {"energy.csv", {"Energy drift", plot_energy}},
+      {"region.csv", {"Stability regions", plot_region}},
   };
   return table;
 }

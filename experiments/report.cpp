@@ -13,6 +13,7 @@
 #include "experiments/commands.hpp"
 #include "experiments/energy.hpp"
 #include "experiments/plotting.hpp"
+#include "experiments/region.hpp"
 #include "experiments/stability.hpp"
 #include "experiments/work_precision.hpp"
 
@@ -215,6 +216,29 @@ void energy_sections(const ReportOptions& opt, std::ostringstream& md, std::ostr
   }
 }
 
+void region_section(const ReportOptions& opt, std::ostringstream& md, std::ostream& err) {
+  namespace fs = std::filesystem;
+  err << "== [regions] stability regions of every hand-written method\n";
+  RegionSpec spec;  // every integrator with stability data, box fitted to them
+  spec.resolution = opt.quick ? 200 : 400;
+  const RegionResult res = run_region(spec);
+  const fs::path dir = fs::path(opt.out_dir) / "stability_regions";
+  write_region_outputs(dir, spec, res);
+  const std::string title = "Stability regions |R(z)| = 1 of the hand-written methods";
+  const bool plotted = plot_region(dir / "region.csv", title, {opt.svg}, err);
+  md << "## " << title << "\n\n";
+  md << "[region.csv](stability_regions/region.csv) · [region_limits.csv]"
+        "(stability_regions/region_limits.csv) · [region.md](stability_regions/region.md) · "
+        "[region.json](stability_regions/region.json)\n\n";
+  if (plotted) md << "![" << title << "](stability_regions/region.png)\n\n";
+  md << "Computed from each method's coefficients (R(z) = 1 + z bᵀ(I − zA)⁻¹1, BDF2's boundary "
+        "locus), not from runs: explicit methods are stable inside their closed curves, "
+        "implicit ones outside theirs; the real- and imaginary-axis limits below are what "
+        "`stability` compares its measurements with (oscillator hω for the splitting "
+        "methods, which have no scalar R(z)).\n\n";
+  md << region_limits_markdown_table(res).to_markdown() << "\n";
+}
+
 }  // namespace
 
 void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) {
@@ -263,6 +287,7 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
     md << summary.to_markdown() << "\n";
   }
   energy_sections(opt, md, err);
+  region_section(opt, md, err);
   stability_sections(opt, md, err);
   // Work-precision: hand-written implicit methods against the library references.
   struct WpItem {

@@ -23,7 +23,9 @@ class BaraffWitkin final : public Integrator {
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   // On a linear oscillator the step is exactly backward Euler's (R(z) = 1/(1 − z)).
   std::optional<LinearStability> linear_stability() const override {
-    return rosenbrock_stability(Mat::Zero(1, 1), Mat::Ones(1, 1), Vec::Ones(1));
+    LinearStability s = rosenbrock_stability(Mat::Zero(1, 1), Mat::Ones(1, 1), Vec::Ones(1));
+    s.kind = "linearly implicit Euler (velocity form)";
+    return s;
   }
 
  private:
