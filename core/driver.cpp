@@ -94,15 +94,28 @@ RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOp
   RunResult r;
   r.y = sys.initial_state();
   r.t = t0;
-  const long outputs = std::max(1L, opt.outputs);
+  std::vector<double> stops = opt.times;
+  if (stops.empty()) {
+    const long outputs = std::max(1L, opt.outputs);
+    for (long j = 1; j <= outputs; ++j)
+      stops.push_back(j == outputs ? opt.t_end
+                                   : t0 + (opt.t_end - t0) * static_cast<double>(j) /
+                                              static_cast<double>(outputs));
+  } else {
+    double prev = t0;
+    for (const double t : stops) {
+      require_input(std::isfinite(t) && t > prev && t <= opt.t_end,
+                    "output times must be finite, increasing, after the initial time " +
+                        std::to_string(t0) + " and not after t-end " + std::to_string(opt.t_end));
+      prev = t;
+    }
+    if (stops.back() < opt.t_end) stops.push_back(opt.t_end);
+  }
   const EvalCounters before = sys.counters();
   const auto start = std::chrono::steady_clock::now();
   integ.reset(sys, t0, r.y);
   if (observer) observer(r.t, r.y);
-  for (long j = 1; j <= outputs; ++j) {
-    const double t_out = j == outputs ? opt.t_end
-                                      : t0 + (opt.t_end - t0) * static_cast<double>(j) /
-                                                 static_cast<double>(outputs);
+  for (const double t_out : stops) {
     const Status s = integ.advance_to(sys, t_out, r.y, r.stats);
     if (s != Status::ok) {
       r.stats.status = s;

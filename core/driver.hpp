@@ -7,6 +7,7 @@
 #pragma once
 
 #include <functional>
+#include <vector>
 
 #include "core/integrator.hpp"
 
@@ -51,6 +52,11 @@ RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0
 struct AdaptiveOptions {
   double t_end = 1.0;
   long outputs = 0;  // observer at t0 and at `outputs` equally spaced times (0: only t_end)
+  // When non-empty: the output times instead of `outputs` equally spaced ones. They must be
+  // finite, strictly increasing, after t0 and not after t_end (BadInput otherwise). The
+  // integrator stops exactly at each (advance_to: no interpolation); the observer is called at
+  // t0, at each of them and at t_end when it is not the last of them.
+  std::vector<double> times = {};
 };
 
 // Runs an adaptive integrator from the system's initial state to t_end, stopping at the output

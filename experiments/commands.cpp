@@ -48,9 +48,11 @@ void list_experiments(std::ostream& out) {
   t.rows.push_back({"solve",
                     "trajectory CSV (t,y0,y1,...); with --frames: VTK/CSV frames, observables.csv",
                     "one run (fixed step, the model's suggested step, or adaptive); final state, "
-                    "invariants, observables and statistics"});
-  t.rows.push_back(
-      {"convergence", "convergence.{csv,md,json}", "global error at t_end vs h, observed orders"});
+                    "invariants, observables and statistics; --times/--log-outputs: the state at "
+                    "given times (exact stops when adaptive, nearest step when fixed)"});
+  t.rows.push_back({"convergence", "convergence.{csv,md,json}; reference/<hash>.csv",
+                    "global error at t_end vs h, observed orders; a non-exact reference is "
+                    "cached in the output folder"});
   t.rows.push_back(
       {"local-error", "local_error.{csv,md,json}", "error of one step vs h, observed slopes"});
   t.rows.push_back({"work-precision", "work_precision.{csv,md,json}",
@@ -133,8 +135,22 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   Setup setup = make_setup(opt.model, {opt.integrator}, opt.params);
   const OdeSystem& sys = *setup.model;
   Integrator& integ = *setup.integrators.front();
+  require_input(opt.times.empty() || opt.log_outputs == 0,
+                "--times and --log-outputs both given: choose one");
+  require_input(opt.log_outputs >= 0,
+                "--log-outputs must be >= 1 (got " + std::to_string(opt.log_outputs) + ")");
+  require_input(std::isnan(opt.log_first) || opt.log_outputs > 0,
+                "--log-first needs --log-outputs N");
+  const bool timed = !opt.times.empty() || opt.log_outputs > 0;
+  const std::string times_flag = opt.times.empty() ? "--log-outputs" : "--times";
+  require_input(!timed || opt.frames == 0, times_flag + " cannot be combined with --frames");
   double t_end = opt.t_end;
-  if (std::isnan(t_end)) {
+  if (std::isnan(t_end) && !opt.times.empty()) {
+    // The run ends at the last requested time.
+    require_input(std::isfinite(opt.times.back()),
+                  "--times: " + format_full(opt.times.back()) + " is not a finite time");
+    t_end = opt.times.back();
+  } else if (std::isnan(t_end)) {
     const auto literature = sys.end_time();
     require_input(literature.has_value(),
                   "--t-end is required: model '" + opt.model + "' has no default end time");
@@ -158,6 +174,29 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   require_input(adaptive || integ.supports_fixed_step(),
                 "integrator '" + opt.integrator +
                     "' has no fixed-step mode: omit --h and set --param rtol=R");
+  const double t0 = sys.initial_time();
+  std::vector<double> times = opt.times;
+  if (opt.log_outputs > 0) {
+    require_input(std::isfinite(t_end) && t_end > t0, "--t-end must be > the model's initial time");
+    times = log_output_times(t0, t_end, opt.log_outputs, opt.log_first);
+  }
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    const double t = times[k];
+    require_input(std::isfinite(t), times_flag + ": " + format_full(t) + " is not a finite time");
+    require_input(k == 0 || t > times[k - 1], times_flag + " must be strictly increasing (" +
+                                                  format_full(t) + " after " +
+                                                  format_full(k ? times[k - 1] : t0) + ")");
+  }
+  if (!times.empty()) {
+    require_input(times.front() > t0, times_flag + ": " + format_full(times.front()) +
+                                          " is not after the model's initial time " +
+                                          format_full(t0));
+    require_input(times.back() <= t_end,
+                  times_flag + ": " + format_full(times.back()) + " is after " +
+                      (std::isnan(opt.t_end)
+                           ? "the model's end time " + format_full(t_end) + " (give --t-end)"
+                           : "--t-end " + format_full(t_end)));
+  }
   require_input(opt.frames >= 0, "--frames must be >= 0 (got " + std::to_string(opt.frames) + ")");
   const bool frames = opt.frames > 0;
   require_input(!frames || !opt.out_csv.empty(), "--frames needs --out DIR (the output directory)");
@@ -201,8 +240,36 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
     for (Index i = 0; i < sys.dimension(); ++i) traj << ",y" << i;
     traj << "\n";
   }
+  // --times / --log-outputs: one row per requested time. Adaptive: the observer's calls are t0,
+  // the requested times, then t_end when it is not the last of them. Fixed step: the observer
+  // sees every step; step j is recorded for each requested time whose nearest step it is.
+  struct TimedRow {
+    double requested, t;
+    Vec y;
+  };
+  std::vector<TimedRow> timed_rows;
+  std::vector<long> nearest_step;
+  if (timed && !adaptive) {
+    const double h_run = (t_end - t0) / static_cast<double>(n_steps);
+    for (const double t : times)
+      nearest_step.push_back(
+          std::clamp(std::llround((t - t0) / h_run), 0LL, static_cast<long long>(n_steps)));
+    fo.outputs = n_steps;  // the observer at every step
+  }
+  long observer_calls = 0;
   Observer obs;
-  if (!traj_path.empty() || frame_writer) {
+  if (timed) {
+    obs = [&](double t, CVecRef y) {
+      const long call = observer_calls++;
+      if (adaptive) {
+        if (call >= 1 && static_cast<std::size_t>(call) <= times.size())
+          timed_rows.push_back({times[static_cast<std::size_t>(call - 1)], t, y});
+        return;
+      }
+      while (timed_rows.size() < times.size() && nearest_step[timed_rows.size()] == call)
+        timed_rows.push_back({times[timed_rows.size()], t, y});
+    };
+  } else if (!traj_path.empty() || frame_writer) {
     obs = [&](double t, CVecRef y) {
       if (!traj_path.empty()) {
         traj << format_full(t);
@@ -218,8 +285,15 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
     };
   }
   const Vec y0 = sys.initial_state();
-  const RunResult r = adaptive ? run_adaptive(sys, integ, {t_end, fo.outputs}, obs)
+  const RunResult r = adaptive ? run_adaptive(sys, integ, {t_end, fo.outputs, times}, obs)
                                : run_fixed_step(sys, integ, fo, obs);
+  if (timed && !traj_path.empty()) {
+    for (const auto& row : timed_rows) {
+      traj << format_full(row.t);
+      for (Index i = 0; i < row.y.size(); ++i) traj << "," << format_full(row.y[i]);
+      traj << "\n";
+    }
+  }
   if (!traj_path.empty()) {
     // Written whatever the status: the trajectory up to a blow-up is part of the result.
     write_file_atomic(traj_path, traj.str());
@@ -253,6 +327,28 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   if (shown < r.y.size())
     out << "  ... (" << r.y.size() - shown << " more of " << r.y.size()
         << " components: --out writes them all)\n";
+  if (timed) {
+    out << "\nstate at " << times.size() << " requested time" << (times.size() == 1 ? "" : "s")
+        << (adaptive ? " (adaptive: the integrator stops exactly at each)"
+                     : " (fixed step: the state at the nearest step, whose t is shown)")
+        << ":\n\n";
+    constexpr Index kColumnsMax = 6;
+    const Index cols = std::min<Index>(sys.dimension(), kColumnsMax);
+    Table t{{"t_requested", "t"}, {}};
+    for (Index i = 0; i < cols; ++i) t.columns.push_back("y" + std::to_string(i));
+    for (const auto& row : timed_rows) {
+      std::vector<std::string> cells{format_full(row.requested), format_full(row.t)};
+      for (Index i = 0; i < cols; ++i) cells.push_back(format_full(row.y[i]));
+      t.rows.push_back(cells);
+    }
+    out << t.to_markdown();
+    if (cols < sys.dimension())
+      out << "(first " << cols << " of " << sys.dimension()
+          << " components: --out writes them all)\n";
+    if (timed_rows.size() < times.size())
+      out << "(the run ended at t = " << format_full(r.t) << ": " << timed_rows.size() << " of "
+          << times.size() << " requested times reached)\n";
+  }
   if (sys.has_exact() && r.stats.status == Status::ok) {
     Vec ye(sys.dimension());
     sys.exact(r.t, ye);
@@ -310,6 +406,49 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
                  {}, PlotOptions{}, err))
       out << "plot: " << (dir / "front.png").string() << "\n";
   }
+}
+
+std::vector<double> parse_times(const std::string& list) {
+  std::vector<double> out;
+  for (const auto& item : split_list(list, "--times")) {
+    char* end = nullptr;
+    const double t = std::strtod(item.c_str(), &end);
+    require_input(end != item.c_str() && *end == '\0',
+                  "--times: '" + item + "' is not a number (expected t1,t2,...)");
+    out.push_back(t);
+  }
+  return out;
+}
+
+std::vector<double> log_output_times(double t0, double t_end, long n, double first) {
+  require_input(n >= 1, "--log-outputs must be >= 1 (got " + std::to_string(n) + ")");
+  const double span = t_end - t0;
+  require_input(std::isfinite(span) && span > 0, "--t-end must be > the model's initial time");
+  if (n == 1) {
+    require_input(std::isnan(first), "--log-first needs --log-outputs >= 2");
+    return {t_end};
+  }
+  // t_k = t0 + span / ratio^((N-k)/(N-1)) with ratio = span/(first - t0): by default
+  // ratio = 10^(N-1) and t_k = t0 + span/10^(N-k), exact decades when span is one.
+  const bool given = !std::isnan(first);
+  if (given)
+    require_input(std::isfinite(first) && first > t0 && first < t_end,
+                  "--log-first must be after the model's initial time " + format_full(t0) +
+                      " and before t_end " + format_full(t_end) + " (got " + format_full(first) +
+                      ")");
+  std::vector<double> out;
+  for (long k = 1; k <= n; ++k) {
+    const double down = given ? std::pow(span / (first - t0),
+                                         static_cast<double>(n - k) / static_cast<double>(n - 1))
+                              : std::pow(10.0, static_cast<double>(n - k));
+    const double t = k == n ? t_end : k == 1 && given ? first : t0 + span / down;
+    require_input(std::isfinite(t) && t > (out.empty() ? t0 : out.back()),
+                  "--log-outputs " + std::to_string(n) +
+                      ": the output times are not increasing after t0 = " + format_full(t0) +
+                      " (spacing below the resolution of t; give fewer outputs or --log-first)");
+    out.push_back(t);
+  }
+  return out;
 }
 
 }  // namespace stiffbench

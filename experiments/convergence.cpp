@@ -1,11 +1,18 @@
 #include "experiments/convergence.hpp"
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <ostream>
 #include <sstream>
 
 #include "core/driver.hpp"
+#include "experiments/build_info.hpp"
 #include "experiments/catalog.hpp"
 
 namespace stiffbench {
@@ -19,6 +26,12 @@ void ConvergenceSpec::validate() const {
   require_input(std::isfinite(refine) && refine > 1,
                 "--refine must be > 1 (got " + format_full(refine) + ")");
   require_input(!integrators.empty(), "--integrators: no integrator given");
+  if (reference_rtol)
+    require_input(std::isfinite(*reference_rtol) && *reference_rtol > 0,
+                  "--reference-rtol must be > 0 (got " + format_full(*reference_rtol) + ")");
+  if (reference_atol)
+    require_input(std::isfinite(*reference_atol) && *reference_atol > 0,
+                  "--reference-atol must be > 0 (got " + format_full(*reference_atol) + ")");
 }
 
 nlohmann::json ConvergenceSpec::to_json() const {
@@ -29,59 +42,296 @@ nlohmann::json ConvergenceSpec::to_json() const {
           {"h", h},
           {"levels", levels},
           {"refine", refine},
-          {"reference", reference}};
+          {"reference", reference},
+          {"reference_rtol", reference_rtol ? nlohmann::json(*reference_rtol) : nlohmann::json()},
+          {"reference_atol", reference_atol ? nlohmann::json(*reference_atol) : nlohmann::json()}};
 }
 
 namespace {
 
-// The reference solution at requested times: exact, or a fine run of a reference method.
-class Reference {
- public:
-  Reference(const ConvergenceSpec& spec, const OdeSystem& sys, double h_fine) : sys_(sys) {
-    const bool want_exact =
-        spec.reference == "exact" || (spec.reference == "auto" && sys.has_exact());
-    if (spec.reference == "auto" && !sys.has_exact()) {
-      throw BadInput("model '" + sys.name() +
-                     "' has no exact solution: pass --reference METHOD (e.g. --reference rk4)");
-    }
-    if (want_exact) {
-      require_input(sys.has_exact(),
-                    "--reference exact: model '" + sys.name() + "' has no exact solution");
-      description_ = "exact";
-      return;
-    }
-    method_ = spec.reference;
-    integrator_ = integrator_registry().create(method_, spec.params);
-    check_compatible(integrator_->info(), sys);
-    h_ = h_fine / 16.0;
-    description_ = method_ + " with h = (finest h)/16 = " + format_full(h_);
-  }
+enum class RefKind { exact, adaptive, fixed_step };
 
-  // y_ref(t) starting from the model's initial state.
-  Vec at(double t) const {
-    Vec y(sys_.dimension());
-    if (!integrator_) {
-      sys_.exact(t, y);
-      return y;
+// What --reference, --reference-rtol and --reference-atol resolve to for one model.
+struct ReferencePlan {
+  RefKind kind = RefKind::exact;
+  std::string method;
+  Params params;  // the reference integrator's effective parameters (defaults filled in)
+  double h = 0;   // step of a fixed-step reference
+  std::string description;
+};
+
+bool declares(const std::vector<ParamSpec>& specs, const std::string& key) {
+  for (const auto& p : specs)
+    if (p.key == key) return true;
+  return false;
+}
+
+// %.17g: the cache's number format (round-trips every double).
+std::string g17(double x) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", x);
+  return buf;
+}
+
+ReferencePlan plan_reference(const ConvergenceSpec& spec, const OdeSystem& sys, double h_finest) {
+  ReferencePlan plan;
+  const bool tol_given = spec.reference_rtol.has_value() || spec.reference_atol.has_value();
+  const std::string tol_flag = spec.reference_rtol ? "--reference-rtol" : "--reference-atol";
+  if (spec.reference == "exact" || (spec.reference == "auto" && sys.has_exact())) {
+    require_input(sys.has_exact(), "--reference exact: model '" + sys.name() +
+                                       "' has no exact solution (pass --reference METHOD, e.g. "
+                                       "--reference cvode_bdf)");
+    require_input(!tol_given, tol_flag +
+                                  " applies to an adaptive --reference only: this study uses "
+                                  "the exact solution of model '" +
+                                  sys.name() +
+                                  "' (omit it, or pass --reference cvode_bdf to compare against "
+                                  "an adaptive run)");
+    plan.description = "exact";
+    return plan;
+  }
+  if (spec.reference == "auto") {
+    throw BadInput("model '" + sys.name() +
+                   "' has no exact solution: pass --reference METHOD (an adaptive integrator "
+                   "such as cvode_bdf, run at --reference-rtol, default " +
+                   format_full(ConvergenceSpec::kDefaultReferenceRtol) +
+                   "; or a fixed-step one such as rk4, run at (finest h)/16)");
+  }
+  const auto* entry = integrator_registry().find(spec.reference);
+  require_input(entry != nullptr, "--reference '" + spec.reference +
+                                      "': neither 'exact' nor an integrator; known: " +
+                                      join(integrator_registry().names()));
+  plan.method = spec.reference;
+  const std::string owner = "integrator '" + plan.method + "'";
+  auto probe = integrator_registry().create(plan.method, spec.params);
+  require_input(probe->supports_adaptive() || probe->supports_fixed_step(),
+                "--reference '" + plan.method + "' has neither a fixed-step nor an adaptive mode");
+  try {
+    check_compatible(probe->info(), sys);
+  } catch (const BadInput& e) {
+    throw BadInput("--reference: " + std::string(e.what()));
+  }
+  if (probe->supports_adaptive()) {
+    const double rtol = spec.reference_rtol.value_or(ConvergenceSpec::kDefaultReferenceRtol);
+    const double atol = spec.reference_atol.value_or(rtol / ConvergenceSpec::kReferenceAtolDivisor);
+    if (!declares(entry->params, "rtol") || !declares(entry->params, "atol"))
+      throw std::logic_error(owner + " is adaptive but declares no rtol/atol parameters");
+    Params user = spec.params;
+    user.set("rtol", format_full(rtol));
+    user.set("atol", format_full(atol));
+    plan.kind = RefKind::adaptive;
+    plan.params = resolve_params(entry->params, user, nullptr, owner);
+    plan.description =
+        plan.method + " adaptive, rtol = " + format_full(rtol) + ", atol = " + format_full(atol);
+  } else {
+    require_input(!tol_given, tol_flag + " applies to an adaptive --reference only: '" +
+                                  plan.method +
+                                  "' is fixed-step and runs at (finest h)/16 (omit it, or pass "
+                                  "an adaptive reference such as --reference cvode_bdf)");
+    plan.kind = RefKind::fixed_step;
+    plan.h = h_finest / 16.0;
+    plan.params = resolve_params(entry->params, spec.params, nullptr, owner);
+    plan.description = plan.method + " with h = (finest h)/16 = " + format_full(plan.h);
+  }
+  return plan;
+}
+
+// y_ref at `times` (increasing, after t0), from the model's initial state.
+std::vector<Vec> compute_reference(const ReferencePlan& plan, const OdeSystem& sys,
+                                   const std::vector<double>& times) {
+  std::vector<Vec> out;
+  if (plan.kind == RefKind::exact) {
+    for (double t : times) {
+      Vec y(sys.dimension());
+      sys.exact(t, y);
+      out.push_back(y);
     }
+    return out;
+  }
+  auto integ = integrator_registry().create(plan.method, plan.params);
+  auto check = [&](const RunResult& r) {
+    if (r.stats.status != Status::ok)
+      throw std::runtime_error("reference run of '" + plan.method + "' (" + plan.description +
+                               ") failed: " + to_string(r.stats.status) + " " + r.stats.message);
+  };
+  if (plan.kind == RefKind::adaptive) {
+    AdaptiveOptions opt;
+    opt.t_end = times.back();
+    opt.times = times;
+    long calls = 0;  // the first call is the initial state
+    const RunResult r = run_adaptive(sys, *integ, opt, [&](double, CVecRef y) {
+      if (calls++ > 0) out.emplace_back(y);
+    });
+    check(r);
+    if (out.size() != times.size())
+      throw std::logic_error("reference run returned " + std::to_string(out.size()) +
+                             " states for " + std::to_string(times.size()) + " times");
+    return out;
+  }
+  for (double t : times) {
     FixedStepOptions opt;
     opt.t_end = t;
-    opt.h = h_;
-    const RunResult r = run_fixed_step(sys_, *integrator_, opt);
-    if (r.stats.status != Status::ok) {
-      throw std::runtime_error("reference run of '" + method_ + "' failed: " + r.stats.message);
-    }
-    return r.y;
+    opt.h = plan.h;
+    const RunResult r = run_fixed_step(sys, *integ, opt);
+    check(r);
+    out.push_back(r.y);
   }
+  return out;
+}
 
-  const std::string& description() const { return description_; }
+std::uint64_t fnv1a(const std::string& s, std::uint64_t h = 14695981039346656037ull) {
+  for (const unsigned char c : s) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return h;
+}
 
- private:
-  const OdeSystem& sys_;
-  std::unique_ptr<Integrator> integrator_;
-  std::string method_, description_;
-  double h_ = 0;
+std::string hex16(std::uint64_t x) {
+  char buf[20];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(x));
+  return buf;
+}
+
+// Everything the reference values depend on, as one line of JSON (keys sorted).
+std::string cache_key(const ConvergenceSpec& spec, const OdeSystem& sys, const ReferencePlan& plan,
+                      const std::vector<double>& times) {
+  const Params model_params = resolve_params(model_registry().at(spec.model).params, spec.params,
+                                             nullptr, "model '" + spec.model + "'");
+  std::uint64_t y0_hash = 14695981039346656037ull;
+  const Vec y0 = sys.initial_state();
+  for (Index i = 0; i < y0.size(); ++i) y0_hash = fnv1a(g17(y0[i]) + ",", y0_hash);
+  nlohmann::json key;
+  key["cache_format"] = 1;
+  key["stiffbench_version"] = STIFFBENCH_VERSION;
+  key["git_revision"] = git_revision();
+  key["model"] = spec.model;
+  key["model_params"] = model_params.values();
+  key["dimension"] = static_cast<long>(sys.dimension());
+  key["initial_state_fnv1a"] = hex16(y0_hash);
+  key["reference"] = plan.method;
+  key["mode"] = plan.kind == RefKind::adaptive ? "adaptive" : "fixed_step";
+  key["reference_params"] = plan.params.values();
+  if (plan.kind == RefKind::fixed_step) key["h"] = g17(plan.h);
+  key["t0"] = g17(sys.initial_time());
+  std::vector<std::string> ts;
+  for (double t : times) ts.push_back(g17(t));
+  key["times"] = ts;
+  return key.dump();
+}
+
+// The cached values when `path` holds exactly this key and one complete row per time.
+std::optional<std::vector<Vec>> read_cache(const std::filesystem::path& path,
+                                           const std::string& key_line,
+                                           const std::vector<double>& times, Index dim) {
+  std::ifstream f(path);
+  if (!f) return std::nullopt;
+  std::string line;
+  if (!std::getline(f, line) || line != key_line) return std::nullopt;
+  while (std::getline(f, line) && !line.empty() && line[0] == '#') {
+  }
+  if (line.rfind("t,", 0) != 0) return std::nullopt;  // the column header
+  std::vector<Vec> out;
+  while (std::getline(f, line)) {
+    if (line.empty()) continue;
+    std::vector<double> v;
+    const char* p = line.c_str();
+    while (true) {
+      char* end = nullptr;
+      const double x = std::strtod(p, &end);
+      if (end == p) return std::nullopt;
+      v.push_back(x);
+      p = end;
+      if (*p == '\0') break;
+      if (*p != ',') return std::nullopt;
+      ++p;
+    }
+    if (out.size() >= times.size() || static_cast<Index>(v.size()) != dim + 1 ||
+        v[0] != times[out.size()])
+      return std::nullopt;
+    Vec y(dim);
+    for (Index i = 0; i < dim; ++i) y[i] = v[static_cast<std::size_t>(i) + 1];
+    if (!y.allFinite()) return std::nullopt;
+    out.push_back(y);
+  }
+  if (out.size() != times.size()) return std::nullopt;
+  return out;
+}
+
+void write_cache(const std::filesystem::path& path, const std::string& key_line,
+                 const std::string& readable, const std::vector<double>& times,
+                 const std::vector<Vec>& values) {
+  std::ostringstream os;
+  os << key_line << "\n# " << readable << "\nt";
+  for (Index i = 0; i < values.front().size(); ++i) os << ",y" << i;
+  os << "\n";
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    os << g17(times[k]);
+    for (Index i = 0; i < values[k].size(); ++i) os << "," << g17(values[k][i]);
+    os << "\n";
+  }
+  write_file_atomic(path, os.str());
+}
+
+struct ReferenceValues {
+  std::vector<Vec> values;  // at the requested times, in their order
+  std::string cache;
+  bool from_cache = false;
 };
+
+// The reference at `times` (any order, duplicates allowed), through the cache when spec has a
+// cache_dir and the reference is not exact.
+ReferenceValues reference_values(const ConvergenceSpec& spec, const OdeSystem& sys,
+                                 const ReferencePlan& plan, std::vector<double> times,
+                                 std::ostream* progress) {
+  std::vector<double> sorted = times;
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  ReferenceValues res;
+  std::vector<Vec> values;
+  const bool use_cache = plan.kind != RefKind::exact && !spec.cache_dir.empty();
+  std::filesystem::path path;
+  std::string key_line;
+  if (use_cache) {
+    key_line = "# key: " + cache_key(spec, sys, plan, sorted);
+    path = std::filesystem::path(spec.cache_dir) / "reference" / (hex16(fnv1a(key_line)) + ".csv");
+    res.cache = path.string();
+    if (auto cached = read_cache(path, key_line, sorted, sys.dimension())) {
+      values = std::move(*cached);
+      res.from_cache = true;
+      if (progress) *progress << "reference: cached " << path.string() << "\n";
+    } else if (progress && std::filesystem::exists(path)) {
+      *progress << "reference: " << path.string()
+                << " does not match this reference; recomputing\n";
+    }
+  }
+  if (!res.from_cache) {
+    const auto start = std::chrono::steady_clock::now();
+    values = compute_reference(plan, sys, sorted);
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (use_cache) {
+      std::ostringstream readable;
+      readable << "model " << spec.model;
+      for (const auto& [k, v] : spec.params.values()) readable << " " << k << "=" << v;
+      readable << "; reference " << plan.description << "; t0 = " << g17(sys.initial_time())
+               << ", t_end = " << g17(sorted.back()) << ", " << sorted.size()
+               << " reference time(s); computed in " << format_short(wall, 2) << " s";
+      write_cache(path, key_line, readable.str(), sorted, values);
+      if (progress)
+        *progress << "reference: computed " << plan.description << " in " << format_short(wall, 2)
+                  << " s; wrote " << path.string() << "\n";
+    } else if (progress && plan.kind != RefKind::exact) {
+      *progress << "reference: computed " << plan.description << " in " << format_short(wall, 2)
+                << " s\n";
+    }
+  }
+  for (double t : times) {
+    const auto it = std::lower_bound(sorted.begin(), sorted.end(), t);
+    res.values.push_back(values[static_cast<std::size_t>(it - sorted.begin())]);
+  }
+  return res;
+}
 
 void add_observed_orders(std::vector<ConvergenceRow>& rows) {
   for (std::size_t i = 1; i < rows.size(); ++i) {
@@ -103,9 +353,27 @@ std::string progress_line(std::size_t k, std::size_t n, const ConvergenceRow& r)
   return os.str();
 }
 
+// The user's parameters without those only a --reference integrator declares (it takes them;
+// make_setup would call them unknown). A key the model or a studied integrator also declares
+// stays, so it reaches them as well.
+Params setup_params(const ConvergenceSpec& spec) {
+  const auto* ref = integrator_registry().find(spec.reference);
+  if (!ref) return spec.params;
+  auto declared_elsewhere = [&](const std::string& key) {
+    if (declares(model_registry().at(spec.model).params, key)) return true;
+    for (const auto& name : spec.integrators)
+      if (declares(integrator_registry().at(name).params, key)) return true;
+    return false;
+  };
+  Params out;
+  for (const auto& [key, value] : spec.params.values())
+    if (!declares(ref->params, key) || declared_elsewhere(key)) out.set(key, value);
+  return out;
+}
+
 ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress, bool local) {
   given.validate();
-  Setup setup = make_setup(given.model, given.integrators, given.params);
+  Setup setup = make_setup(given.model, given.integrators, setup_params(given));
   const OdeSystem& sys = *setup.model;
   ConvergenceSpec spec = given;
   std::string h_source = "--h";
@@ -133,18 +401,24 @@ ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress
   for (int k = 0; k < spec.levels; ++k) hs.push_back(spec.h / std::pow(spec.refine, k));
   for (double h : hs) fixed_step_count(t0, spec.t_end, h, FixedStepOptions{}.max_steps);
 
-  Reference ref(spec, sys, hs.back());
+  const ReferencePlan plan = plan_reference(spec, sys, hs.back());
+  if (!spec.cache_dir.empty() && plan.kind != RefKind::exact) require_output_dir(spec.cache_dir);
   ConvergenceResult result;
-  result.reference_description = ref.description();
+  result.reference_description = plan.description;
   result.h = spec.h;
   result.h_source = h_source;
 
-  std::vector<Vec> ref_values;  // per level for local, one value for global
+  // Per level for local, one value for global.
+  std::vector<double> ref_times;
   if (local) {
-    for (double h : hs) ref_values.push_back(ref.at(t0 + h));
+    for (double h : hs) ref_times.push_back(t0 + h);
   } else {
-    ref_values.push_back(ref.at(spec.t_end));
+    ref_times.push_back(spec.t_end);
   }
+  ReferenceValues ref = reference_values(spec, sys, plan, ref_times, progress);
+  result.reference_cache = ref.cache;
+  result.reference_from_cache = ref.from_cache;
+  const std::vector<Vec>& ref_values = ref.values;
 
   const std::size_t total = setup.integrators.size() * hs.size();
   std::size_t done = 0;
@@ -245,7 +519,12 @@ std::string markdown_report(const std::string& name, const ConvergenceSpec& spec
   os << "Error: max-norm "
      << (local ? "after one step of size h from the initial state"
                : "at t_end = " + format_full(spec.t_end))
-     << "; reference: " << res.reference_description << ".";
+     << "; reference: " << res.reference_description;
+  if (!res.reference_cache.empty())
+    os << " (values in `reference/"
+       << std::filesystem::path(res.reference_cache).filename().string() << "`"
+       << (res.reference_from_cache ? ", reused from an earlier run" : "") << ")";
+  os << ".";
   if (!spec.params.empty()) {
     os << " Parameters:";
     for (const auto& [k, v] : spec.params.values()) os << " " << k << "=" << v;
@@ -297,6 +576,10 @@ void write_convergence_outputs(const std::string& dir, const std::string& name,
   spec_json["h_source"] = res.h_source;
   nlohmann::json meta = run_metadata(local ? "local-error" : "convergence", spec_json);
   meta["reference"] = res.reference_description;
+  if (!res.reference_cache.empty()) {
+    meta["reference_cache"] = res.reference_cache;
+    meta["reference_from_cache"] = res.reference_from_cache;
+  }
   meta["error_norm"] = "max-norm of the absolute error";
   write_file_atomic(d / (name + ".json"), meta.dump(2) + "\n");
 }

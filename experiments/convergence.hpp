@@ -3,8 +3,30 @@
 // Global error: max-norm of y_N - y_ref(t_end) after a fixed-step run to t_end.
 // Local error: max-norm after ONE step of size h_k from the model's initial state (a fresh
 // reset, so history methods take their start-up step), against y_ref(t0 + h_k).
-// The reference is the exact solution (`exact`, the default where the model has one) or a run
-// of `reference_method` with step (finest h)/16.
+// The reference (--reference) is
+//  - `exact`: the model's exact solution; the default (`auto`) where the model has one;
+//  - an adaptive integrator (cvode_bdf, cvode_adams, arkode_*, gsl_*: any whose
+//    supports_adaptive() is true; those with a fixed-step mode too run adaptively here), run
+//    from the initial state with rtol = --reference-rtol (default 1e-12) and atol =
+//    --reference-atol (default rtol/100), stopping exactly (no interpolation) at t_end, or at
+//    every t0 + h_k for the local study; the other integrator parameters are the user's --param
+//    values where the integrator declares them, else its defaults;
+//  - a fixed-step integrator (e.g. rk4), run with step (finest h)/16.
+// A model without an exact solution has no default: `auto` there is BadInput asking for
+// --reference (as before adaptive references existed). The tolerance flags are BadInput with an
+// exact or a fixed-step reference, where they would silently do nothing.
+//
+// Cache: with `cache_dir` set (the commands pass --out), a non-exact reference is stored in
+// DIR/reference/<16 hex digits>.csv: a comment line with the key (JSON: cache format,
+// stiffbench version and git revision, model and its parameters with defaults filled in, a hash
+// of the initial state, reference integrator and its effective parameters including rtol/atol
+// or the fixed step, t0 and the reference times), a readable comment line, then `t,y0,y1,...`
+// rows at the reference times (t_end; or t0 + h_k for the local study) printed with %.17g.
+// The file name is the 64-bit FNV-1a hash of the key; a file is reused only when its key line
+// matches exactly and its rows are complete, otherwise the reference is recomputed and the file
+// rewritten (atomically). The integrators under study and the h ladder (except through a fixed
+// reference's step or the local study's times) are not in the key: adding an integrator
+// reuses the reference.
 // observed_order between consecutive rows of one integrator is log(e_k/e_{k+1})/log(h_k/h_{k+1})
 // using the steps actually taken; a global error should give the method's order p, a local
 // error p + 1.
@@ -33,6 +55,14 @@ struct ConvergenceSpec {
   int levels = 5;
   double refine = 2.0;
   std::string reference = "auto";  // auto | exact | METHOD
+  // Tolerances of an adaptive reference (--reference-rtol, --reference-atol); unset: the
+  // defaults below. Set with an exact or fixed-step reference: BadInput naming the flag.
+  std::optional<double> reference_rtol, reference_atol;
+  static constexpr double kDefaultReferenceRtol = 1e-12;
+  static constexpr double kReferenceAtolDivisor = 100;  // default atol = rtol / 100
+  // Folder holding the reference cache (DIR/reference/); empty: no cache. Not part of the spec's
+  // JSON (it is where the outputs go).
+  std::string cache_dir;
 
   void validate() const;  // BadInput naming the bad flag
   nlohmann::json to_json() const;
@@ -50,7 +80,10 @@ struct ConvergenceRow {
 
 struct ConvergenceResult {
   std::vector<ConvergenceRow> rows;
-  std::string reference_description;  // "exact" or "rk4 with h = ..."
+  std::string
+      reference_description;    // "exact", "cvode_bdf adaptive, rtol = ..." or "rk4 with h = ..."
+  std::string reference_cache;  // the cache file used or written; empty without a cache
+  bool reference_from_cache = false;  // true: read from reference_cache, not recomputed
   double h = 0;                       // the coarsest step requested (spec.h, or the suggested step)
   std::string h_source;               // "--h" or "suggested step: <the model's rule>"
 };

@@ -27,8 +27,17 @@ void add_study_flags(CLI::App* cmd, ConvergenceSpec& spec, std::string& integrat
   cmd->add_option("--refine", spec.refine, "ratio between consecutive step sizes (> 1)")
       ->capture_default_str();
   cmd->add_option("--reference", spec.reference,
-                  "exact | METHOD (run at (finest h)/16); default: exact where the model has one")
+                  "exact | METHOD: an adaptive integrator (cvode_bdf, cvode_adams, arkode_*, "
+                  "gsl_*) runs at --reference-rtol/--reference-atol and stops exactly at the "
+                  "reference times; a fixed-step one (e.g. rk4) runs at (finest h)/16. Default: "
+                  "exact where the model has one; a model without one needs --reference. A "
+                  "non-exact reference is cached in OUT/reference/<hash>.csv and reused by a "
+                  "run of the same build with the same model, parameters, reference and times")
       ->capture_default_str();
+  cmd->add_option("--reference-rtol", spec.reference_rtol,
+                  "relative tolerance of an adaptive --reference (default 1e-12)");
+  cmd->add_option("--reference-atol", spec.reference_atol,
+                  "absolute tolerance of an adaptive --reference (default rtol/100)");
   cmd->add_option("--out", out_dir, "output directory")->capture_default_str();
 }
 
@@ -78,6 +87,18 @@ int main(int argc, char** argv) {
                     "write N+1 equally spaced frames into the --out directory: VTK particle "
                     "frames (frame_NNNN.vtu, frames.pvd) for particle models, trajectory.csv "
                     "otherwise, and observables.csv");
+  std::string solve_times;
+  solve->add_option("--times", solve_times,
+                    "output times t1,t2,... (increasing, in (t0, t_end]; without --t-end the run "
+                    "ends at the last) instead of --outputs: adaptive integrators stop exactly at "
+                    "each (no interpolation); fixed-step runs report the nearest step and print "
+                    "and write its actual t. --out gets one row per time");
+  solve->add_option("--log-outputs", solve_opt.log_outputs,
+                    "N output times log-spaced in t - t0 from --log-first to t_end: t_k = t0 + "
+                    "(t1 - t0)*((t_end - t0)/(t1 - t0))^((k-1)/(N-1)); default t1 = t0 + "
+                    "(t_end - t0)*10^-(N-1), one per decade; same stops as --times");
+  solve->add_option("--log-first", solve_opt.log_first,
+                    "first time of --log-outputs (default: N-1 decades before t_end)");
   solve
       ->add_option("--frame-format", solve_opt.frame_format,
                    "particle frame files: vtu (VTK XML + frames.pvd) or vtk (legacy); a CSV "
@@ -184,6 +205,7 @@ int main(int argc, char** argv) {
     if (*describe) cmd_describe(describe_name, std::cout);
     if (*solve) {
       solve_opt.params = Params::from_assignments(solve_params);
+      if (solve->count("--times")) solve_opt.times = parse_times(solve_times);
       cmd_solve(solve_opt, std::cout, std::cerr);
     }
     if (*convergence || *local_error) {
@@ -193,6 +215,7 @@ int main(int argc, char** argv) {
           split_list(is_local ? local_integrators : conv_integrators, "--integrators");
       spec.params = Params::from_assignments(is_local ? local_params : conv_params);
       const std::string& dir = is_local ? local_out : conv_out;
+      spec.cache_dir = dir;
       const std::string name = is_local ? "local_error" : "convergence";
       const ConvergenceResult res =
           is_local ? run_local_error(spec, &std::cerr) : run_convergence(spec, &std::cerr);

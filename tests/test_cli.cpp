@@ -401,4 +401,47 @@ TEST(Cli, RegionWritesContractFiles) {
   std::filesystem::remove_all(dir);
 }
 
+// Issue #9, adaptive references: the first run computes the cvode_bdf reference and writes
+// OUT/reference/<hash>.csv, the second says it reuses it; a tolerance with a fixed-step reference
+// and a decreasing --times are bad input naming the flag; --log-outputs writes one row per time.
+TEST(Cli, AdaptiveReferenceCacheAndOutputTimes) {
+  const auto dir = std::filesystem::temp_directory_path() / "sb_refcache_cli";
+  std::filesystem::remove_all(dir);
+  const std::string conv =
+      "convergence --model van_der_pol --param form=mu --param mu=1 "
+      "--integrators rk4 --t-end 1 --h 0.1 --levels 2 --reference cvode_bdf "
+      "--out " +
+      dir.string();
+  const Outcome first = run(conv);
+  ASSERT_EQ(first.code, 0) << first.err;
+  EXPECT_NE(first.err.find("reference: computed cvode_bdf adaptive, rtol = 1e-12"),
+            std::string::npos)
+      << first.err;
+  const Outcome second = run(conv);
+  ASSERT_EQ(second.code, 0) << second.err;
+  EXPECT_NE(second.err.find("reference: cached " + (dir / "reference").string() + "/"),
+            std::string::npos)
+      << second.err;
+  const Outcome bad = run(conv.substr(0, conv.find("--reference")) +
+                          "--reference rk4 --reference-rtol 1e-10 --out " + dir.string());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("--reference-rtol"), std::string::npos) << bad.err;
+  EXPECT_EQ(lines(bad.err), 1) << bad.err;
+  const Outcome times = run(kSolve + " --times 0.5,0.25");
+  EXPECT_EQ(times.code, 2);
+  EXPECT_NE(times.err.find("--times"), std::string::npos) << times.err;
+  const auto csv = dir / "robertson.csv";
+  const Outcome log =
+      run("solve --model robertson --integrator cvode_bdf --t-end 1000 "
+          "--log-outputs 4 --out " +
+          csv.string());
+  ASSERT_EQ(log.code, 0) << log.err;
+  const auto rows = read_csv(csv);
+  ASSERT_EQ(rows.size(), 5u);
+  EXPECT_EQ(join_cells(rows.front()), "t,y0,y1,y2");
+  const char* decades[] = {"1", "10", "100", "1000"};  // one per decade, ending at t_end
+  for (std::size_t i = 1; i < rows.size(); ++i) EXPECT_EQ(rows[i][0], decades[i - 1]);
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
