@@ -50,15 +50,28 @@ void list_experiments(std::ostream& out) {
                     "one run (fixed step, the model's suggested step, or adaptive); final state, "
                     "invariants, observables and statistics; --times/--log-outputs: the state at "
                     "given times (exact stops when adaptive, nearest step when fixed)"});
-  t.rows.push_back({"convergence", "convergence.{csv,md,json}; reference/<hash>.csv",
+  t.rows.push_back({"convergence", "convergence.{csv,md,json,png}; reference/<hash>.csv",
                     "global error at t_end vs h, observed orders; a non-exact reference is "
                     "cached in the output folder"});
   t.rows.push_back(
-      {"local-error", "local_error.{csv,md,json}", "error of one step vs h, observed slopes"});
-  t.rows.push_back({"work-precision", "work_precision.{csv,md,json}",
+      {"local-error", "local_error.{csv,md,json,png}", "error of one step vs h, observed slopes"});
+  t.rows.push_back({"work-precision", "work_precision.{csv,md,json,png}",
                     "error at t_end against work: h ladder for fixed-step methods, tolerance "
                     "ladder for references"});
-  t.rows.push_back({"report", "DIR/REPORT.md and one folder per study", "the default suite"});
+  t.rows.push_back({"stability", "stability.{csv,md,json,png}",
+                    "largest stable fixed step per integrator (bisection) against linear theory; "
+                    "--sweep over a stiffness parameter with log-log slope"});
+  t.rows.push_back({"region", "region.{csv,md,json,png}, region_limits.csv",
+                    "stability region boundaries (amplification 1) from the coefficients, axis and "
+                    "oscillator limits, A-stability"});
+  t.rows.push_back({"energy", "energy.{csv,md,json,png}, energy_summary.csv",
+                    "relative invariant error at every step, sampled; max, final, drift rate, "
+                    "growth ratio"});
+  t.rows.push_back({"plot", "NAME.png (and .svg) next to each CSV",
+                    "redraw the plots of an output folder from its CSV files"});
+  t.rows.push_back({"report", "DIR/REPORT.md and one folder per study",
+                    "the default suite: convergence, local error, energy drift, stability "
+                    "limits and regions, work-precision"});
   out << t.to_markdown();
 }
 
