@@ -10,6 +10,21 @@ jobs="$(nproc 2>/dev/null || echo 2)"
 echo "== Release build and tests"
 "$root/scripts/build.sh" "$root/build"
 (cd "$root/build" && ctest --output-on-failure -j "$jobs")
+echo "== stiffbench report --quick (every experiment kind with its plot)"
+rm -rf "$root/build/report-quick"
+start=$(date +%s)
+if ! "$root/build/experiments/stiffbench" report --quick --out "$root/build/report-quick" \
+    2>"$root/build/report-quick.log"; then
+  tail -n 30 "$root/build/report-quick.log" >&2
+  exit 1
+fi
+echo "report --quick took $(( $(date +%s) - start )) s"
+for kind in convergence local_error energy region stability work_precision; do
+  if ! ls "$root/build/report-quick"/*/"$kind.png" >/dev/null 2>&1; then
+    echo "report --quick wrote no $kind.png" >&2
+    exit 1
+  fi
+done
 
 if [ "${STIFFBENCH_SKIP_SANITIZE:-0}" != "1" ]; then
   echo "== ASan + UBSan build and tests"
