@@ -217,6 +217,7 @@ int main(int argc, char** argv) {
       const std::string& dir = is_local ? local_out : conv_out;
       spec.cache_dir = dir;
       const std::string name = is_local ? "local_error" : "convergence";
+      require_output_dir(dir);
       const ConvergenceResult res =
           is_local ? run_local_error(spec, &std::cerr) : run_convergence(spec, &std::cerr);
       write_convergence_outputs(dir, name, spec, res, is_local);
@@ -230,6 +231,7 @@ int main(int argc, char** argv) {
     if (*work_precision) {
       wp.integrators = split_list(wp_integrators, "--integrators");
       wp.params = Params::from_assignments(wp_params);
+      require_output_dir(wp_out);
       const WorkPrecisionResult res = run_work_precision(wp, &std::cerr);
       write_work_precision_outputs(wp_out, wp, res);
       std::cout << work_precision_table(res).to_markdown();

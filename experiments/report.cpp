@@ -243,6 +243,7 @@ void region_section(const ReportOptions& opt, std::ostringstream& md, std::ostre
 
 void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) {
   namespace fs = std::filesystem;
+  require_output_dir(opt.out_dir);
   const auto suite = default_suite(opt.quick);
   const PlotOptions plot_opt{opt.svg};
   std::ostringstream md;

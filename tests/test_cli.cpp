@@ -445,3 +445,35 @@ TEST(Cli, AdaptiveReferenceCacheAndOutputTimes) {
 }
 
 }  // namespace
+
+// Issue #9, stability limits: the Done-when command writes the stability.csv contract with
+// ratios near 1 (symplectic Euler: 2/ω_max, REFERENCES.md) and Euler marked
+// unstable_for_all_h; a malformed --sweep and an unwritable --out are bad input before any run.
+TEST(Cli, StabilityWritesContractFiles) {
+  const auto dir = std::filesystem::temp_directory_path() / "sb_stability_cli";
+  std::filesystem::remove_all(dir);
+  const Outcome o = run(
+      "stability --model spring_chain --integrators symplectic_euler,euler --out " + dir.string());
+  ASSERT_EQ(o.code, 0) << o.err;
+  const auto rows = read_csv(dir / "stability.csv");
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(join_cells(rows[0]),
+            "model,integrator,param,value,h_max_measured,h_max_predicted,ratio,status");
+  EXPECT_EQ(rows[1][1], "symplectic_euler");
+  EXPECT_NEAR(std::stod(rows[1][6]), 1.0, 0.02);
+  EXPECT_EQ(rows[2][1], "euler");
+  EXPECT_EQ(rows[2][7], "unstable_for_all_h");
+  EXPECT_TRUE(rows[2][4].empty());
+  for (const char* f : {"stability.md", "stability.json"})
+    EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
+  const Outcome bad =
+      run("stability --model spring_chain --integrators rk4 --sweep k=1:10 --out " + dir.string());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("--sweep"), std::string::npos) << bad.err;
+  EXPECT_EQ(lines(bad.err), 1) << bad.err;
+  const Outcome unwritable =
+      run("stability --model spring_chain --integrators rk4 --out /proc/nonexistent/x");
+  EXPECT_EQ(unwritable.code, 2);
+  EXPECT_NE(unwritable.err.find("--out"), std::string::npos) << unwritable.err;
+  std::filesystem::remove_all(dir);
+}
