@@ -71,15 +71,16 @@ AxisLimit first_crossing(const G& g, double cap) {
 std::vector<cd> distinct_upper(const std::vector<cd>& eigenvalues) {
   // Eigenvalues below 1e-6 of the largest modulus are taken as 0 (stable for every method with
   // R(0) = 1): a Jordan block of a pinned dof, [[0, 1], [0, 0]], comes out of a numerical
-  // eigensolver as ±O(√ε·‖J‖), and a spurious positive real eigenvalue would make every
-  // method look unstable.
+  // eigensolver as ±O(√ε·‖J‖). Growing modes (Re λ > 0 beyond round-off) are left out: see
+  // the header.
   double largest = 0.0;
   for (const cd& l : eigenvalues)
     if (std::isfinite(l.real()) && std::isfinite(l.imag()))
       largest = std::max(largest, std::abs(l));
   std::vector<cd> out;
   for (const cd& l : eigenvalues)
-    if (std::isfinite(l.real()) && std::isfinite(l.imag()) && std::abs(l) > 1e-6 * largest)
+    if (std::isfinite(l.real()) && std::isfinite(l.imag()) && std::abs(l) > 1e-6 * largest &&
+        l.real() <= kGrowingModeTolerance * largest)
       out.emplace_back(l.real(), std::abs(l.imag()));
   std::sort(out.begin(), out.end(), [](const cd& a, const cd& b) {
     if (std::abs(a) != std::abs(b)) return std::abs(a) > std::abs(b);

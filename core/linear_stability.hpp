@@ -68,8 +68,12 @@ AxisLimit imaginary_axis_limit(const LinearStability& s, double cap = 1e6);  // 
 // Undamped oscillator x'' = −ω²x: limit on hω (via mechanical_amplification(−(hω)², 0)).
 AxisLimit oscillator_limit(const LinearStability& s, double cap = 1e6);
 
-// Eigenvalues of modulus below 1e-6 × the largest are treated as 0 by the two functions below
-// (numerical noise of the eigensolver on zero modes, e.g. pinned dofs' Jordan blocks).
+// The two functions below ignore eigenvalues of modulus below 1e-6 × the largest (numerical
+// noise of the eigensolver on zero modes, e.g. pinned dofs' Jordan blocks) and eigenvalues with
+// Re λ > kGrowingModeTolerance × the largest modulus: modes the system itself lets grow (a
+// compressed spring's buckling, a negative concentration) are unstable for every method and
+// say nothing about the step limit. Undamped modes (Re λ at round-off level) are kept.
+inline constexpr double kGrowingModeTolerance = 1e-6;
 // Largest amplification over a set of eigenvalues of a first-order system at step h.
 // `mechanical`: the system is mechanical and only the mechanical test applies (pairs mapped to
 // oscillators as above); otherwise `amplification(hλ)` is used.

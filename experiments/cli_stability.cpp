@@ -38,6 +38,11 @@ void add_stability_command(CLI::App& app) {
                   "mechanical systems: a run is unstable when its energy exceeds E0 + "
                   "(growth - 1)|E0| at any step")
       ->capture_default_str();
+  cmd->add_option("--criterion", st->spec.criterion,
+                  "auto (energy for mechanical systems with an energy invariant, else the norm), "
+                  "energy, or norm (for models whose energy has an arbitrary zero, e.g. "
+                  "gravity)")
+      ->capture_default_str();
   cmd->add_option("--norm-growth", st->spec.norm_growth,
                   "a run is unstable when its max-norm exceeds this factor times max(1, |y0|)")
       ->capture_default_str();

@@ -9,10 +9,13 @@
 // periods 2π/ω of the fastest mode (ω = the spectral radius below), and at least `min_steps`
 // steps. The energy matters: on nonlinear models an unstable mode can saturate (a 1D chain's
 // springs invert at amplitudes near the rest length) long before the norm grows tenfold. The
-// initial state is perturbed first so that every mode is excited (an unexcited fastest mode only
-// grows from round-off and hides the instability):
+// energy threshold is relative to |E0|, so it needs an energy whose zero is the rest state
+// (chains, the SPH drop, Kepler); with gravity's arbitrary zero (cloth at z = 0, the pendulum)
+// use `criterion = norm`. The initial state is perturbed first so that every mode is excited (an
+// unexcited fastest mode only grows from round-off and hides the instability):
 //   mechanical systems: x_i += ε·s·ξ_i with s the RMS deviation of x0 from its mean (1 if 0);
-//   first-order systems: y_i += ε·max(|y0_i|, 1e-3·‖y0‖∞)·ξ_i;
+//   first-order systems: y_i += ε·max(|y0_i|, 1e-3·‖y0‖∞)·ξ_i, reflected to |y_i| where
+//                        y0_i >= 0 (concentrations stay non-negative);
 // ξ_i standard normal from `seed` (std::mt19937_64), ε = `perturbation`. Velocities of
 // mechanical systems are not perturbed (pinned points stay pinned).
 //
@@ -68,9 +71,13 @@ struct StabilitySpec {
   double norm_growth = 10;           // blow-up factor on the max-norm (every system)
   double perturbation = 1e-3;        // ε
   unsigned long seed = 1;
-  double h_cap_factor = 1e3;      // largest step tried: h_cap_factor × 2/ω
-  long max_steps = 20'000'000;    // per probe run (also limits h_floor)
-  std::string ray = "auto";       // auto | imag | real (for the stiffness() estimate)
+  double h_cap_factor = 1e3;    // largest step tried: h_cap_factor × 2/ω
+  long max_steps = 20'000'000;  // per probe run (also limits h_floor)
+  std::string ray = "auto";     // auto | imag | real (for the stiffness() estimate)
+  // auto: the energy criterion for mechanical systems with an "energy" invariant, the norm
+  // alone otherwise; norm: the norm alone (models whose energy has an arbitrary zero, e.g.
+  // gravity's potential with cloth at z = 0, where E0 is no scale); energy: require it.
+  std::string criterion = "auto";
   Index dense_limit = 600;        // eigen-decompose the Jacobian up to this dimension
   std::optional<double> horizon;  // explicit horizon (time); else periods × 2π/ω
 
