@@ -31,6 +31,12 @@ void MechanicalSystem::damping_block(double, CVecRef, CVecRef, SparseMat&) const
   throw BadInput("model '" + name() + "' provides no damping block D = da/dv");
 }
 
+void MechanicalSystem::force_jacobians(double t, CVecRef x, CVecRef v, SparseMat& k,
+                                       SparseMat& d) const {
+  stiffness_block(t, x, v, k);
+  damping_block(t, x, v, d);
+}
+
 void MechanicalSystem::eval_rhs(double t, CVecRef y, VecRef dydt) const {
   const Index n = dofs();
   dydt.head(n) = y.tail(n);

@@ -174,6 +174,22 @@ class MechanicalSystem : public OdeSystem {
   virtual void stiffness_block(double t, CVecRef x, CVecRef v, SparseMat& k) const;
   virtual void damping_block(double t, CVecRef x, CVecRef v, SparseMat& d) const;
 
+  // K and D together, written in place: when k and d already hold the model's pattern (from a
+  // previous call) only their values change, so implicit solvers call this every step without
+  // allocating or rebuilding a matrix. A model computes both in one pass where it can; the
+  // default calls stiffness_block and damping_block. Not counted by the system (callers add one
+  // Jacobian evaluation to their SolveStats).
+  virtual void force_jacobians(double t, CVecRef x, CVecRef v, SparseMat& k, SparseMat& d) const;
+
+  // Dofs that never move (pinned points): a_i ≡ 0, v_i = 0 at the start, rows i of K and D zero.
+  // Implicit solvers eliminate them from the reduced Newton system, which keeps it symmetric.
+  virtual std::vector<Index> fixed_dofs() const { return {}; }
+
+  // True when M K and M D are symmetric (forces from a potential, symmetric dampers), so the
+  // reduced Newton matrix M - c_D M D - c_K M K of the implicit methods is symmetric (and
+  // positive definite where -M K and -M D are semi-definite): CG and LDLT apply.
+  virtual bool symmetric_force_jacobians() const { return false; }
+
   bool has_jacobian() const override { return has_force_jacobians(); }
 
  protected:

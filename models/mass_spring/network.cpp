@@ -124,7 +124,8 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
   }
 
   velocity_dependent_ = opt_.point_damping != 0.0;
-  for (const Spring& s : springs_) velocity_dependent_ = velocity_dependent_ || s.damping != 0.0;
+  for (const Spring& s : springs_) has_dashpots_ = has_dashpots_ || s.damping != 0.0;
+  velocity_dependent_ = velocity_dependent_ || has_dashpots_;
 
   const Index n = dofs();
   y0_.resize(2 * n);
@@ -345,6 +346,14 @@ void MassSpringNetwork::stiffness_block(double, CVecRef x, CVecRef v, SparseMat&
 
 void MassSpringNetwork::damping_block(double, CVecRef x, CVecRef v, SparseMat& d) const {
   fill_blocks(x, v, nullptr, &d);
+}
+
+std::vector<Index> MassSpringNetwork::fixed_dofs() const {
+  std::vector<Index> out;
+  for (Index p = 0; p < num_points(); ++p)
+    if (points_[static_cast<std::size_t>(p)].pinned)
+      for (int c = 0; c < dim_; ++c) out.push_back(dim_ * p + c);
+  return out;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -149,6 +149,10 @@ class MassSpringNetwork final : public MechanicalSystem {
   bool has_force_jacobians() const override { return true; }
   void stiffness_block(double t, CVecRef x, CVecRef v, SparseMat& k) const override;
   void damping_block(double t, CVecRef x, CVecRef v, SparseMat& d) const override;
+  // The pinned points' dofs.
+  std::vector<Index> fixed_dofs() const override;
+  // ∂f/∂x of springs is a Hessian and point damping is -γI; dashpots make ∂f/∂x non-symmetric.
+  bool symmetric_force_jacobians() const override { return !has_dashpots_; }
 
   std::vector<Invariant> invariants() const override;
   std::optional<double> stiffness(double t, CVecRef y) const override;
@@ -223,6 +227,7 @@ class MassSpringNetwork final : public MechanicalSystem {
   std::vector<DistanceConstraint> constraints_;
   NetworkOptions opt_;
   bool velocity_dependent_ = false;
+  bool has_dashpots_ = false;
   Vec y0_, dof_mass_;
   std::vector<double> inv_mass_;  // per point, 0 for pinned points (projection weights)
   std::vector<bool> active_;      // per constraint: not both ends pinned

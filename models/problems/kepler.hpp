@@ -26,6 +26,7 @@ class Kepler final : public MechanicalSystem {
   bool has_force_jacobians() const override { return true; }
   void stiffness_block(double t, CVecRef x, CVecRef v, SparseMat& k) const override;
   void damping_block(double t, CVecRef x, CVecRef v, SparseMat& d) const override;
+  bool symmetric_force_jacobians() const override { return true; }  // 1-dof or a Hessian
   bool has_exact() const override { return true; }
   void exact(double t, VecRef y) const override;
   std::vector<Invariant> invariants() const override;

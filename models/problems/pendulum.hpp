@@ -23,6 +23,7 @@ class Pendulum final : public MechanicalSystem {
   bool has_force_jacobians() const override { return true; }
   void stiffness_block(double t, CVecRef x, CVecRef v, SparseMat& k) const override;
   void damping_block(double t, CVecRef x, CVecRef v, SparseMat& d) const override;
+  bool symmetric_force_jacobians() const override { return true; }  // 1-dof or a Hessian
   std::vector<Invariant> invariants() const override;
   std::optional<double> stiffness(double t, CVecRef y) const override;
 
