@@ -84,7 +84,22 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
              return std::make_unique<Rosenbrock>(rosenbrock2_tableau(), ros_desc,
                                                  read_implicit_options(p, false));
            }});
-  reg.add({BaraffWitkin({}).info(), linear_specs, [](const Params& p) {
+  // Baraff–Witkin is velocity-form by construction (no `form`), and its single Krylov solve
+  // defaults to a relative 1e-6 (baraff_witkin.hpp).
+  std::vector<ParamSpec> bw_specs;
+  for (ParamSpec s : linear_specs) {
+    if (s.key == "system_form") continue;
+    if (s.key == "linear_solver")
+      s.help = "auto (ldlt up to 2000 dofs, cg above for symmetric force Jacobians; "
+               "dense_lu/sparse_lu otherwise), dense_lu, sparse_lu, ldlt, cg, bicgstab, gmres";
+    if (s.key == "krylov_tol") {
+      s.default_value = "1e-6";
+      s.help = "relative residual of the Krylov solve (warm-started from the previous step's "
+               "dv); 1e-6 keeps the solve error far below the method's O(h) error";
+    }
+    bw_specs.push_back(s);
+  }
+  reg.add({BaraffWitkin({}).info(), bw_specs, [](const Params& p) {
              return std::make_unique<BaraffWitkin>(read_implicit_options(p, false));
            }});
 }

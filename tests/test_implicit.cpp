@@ -214,7 +214,7 @@ TEST(Jacobian, FiniteDifferencesMatchAnalyticOnEveryModel) {
       ImplicitOptions o;
       o.jacobian = source;
       ImplicitCore core(o);
-      core.reset(*sys);
+      core.reset(*sys, t, y);
       SolveStats stats;
       core.update_jacobian(*sys, t, y, f, stats);
       const Mat jf(core.jacobian_matrix());
@@ -337,16 +337,27 @@ TEST(LinearSolvers, ImpossibleCombinationsAreBadInput) {
   EXPECT_THROW(make("backward_euler", {"linear_solver=qr"}), BadInput);
 }
 
-// CG and LDLᵀ refuse the non-symmetric Newton matrix of a first-order mechanical system
-// (W = [[I, -hI], [-hK, I]]) instead of solving a different system.
+// CG and LDLᵀ refuse the non-symmetric first-order Newton matrix of a mechanical system
+// (W = [[I, -hI], [-hK, I]]) instead of solving a different system, and the run ends with
+// solver_error naming the solver, not with a Newton failure. In velocity form (the default) the
+// same solvers work on the symmetric M - h²MK (Kepler's K is a Hessian) and agree with sparse LU.
 TEST(LinearSolvers, SymmetricSolversRefuseNonSymmetricMatrix) {
   auto sys = model("kepler");
-  for (const auto& solver : {"cg", "ldlt"}) {
-    auto integ = make("backward_euler", {std::string("linear_solver=") + solver});
-    FixedStepOptions opt;
-    opt.t_end = 1.0;
-    opt.h = 0.1;
-    EXPECT_EQ(run_fixed_step(*sys, *integ, opt).stats.status, Status::newton_failed) << solver;
+  FixedStepOptions opt;
+  opt.t_end = 1.0;
+  opt.h = 0.1;
+  auto lu = make("backward_euler", {"linear_solver=sparse_lu", "system_form=first_order"});
+  const Vec ref = run_fixed_step(*sys, *lu, opt).y;
+  for (const std::string solver : {"cg", "ldlt"}) {
+    auto first = make("backward_euler", {"linear_solver=" + solver, "system_form=first_order"});
+    const RunResult r = run_fixed_step(*sys, *first, opt);
+    EXPECT_EQ(r.stats.status, Status::solver_error) << solver;
+    EXPECT_NE(r.stats.message.find(solver + ": the matrix is not symmetric"), std::string::npos)
+        << r.stats.message;
+    auto velocity = make("backward_euler", {"linear_solver=" + solver, "krylov_tol=1e-14"});
+    const RunResult v = run_fixed_step(*sys, *velocity, opt);
+    ASSERT_EQ(v.stats.status, Status::ok) << solver << ": " << v.stats.message;
+    EXPECT_LT(max_abs_diff(v.y, ref), 1e-11) << solver;
   }
 }
 
@@ -371,31 +382,35 @@ TEST(BaraffWitkin, OneStepMatchesFormula) {
 namespace stiffbench {
 namespace {
 
-// Baraff–Witkin's matrix M - hD - h²K is symmetric for a mass-spring network without pins (M K
-// and M D are symmetric force Jacobians) and SPD at this step size, so LDLᵀ and CG apply and
-// every linear solver gives the same step (issue #3's SPD check on issue #4's model). With pins
-// K keeps the columns of the pinned points (exact, not symmetric) and LDLᵀ/CG refuse.
+// Baraff–Witkin's matrix M - hD - h²K is symmetric for a mass-spring network (M K and M D are
+// symmetric force Jacobians) and SPD at this step size, so LDLᵀ and CG apply and every linear
+// solver gives the same step. With pins the pinned dofs are eliminated (their rows and columns
+// filtered), which keeps the matrix symmetric: LDLᵀ and CG agree with sparse LU there too.
 TEST(BaraffWitkin, AllLinearSolversAgreeOnFreeCloth) {
-  auto sys = model("cloth", {"n=8", "pin=none"});
-  auto step_with = [&](const std::string& solver) {
-    auto integ = make("baraff_witkin", {"linear_solver=" + solver, "krylov_tol=1e-14"});
-    FixedStepOptions opt;
-    opt.t_end = 0.01;
-    opt.h = 0.01;
-    const RunResult r = run_fixed_step(*sys, *integ, opt);
-    EXPECT_EQ(r.stats.status, Status::ok) << solver << ": " << r.stats.message;
-    return r.y;
-  };
-  const Vec ref = step_with("sparse_lu");
-  for (const auto& solver : {"dense_lu", "ldlt", "cg", "bicgstab", "gmres"})
-    EXPECT_LT(max_abs_diff(step_with(solver), ref), 1e-10) << solver;
-  // The pinned cloth's matrix is not symmetric: LDLᵀ refuses rather than solve another system.
-  auto pinned = model("cloth", {"n=8"});
-  auto ldlt = make("baraff_witkin", {"linear_solver=ldlt"});
-  FixedStepOptions opt;
-  opt.t_end = 0.01;
-  opt.h = 0.01;
-  EXPECT_EQ(run_fixed_step(*pinned, *ldlt, opt).stats.status, Status::solver_error);
+  for (const std::string pin : {"none", "top_edge"}) {
+    auto sys = model("cloth", {"n=8", "pin=" + pin});
+    auto step_with = [&](const std::string& solver) {
+      auto integ = make("baraff_witkin", {"linear_solver=" + solver, "krylov_tol=1e-14"});
+      FixedStepOptions opt;
+      opt.t_end = 0.05;
+      opt.h = 0.01;
+      const RunResult r = run_fixed_step(*sys, *integ, opt);
+      EXPECT_EQ(r.stats.status, Status::ok) << solver << ": " << r.stats.message;
+      return r.y;
+    };
+    const Vec ref = step_with("sparse_lu");
+    for (const auto& solver : {"dense_lu", "ldlt", "cg", "bicgstab", "gmres"})
+      EXPECT_LT(max_abs_diff(step_with(solver), ref), 1e-10) << solver << " pin=" << pin;
+    // Pinned points stay where they are.
+    if (pin == "top_edge") {
+      const Vec y0 = sys->initial_state();
+      const Vec y = step_with("cg");
+      for (Index f : sys->as_mechanical()->fixed_dofs()) {
+        EXPECT_EQ(y[f], y0[f]);
+        EXPECT_EQ(y[sys->as_mechanical()->dofs() + f], 0.0);
+      }
+    }
+  }
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "integrators/implicit/baraff_witkin.hpp"
 
+#include <sstream>
+
 namespace stiffbench {
 
 BaraffWitkin::BaraffWitkin(ImplicitOptions opt)
@@ -8,10 +10,6 @@ BaraffWitkin::BaraffWitkin(ImplicitOptions opt)
                   "h (f + h K v)"}),
       opt_(std::move(opt)) {}
 
-std::vector<SparseTerm> BaraffWitkin::terms(double h) const {
-  return {{1.0, &mass_, nullptr}, {-h, &d_, &m_}, {-h * h, &k_, &m_}};
-}
-
 void BaraffWitkin::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   check_compatible(info(), sys);
   require_input(
@@ -19,23 +17,9 @@ void BaraffWitkin::reset(const OdeSystem& sys, double t0, CVecRef y0) {
       "baraff_witkin uses the model's K and D blocks: parameter 'jacobian' must be auto or "
       "analytic");
   mech_ = sys.as_mechanical();
-  const Index n = mech_->dofs();
-  m_ = mech_->masses();
-  mass_.resize(n, n);
-  std::vector<Eigen::Triplet<double>> diag;
-  for (Index i = 0; i < n; ++i) diag.emplace_back(i, i, m_[i]);
-  mass_.setFromTriplets(diag.begin(), diag.end());
-  mass_.makeCompressed();
-  mech_->stiffness_block(t0, y0.head(n), y0.tail(n), k_);
-  mech_->damping_block(t0, y0.head(n), y0.tail(n), d_);
-  k_.makeCompressed();
-  d_.makeCompressed();
-  solver_ = make_linear_solver(opt_.linear, n);
-  a_.build(terms(0.0));
-  solver_->analyze(a_.matrix());
-  acc_.resize(n);
-  rhs_.resize(n);
-  dv_.resize(n);
+  solver_.reset(*mech_, opt_.linear, t0, y0);
+  r_.resize(sys.dimension());
+  k_ = Vec::Zero(sys.dimension());  // k_'s velocity half: the previous Δv (Krylov warm start)
 }
 
 Status BaraffWitkin::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) {
@@ -43,37 +27,27 @@ Status BaraffWitkin::step(const OdeSystem& sys, double t, VecRef y, double h, So
   const Index n = mech_->dofs();
   auto x = y.head(n);
   auto v = y.tail(n);
-  mech_->acceleration(t, x, v, acc_);
-  mech_->stiffness_block(t, x, v, k_);
-  mech_->damping_block(t, x, v, d_);
-  k_.makeCompressed();
-  d_.makeCompressed();
+  // r = h f(t, y) = [h v; h a]: the velocity-form solve then gives Δv = k_v and h v⁺ = k_x.
+  mech_->acceleration(t, x, v, r_.tail(n));
+  r_.tail(n) *= h;
+  r_.head(n) = h * v;
+  solver_.update(t, y);
   ++stats.jac_evals;
-  const auto tr = terms(h);
-  if (!a_.same_patterns(tr)) {
-    a_.build(tr);
-    solver_->analyze(a_.matrix());
-  }
-  a_.assemble(tr);
   ++stats.lin_setups;
-  if (!solver_->factor(a_.matrix())) {
-    stats.message = "baraff_witkin: matrix M - hD - h^2 K singular (or not symmetric for " +
-                    to_string(solver_->kind()) + ") at t = " + std::to_string(t);
+  const auto fail = [&](const char* what) {
+    std::ostringstream msg;
+    msg << "baraff_witkin: " << what << " at t = " << t << ": " << solver_.error();
+    stats.message = msg.str();
     return Status::solver_error;
-  }
-  // rhs = h M (a + h K v)
-  rhs_.noalias() = k_ * v;
-  rhs_ = h * m_.cwiseProduct(acc_ + h * rhs_);
-  dv_.setZero();
+  };
+  if (!solver_.factor(h)) return fail("matrix M - hD - h^2 K refused");
   ++stats.lin_solves;
-  const LinearSolveResult r = solver_->solve(rhs_, dv_);
+  const LinearSolveResult r = solver_.solve(r_, k_);
   stats.krylov_iters += r.iterations;
-  if (!r.ok || !dv_.allFinite()) {
-    stats.message = "baraff_witkin: linear solve failed at t = " + std::to_string(t);
-    return Status::solver_error;
-  }
-  v += dv_;
-  x += h * v;
+  if (!r.ok) return fail("linear solve failed");
+  if (!k_.allFinite()) return fail("non-finite solution");
+  v += k_.tail(n);
+  x += k_.head(n);
   return Status::ok;
 }
 

@@ -94,9 +94,9 @@ DirkIntegrator::DirkIntegrator(ButcherTableau tableau, std::string description, 
       stepper_(std::move(tableau)),
       core_(std::move(opt)) {}
 
-void DirkIntegrator::reset(const OdeSystem& sys, double, CVecRef) {
+void DirkIntegrator::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   check_compatible(info(), sys);
-  core_.reset(sys);
+  core_.reset(sys, t0, y0);
   stepper_.reset(sys.dimension());
 }
 
@@ -114,9 +114,9 @@ Bdf2Integrator::Bdf2Integrator(ImplicitOptions opt)
       core_(std::move(opt)),
       startup_(implicit_tableau("sdirk2")) {}
 
-void Bdf2Integrator::reset(const OdeSystem& sys, double, CVecRef) {
+void Bdf2Integrator::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   check_compatible(info(), sys);
-  core_.reset(sys);
+  core_.reset(sys, t0, y0);
   const Index n = sys.dimension();
   startup_.reset(n);
   y_prev_.resize(n);

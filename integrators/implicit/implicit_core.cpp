@@ -1,5 +1,6 @@
 #include "integrators/implicit/implicit_core.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -42,18 +43,38 @@ std::vector<ParamSpec> implicit_param_specs(bool with_newton) {
                    "fd_colored over the model's pattern, else fd_dense up to 200 unknowns and "
                    "matrix_free with gmres above",
                    {"auto", "analytic", "fd_dense", "fd_colored", "matrix_free"}});
+  specs.push_back({"system_form",
+                   P::text,
+                   "auto",
+                   "system the linear solves work on: velocity (mechanical systems with force "
+                   "Jacobians: (M - c M D - c^2 M K) dv of the dofs' size, pinned dofs "
+                   "eliminated), first_order (I - c J of size 2n); auto: velocity where it applies",
+                   {"auto", "velocity", "first_order"}});
   specs.push_back(
       {"linear_solver", P::text, "auto",
-       "auto (dense_lu up to 200 unknowns, sparse_lu above), dense_lu, sparse_lu, ldlt, "
-       "cg, bicgstab, gmres",
+       "auto (velocity form: ldlt up to 2000 dofs, cg above for symmetric force Jacobians, "
+       "dense_lu/sparse_lu otherwise; first-order form: dense_lu up to 200 unknowns, sparse_lu "
+       "above), dense_lu, sparse_lu, ldlt, cg, bicgstab, gmres",
        linear_solver_names()});
   specs.push_back({"preconditioner",
                    P::text,
                    "auto",
-                   "Krylov preconditioner: jacobi, none; auto: jacobi (none when matrix-free)",
-                   {"auto", "jacobi", "none"}});
+                   "Krylov preconditioner: jacobi, ichol (incomplete Cholesky, cg only), none; "
+                   "auto: jacobi (none when matrix-free)",
+                   {"auto", "jacobi", "ichol", "none"}});
   specs.push_back({"krylov_tol", P::real, "1e-12",
-                   "relative residual of Krylov solves (at least 1e-7 when matrix-free)"});
+                   with_newton ? "relative residual of Krylov solves; with "
+                                 "krylov_forcing=eisenstat_walker the floor of the forcing terms "
+                                 "(at least 1e-7 when matrix-free)"
+                               : "relative residual of Krylov solves (at least 1e-7 when "
+                                 "matrix-free)"});
+  if (with_newton)
+    specs.push_back({"krylov_forcing",
+                     P::text,
+                     "eisenstat_walker",
+                     "Krylov tolerance per Newton iteration: eisenstat_walker (forcing terms "
+                     "that tighten as Newton converges) or fixed (krylov_tol every time)",
+                     {"eisenstat_walker", "fixed"}});
   specs.push_back({"krylov_max_iter", P::integer, "1000", "Krylov iterations per solve"});
   specs.push_back({"gmres_restart", P::integer, "50", "GMRES restart length"});
   return specs;
@@ -80,7 +101,18 @@ ImplicitOptions read_implicit_options(const Params& p, bool with_newton) {
   o.linear.kind = parse_linear_solver(p.text("linear_solver"));
   const std::string& pc = p.text("preconditioner");
   o.preconditioner_given = pc != "auto";
-  o.linear.preconditioner = pc == "none" ? PreconditionerKind::none : PreconditionerKind::jacobi;
+  o.linear.preconditioner = pc == "none"    ? PreconditionerKind::none
+                            : pc == "ichol" ? PreconditionerKind::ichol
+                                            : PreconditionerKind::jacobi;
+  require_input(o.linear.preconditioner != PreconditionerKind::ichol ||
+                    o.linear.kind == LinearSolverKind::cg ||
+                    o.linear.kind == LinearSolverKind::automatic,
+                "preconditioner=ichol needs linear_solver=cg (or auto)");
+  const std::string form = p.contains("system_form") ? p.text("system_form") : "auto";
+  o.form = form == "velocity"      ? SystemForm::velocity
+           : form == "first_order" ? SystemForm::first_order
+                                   : SystemForm::automatic;
+  if (with_newton) o.eisenstat_walker = p.text("krylov_forcing") != "fixed";
   o.linear.krylov_tol = p.real("krylov_tol");
   require_input(o.linear.krylov_tol > 0, "parameter 'krylov_tol' must be > 0");
   o.linear.krylov_max_iter = static_cast<int>(p.integer("krylov_max_iter"));
@@ -119,11 +151,17 @@ std::vector<int> color_columns(const SparseMat& pattern, int* n_colors) {
   return color;
 }
 
-void ImplicitCore::reset(const OdeSystem& sys) {
+void ImplicitCore::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   sys_ = &sys;
   const Index n = sys.dimension();
   source_ = opt_.jacobian;
   LinearSolverOptions lin = user_linear_;
+  const MechanicalSystem* mech = sys.as_mechanical();
+  const bool mech_blocks = mech && mech->has_force_jacobians();
+  if (opt_.form == SystemForm::velocity)
+    require_input(mech_blocks, "parameter 'system_form': velocity needs a mechanical model with force "
+                               "Jacobians K and D; model '" +
+                                   sys.name() + "' has none (use system_form=first_order)");
   if (source_ == JacobianSource::automatic) {
     // Without an analytic Jacobian or a pattern, a dense finite-difference Jacobian costs 2n f
     // evaluations and n² memory: above the dense limit (e.g. an SPH fluid of 2,000 particles,
@@ -141,39 +179,79 @@ void ImplicitCore::reset(const OdeSystem& sys) {
   if (source_ == JacobianSource::fd_colored)
     require_input(sys.has_jacobian_pattern(), "parameter 'jacobian': model '" + sys.name() +
                                                   "' gives no sparsity pattern for fd_colored");
+  if (opt_.form == SystemForm::velocity)
+    require_input(source_ == JacobianSource::analytic,
+                  "parameter 'system_form': velocity uses the model's K and D (jacobian=auto or analytic)");
   if (source_ == JacobianSource::matrix_free) {
     require_input(is_krylov(lin.kind),
                   "jacobian=matrix_free needs a Krylov linear_solver (cg, bicgstab or gmres)");
-    require_input(!(opt_.preconditioner_given && lin.preconditioner == PreconditionerKind::jacobi),
-                  "preconditioner=jacobi needs an assembled matrix; jacobian=matrix_free has none");
+    require_input(!(opt_.preconditioner_given && lin.preconditioner != PreconditionerKind::none),
+                  "preconditioner=" +
+                      std::string(lin.preconditioner == PreconditionerKind::ichol ? "ichol"
+                                                                                   : "jacobi") +
+                      " needs an assembled matrix; jacobian=matrix_free has none");
     lin.preconditioner = PreconditionerKind::none;
     // Finite-difference products are accurate to ~√eps relative, so a restarted Krylov method
     // cannot push the true residual much below that: solve to 1e-7 and let Newton iterate
     // (inexact Newton; SUNDIALS likewise ties its linear tolerance to the nonlinear one).
     lin.krylov_tol = std::max(lin.krylov_tol, kMatrixFreeKrylovTol);
   }
-  solver_ = make_linear_solver(lin, n);
-  opt_.linear = lin;
-
-  identity_.resize(n, n);
-  identity_.setIdentity();
-  identity_.makeCompressed();
-  // The pattern of J: analytic or declared structure, or dense for fd_dense.
-  if (source_ == JacobianSource::fd_dense) {
-    jac_ = Mat::Ones(n, n).sparseView();
-  } else if (source_ != JacobianSource::matrix_free) {
-    jac_ = sys.jacobian_pattern();
+  krylov_tol_ = lin.krylov_tol;
+  velocity_.reset();
+  solver_.reset();
+  mech_inplace_ = nullptr;
+  if (mech_blocks && source_ == JacobianSource::analytic && opt_.form != SystemForm::first_order) {
+    velocity_ = std::make_unique<VelocityFormSolver>();
+    velocity_->reset(*mech, lin, t0, y0);
+    lin.kind = velocity_->kind();
+    opt_.linear = lin;
   } else {
-    jac_.resize(n, n);
+    solver_ = make_linear_solver(lin, n);
+    opt_.linear = lin;
+    identity_.resize(n, n);
+    identity_.setIdentity();
+    identity_.makeCompressed();
+    // The pattern of J: analytic or declared structure, or dense for fd_dense.
+    if (source_ == JacobianSource::fd_dense) {
+      jac_ = Mat::Ones(n, n).sparseView();
+    } else if (source_ != JacobianSource::matrix_free) {
+      jac_ = sys.jacobian_pattern();
+    } else {
+      jac_.resize(n, n);
+    }
+    jac_.makeCompressed();
+    if (mech_blocks && source_ == JacobianSource::analytic) {
+      // J = [[0, I], [K, D]] written in place: the position in J of every entry of K and D.
+      const Index nd = mech->dofs();
+      mech_inplace_ = mech;
+      k_.resize(0, 0);
+      d_.resize(0, 0);
+      mech->force_jacobians(t0, y0.head(nd), y0.tail(nd), k_, d_);
+      k_.makeCompressed();
+      d_.makeCompressed();
+      const auto map = [&](const SparseMat& b, Index col0, std::vector<int>& out) {
+        out.clear();
+        for (Index c = 0; c < b.outerSize(); ++c)
+          for (SparseMat::InnerIterator it(b, c); it; ++it) {
+            const int* begin = jac_.innerIndexPtr() + jac_.outerIndexPtr()[col0 + c];
+            const int* end = jac_.innerIndexPtr() + jac_.outerIndexPtr()[col0 + c + 1];
+            const int* pos = std::lower_bound(begin, end, static_cast<int>(nd + it.row()));
+            if (pos == end || *pos != nd + it.row())
+              throw std::logic_error("ImplicitCore: K/D entry missing from the Jacobian pattern");
+            out.push_back(static_cast<int>(pos - jac_.innerIndexPtr()));
+          }
+      };
+      map(k_, 0, k_in_jac_);
+      map(d_, nd, d_in_jac_);
+    }
+    if (source_ == JacobianSource::fd_colored) colors_ = color_columns(jac_, &n_colors_);
+    if (source_ == JacobianSource::fd_dense) {
+      colors_.resize(static_cast<std::size_t>(n));
+      for (Index j = 0; j < n; ++j) colors_[static_cast<std::size_t>(j)] = static_cast<int>(j);
+      n_colors_ = static_cast<int>(n);
+    }
+    if (source_ != JacobianSource::matrix_free) rebuild_w_pattern();
   }
-  jac_.makeCompressed();
-  if (source_ == JacobianSource::fd_colored) colors_ = color_columns(jac_, &n_colors_);
-  if (source_ == JacobianSource::fd_dense) {
-    colors_.resize(static_cast<std::size_t>(n));
-    for (Index j = 0; j < n; ++j) colors_[static_cast<std::size_t>(j)] = static_cast<int>(j);
-    n_colors_ = static_cast<int>(n);
-  }
-  if (source_ != JacobianSource::matrix_free) rebuild_w_pattern();
   lin_y_.resize(n);
   lin_f_.resize(n);
   tmp_.resize(n);
@@ -182,12 +260,24 @@ void ImplicitCore::reset(const OdeSystem& sys) {
   delta_.resize(n);
   z0_.resize(n);
   have_jac_ = jac_fresh_in_step_ = w_current_ = false;
+  error_.clear();
 }
 
 void ImplicitCore::rebuild_w_pattern() {
-  const std::vector<SparseTerm> terms{{1.0, &identity_, nullptr}, {1.0, &jac_, nullptr}};
-  w_.build(terms);
+  w_terms_ = {{1.0, &identity_, nullptr}, {1.0, &jac_, nullptr}};
+  w_.build(w_terms_);
   solver_->analyze(w_.matrix());
+}
+
+bool ImplicitCore::is_krylov_run() const { return is_krylov(linear_solver()); }
+
+void ImplicitCore::set_krylov_tolerance(double tol) {
+  if (velocity_)
+    velocity_->set_tolerance(tol);
+  else if (source_ == JacobianSource::matrix_free)
+    krylov_tol_ = std::max(tol, kMatrixFreeKrylovTol);
+  else
+    solver_->set_tolerance(tol);
 }
 
 void ImplicitCore::fd_jacobian(const OdeSystem& sys, double t, CVecRef y, CVecRef) {
@@ -218,11 +308,33 @@ void ImplicitCore::update_jacobian(const OdeSystem& sys, double t, CVecRef y, CV
                                    SolveStats& stats) {
   switch (source_) {
     case JacobianSource::analytic: {
+      if (velocity_) {
+        velocity_->update(t, y);
+        ++stats.jac_evals;  // K and D: one Jacobian (not counted by the system)
+        break;
+      }
+      if (mech_inplace_) {
+        const Index nd = mech_inplace_->dofs();
+        mech_inplace_->force_jacobians(t, y.head(nd), y.tail(nd), k_, d_);
+        k_.makeCompressed();
+        d_.makeCompressed();
+        // The maps hold when the blocks keep the nonzero counts seen at reset() (a model whose
+        // blocks change pattern would fail the first-order pattern test below as well).
+        if (static_cast<std::size_t>(k_.nonZeros()) != k_in_jac_.size() ||
+            static_cast<std::size_t>(d_.nonZeros()) != d_in_jac_.size())
+          throw std::logic_error("model '" + sys.name() +
+                                 "': the pattern of its force Jacobians changed during a run");
+        double* jv = jac_.valuePtr();
+        for (std::size_t i = 0; i < k_in_jac_.size(); ++i) jv[k_in_jac_[i]] = k_.valuePtr()[i];
+        for (std::size_t i = 0; i < d_in_jac_.size(); ++i) jv[d_in_jac_[i]] = d_.valuePtr()[i];
+        ++stats.jac_evals;
+        break;
+      }
       sys.jacobian(t, y, jac_);
       jac_.makeCompressed();
-      const std::vector<SparseTerm> terms{{1.0, &identity_, nullptr}, {1.0, &jac_, nullptr}};
       // A model whose Jacobian pattern changed (it should not) costs a new symbolic analysis.
-      if (!w_.same_patterns(terms)) rebuild_w_pattern();
+      w_terms_[1].coeff = 1.0;
+      if (!w_.same_patterns(w_terms_)) rebuild_w_pattern();
       break;
     }
     case JacobianSource::fd_dense:
@@ -248,30 +360,58 @@ bool ImplicitCore::prepare(double hg, SolveStats& stats) {
   w_hg_ = hg;
   w_current_ = true;
   if (source_ == JacobianSource::matrix_free) return true;
-  const std::vector<SparseTerm> terms{{1.0, &identity_, nullptr}, {-hg, &jac_, nullptr}};
-  w_.assemble(terms);
   ++stats.lin_setups;
-  return solver_->factor(w_.matrix());
+  if (velocity_) {
+    const bool ok = velocity_->factor(hg);
+    if (!ok) {
+      error_ = velocity_->error();
+      w_current_ = false;
+    }
+    return ok;
+  }
+  w_terms_[1].coeff = -hg;
+  w_.assemble(w_terms_);
+  const bool ok = solver_->factor(w_.matrix());
+  if (!ok) {
+    error_ = solver_->error();
+    w_current_ = false;
+  }
+  return ok;
 }
 
 bool ImplicitCore::solve(CVecRef b, VecRef x, SolveStats& stats) {
   ++stats.lin_solves;
   LinearSolveResult r;
-  if (source_ == JacobianSource::matrix_free) {
+  if (velocity_) {
+    r = velocity_->solve(b, x);
+    if (!r.ok) error_ = velocity_->error();
+  } else if (source_ == JacobianSource::matrix_free) {
     const double hg = w_hg_;
     const LinearOperator op = [this, hg, &stats](CVecRef v, VecRef out) {
       jacobian_times(v, out, stats);
       out = v - hg * out;
     };
-    r = krylov_solve(solver_->kind(), op, Vec(), b, x, opt_.linear);
+    LinearSolverOptions o = opt_.linear;
+    o.krylov_tol = krylov_tol_;
+    r = krylov_solve(solver_->kind(), op, Vec(), b, x, o, krylov_ws_);
+    if (!r.ok) error_ = to_string(solver_->kind()) + " (matrix-free): no convergence";
   } else {
     r = solver_->solve(b, x);
+    if (!r.ok) error_ = solver_->error();
   }
   stats.krylov_iters += r.iterations;
-  return r.ok && x.allFinite();
+  if (r.ok && !x.allFinite()) {
+    error_ = to_string(linear_solver()) + ": non-finite solution";
+    return false;
+  }
+  return r.ok;
 }
 
 void ImplicitCore::jacobian_times(CVecRef v, VecRef out, SolveStats&) {
+  if (velocity_) {
+    velocity_->jacobian_times(v, out);
+    return;
+  }
   if (source_ != JacobianSource::matrix_free) {
     out.noalias() = jac_ * v;
     return;
@@ -288,9 +428,18 @@ void ImplicitCore::jacobian_times(CVecRef v, VecRef out, SolveStats&) {
   out = (out - lin_f_) / eps;
 }
 
+Status ImplicitCore::linear_failure(double t, SolveStats& stats) {
+  std::ostringstream msg;
+  msg << "linear solver failed at t = " << t << ": " << error_;
+  stats.message = msg.str();
+  return Status::solver_error;
+}
+
 Status ImplicitCore::solve_stage(const OdeSystem& sys, double t, CVecRef psi, double hg, VecRef z,
                                  VecRef fz, SolveStats& stats) {
   z0_ = z;
+  const bool forcing = opt_.eisenstat_walker && is_krylov_run();
+  bool linear_failed = false;
   // Attempt 0 uses the configured Jacobian reuse; when it fails, attempt 1 starts again from
   // the predictor with full Newton (J at every iterate): the fixed-step driver cannot shrink
   // the step, so this is the only remedy before reporting newton_failed.
@@ -301,8 +450,10 @@ Status ImplicitCore::solve_stage(const OdeSystem& sys, double t, CVecRef psi, do
       if (opt_.newton == NewtonMode::full || source_ == JacobianSource::matrix_free) break;
       z = z0_;
     }
+    linear_failed = false;
     double prev_dnorm = std::numeric_limits<double>::infinity();
     double dnorm = prev_dnorm;
+    double prev_gnorm = 0.0, eta = 0.0;
     bool refresh = false;  // slow contraction with a reused J: re-evaluate it at the iterate
     for (int it = 0; it <= opt_.newton_max_iter; ++it) {
       sys.rhs(t, z, fz);
@@ -317,9 +468,30 @@ Status ImplicitCore::solve_stage(const OdeSystem& sys, double t, CVecRef psi, do
                           (opt_.newton == NewtonMode::modified && !jac_fresh_in_step_);
       if (need_j) update_jacobian(sys, t, z, fz, stats);
       refresh = false;
-      if (!prepare(hg, stats)) break;
+      if (!prepare(hg, stats)) {
+        linear_failed = true;
+        break;
+      }
+      if (forcing) {
+        // Eisenstat–Walker forcing term (choice 2, γ = 0.9, α = 2; see the header comment).
+        const double gnorm = g_.norm();
+        double next = 1e-2;
+        if (it > 0 && prev_gnorm > 0) {
+          const double ratio = gnorm / prev_gnorm;
+          next = 0.9 * ratio * ratio;
+          if (0.9 * eta * eta > 0.1) next = std::max(next, 0.9 * eta * eta);
+        }
+        const double floor = std::max(opt_.linear.krylov_tol,
+                                      gnorm > 0 ? 0.1 * opt_.newton_tol / gnorm : 0.0);
+        eta = std::max(std::min(next, 0.1), floor);
+        prev_gnorm = gnorm;
+        set_krylov_tolerance(eta);
+      }
       delta_.setZero();
-      if (!solve(-g_, delta_, stats)) break;
+      if (!solve(-g_, delta_, stats)) {
+        linear_failed = true;
+        break;
+      }
       z += delta_;
       ++stats.newton_iters;
       dnorm = weighted_norm(delta_, z);
@@ -329,6 +501,7 @@ Status ImplicitCore::solve_stage(const OdeSystem& sys, double t, CVecRef psi, do
       prev_dnorm = dnorm;
     }
   }
+  if (linear_failed) return linear_failure(t, stats);
   ++stats.newton_fails;
   std::ostringstream msg;
   msg << "Newton did not converge at t = " << t << " (hγ = " << hg << ", " << opt_.newton_max_iter

@@ -15,6 +15,23 @@
 // convergence studies at very small h. A linear problem with an exact J converges after one
 // iteration (one linear solve), confirmed by the residual at the next iterate.
 //
+// Mechanical systems (system_form=auto or velocity): on a MechanicalSystem with force Jacobians K and D
+// every linear system W k = r is solved in velocity form (integrators/implicit/velocity_form.hpp:
+// n unknowns instead of 2n, symmetric for symmetric force Jacobians, pinned dofs eliminated;
+// auto linear solver ldlt / cg); system_form=first_order keeps the 2n system (for comparison), with J
+// written in place from K and D.
+//
+// Krylov tolerances (krylov_forcing=eisenstat_walker, the default): Newton's k-th linear solve
+// stops at the relative residual η_k = 0.9 (‖G_k‖/‖G_{k-1}‖)² (Eisenstat & Walker 1996, choice
+// 2, with their safeguard η_k ≥ 0.9 η_{k-1}² when that is above 0.1), η_0 = 0.01, capped at 0.1
+// and floored at max(krylov_tol, 0.1 newton_tol / ‖G_k‖₂) (no accuracy beyond what the Newton
+// test asks for). The Newton convergence test evaluates the true residual, so inexact solves
+// cost iterations, never accuracy. krylov_forcing=fixed uses krylov_tol for every solve.
+//
+// A linear solver that fails (refuses a non-symmetric matrix, meets non-positive curvature,
+// a singular factorisation, no Krylov convergence) ends the step with Status::solver_error and
+// its reason, not newton_failed.
+//
 // Counting: every f evaluation (Newton residuals, finite-difference columns, matrix-free
 // products) goes through OdeSystem::rhs and is counted there. stats.jac_evals gets +1 for each
 // finite-difference Jacobian; analytic ones are counted at the system boundary.
@@ -28,11 +45,13 @@
 #include "core/params.hpp"
 #include "integrators/implicit/linear_solver.hpp"
 #include "integrators/implicit/sparse_assembly.hpp"
+#include "integrators/implicit/velocity_form.hpp"
 
 namespace stiffbench {
 
 enum class NewtonMode { full, modified, frozen };
 enum class JacobianSource { automatic, analytic, fd_dense, fd_colored, matrix_free };
+enum class SystemForm { automatic, velocity, first_order };
 
 struct ImplicitOptions {
   NewtonMode newton = NewtonMode::modified;
@@ -41,6 +60,8 @@ struct ImplicitOptions {
   JacobianSource jacobian = JacobianSource::automatic;
   LinearSolverOptions linear;
   bool preconditioner_given = false;
+  SystemForm form = SystemForm::automatic;
+  bool eisenstat_walker = true;  // Krylov tolerances follow Newton (see the header comment)
 };
 
 // Parameters of the implicit family (with_newton: also the Newton keys).
@@ -58,7 +79,7 @@ class ImplicitCore {
   // Chooses the Jacobian source and linear solver for `sys`, computes the pattern of W and
   // runs the symbolic analysis. BadInput for impossible combinations (e.g. matrix_free with a
   // direct solver).
-  void reset(const OdeSystem& sys);
+  void reset(const OdeSystem& sys, double t0, CVecRef y0);
 
   // Marks the start of a step (modified Newton evaluates J again at its first iterate).
   void new_step() { jac_fresh_in_step_ = false; }
@@ -69,8 +90,11 @@ class ImplicitCore {
   // W = I - hγ J with the current J, factored (or set up for Krylov). False if singular.
   bool prepare(double hg, SolveStats& stats);
 
-  // Solves W x = b. x is the initial guess for Krylov solvers.
+  // Solves W x = b. x is the initial guess for Krylov solvers. On failure error() says why.
   bool solve(CVecRef b, VecRef x, SolveStats& stats);
+  const std::string& error() const { return error_; }
+  // Relative residual of the following Krylov solves (Eisenstat–Walker forcing).
+  void set_krylov_tolerance(double tol);
 
   // out = J v with the current J (assembled) or a finite-difference product (matrix-free).
   void jacobian_times(CVecRef v, VecRef out, SolveStats& stats);
@@ -80,13 +104,19 @@ class ImplicitCore {
                      SolveStats& stats);
 
   JacobianSource jacobian_source() const { return source_; }
-  LinearSolverKind linear_solver() const { return solver_ ? solver_->kind() : opt_.linear.kind; }
+  LinearSolverKind linear_solver() const {
+    return velocity_ ? velocity_->kind() : solver_ ? solver_->kind() : opt_.linear.kind;
+  }
+  bool velocity_form() const { return velocity_ != nullptr; }
+  const VelocityFormSolver* velocity_solver() const { return velocity_.get(); }
   const SparseMat& jacobian_matrix() const { return jac_; }
   const ImplicitOptions& options() const { return opt_; }
 
  private:
   void fd_jacobian(const OdeSystem& sys, double t, CVecRef y, CVecRef fy);
   void rebuild_w_pattern();
+  bool is_krylov_run() const;
+  Status linear_failure(double t, SolveStats& stats);
 
   ImplicitOptions opt_;
   // The linear-solver options as the user gave them: every reset() resolves `automatic` choices
@@ -94,9 +124,16 @@ class ImplicitCore {
   LinearSolverOptions user_linear_;
   JacobianSource source_ = JacobianSource::analytic;
   std::unique_ptr<LinearSolver> solver_;
+  std::unique_ptr<VelocityFormSolver> velocity_;
   const OdeSystem* sys_ = nullptr;
-  SparseMat jac_, identity_;
+  const MechanicalSystem* mech_inplace_ = nullptr;  // first-order J filled in place from K, D
+  SparseMat jac_, identity_, k_, d_;
+  std::vector<int> k_in_jac_, d_in_jac_;
   SparseCombination w_;
+  std::vector<SparseTerm> w_terms_;  // {I, -hγ J}: kept so that prepare() does not allocate
+  KrylovWorkspace krylov_ws_;
+  double krylov_tol_ = 0.0;  // matrix-free solves
+  std::string error_;
   std::vector<int> colors_;
   int n_colors_ = 0;
   bool have_jac_ = false, jac_fresh_in_step_ = false, w_current_ = false;

@@ -1,5 +1,6 @@
 #include "integrators/implicit/linear_solver.hpp"
 
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/LU>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
@@ -52,18 +53,26 @@ bool is_krylov(LinearSolverKind k) {
 namespace {
 
 // --- Krylov methods -----------------------------------------------------------------------
+// Templates on the operator so that an assembled matrix is applied without std::function; the
+// work vectors live in a KrylovWorkspace (resize() is a no-op once the size is right).
 
 // out = M⁻¹ in for the Jacobi preconditioner M = diag(W); identity when diag is empty.
-void apply_jacobi(const Vec& diag, CVecRef in, Vec& out) {
+void apply_jacobi(const Vec& diag, CVecRef in, VecRef out) {
   if (diag.size())
     out = in.cwiseQuotient(diag);
   else
     out = in;
 }
 
+struct Jacobi {
+  const Vec& diag;
+  void operator()(CVecRef in, VecRef out) const { apply_jacobi(diag, in, out); }
+};
+
 // Preconditioned conjugate gradients (Saad, Iterative Methods, Alg. 9.1).
-LinearSolveResult pcg(const LinearOperator& op, const Vec& diag, CVecRef b, VecRef x,
-                      const LinearSolverOptions& opt) {
+template <class Op, class Prec>
+LinearSolveResult pcg(const Op& op, const Prec& prec, CVecRef b, VecRef x,
+                      const LinearSolverOptions& opt, KrylovWorkspace& ws) {
   const Index n = b.size();
   const double bnorm = b.norm();
   LinearSolveResult res;
@@ -71,10 +80,14 @@ LinearSolveResult pcg(const LinearOperator& op, const Vec& diag, CVecRef b, VecR
     x.setZero();
     return res;
   }
-  Vec r(n), z(n), p(n), ap(n);
+  ws.r.resize(n);
+  ws.z.resize(n);
+  ws.p.resize(n);
+  ws.v.resize(n);
+  Vec &r = ws.r, &z = ws.z, &p = ws.p, &ap = ws.v;
   op(x, ap);
   r = b - ap;
-  apply_jacobi(diag, r, z);
+  prec(r, z);
   p = z;
   double rz = r.dot(z);
   for (int it = 0; it < opt.krylov_max_iter; ++it) {
@@ -84,12 +97,13 @@ LinearSolveResult pcg(const LinearOperator& op, const Vec& diag, CVecRef b, VecR
     const double pap = p.dot(ap);
     if (!(pap > 0)) {  // not SPD (or breakdown): CG does not apply
       res.ok = false;
+      res.residual = -1;  // marks the breakdown for the caller
       return res;
     }
     const double alpha = rz / pap;
     x += alpha * p;
     r -= alpha * ap;
-    apply_jacobi(diag, r, z);
+    prec(r, z);
     const double rz_new = r.dot(z);
     p = z + (rz_new / rz) * p;
     rz = rz_new;
@@ -101,8 +115,9 @@ LinearSolveResult pcg(const LinearOperator& op, const Vec& diag, CVecRef b, VecR
 }
 
 // Right-preconditioned BiCGSTAB (van der Vorst 1992; Saad Alg. 7.7).
-LinearSolveResult bicgstab(const LinearOperator& op, const Vec& diag, CVecRef b, VecRef x,
-                           const LinearSolverOptions& opt) {
+template <class Op>
+LinearSolveResult bicgstab(const Op& op, const Vec& diag, CVecRef b, VecRef x,
+                           const LinearSolverOptions& opt, KrylovWorkspace& ws) {
   const Index n = b.size();
   const double bnorm = b.norm();
   LinearSolveResult res;
@@ -110,7 +125,9 @@ LinearSolveResult bicgstab(const LinearOperator& op, const Vec& diag, CVecRef b,
     x.setZero();
     return res;
   }
-  Vec r(n), r0(n), p(n), v(n), s(n), t(n), ph(n), sh(n);
+  for (Vec* w : {&ws.r, &ws.r0, &ws.p, &ws.v, &ws.s, &ws.t, &ws.ph, &ws.sh}) w->resize(n);
+  Vec &r = ws.r, &r0 = ws.r0, &p = ws.p, &v = ws.v, &s = ws.s, &t = ws.t, &ph = ws.ph,
+      &sh = ws.sh;
   op(x, v);
   r = b - v;
   r0 = r;
@@ -148,14 +165,16 @@ LinearSolveResult bicgstab(const LinearOperator& op, const Vec& diag, CVecRef b,
   }
   // Confirm with the true residual.
   op(x, v);
-  res.residual = (b - v).norm() / bnorm;
+  v = b - v;
+  res.residual = v.norm() / bnorm;
   res.ok = res.residual <= std::max(opt.krylov_tol, 10 * opt.krylov_tol);
   return res;
 }
 
 // Restarted GMRES(m) with right preconditioning and Givens rotations (Saad Alg. 6.11 / 9.5).
-LinearSolveResult gmres(const LinearOperator& op, const Vec& diag, CVecRef b, VecRef x,
-                        const LinearSolverOptions& opt) {
+template <class Op>
+LinearSolveResult gmres(const Op& op, const Vec& diag, CVecRef b, VecRef x,
+                        const LinearSolverOptions& opt, KrylovWorkspace& ws) {
   const Index n = b.size();
   const double bnorm = b.norm();
   LinearSolveResult res;
@@ -164,8 +183,15 @@ LinearSolveResult gmres(const LinearOperator& op, const Vec& diag, CVecRef b, Ve
     return res;
   }
   const int m = std::max(1, std::min<int>(opt.gmres_restart, static_cast<int>(n)));
-  Mat v(n, m + 1), h = Mat::Zero(m + 1, m);
-  Vec cs(m), sn(m), g(m + 1), w(n), z(n), r(n);
+  ws.basis.resize(n, m + 1);
+  ws.hess.resize(m + 1, m);
+  ws.hess.setZero();
+  for (Vec* w : {&ws.w, &ws.z, &ws.r, &ws.update}) w->resize(n);
+  ws.cs.resize(m);
+  ws.sn.resize(m);
+  ws.g.resize(m + 1);
+  Mat &v = ws.basis, &h = ws.hess;
+  Vec &cs = ws.cs, &sn = ws.sn, &g = ws.g, &w = ws.w, &z = ws.z, &r = ws.r;
   bool converged = false;
   while (res.iterations < opt.krylov_max_iter) {
     op(x, w);
@@ -206,9 +232,10 @@ LinearSolveResult gmres(const LinearOperator& op, const Vec& diag, CVecRef b, Ve
       }
     }
     // Solve the k×k upper-triangular system and update x = x + M⁻¹ V y.
-    const Vec y = h.topLeftCorner(k, k).triangularView<Eigen::Upper>().solve(g.head(k));
-    Vec update = v.leftCols(k) * y;
-    apply_jacobi(diag, update, z);
+    ws.y = g.head(k);
+    h.topLeftCorner(k, k).triangularView<Eigen::Upper>().solveInPlace(ws.y);
+    ws.update.noalias() = v.leftCols(k) * ws.y;
+    apply_jacobi(diag, ws.update, z);
     x += z;
     if (converged) {
       // The recursive residual estimate is the convergence test (as in CG): with a matrix-free
@@ -219,9 +246,32 @@ LinearSolveResult gmres(const LinearOperator& op, const Vec& diag, CVecRef b, Ve
     }
   }
   op(x, w);
-  res.residual = (b - w).norm() / bnorm;
+  w = b - w;
+  res.residual = w.norm() / bnorm;
   res.ok = res.residual <= opt.krylov_tol;
   return res;
+}
+
+template <class Op>
+LinearSolveResult krylov_dispatch(LinearSolverKind kind, const Op& op, const Vec& diag, CVecRef b,
+                                  VecRef x, const LinearSolverOptions& opt, KrylovWorkspace& ws) {
+  switch (kind) {
+    case LinearSolverKind::cg:
+      return pcg(op, Jacobi{diag}, b, x, opt, ws);
+    case LinearSolverKind::bicgstab:
+      return bicgstab(op, diag, b, x, opt, ws);
+    case LinearSolverKind::gmres:
+      return gmres(op, diag, b, x, opt, ws);
+    default:
+      throw std::logic_error("krylov_solve: not a Krylov solver");
+  }
+}
+
+// ‖W - Wᵀ‖ > 1e-12 ‖W‖ (an O(nnz) check with a transposed copy: only when the caller does not
+// know that W is symmetric).
+bool asymmetric(const SparseMat& w) {
+  const double asym = (w - SparseMat(w.transpose())).norm();
+  return asym > 1e-12 * w.norm();
 }
 
 // --- Solver objects ------------------------------------------------------------------------
@@ -230,12 +280,14 @@ class DenseLu final : public LinearSolver {
  public:
   void analyze(const SparseMat& p) override { dense_.resize(p.rows(), p.cols()); }
   bool factor(const SparseMat& w) override {
-    dense_ = Mat(w);
+    dense_ = w;
     lu_.compute(dense_);
     // PartialPivLU does not report singularity: look for a zero or non-finite pivot (the
     // determinant itself overflows for large well-conditioned matrices).
     const auto pivots = lu_.matrixLU().diagonal();
-    return pivots.allFinite() && (pivots.array() != 0.0).all();
+    const bool ok = pivots.allFinite() && (pivots.array() != 0.0).all();
+    if (!ok) error_ = "dense_lu: matrix singular (zero or non-finite pivot)";
+    return ok;
   }
   LinearSolveResult solve(CVecRef b, VecRef x) override {
     x = lu_.solve(b);
@@ -257,6 +309,7 @@ class SparseLu final : public LinearSolver {
   }
   bool factor(const SparseMat& w) override {
     lu_.factorize(w);
+    if (lu_.info() != Eigen::Success) error_ = "sparse_lu: " + lu_.lastErrorMessage();
     return lu_.info() == Eigen::Success;
   }
   LinearSolveResult solve(CVecRef b, VecRef x) override {
@@ -271,12 +324,16 @@ class SparseLu final : public LinearSolver {
 
 class Ldlt final : public LinearSolver {
  public:
+  explicit Ldlt(bool symmetric) : symmetric_(symmetric) {}
   void analyze(const SparseMat& p) override { ldlt_.analyzePattern(p); }
   bool factor(const SparseMat& w) override {
     // LDLᵀ reads one triangle: refuse a non-symmetric W instead of solving a different system.
-    const double asym = (w - SparseMat(w.transpose())).norm();
-    if (asym > 1e-12 * w.norm()) return false;
+    if (!symmetric_ && asymmetric(w)) {
+      error_ = "ldlt: the matrix is not symmetric (use sparse_lu, bicgstab or gmres)";
+      return false;
+    }
     ldlt_.factorize(w);
+    if (ldlt_.info() != Eigen::Success) error_ = "ldlt: factorisation failed (zero pivot)";
     return ldlt_.info() == Eigen::Success;
   }
   LinearSolveResult solve(CVecRef b, VecRef x) override {
@@ -286,15 +343,25 @@ class Ldlt final : public LinearSolver {
   LinearSolverKind kind() const override { return LinearSolverKind::ldlt; }
 
  private:
+  bool symmetric_;
   Eigen::SimplicialLDLT<SparseMat> ldlt_;
 };
 
 class Krylov final : public LinearSolver {
  public:
-  Krylov(LinearSolverKind kind, LinearSolverOptions opt) : kind_(kind), opt_(opt) {}
-  void analyze(const SparseMat&) override {}
+  Krylov(LinearSolverKind kind, LinearSolverOptions opt) : kind_(kind), opt_(opt) {
+    if (opt_.preconditioner == PreconditionerKind::ichol && kind_ != LinearSolverKind::cg)
+      throw BadInput("preconditioner=ichol needs linear_solver=cg");
+  }
+  void analyze(const SparseMat& p) override {
+    if (opt_.preconditioner == PreconditionerKind::ichol) ichol_.analyzePattern(p);
+  }
   bool factor(const SparseMat& w) override {
     w_ = &w;
+    if (kind_ == LinearSolverKind::cg && !opt_.symmetric && asymmetric(w)) {
+      error_ = "cg: the matrix is not symmetric (use bicgstab, gmres or sparse_lu)";
+      return false;
+    }
     if (opt_.preconditioner == PreconditionerKind::jacobi) {
       diag_ = w.diagonal();
       for (Index i = 0; i < diag_.size(); ++i)
@@ -302,40 +369,81 @@ class Krylov final : public LinearSolver {
     } else {
       diag_.resize(0);
     }
-    if (kind_ == LinearSolverKind::cg) {
-      const double asym = (w - SparseMat(w.transpose())).norm();
-      if (asym > 1e-12 * w.norm()) return false;  // CG needs a symmetric matrix
+    if (opt_.preconditioner == PreconditionerKind::ichol) {
+      ichol_.factorize(w);
+      if (ichol_.info() != Eigen::Success) {
+        error_ = "cg: incomplete Cholesky failed (matrix not positive definite?)";
+        return false;
+      }
     }
     return true;
   }
   LinearSolveResult solve(CVecRef b, VecRef x) override {
     const SparseMat& w = *w_;
-    const LinearOperator op = [&w](CVecRef in, VecRef out) { out.noalias() = w * in; };
-    return krylov_solve(kind_, op, diag_, b, x, opt_);
+    LinearSolveResult r;
+    if (opt_.symmetric) {
+      const auto op = [&w](CVecRef in, VecRef out) { symmetric_product(w, in, out); };
+      r = run(op, b, x);
+    } else {
+      const auto op = [&w](CVecRef in, VecRef out) { out.noalias() = w * in; };
+      r = run(op, b, x);
+    }
+    if (!r.ok)
+      error_ = r.residual < 0 ? to_string(kind_) +
+                                    ": the matrix is not positive definite (a direction of "
+                                    "non-positive curvature); use ldlt or sparse_lu"
+                              : to_string(kind_) + ": no convergence to " +
+                                    std::to_string(opt_.krylov_tol) + " in " +
+                                    std::to_string(opt_.krylov_max_iter) + " iterations";
+    return r;
   }
   LinearSolverKind kind() const override { return kind_; }
+  void set_tolerance(double tol) override { opt_.krylov_tol = tol; }
 
  private:
+  template <class Op>
+  LinearSolveResult run(const Op& op, CVecRef b, VecRef x) {
+    if (opt_.preconditioner == PreconditionerKind::ichol) {
+      const auto prec = [this](CVecRef in, VecRef out) { out = ichol_.solve(in); };
+      return pcg(op, prec, b, x, opt_, ws_);
+    }
+    return krylov_dispatch(kind_, op, diag_, b, x, opt_, ws_);
+  }
+
   LinearSolverKind kind_;
   LinearSolverOptions opt_;
   const SparseMat* w_ = nullptr;
   Vec diag_;
+  KrylovWorkspace ws_;
+  Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>> ichol_;
 };
 
 }  // namespace
 
-LinearSolveResult krylov_solve(LinearSolverKind kind, const LinearOperator& op, const Vec& diag,
-                               CVecRef b, VecRef x, const LinearSolverOptions& opt) {
-  switch (kind) {
-    case LinearSolverKind::cg:
-      return pcg(op, diag, b, x, opt);
-    case LinearSolverKind::bicgstab:
-      return bicgstab(op, diag, b, x, opt);
-    case LinearSolverKind::gmres:
-      return gmres(op, diag, b, x, opt);
-    default:
-      throw std::logic_error("krylov_solve: not a Krylov solver");
+void symmetric_product(const SparseMat& w, CVecRef in, VecRef out) {
+  const Index n = w.outerSize();
+  const int* outer = w.outerIndexPtr();
+  const int* inner = w.innerIndexPtr();
+  const double* val = w.valuePtr();
+  const double* x = in.data();
+  double* y = out.data();
+  const auto row = [&](Index i) {
+    double acc = 0.0;
+    for (int k = outer[i]; k < outer[i + 1]; ++k) acc += val[k] * x[inner[k]];
+    y[i] = acc;
+  };
+  if (w.nonZeros() >= 200000) {
+#pragma omp parallel for schedule(static)
+    for (Index i = 0; i < n; ++i) row(i);
+  } else {
+    for (Index i = 0; i < n; ++i) row(i);
   }
+}
+
+LinearSolveResult krylov_solve(LinearSolverKind kind, const LinearOperator& op, const Vec& diag,
+                               CVecRef b, VecRef x, const LinearSolverOptions& opt,
+                               KrylovWorkspace& ws) {
+  return krylov_dispatch(kind, op, diag, b, x, opt, ws);
 }
 
 std::unique_ptr<LinearSolver> make_linear_solver(const LinearSolverOptions& opt, Index n) {
@@ -348,7 +456,7 @@ std::unique_ptr<LinearSolver> make_linear_solver(const LinearSolverOptions& opt,
     case LinearSolverKind::sparse_lu:
       return std::make_unique<SparseLu>();
     case LinearSolverKind::ldlt:
-      return std::make_unique<Ldlt>();
+      return std::make_unique<Ldlt>(opt.symmetric);
     default:
       return std::make_unique<Krylov>(k, opt);
   }

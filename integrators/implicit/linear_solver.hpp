@@ -9,7 +9,13 @@
 //   cg         preconditioned conjugate gradients: symmetric positive definite matrices only
 //   bicgstab   preconditioned BiCGSTAB (van der Vorst 1992)
 //   gmres      restarted GMRES(m) with right preconditioning (Saad & Schultz 1986)
-// Preconditioners for the Krylov solvers: none, jacobi (diagonal of W).
+// Preconditioners for the Krylov solvers: none, jacobi (diagonal of W), ichol (Eigen's
+// incomplete Cholesky with AMD ordering, cg only).
+//
+// Solver objects keep their work vectors between solves (no allocation per solve after the first
+// of a given size). A solver that cannot take a matrix (ldlt or cg given a non-symmetric one, cg
+// meeting a direction of non-positive curvature, a singular factorisation) returns false and says
+// why in error(), so callers report a linear-solver failure, not a Newton failure.
 #pragma once
 
 #include <functional>
@@ -22,7 +28,7 @@
 namespace stiffbench {
 
 enum class LinearSolverKind { automatic, dense_lu, sparse_lu, ldlt, cg, bicgstab, gmres };
-enum class PreconditionerKind { none, jacobi };
+enum class PreconditionerKind { none, jacobi, ichol };
 
 LinearSolverKind parse_linear_solver(const std::string& s);
 std::string to_string(LinearSolverKind k);
@@ -36,6 +42,10 @@ struct LinearSolverOptions {
   int krylov_max_iter = 1000;
   int gmres_restart = 50;
   Index dense_max = 200;  // `automatic` picks dense_lu up to this dimension, sparse_lu above
+  // The caller knows W is symmetric (e.g. the velocity-form matrix of a model with symmetric
+  // force Jacobians): ldlt and cg skip their O(nnz) symmetry check, and products with W run in
+  // parallel (OpenMP) row by row on the column-major storage.
+  bool symmetric = false;
 };
 
 // y = W x for the matrix-free path.
@@ -57,14 +67,34 @@ class LinearSolver {
   // Solves W x = b with the last factored W; x holds the initial guess for Krylov solvers.
   virtual LinearSolveResult solve(CVecRef b, VecRef x) = 0;
   virtual LinearSolverKind kind() const = 0;
+  // Relative residual target of later Krylov solves (Eisenstat–Walker forcing); no effect on
+  // direct solvers.
+  virtual void set_tolerance(double) {}
+  // Why the last factor() or solve() failed.
+  const std::string& error() const { return error_; }
+
+ protected:
+  std::string error_;
 };
 
 // `automatic` is resolved with n and options.dense_max.
 std::unique_ptr<LinearSolver> make_linear_solver(const LinearSolverOptions& opt, Index n);
 
+// Work vectors of the Krylov methods, kept by their owner across solves.
+struct KrylovWorkspace {
+  Vec r, r0, z, p, v, s, t, ph, sh, w, cs, sn, g, y, update;
+  Mat basis, hess;
+};
+
 // Krylov iterations on an operator (assembled or matrix-free). `diag` is the Jacobi
 // preconditioner's diagonal of W (empty: no preconditioner).
 LinearSolveResult krylov_solve(LinearSolverKind kind, const LinearOperator& op, const Vec& diag,
-                               CVecRef b, VecRef x, const LinearSolverOptions& opt);
+                               CVecRef b, VecRef x, const LinearSolverOptions& opt,
+                               KrylovWorkspace& ws);
+
+// out = W in for a symmetric W in compressed column-major storage, computed row by row (row i of
+// W is its column i) over OpenMP threads when W is large; each entry is summed in a fixed order,
+// so the result does not depend on the thread count.
+void symmetric_product(const SparseMat& w, CVecRef in, VecRef out);
 
 }  // namespace stiffbench

@@ -13,9 +13,9 @@ SemiImplicitEuler::SemiImplicitEuler(ImplicitOptions opt)
                   "linearly implicit Euler (I - hJ) dy = h f(t, y): one linear solve, no Newton"}),
       core_(std::move(opt)) {}
 
-void SemiImplicitEuler::reset(const OdeSystem& sys, double, CVecRef) {
+void SemiImplicitEuler::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   check_compatible(info(), sys);
-  core_.reset(sys);
+  core_.reset(sys, t0, y0);
   for (Vec* v : {&f_, &dy_, &ft_, &rhs_}) v->resize(sys.dimension());
 }
 
@@ -68,9 +68,9 @@ Rosenbrock::Rosenbrock(RosenbrockTableau tableau, std::string description, Impli
       tab_(std::move(tableau)),
       core_(std::move(opt)) {}
 
-void Rosenbrock::reset(const OdeSystem& sys, double, CVecRef) {
+void Rosenbrock::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   check_compatible(info(), sys);
-  core_.reset(sys);
+  core_.reset(sys, t0, y0);
   const Index n = sys.dimension();
   k_.resize(n, tab_.b.size());
   for (Vec* v : {&u_, &f_, &ft_, &rhs_, &sum_, &jv_}) v->resize(n);
