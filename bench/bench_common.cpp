@@ -1,0 +1,101 @@
+#include "bench/bench_common.hpp"
+
+#include <omp.h>
+
+#include <chrono>
+#include <deque>
+
+#include "experiments/catalog.hpp"
+
+namespace stiffbench::bench {
+
+namespace {
+
+struct CacheEntry {
+  std::string key;
+  CachedModel model;
+};
+
+std::deque<CacheEntry>& cache() {
+  static std::deque<CacheEntry> c;
+  return c;
+}
+
+}  // namespace
+
+const CachedModel& cached_model(const std::string& name,
+                                const std::vector<std::pair<std::string, std::string>>& params,
+                                int warm_steps) {
+  std::string key = name;
+  for (const auto& [k, v] : params) key += " " + k + "=" + v;
+  key += " warm=" + std::to_string(warm_steps);
+  auto& c = cache();
+  for (auto it = c.begin(); it != c.end(); ++it) {
+    if (it->key == key) {
+      if (it != c.begin()) {
+        CacheEntry e = std::move(*it);
+        c.erase(it);
+        c.push_front(std::move(e));
+      }
+      return c.front().model;
+    }
+  }
+  // Keep at most two models alive (a 512² cloth holds ~0.4 GB of Jacobian pattern).
+  while (c.size() >= 2) c.pop_back();
+  Params p;
+  for (const auto& [k, v] : params) p.set(k, v);
+  CacheEntry e;
+  e.key = key;
+  e.model.sys = model_registry().create(name, p);
+  e.model.warm = e.model.sys->initial_state();
+  if (warm_steps > 0) {
+    // Symplectic Euler at the suggested step: moves SPH particles off their initial lattice.
+    const auto* mech = e.model.sys->as_mechanical();
+    const Index n = mech->dofs();
+    const double h = e.model.sys->suggested_step()->h;
+    Vec a(n);
+    Vec& y = e.model.warm;
+    for (int k = 0; k < warm_steps; ++k) {
+      mech->acceleration(0.0, y.head(n), y.tail(n), a);
+      y.tail(n) += h * a;
+      y.head(n) += h * y.tail(n);
+    }
+  }
+  e.model.sys->reset_counters();
+  c.push_front(std::move(e));
+  return c.front().model;
+}
+
+OmpThreads::OmpThreads(int n) : previous_(omp_get_max_threads()) { omp_set_num_threads(n); }
+OmpThreads::~OmpThreads() { omp_set_num_threads(previous_); }
+
+double now_seconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+double best_seconds_per_call(const std::function<void()>& f, int reps) {
+  double best = 1e300;
+  for (int r = 0; r < reps; ++r) {
+    const double t0 = now_seconds();
+    long calls = 0;
+    double t = t0;
+    do {
+      f();
+      ++calls;
+      t = now_seconds();
+    } while (t - t0 < 2e-3);
+    best = std::min(best, (t - t0) / static_cast<double>(calls));
+  }
+  return best;
+}
+
+benchmark::internal::Benchmark* add(const std::string& name,
+                                    std::function<void(benchmark::State&)> fn,
+                                    benchmark::TimeUnit unit) {
+  return benchmark::RegisterBenchmark(name.c_str(),
+                                      [fn = std::move(fn)](benchmark::State& s) { fn(s); })
+      ->UseRealTime()
+      ->Unit(unit);
+}
+
+}  // namespace stiffbench::bench

@@ -1,0 +1,85 @@
+// Shared pieces of the stiffbench_bench program: run configuration, a model cache (building a
+// 512² cloth or a 1e5-particle SPH scene takes seconds, and Google Benchmark calls a benchmark
+// function once per trial iteration count), thread control and small timing helpers.
+//
+// Benchmark names are paths: "<group>/<what>/<size>/omp:<threads>", e.g.
+// "rhs/cloth/n:512/omp:2". The summary (summary.cpp) looks results up by these exact names, so
+// every figure it prints is a ratio of two measurements from the same run.
+#pragma once
+
+#include <benchmark/benchmark.h>
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/ode_system.hpp"
+#include "core/params.hpp"
+
+namespace stiffbench::bench {
+
+struct Config {
+  bool quick = false;
+  // Seconds a CVODE child run may take before it is killed (its row then reports the limit).
+  double cvode_timeout_s = 300.0;
+};
+
+// One measured benchmark as the summary sees it.
+struct Result {
+  double seconds = 0.0;  // real time per iteration (best over repetitions)
+  long iterations = 0;
+  std::map<std::string, double> counters;
+  bool error = false;
+  std::string message;
+};
+using Results = std::map<std::string, Result>;
+
+// A model built once and kept while consecutive benchmarks use it (the cache holds the two most
+// recently used models), with a "warm" state: the initial state, or for SPH scenes the state
+// after some symplectic Euler steps at the suggested step (particles off their lattice).
+struct CachedModel {
+  std::unique_ptr<OdeSystem> sys;
+  Vec warm;
+};
+const CachedModel& cached_model(const std::string& name,
+                                const std::vector<std::pair<std::string, std::string>>& params,
+                                int warm_steps = 0);
+
+// Sets the OpenMP thread count for the benchmark's lifetime; restores the previous count.
+class OmpThreads {
+ public:
+  explicit OmpThreads(int n);
+  ~OmpThreads();
+  OmpThreads(const OmpThreads&) = delete;
+  OmpThreads& operator=(const OmpThreads&) = delete;
+
+ private:
+  int previous_;
+};
+
+// Best-of-reps seconds per call of f (each rep repeats f until it has run >= 2 ms).
+double best_seconds_per_call(const std::function<void()>& f, int reps = 5);
+
+double now_seconds();
+
+// Registration helpers (benchmark::RegisterBenchmark with real time and a unit chosen from the
+// expected magnitude).
+benchmark::internal::Benchmark* add(const std::string& name,
+                                    std::function<void(benchmark::State&)> fn,
+                                    benchmark::TimeUnit unit = benchmark::kMillisecond);
+
+void register_rhs_benchmarks(const Config& cfg);
+void register_step_benchmarks(const Config& cfg);
+void register_implicit_benchmarks(const Config& cfg);
+
+// Summary of ratios printed after the table (summary.cpp).
+void print_summary(const Results& r, const Config& cfg, double wall_seconds);
+
+// Child mode of the binary (a CVODE run in its own process, so that a run that never finishes
+// can be killed): prints "ok <wall_s> <steps> <f_evals> <jac_evals> <status>" and returns 0.
+int cvode_child_main(int argc, char** argv);
+
+}  // namespace stiffbench::bench

@@ -1,0 +1,239 @@
+// Right-hand-side cost per model and size (issue #10, "Benchmarks"): the testbed's
+// MechanicalSystem::acceleration (the force computation of rhs(), without rhs()'s copy x' = v)
+// on spring_chain, cloth and the SPH scenes; the plain cloth gather (plain_cloth.hpp) on the
+// same cloth; and the SPH neighbour search on its own (models/sph/neighbour_grid.hpp: grid
+// build, and build plus one visit of every neighbour pair within the support radius in cell
+// order — the search a density or force pass does). Each at 1 and 2 OpenMP threads where the
+// thread scaling is asked for.
+#include <omp.h>
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include "bench/bench_common.hpp"
+#include "bench/plain_cloth.hpp"
+#include "models/sph/neighbour_grid.hpp"
+#include "models/sph/sph_fluid.hpp"
+
+namespace stiffbench::bench {
+
+namespace {
+
+using Kv = std::vector<std::pair<std::string, std::string>>;
+
+std::string omp_suffix(int threads) { return "/omp:" + std::to_string(threads); }
+
+void set_rate(benchmark::State& st, const std::string& name, double per_iteration) {
+  st.counters[name] = benchmark::Counter(per_iteration * static_cast<double>(st.iterations()),
+                                         benchmark::Counter::kIsRate);
+}
+
+// Time per item (seconds, shown with an SI prefix: 300n = 300 ns).
+void set_time_per(benchmark::State& st, const std::string& name, double items) {
+  st.counters[name] = benchmark::Counter(items * static_cast<double>(st.iterations()),
+                                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+void network_rhs(benchmark::State& st, const std::string& model, const Kv& params, int threads) {
+  OmpThreads omp(threads);
+  const CachedModel& cm = cached_model(model, params);
+  const auto* net = dynamic_cast<const MassSpringNetwork*>(cm.sys.get());
+  const Index n = net->dofs();
+  Vec a(n);
+  const auto x = cm.warm.head(n), v = cm.warm.tail(n);
+  for (auto _ : st) {
+    net->acceleration(0.0, x, v, a);
+    benchmark::DoNotOptimize(a.data());
+    benchmark::ClobberMemory();
+  }
+  set_rate(st, "springs/s", static_cast<double>(net->springs().size()));
+  st.counters["points"] = static_cast<double>(net->num_points());
+  st.counters["springs"] = static_cast<double>(net->springs().size());
+  st.counters["threads"] = threads;
+}
+
+// The plain gather, checked once against the testbed's acceleration at the same state (the two
+// sum the same spring forces in different orders: agreement to round-off).
+void plain_cloth_rhs(benchmark::State& st, long side, int threads) {
+  OmpThreads omp(threads);
+  const CachedModel& cm = cached_model("cloth", {{"n", std::to_string(side)}});
+  const auto* net = dynamic_cast<const MassSpringNetwork*>(cm.sys.get());
+  static std::unique_ptr<PlainClothRhs> plain;
+  static const void* owner = nullptr;
+  const Index n = net->dofs();
+  Vec a(n), ref(n);
+  if (owner != net) {
+    plain = std::make_unique<PlainClothRhs>(*net);
+    owner = net;
+    plain->acceleration(cm.warm.data(), a.data());
+    net->acceleration(0.0, cm.warm.head(n), cm.warm.tail(n), ref);
+    const double diff = (a - ref).cwiseAbs().maxCoeff();
+    if (!(diff <= 1e-12 * std::max(1.0, ref.cwiseAbs().maxCoeff()))) {
+      owner = nullptr;
+      st.SkipWithError("plain cloth RHS differs from the testbed's acceleration");
+      return;
+    }
+  }
+  for (auto _ : st) {
+    plain->acceleration(cm.warm.data(), a.data());
+    benchmark::DoNotOptimize(a.data());
+    benchmark::ClobberMemory();
+  }
+  set_rate(st, "springs/s", static_cast<double>(plain->springs()));
+  st.counters["points"] = static_cast<double>(plain->points());
+  st.counters["threads"] = threads;
+}
+
+template <int D>
+long count_pairs(const double* x, Index np, double radius) {
+  sph::NeighbourGrid<D> grid;
+  grid.build(x, np, radius);
+  long pairs = 0;
+  for (Index s = 0; s < np; ++s)
+    grid.for_each_neighbour_slot(grid.positions() + D * s, radius,
+                                 [&](std::size_t, double, const auto&) { ++pairs; });
+  return pairs;
+}
+
+void sph_rhs(benchmark::State& st, const std::string& model, long n_param, int warm, int threads) {
+  OmpThreads omp(threads);
+  const CachedModel& cm = cached_model(model, {{"n", std::to_string(n_param)}}, warm);
+  const auto* fluid = dynamic_cast<const SphFluid*>(cm.sys.get());
+  const Index n = fluid->dofs();
+  Vec a(n);
+  const auto x = cm.warm.head(n), v = cm.warm.tail(n);
+  for (auto _ : st) {
+    fluid->acceleration(0.0, x, v, a);
+    benchmark::DoNotOptimize(a.data());
+    benchmark::ClobberMemory();
+  }
+  const double particles = static_cast<double>(fluid->fluid_particles());
+  const double support = fluid->options().support;
+  const long pairs = fluid->dim() == 2
+                         ? count_pairs<2>(cm.warm.data(), fluid->fluid_particles(), support)
+                         : count_pairs<3>(cm.warm.data(), fluid->fluid_particles(), support);
+  st.counters["particles"] = particles;
+  st.counters["boundary"] = static_cast<double>(fluid->boundary_particles());
+  set_time_per(st, "s/particle", particles);
+  set_rate(st, "pairs/s", static_cast<double>(pairs));
+  st.counters["threads"] = threads;
+}
+
+// Neighbour search alone on the fluid particles of an SPH scene: build the grid (build_only) or
+// build it and visit every neighbour within the support radius, each particle in cell order, in
+// parallel over particles as the testbed's passes do.
+template <int D>
+void sph_neighbours(benchmark::State& st, const std::string& model, long n_param, int warm,
+                    int threads, bool build_only) {
+  OmpThreads omp(threads);
+  const CachedModel& cm = cached_model(model, {{"n", std::to_string(n_param)}}, warm);
+  const auto* fluid = dynamic_cast<const SphFluid*>(cm.sys.get());
+  const Index np = fluid->fluid_particles();
+  const double radius = fluid->options().support;
+  sph::NeighbourGrid<D> grid;
+  for (auto _ : st) {
+    grid.build(cm.warm.data(), np, radius);
+    if (!build_only) {
+      // Sum r² over the pairs so that the visits cannot be optimised away.
+      double total = 0.0;
+      const double* pos = grid.positions();
+#pragma omp parallel for schedule(static) reduction(+ : total)
+      for (Index s = 0; s < np; ++s)
+        grid.for_each_neighbour_slot(pos + D * s, radius,
+                                     [&](std::size_t, double r2, const auto&) { total += r2; });
+      benchmark::DoNotOptimize(total);
+    }
+    benchmark::ClobberMemory();
+  }
+  const long pairs = count_pairs<D>(cm.warm.data(), np, radius);
+  st.counters["particles"] = static_cast<double>(np);
+  if (!build_only) set_rate(st, "pairs/s", static_cast<double>(pairs));
+  set_time_per(st, "s/particle", static_cast<double>(np));
+  st.counters["threads"] = threads;
+}
+
+}  // namespace
+
+void register_rhs_benchmarks(const Config& cfg) {
+  const bool q = cfg.quick;
+  using benchmark::kMicrosecond;
+  using benchmark::kMillisecond;
+  // spring_chain, 1e3 .. 1e6 free masses.
+  const std::vector<std::pair<long, std::vector<int>>> chains =
+      q ? std::vector<std::pair<long, std::vector<int>>>{{1000, {2}}, {1000000, {1, 2}}}
+        : std::vector<std::pair<long, std::vector<int>>>{
+              {1000, {1, 2}}, {10000, {1, 2}}, {100000, {1, 2}}, {1000000, {1, 2}}};
+  for (const auto& [n, threads] : chains)
+    for (const int t : threads)
+      add(
+          "rhs/spring_chain/n:" + std::to_string(n) + omp_suffix(t),
+          [n = n, t](benchmark::State& st) {
+            network_rhs(st, "spring_chain", {{"n", std::to_string(n)}}, t);
+          },
+          n < 100000 ? kMicrosecond : kMillisecond);
+  // cloth 32² .. 512², then the plain gather on the same cloth right after (cached model).
+  const std::vector<std::pair<long, std::vector<int>>> cloths =
+      q ? std::vector<std::pair<long, std::vector<int>>>{{32, {2}}, {128, {2}}, {512, {1, 2}}}
+        : std::vector<std::pair<long, std::vector<int>>>{
+              {32, {1, 2}}, {64, {1, 2}}, {128, {1, 2}}, {256, {1, 2}}, {512, {1, 2}}};
+  for (const auto& [n, threads] : cloths) {
+    for (const int t : threads)
+      add(
+          "rhs/cloth/n:" + std::to_string(n) + omp_suffix(t),
+          [n = n, t](benchmark::State& st) {
+            network_rhs(st, "cloth", {{"n", std::to_string(n)}}, t);
+          },
+          n < 256 ? kMicrosecond : kMillisecond);
+    if (n == 512 || (!q && n == 128))
+      for (const int t : threads)
+        add(
+            "rhs/plain_cloth/n:" + std::to_string(n) + omp_suffix(t),
+            [n = n, t](benchmark::State& st) { plain_cloth_rhs(st, n, t); },
+            n < 256 ? kMicrosecond : kMillisecond);
+  }
+  // SPH. sph_dam_break_2d: n across the column width a, 2n² fluid particles (n = 45: 4,050, the
+  // size of PySPH's dam_break_2d example, 2,278 fluid + 1,660 boundary = 3,938 particles at its
+  // default dx = 0.03; n = 224: 100,352). sph_dam_break_3d: a column n × 2n × n/2, n³ particles
+  // (n = 46: 97,336). sph_drop_2d: a disc n across (n = 50: 1,976).
+  struct SphCase {
+    const char* model;  // (not std::string: g++ 12 warns falsely on the initializer lists)
+    long n;
+    int warm;
+    std::vector<int> threads;
+  };
+  const std::vector<SphCase> sph =
+      q ? std::vector<SphCase>{{"sph_dam_break_2d", 45, 50, {2}},
+                               {"sph_dam_break_2d", 224, 10, {1, 2}},
+                               {"sph_dam_break_3d", 46, 5, {1, 2}}}
+        : std::vector<SphCase>{
+              {"sph_drop_2d", 50, 50, {1, 2}},       {"sph_dam_break_2d", 32, 50, {1, 2}},
+              {"sph_dam_break_2d", 45, 50, {1, 2}},  {"sph_dam_break_2d", 100, 20, {1, 2}},
+              {"sph_dam_break_2d", 224, 10, {1, 2}}, {"sph_dam_break_3d", 12, 20, {1, 2}},
+              {"sph_dam_break_3d", 24, 10, {1, 2}},  {"sph_dam_break_3d", 46, 5, {1, 2}}};
+  for (const auto& c : sph) {
+    const std::string model = c.model;
+    const std::string base = "/" + model + "/n:" + std::to_string(c.n);
+    for (const int t : c.threads)
+      add(
+          "rhs" + base + omp_suffix(t),
+          [c, t](benchmark::State& st) { sph_rhs(st, c.model, c.n, c.warm, t); },
+          c.n >= 100 || model == "sph_dam_break_3d" ? kMillisecond : kMicrosecond);
+    if (model == "sph_drop_2d" || (q && model == "sph_dam_break_2d" && c.n != 224)) continue;
+    for (const int t : c.threads)
+      for (const bool build_only : {false, true}) {
+        const std::string name =
+            std::string(build_only ? "neighbour_build" : "neighbour_search") + base + omp_suffix(t);
+        if (model == "sph_dam_break_3d")
+          add(name, [c, t, build_only](benchmark::State& st) {
+            sph_neighbours<3>(st, c.model, c.n, c.warm, t, build_only);
+          });
+        else
+          add(name, [c, t, build_only](benchmark::State& st) {
+            sph_neighbours<2>(st, c.model, c.n, c.warm, t, build_only);
+          });
+      }
+  }
+}
+
+}  // namespace stiffbench::bench

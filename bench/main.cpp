@@ -1,0 +1,89 @@
+// stiffbench_bench: the cost benchmarks of issue #10 in one Google Benchmark program, followed by
+// a summary of ratios, each of two measurements from this same run (summary.cpp).
+//
+//   stiffbench_bench [--quick] [Google Benchmark flags]
+//
+// --quick runs a curated subset with --benchmark_min_time=0.1 (unless given) and a 20 s limit
+// on the CVODE run, in under two minutes on the project's 2-core machine; without it every
+// size and thread count runs at Google Benchmark's default minimum time and CVODE gets 300 s.
+// Other flags go to Google Benchmark (--benchmark_filter=REGEX, --benchmark_repetitions=N, ...;
+// version 1.7.1 takes --benchmark_min_time=SECONDS without a unit). With repetitions the summary
+// uses the best repetition. The binary also has a child mode, --cvode-child (bench_implicit.cpp).
+#include <benchmark/benchmark.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "bench/bench_common.hpp"
+
+namespace {
+
+using stiffbench::bench::Result;
+using stiffbench::bench::Results;
+
+// The console table as usual, plus every iteration run kept for the summary.
+class CollectingReporter : public benchmark::ConsoleReporter {
+ public:
+  CollectingReporter() : benchmark::ConsoleReporter(OO_Tabular) {}
+
+  void ReportRuns(const std::vector<Run>& reports) override {
+    for (const Run& run : reports) {
+      if (run.run_type != Run::RT_Iteration) continue;
+      const std::string name = run.run_name.function_name;
+      Result r;
+      r.error = run.error_occurred;
+      r.message = run.error_message;
+      r.iterations = static_cast<long>(run.iterations);
+      r.seconds = run.iterations > 0
+                      ? run.real_accumulated_time / static_cast<double>(run.iterations)
+                      : 0.0;
+      for (const auto& [k, c] : run.counters) r.counters[k] = c.value;
+      auto it = results_.find(name);
+      if (it == results_.end() || it->second.error || (!r.error && r.seconds < it->second.seconds))
+        results_[name] = r;
+    }
+    benchmark::ConsoleReporter::ReportRuns(reports);
+  }
+
+  const Results& results() const { return results_; }
+
+ private:
+  Results results_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace stiffbench::bench;
+  if (argc > 1 && std::strcmp(argv[1], "--cvode-child") == 0) return cvode_child_main(argc, argv);
+  Config cfg;
+  std::vector<char*> args{argv[0]};
+  bool min_time_given = false;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--quick") == 0) {
+      cfg.quick = true;
+      continue;
+    }
+    if (std::strncmp(argv[i], "--benchmark_min_time", 20) == 0) min_time_given = true;
+    args.push_back(argv[i]);
+  }
+  std::string min_time = "--benchmark_min_time=0.1";
+  if (cfg.quick && !min_time_given) args.push_back(min_time.data());
+  cfg.cvode_timeout_s = cfg.quick ? 20.0 : 300.0;
+  int ac = static_cast<int>(args.size());
+  args.push_back(nullptr);
+  benchmark::Initialize(&ac, args.data());
+  if (benchmark::ReportUnrecognizedArguments(ac, args.data())) return 1;
+
+  register_rhs_benchmarks(cfg);
+  register_step_benchmarks(cfg);
+  register_implicit_benchmarks(cfg);
+
+  const double start = now_seconds();
+  CollectingReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  print_summary(reporter.results(), cfg, now_seconds() - start);
+  benchmark::Shutdown();
+  return 0;
+}
