@@ -90,12 +90,14 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
   for (ParamSpec s : linear_specs) {
     if (s.key == "system_form") continue;
     if (s.key == "linear_solver")
-      s.help = "auto (ldlt up to 2000 dofs, cg above for symmetric force Jacobians; "
-               "dense_lu/sparse_lu otherwise), dense_lu, sparse_lu, ldlt, cg, bicgstab, gmres";
+      s.help =
+          "auto (ldlt up to 2000 dofs, cg above for symmetric force Jacobians; "
+          "dense_lu/sparse_lu otherwise), dense_lu, sparse_lu, ldlt, cg, bicgstab, gmres";
     if (s.key == "krylov_tol") {
       s.default_value = "1e-6";
-      s.help = "relative residual of the Krylov solve (warm-started from the previous step's "
-               "dv); 1e-6 keeps the solve error far below the method's O(h) error";
+      s.help =
+          "relative residual of the Krylov solve (warm-started from the previous step's "
+          "dv); 1e-6 keeps the solve error far below the method's O(h) error";
     }
     bw_specs.push_back(s);
   }

@@ -159,9 +159,10 @@ void ImplicitCore::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   const MechanicalSystem* mech = sys.as_mechanical();
   const bool mech_blocks = mech && mech->has_force_jacobians();
   if (opt_.form == SystemForm::velocity)
-    require_input(mech_blocks, "parameter 'system_form': velocity needs a mechanical model with force "
-                               "Jacobians K and D; model '" +
-                                   sys.name() + "' has none (use system_form=first_order)");
+    require_input(mech_blocks,
+                  "parameter 'system_form': velocity needs a mechanical model with force "
+                  "Jacobians K and D; model '" +
+                      sys.name() + "' has none (use system_form=first_order)");
   if (source_ == JacobianSource::automatic) {
     // Without an analytic Jacobian or a pattern, a dense finite-difference Jacobian costs 2n f
     // evaluations and n² memory: above the dense limit (e.g. an SPH fluid of 2,000 particles,
@@ -180,16 +181,17 @@ void ImplicitCore::reset(const OdeSystem& sys, double t0, CVecRef y0) {
     require_input(sys.has_jacobian_pattern(), "parameter 'jacobian': model '" + sys.name() +
                                                   "' gives no sparsity pattern for fd_colored");
   if (opt_.form == SystemForm::velocity)
-    require_input(source_ == JacobianSource::analytic,
-                  "parameter 'system_form': velocity uses the model's K and D (jacobian=auto or analytic)");
+    require_input(
+        source_ == JacobianSource::analytic,
+        "parameter 'system_form': velocity uses the model's K and D (jacobian=auto or analytic)");
   if (source_ == JacobianSource::matrix_free) {
     require_input(is_krylov(lin.kind),
                   "jacobian=matrix_free needs a Krylov linear_solver (cg, bicgstab or gmres)");
-    require_input(!(opt_.preconditioner_given && lin.preconditioner != PreconditionerKind::none),
-                  "preconditioner=" +
-                      std::string(lin.preconditioner == PreconditionerKind::ichol ? "ichol"
-                                                                                   : "jacobi") +
-                      " needs an assembled matrix; jacobian=matrix_free has none");
+    require_input(
+        !(opt_.preconditioner_given && lin.preconditioner != PreconditionerKind::none),
+        "preconditioner=" +
+            std::string(lin.preconditioner == PreconditionerKind::ichol ? "ichol" : "jacobi") +
+            " needs an assembled matrix; jacobian=matrix_free has none");
     lin.preconditioner = PreconditionerKind::none;
     // Finite-difference products are accurate to ~√eps relative, so a restarted Krylov method
     // cannot push the true residual much below that: solve to 1e-7 and let Newton iterate
@@ -481,8 +483,8 @@ Status ImplicitCore::solve_stage(const OdeSystem& sys, double t, CVecRef psi, do
           next = 0.9 * ratio * ratio;
           if (0.9 * eta * eta > 0.1) next = std::max(next, 0.9 * eta * eta);
         }
-        const double floor = std::max(opt_.linear.krylov_tol,
-                                      gnorm > 0 ? 0.1 * opt_.newton_tol / gnorm : 0.0);
+        const double floor =
+            std::max(opt_.linear.krylov_tol, gnorm > 0 ? 0.1 * opt_.newton_tol / gnorm : 0.0);
         eta = std::max(std::min(next, 0.1), floor);
         prev_gnorm = gnorm;
         set_krylov_tolerance(eta);

@@ -15,11 +15,11 @@
 // convergence studies at very small h. A linear problem with an exact J converges after one
 // iteration (one linear solve), confirmed by the residual at the next iterate.
 //
-// Mechanical systems (system_form=auto or velocity): on a MechanicalSystem with force Jacobians K and D
-// every linear system W k = r is solved in velocity form (integrators/implicit/velocity_form.hpp:
-// n unknowns instead of 2n, symmetric for symmetric force Jacobians, pinned dofs eliminated;
-// auto linear solver ldlt / cg); system_form=first_order keeps the 2n system (for comparison), with J
-// written in place from K and D.
+// Mechanical systems (system_form=auto or velocity): on a MechanicalSystem with force Jacobians K
+// and D every linear system W k = r is solved in velocity form
+// (integrators/implicit/velocity_form.hpp: n unknowns instead of 2n, symmetric for symmetric force
+// Jacobians, pinned dofs eliminated; auto linear solver ldlt / cg); system_form=first_order keeps
+// the 2n system (for comparison), with J written in place from K and D.
 //
 // Krylov tolerances (krylov_forcing=eisenstat_walker, the default): Newton's k-th linear solve
 // stops at the relative residual η_k = 0.9 (‖G_k‖/‖G_{k-1}‖)² (Eisenstat & Walker 1996, choice

@@ -126,8 +126,7 @@ LinearSolveResult bicgstab(const Op& op, const Vec& diag, CVecRef b, VecRef x,
     return res;
   }
   for (Vec* w : {&ws.r, &ws.r0, &ws.p, &ws.v, &ws.s, &ws.t, &ws.ph, &ws.sh}) w->resize(n);
-  Vec &r = ws.r, &r0 = ws.r0, &p = ws.p, &v = ws.v, &s = ws.s, &t = ws.t, &ph = ws.ph,
-      &sh = ws.sh;
+  Vec &r = ws.r, &r0 = ws.r0, &p = ws.p, &v = ws.v, &s = ws.s, &t = ws.t, &ph = ws.ph, &sh = ws.sh;
   op(x, v);
   r = b - v;
   r0 = r;
@@ -389,12 +388,12 @@ class Krylov final : public LinearSolver {
       r = run(op, b, x);
     }
     if (!r.ok)
-      error_ = r.residual < 0 ? to_string(kind_) +
-                                    ": the matrix is not positive definite (a direction of "
-                                    "non-positive curvature); use ldlt or sparse_lu"
-                              : to_string(kind_) + ": no convergence to " +
-                                    std::to_string(opt_.krylov_tol) + " in " +
-                                    std::to_string(opt_.krylov_max_iter) + " iterations";
+      error_ = r.residual < 0
+                   ? to_string(kind_) +
+                         ": the matrix is not positive definite (a direction of "
+                         "non-positive curvature); use ldlt or sparse_lu"
+                   : to_string(kind_) + ": no convergence to " + std::to_string(opt_.krylov_tol) +
+                         " in " + std::to_string(opt_.krylov_max_iter) + " iterations";
     return r;
   }
   LinearSolverKind kind() const override { return kind_; }

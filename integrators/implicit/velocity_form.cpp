@@ -100,12 +100,12 @@ void VelocityFormSolver::build_pattern() {
     for (int k = a_.outerIndexPtr()[c]; k < a_.outerIndexPtr()[c + 1]; ++k) {
       const Index r = a_.innerIndexPtr()[k];
       if (r == c) continue;
-      const bool fr = is_fixed_[static_cast<std::size_t>(r)], fc = is_fixed_[static_cast<std::size_t>(c)];
+      const bool fr = is_fixed_[static_cast<std::size_t>(r)],
+                 fc = is_fixed_[static_cast<std::size_t>(c)];
       if (fr || fc) fixed_entries_.push_back(k);
       if (fc && !fr) couplings_.push_back({k, r, c});
     }
   coupling_values_.resize(static_cast<Index>(couplings_.size()));
-
 }
 
 bool VelocityFormSolver::same_patterns() const {
