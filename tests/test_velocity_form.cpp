@@ -50,8 +50,10 @@ TEST(VelocityForm, SolveEqualsFirstOrderSystem) {
       ASSERT_TRUE(vf.solve(r, k).ok) << vf.error();
       EXPECT_LT(max_abs_diff(k, expected), 1e-11 * expected.cwiseAbs().maxCoeff())
           << "dashpot=" << dashpot << " " << to_string(vf.kind());
-      // The symmetric case keeps a symmetric matrix with pins (what lets ldlt and cg run).
+      // The symmetric case keeps a symmetric matrix with pins (what lets ldlt and cg run), and
+      // Krylov products go through its 3×3 block-row copy.
       if (dashpot == "0") {
+        EXPECT_EQ(vf.block_size(), 3);
         const Mat a(vf.matrix());
         EXPECT_LT((a - a.transpose()).cwiseAbs().maxCoeff(), 1e-12 * a.cwiseAbs().maxCoeff());
       }

@@ -380,7 +380,9 @@ class Krylov final : public LinearSolver {
   LinearSolveResult solve(CVecRef b, VecRef x) override {
     const SparseMat& w = *w_;
     LinearSolveResult r;
-    if (opt_.symmetric) {
+    if (product_) {
+      r = run(product_, b, x);
+    } else if (opt_.symmetric) {
       const auto op = [&w](CVecRef in, VecRef out) { symmetric_product(w, in, out); };
       r = run(op, b, x);
     } else {
@@ -398,6 +400,7 @@ class Krylov final : public LinearSolver {
   }
   LinearSolverKind kind() const override { return kind_; }
   void set_tolerance(double tol) override { opt_.krylov_tol = tol; }
+  void use_product(LinearOperator product) override { product_ = std::move(product); }
 
  private:
   template <class Op>
@@ -414,6 +417,7 @@ class Krylov final : public LinearSolver {
   const SparseMat* w_ = nullptr;
   Vec diag_;
   KrylovWorkspace ws_;
+  LinearOperator product_;
   Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>> ichol_;
 };
 

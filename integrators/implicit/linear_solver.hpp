@@ -70,6 +70,9 @@ class LinearSolver {
   // Relative residual target of later Krylov solves (Eisenstat–Walker forcing); no effect on
   // direct solvers.
   virtual void set_tolerance(double) {}
+  // Krylov solvers: apply W through `product` (e.g. a block-sparse copy of W) instead of the
+  // matrix passed to factor(), which still supplies the preconditioner. Set once per run.
+  virtual void use_product(LinearOperator) {}
   // Why the last factor() or solve() failed.
   const std::string& error() const { return error_; }
 

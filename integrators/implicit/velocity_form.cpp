@@ -39,6 +39,83 @@ void VelocityFormSolver::make_solver(LinearSolverKind kind) {
   o.kind = kind;
   solver_ = make_linear_solver(o, n_);
   solver_->analyze(a_);
+  if (block_ && is_krylov(kind))
+    solver_->use_product([this](CVecRef in, VecRef out) { block_product(in, out); });
+}
+
+void VelocityFormSolver::detect_blocks() {
+  block_ = 0;
+  if (!opt_.symmetric) return;
+  const int* outer = a_.outerIndexPtr();
+  const int* inner = a_.innerIndexPtr();
+  for (int b : {3, 2}) {
+    if (n_ % b != 0) continue;
+    bool ok = true;
+    for (Index c0 = 0; ok && c0 < n_; c0 += b) {
+      const int len = outer[c0 + 1] - outer[c0];
+      if (len % b != 0) ok = false;
+      for (int k = outer[c0]; ok && k < outer[c0 + 1]; k += b)
+        for (int i = 0; i < b; ++i)
+          if (inner[k + i] != inner[k] + i || inner[k] % b != 0) ok = false;
+      for (int j = 1; ok && j < b; ++j)
+        ok = outer[c0 + j + 1] - outer[c0 + j] == len &&
+             std::equal(inner + outer[c0], inner + outer[c0 + 1], inner + outer[c0 + j]);
+    }
+    if (!ok) continue;
+    block_ = b;
+    const Index nb = n_ / b;
+    bsr_row_.assign(static_cast<std::size_t>(nb) + 1, 0);
+    bsr_col_.clear();
+    bsr_pos_.assign(static_cast<std::size_t>(a_.nonZeros()), 0);
+    for (Index bi = 0; bi < nb; ++bi) {
+      const Index c0 = bi * b;
+      const int first = static_cast<int>(bsr_col_.size());
+      for (int k = outer[c0]; k < outer[c0 + 1]; k += b) bsr_col_.push_back(inner[k] / b);
+      bsr_row_[static_cast<std::size_t>(bi) + 1] = static_cast<int>(bsr_col_.size());
+      // Entry (row bJ + j, column bI + i) of A is element [i][j] of block (I, J) (symmetry).
+      for (int i = 0; i < b; ++i) {
+        int blk = first;
+        for (int k = outer[c0 + i]; k < outer[c0 + i + 1]; k += b, ++blk)
+          for (int j = 0; j < b; ++j)
+            bsr_pos_[static_cast<std::size_t>(k + j)] = (blk * b + i) * b + j;
+      }
+    }
+    bsr_val_.assign(bsr_col_.size() * static_cast<std::size_t>(b * b), 0.0);
+    return;
+  }
+}
+
+namespace {
+
+template <int B>
+void bsr_multiply(Index nb, const int* row, const int* col, const double* val, const double* x,
+                  double* y) {
+  const auto block_row = [&](Index bi) {
+    double acc[B] = {};
+    for (int blk = row[bi]; blk < row[bi + 1]; ++blk) {
+      const double* v = val + static_cast<std::ptrdiff_t>(blk) * B * B;
+      const double* xj = x + static_cast<std::ptrdiff_t>(col[blk]) * B;
+      for (int i = 0; i < B; ++i)
+        for (int j = 0; j < B; ++j) acc[i] += v[i * B + j] * xj[j];
+    }
+    for (int i = 0; i < B; ++i) y[bi * B + i] = acc[i];
+  };
+  if (static_cast<Index>(row[nb]) * B * B >= kParallelNonzeros) {
+#pragma omp parallel for schedule(static)
+    for (Index bi = 0; bi < nb; ++bi) block_row(bi);
+  } else {
+    for (Index bi = 0; bi < nb; ++bi) block_row(bi);
+  }
+}
+
+}  // namespace
+
+void VelocityFormSolver::block_product(CVecRef in, VecRef out) const {
+  const Index nb = n_ / block_;
+  if (block_ == 3)
+    bsr_multiply<3>(nb, bsr_row_.data(), bsr_col_.data(), bsr_val_.data(), in.data(), out.data());
+  else
+    bsr_multiply<2>(nb, bsr_row_.data(), bsr_col_.data(), bsr_val_.data(), in.data(), out.data());
 }
 
 void VelocityFormSolver::reset(const MechanicalSystem& sys, LinearSolverOptions opt, double t0,
@@ -106,6 +183,7 @@ void VelocityFormSolver::build_pattern() {
       if (fc && !fr) couplings_.push_back({k, r, c});
     }
   coupling_values_.resize(static_cast<Index>(couplings_.size()));
+  detect_blocks();
 }
 
 bool VelocityFormSolver::same_patterns() const {
@@ -126,7 +204,7 @@ void VelocityFormSolver::update(double t, CVecRef y) {
   d_.makeCompressed();
   if (same_patterns()) return;
   build_pattern();  // a model that rebuilds its blocks with another pattern: analyse again
-  solver_->analyze(a_);
+  make_solver(solver_->kind());
 }
 
 bool VelocityFormSolver::factor(double c) {
@@ -165,6 +243,22 @@ bool VelocityFormSolver::factor(double c) {
   for (int k : fixed_entries_) a[k] = 0.0;
   for (Index f : fixed_) a[diag_pos_[static_cast<std::size_t>(f)]] = m[f];
 
+  if (block_ && is_krylov(solver_->kind())) {
+    // Columns bI..bI+b-1 of A fill block row I: block rows are independent.
+    const int b = block_;
+    const int* pos = bsr_pos_.data();
+    double* bv = bsr_val_.data();
+    const auto copy = [&](Index bi) {
+      for (int k = ao[bi * b]; k < ao[bi * b + b]; ++k) bv[pos[k]] = a[k];
+    };
+    const Index nb = n_ / b;
+    if (a_.nonZeros() >= kParallelNonzeros) {
+#pragma omp parallel for schedule(static)
+      for (Index bi = 0; bi < nb; ++bi) copy(bi);
+    } else {
+      for (Index bi = 0; bi < nb; ++bi) copy(bi);
+    }
+  }
   if (!solver_->factor(a_)) {
     error_ = solver_->error();
     return false;

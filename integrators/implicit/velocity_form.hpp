@@ -22,7 +22,10 @@
 //
 // Assembly: A's pattern (K's, D's and the diagonal) and the position in it of every entry of K
 // and D are computed once; each factor() writes A's values in place (in parallel over columns
-// for large systems), so a step allocates nothing.
+// for large systems), so a step allocates nothing. When A is symmetric and made of dense 2×2 or
+// 3×3 blocks (mass-spring networks in 2D and 3D), Krylov solvers multiply with a block-row copy
+// of A (one index per block instead of one per entry, rows in parallel): the product is the
+// Krylov solvers' main cost.
 #pragma once
 
 #include <memory>
@@ -58,6 +61,8 @@ class VelocityFormSolver {
   bool symmetric() const { return opt_.symmetric; }
   Index dofs() const { return n_; }
   const SparseMat& matrix() const { return a_; }
+  // Block size of the block-row copy used for Krylov products (0: none).
+  int block_size() const { return block_; }
 
  private:
   void make_solver(LinearSolverKind kind);
@@ -89,6 +94,13 @@ class VelocityFormSolver {
   Vec coupling_values_;  // their values in the last factor()
   std::unique_ptr<LinearSolver> solver_;
   std::string error_;
+  // Block-row (BSR) copy of a symmetric A: block row I holds columns bI..bI+b-1 of A (its rows,
+  // by symmetry); bsr_pos_[k] is where entry k of a_ goes.
+  void detect_blocks();
+  void block_product(CVecRef in, VecRef out) const;
+  int block_ = 0;
+  std::vector<int> bsr_row_, bsr_col_, bsr_pos_;
+  std::vector<double> bsr_val_;
   Vec rhs_, kv_;
 };
 
