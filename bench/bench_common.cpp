@@ -89,11 +89,20 @@ double best_seconds_per_call(const std::function<void()>& f, int reps) {
   return best;
 }
 
+std::map<std::string, double>& time_spent() {
+  static std::map<std::string, double> t;
+  return t;
+}
+
 benchmark::internal::Benchmark* add(const std::string& name,
                                     std::function<void(benchmark::State&)> fn,
                                     benchmark::TimeUnit unit) {
   return benchmark::RegisterBenchmark(name.c_str(),
-                                      [fn = std::move(fn)](benchmark::State& s) { fn(s); })
+                                      [name, fn = std::move(fn)](benchmark::State& s) {
+                                        const double t0 = now_seconds();
+                                        fn(s);
+                                        time_spent()[name] += now_seconds() - t0;
+                                      })
       ->UseRealTime()
       ->Unit(unit);
 }

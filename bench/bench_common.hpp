@@ -25,6 +25,8 @@ struct Config {
   bool quick = false;
   // Seconds a CVODE child run may take before it is killed (its row then reports the limit).
   double cvode_timeout_s = 300.0;
+  // Allocations the counter saw for one Eigen vector and one std::vector (expected: 2).
+  long alloc_self_check = -1;
 };
 
 // One measured benchmark as the summary sees it.
@@ -64,6 +66,10 @@ class OmpThreads {
 double best_seconds_per_call(const std::function<void()>& f, int reps = 5);
 
 double now_seconds();
+
+// Wall time spent in each benchmark registered with add(), set-up and every trial run included
+// (the summary lists the largest, to keep --quick under its budget).
+std::map<std::string, double>& time_spent();
 
 // Registration helpers (benchmark::RegisterBenchmark with real time and a unit chosen from the
 // expected magnitude).

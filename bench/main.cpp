@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/alloc_count.hpp"
 #include "bench/bench_common.hpp"
 
 namespace {
@@ -75,6 +76,16 @@ int main(int argc, char** argv) {
   args.push_back(nullptr);
   benchmark::Initialize(&ac, args.data());
   if (benchmark::ReportUnrecognizedArguments(ac, args.data())) return 1;
+
+  // The counter must see Eigen's allocations (malloc) as well as operator new.
+  alloc_count_start();
+  {
+    stiffbench::Vec v(1000);
+    std::vector<double> w(1000);
+    benchmark::DoNotOptimize(v.data());
+    benchmark::DoNotOptimize(w.data());
+  }
+  cfg.alloc_self_check = alloc_count_stop();
 
   register_rhs_benchmarks(cfg);
   register_step_benchmarks(cfg);

@@ -4,11 +4,14 @@
 // benchmarks were filtered out or failed prints "n/a" with the reason.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "bench/bench_common.hpp"
 
@@ -183,6 +186,8 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
   }
   row("heap allocations per step, hand-written integrators (max)", worst_allocs, "%.3g", "0",
       worst_allocs == 0.0, alloc_list.empty() ? "" : "(non-zero:" + alloc_list + ")");
+  std::printf("(allocation counter self-check: %ld of 2 test allocations seen)\n",
+              cfg.alloc_self_check);
 
   // ---- Baraff-Witkin trajectory check.
   const std::string chk = "check/bw_trajectory/cloth:64";
@@ -242,6 +247,12 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
 
   std::printf("\n2-thread speed-ups (time at 1 thread / time at 2):\n%s",
               speedups.empty() ? "    (none measured at both thread counts)\n" : speedups.c_str());
+  std::vector<std::pair<double, std::string>> spent;
+  for (const auto& [name, t] : time_spent()) spent.emplace_back(t, name);
+  std::sort(spent.rbegin(), spent.rend());
+  std::printf("\nWall time spent per benchmark (set-up and trial runs included), largest:\n");
+  for (std::size_t i = 0; i < spent.size() && i < 8; ++i)
+    std::printf("    %6.1f s  %s\n", spent[i].first, spent[i].second.c_str());
   std::printf("\nstiffbench_bench: %s run finished in %.1f s\n", cfg.quick ? "--quick" : "full",
               wall_seconds);
 }
