@@ -3,7 +3,7 @@
 # time (issue #10, "Benchmarks"): prints each one's cost per particle per right-hand-side
 # evaluation and their ratio. Usage:
 #   scripts/bench_pysph.sh [--t-end T] [--threads N] [--build DIR]
-# Defaults: T = 0.05 s of simulated time, N = 2 OpenMP threads, build folder build-bench.
+# Defaults: T = 0.1 s of simulated time, N = 2 OpenMP threads, build folder build-bench.
 #
 # PySPH: Debian's python3-pysph, installed here only (not by the main set-up; idempotent), its
 # own example `python3 -m pysph.examples.dam_break_2d` with its default WCSPH scheme (PEC
@@ -19,7 +19,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="$root/build-bench"
-t_end="0.05"
+t_end="0.1"
 threads="2"
 while [ $# -gt 0 ]; do
   case "$1" in
