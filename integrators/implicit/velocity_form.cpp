@@ -183,6 +183,11 @@ void VelocityFormSolver::build_pattern() {
       if (fc && !fr) couplings_.push_back({k, r, c});
     }
   coupling_values_.resize(static_cast<Index>(couplings_.size()));
+  k_fixed_cols_.clear();
+  for (Index f : fixed_)
+    for (int k = k_.outerIndexPtr()[f]; k < k_.outerIndexPtr()[f + 1]; ++k)
+      if (!is_fixed_[static_cast<std::size_t>(k_.innerIndexPtr()[k])])
+        k_fixed_cols_.push_back({k, k_.innerIndexPtr()[k], f});
   detect_blocks();
 }
 
@@ -270,8 +275,13 @@ LinearSolveResult VelocityFormSolver::solve(CVecRef r, VecRef k) {
   const auto rx = r.head(n_);
   const auto rv = r.tail(n_);
   // rhs = M (r_v + c K r_x); fixed rows: M_ff k_v,f = M_ff r_v,f.
-  rhs_.noalias() = k_ * rx;
-  rhs_ = m_.cwiseProduct(rv + c_ * rhs_);
+  if (opt_.symmetric) {
+    mk_product(rx, rhs_);
+    rhs_ = m_.cwiseProduct(rv) + c_ * rhs_;
+  } else {
+    rhs_.noalias() = k_ * rx;
+    rhs_ = m_.cwiseProduct(rv + c_ * rhs_);
+  }
   bool moved = false;
   for (Index f : fixed_) {
     rhs_[f] = m_[f] * rv[f];
@@ -303,6 +313,27 @@ LinearSolveResult VelocityFormSolver::solve(CVecRef r, VecRef k) {
   k.tail(n_) = kv_;
   k.head(n_) = rx + c_ * kv_;
   return res;
+}
+
+void VelocityFormSolver::mk_product(CVecRef r, VecRef out) const {
+  const int* ko = k_.outerIndexPtr();
+  const int* ki = k_.innerIndexPtr();
+  const double* kv = k_.valuePtr();
+  const double* m = m_.data();
+  const double* x = r.data();
+  double* y = out.data();
+  const auto row = [&](Index i) {
+    double acc = 0.0;
+    for (int k = ko[i]; k < ko[i + 1]; ++k) acc += kv[k] * m[ki[k]] * x[ki[k]];
+    y[i] = acc;
+  };
+  if (k_.nonZeros() >= kParallelNonzeros) {
+#pragma omp parallel for schedule(static)
+    for (Index i = 0; i < n_; ++i) row(i);
+  } else {
+    for (Index i = 0; i < n_; ++i) row(i);
+  }
+  for (const FixedColumnEntry& e : k_fixed_cols_) y[e.row] += m[e.row] * kv[e.k] * x[e.fixed];
 }
 
 void VelocityFormSolver::jacobian_times(CVecRef u, VecRef out) const {

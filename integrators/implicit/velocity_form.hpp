@@ -97,6 +97,15 @@ class VelocityFormSolver {
   // Block-row (BSR) copy of a symmetric A: block row I holds columns bI..bI+b-1 of A (its rows,
   // by symmetry); bsr_pos_[k] is where entry k of a_ goes.
   void detect_blocks();
+  // out = M K r (symmetric M K: column i of K gives row i of M K, in parallel; the entries of
+  // fixed columns at free rows, where the symmetry of the stored K breaks, added separately).
+  void mk_product(CVecRef r, VecRef out) const;
+  struct FixedColumnEntry {
+    int k;        // entry of k_
+    Index row;    // free row
+    Index fixed;  // fixed column
+  };
+  std::vector<FixedColumnEntry> k_fixed_cols_;
   void block_product(CVecRef in, VecRef out) const;
   int block_ = 0;
   std::vector<int> bsr_row_, bsr_col_, bsr_pos_;
