@@ -490,7 +490,8 @@ Status ImplicitCore::solve_stage(const OdeSystem& sys, double t, CVecRef psi, do
         set_krylov_tolerance(eta);
       }
       delta_.setZero();
-      if (!solve(-g_, delta_, stats)) {
+      g_ = -g_;  // in place: passing the expression -g_ would allocate a temporary
+      if (!solve(g_, delta_, stats)) {
         linear_failed = true;
         break;
       }

@@ -2,9 +2,12 @@
 
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/LU>
+#include <Eigen/OrderingMethods>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace stiffbench {
 
@@ -321,29 +324,156 @@ class SparseLu final : public LinearSolver {
   Eigen::SparseLU<SparseMat, Eigen::COLAMDOrdering<int>> lu_;
 };
 
+// Sparse LDLᵀ of a symmetric matrix: approximate minimum degree ordering (Eigen's AMD) and the
+// elimination tree once per pattern (analyze), then an up-looking numeric factorisation row by
+// row (the LDL algorithm of Davis, ACM TOMS 31, 2005) into storage sized by the symbolic pass,
+// so factor() and solve() never allocate. No pivoting: fine for the SPD and quasi-definite
+// matrices of the implicit methods; a zero pivot is reported.
 class Ldlt final : public LinearSolver {
  public:
   explicit Ldlt(bool symmetric) : symmetric_(symmetric) {}
-  void analyze(const SparseMat& p) override { ldlt_.analyzePattern(p); }
+
+  void analyze(const SparseMat& p) override {
+    const Index n = p.cols();
+    n_ = n;
+    // Ordering on the pattern of A + Aᵀ; new index of row/column i: perm_[i].
+    SparseMat sym = p;
+    for (Index k = 0; k < sym.nonZeros(); ++k) sym.valuePtr()[k] = 1.0;
+    sym = SparseMat(sym.transpose()) + sym;
+    Eigen::AMDOrdering<int> amd;
+    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> pinv;
+    amd(sym, pinv);
+    const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> perm = pinv.inverse();
+    perm_.assign(perm.indices().data(), perm.indices().data() + n);
+    // Upper triangle of P A Pᵀ (column-major) and where each entry of A goes in it (-1: the
+    // mirror entry below the diagonal, not used).
+    std::vector<Eigen::Triplet<double>> trips;
+    for (Index c = 0; c < n; ++c)
+      for (SparseMat::InnerIterator it(p, c); it; ++it) {
+        const int i = perm_[static_cast<std::size_t>(it.row())];
+        const int j = perm_[static_cast<std::size_t>(c)];
+        if (i <= j) trips.emplace_back(i, j, 0.0);
+      }
+    for (Index i = 0; i < n; ++i) trips.emplace_back(i, i, 0.0);
+    upper_.resize(n, n);
+    upper_.setFromTriplets(trips.begin(), trips.end());
+    upper_.makeCompressed();
+    map_.assign(static_cast<std::size_t>(p.nonZeros()), -1);
+    pattern_outer_.assign(p.outerIndexPtr(), p.outerIndexPtr() + p.outerSize() + 1);
+    for (Index c = 0; c < n; ++c)
+      for (int k = p.outerIndexPtr()[c]; k < p.outerIndexPtr()[c + 1]; ++k) {
+        const int i = perm_[static_cast<std::size_t>(p.innerIndexPtr()[k])];
+        const int j = perm_[static_cast<std::size_t>(c)];
+        if (i > j) continue;
+        const int* b = upper_.innerIndexPtr() + upper_.outerIndexPtr()[j];
+        const int* e = upper_.innerIndexPtr() + upper_.outerIndexPtr()[j + 1];
+        map_[static_cast<std::size_t>(k)] =
+            static_cast<int>(std::lower_bound(b, e, i) - upper_.innerIndexPtr());
+      }
+    // Elimination tree and column counts of L.
+    const std::size_t nu = static_cast<std::size_t>(n);
+    parent_.assign(nu, -1);
+    lnz_.assign(nu, 0);
+    flag_.assign(nu, -1);
+    for (int k = 0; k < n; ++k) {
+      flag_[static_cast<std::size_t>(k)] = k;
+      for (int q = upper_.outerIndexPtr()[k]; q < upper_.outerIndexPtr()[k + 1]; ++q) {
+        for (int i = upper_.innerIndexPtr()[q]; i < k && flag_[static_cast<std::size_t>(i)] != k;
+             i = parent_[static_cast<std::size_t>(i)]) {
+          if (parent_[static_cast<std::size_t>(i)] == -1) parent_[static_cast<std::size_t>(i)] = k;
+          ++lnz_[static_cast<std::size_t>(i)];
+          flag_[static_cast<std::size_t>(i)] = k;
+        }
+      }
+    }
+    lp_.assign(nu + 1, 0);
+    for (std::size_t k = 0; k < nu; ++k) lp_[k + 1] = lp_[k] + lnz_[k];
+    li_.assign(static_cast<std::size_t>(lp_[nu]), 0);
+    lx_.assign(static_cast<std::size_t>(lp_[nu]), 0.0);
+    d_.assign(nu, 0.0);
+    y_.assign(nu, 0.0);
+    stack_.assign(nu, 0);
+    work_.resize(n);
+  }
+
   bool factor(const SparseMat& w) override {
     // LDLᵀ reads one triangle: refuse a non-symmetric W instead of solving a different system.
     if (!symmetric_ && asymmetric(w)) {
       error_ = "ldlt: the matrix is not symmetric (use sparse_lu, bicgstab or gmres)";
       return false;
     }
-    ldlt_.factorize(w);
-    if (ldlt_.info() != Eigen::Success) error_ = "ldlt: factorisation failed (zero pivot)";
-    return ldlt_.info() == Eigen::Success;
+    double* u = upper_.valuePtr();
+    std::fill(u, u + upper_.nonZeros(), 0.0);
+    const double* wv = w.valuePtr();
+    for (std::size_t k = 0; k < map_.size(); ++k)
+      if (map_[k] >= 0) u[map_[k]] = wv[k];
+    const int* uo = upper_.outerIndexPtr();
+    const int* ui = upper_.innerIndexPtr();
+    const int n = static_cast<int>(n_);
+    for (int k = 0; k < n; ++k) {
+      const auto ku = static_cast<std::size_t>(k);
+      y_[ku] = 0.0;
+      int top = n;
+      flag_[ku] = k;
+      lnz_[ku] = 0;
+      for (int q = uo[k]; q < uo[k + 1]; ++q) {
+        int i = ui[q];
+        y_[static_cast<std::size_t>(i)] += u[q];
+        int len = 0;
+        for (; flag_[static_cast<std::size_t>(i)] != k; i = parent_[static_cast<std::size_t>(i)]) {
+          stack_[static_cast<std::size_t>(len++)] = i;
+          flag_[static_cast<std::size_t>(i)] = k;
+        }
+        while (len > 0)
+          stack_[static_cast<std::size_t>(--top)] = stack_[static_cast<std::size_t>(--len)];
+      }
+      d_[ku] = y_[ku];
+      y_[ku] = 0.0;
+      for (; top < n; ++top) {
+        const auto i = static_cast<std::size_t>(stack_[static_cast<std::size_t>(top)]);
+        const double yi = y_[i];
+        y_[i] = 0.0;
+        const int end = lp_[i] + lnz_[i];
+        for (int q = lp_[i]; q < end; ++q)
+          y_[static_cast<std::size_t>(li_[static_cast<std::size_t>(q)])] -=
+              lx_[static_cast<std::size_t>(q)] * yi;
+        const double l = yi / d_[i];
+        d_[ku] -= l * yi;
+        li_[static_cast<std::size_t>(end)] = k;
+        lx_[static_cast<std::size_t>(end)] = l;
+        ++lnz_[i];
+      }
+      if (!(d_[ku] != 0.0) || !std::isfinite(d_[ku])) {
+        error_ = "ldlt: zero or non-finite pivot (matrix singular)";
+        return false;
+      }
+    }
+    return true;
   }
+
   LinearSolveResult solve(CVecRef b, VecRef x) override {
-    x = ldlt_.solve(b);
-    return {ldlt_.info() == Eigen::Success, 0, 0};
+    const std::size_t n = static_cast<std::size_t>(n_);
+    double* z = work_.data();
+    for (std::size_t i = 0; i < n; ++i) z[perm_[i]] = b[static_cast<Index>(i)];
+    for (std::size_t j = 0; j < n; ++j)  // L z = Pb
+      for (int q = lp_[j]; q < lp_[j] + lnz_[j]; ++q)
+        z[li_[static_cast<std::size_t>(q)]] -= lx_[static_cast<std::size_t>(q)] * z[j];
+    for (std::size_t j = 0; j < n; ++j) z[j] /= d_[j];
+    for (std::size_t j = n; j-- > 0;)  // Lᵀ
+      for (int q = lp_[j]; q < lp_[j] + lnz_[j]; ++q)
+        z[j] -= lx_[static_cast<std::size_t>(q)] * z[li_[static_cast<std::size_t>(q)]];
+    for (std::size_t i = 0; i < n; ++i) x[static_cast<Index>(i)] = z[perm_[i]];
+    return {};
   }
   LinearSolverKind kind() const override { return LinearSolverKind::ldlt; }
 
  private:
   bool symmetric_;
-  Eigen::SimplicialLDLT<SparseMat> ldlt_;
+  Index n_ = 0;
+  std::vector<int> perm_, map_, pattern_outer_, parent_, lnz_, flag_, lp_, li_, stack_;
+  std::vector<double> lx_, d_, y_;
+  SparseMat upper_;
+  Vec work_;
 };
 
 class Krylov final : public LinearSolver {
