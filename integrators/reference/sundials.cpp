@@ -13,6 +13,7 @@
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -25,12 +26,68 @@ namespace {
 
 enum class Lin { automatic, dense, band, klu, spgmr };
 
-// linear_solver=auto: a dense matrix up to this many unknowns (32 MB at 2000), matrix-free SPGMR
-// above, where a dense n² matrix would cost gigabytes (24,576 unknowns: 4.8 GB). SPGMR also for
-// models with an analytic sparse Jacobian: KLU on the mass-spring cloth (no diagonal in the
-// x-block) made SUNDIALS 6's SUNMatScaleAddI rebuild the matrix quadratically (issue #10), and
-// SPH scenes have no Jacobian at all.
-constexpr Index kAutoDenseMax = 2000;
+const char* to_string(Lin l) {
+  switch (l) {
+    case Lin::automatic:
+      return "auto";
+    case Lin::dense:
+      return "dense";
+    case Lin::band:
+      return "band";
+    case Lin::klu:
+      return "klu";
+    case Lin::spgmr:
+      return "spgmr";
+  }
+  return "?";
+}
+
+// Positions in the fixed Jacobian pattern of one block's nonzeros (the block placed at row0,
+// col0). The block's own structure is kept so that a model whose pattern changes is noticed
+// (the map is rebuilt, or the call fails naming the missing entry) instead of scattering values
+// to wrong places; the check is a comparison of index arrays, no allocation.
+class BlockMap {
+ public:
+  BlockMap() = default;
+  BlockMap(Index row0, Index col0) : row0_(row0), col0_(col0) {}
+
+  bool matches(const SparseMat& m) const {
+    return m.isCompressed() && m.cols() + 1 == static_cast<Index>(outer_.size()) &&
+           m.nonZeros() == static_cast<Index>(inner_.size()) &&
+           std::equal(outer_.begin(), outer_.end(), m.outerIndexPtr()) &&
+           std::equal(inner_.begin(), inner_.end(), m.innerIndexPtr());
+  }
+  // m compressed; every entry of m (shifted) must be in the pattern p (compressed, sorted).
+  void build(const SparseMat& m, const SparseMat& p) {
+    outer_.assign(m.outerIndexPtr(), m.outerIndexPtr() + m.cols() + 1);
+    inner_.assign(m.innerIndexPtr(), m.innerIndexPtr() + m.nonZeros());
+    pos_.resize(static_cast<std::size_t>(m.nonZeros()));
+    for (Index c = 0; c < m.cols(); ++c)
+      for (Index k = m.outerIndexPtr()[c]; k < m.outerIndexPtr()[c + 1]; ++k)
+        pos_[static_cast<std::size_t>(k)] = find(p, row0_ + m.innerIndexPtr()[k], col0_ + c);
+  }
+  void scatter(const SparseMat& m, double* data) const {
+    const double* v = m.valuePtr();
+    const std::size_t nnz = pos_.size();
+    for (std::size_t k = 0; k < nnz; ++k) data[pos_[k]] = v[k];
+  }
+  // Index of (r, c) in p's value array; throws when p has no such entry.
+  static Index find(const SparseMat& p, Index r, Index c) {
+    const auto* b = p.innerIndexPtr() + p.outerIndexPtr()[c];
+    const auto* e = p.innerIndexPtr() + p.outerIndexPtr()[c + 1];
+    const auto* it = std::lower_bound(b, e, r);
+    if (it == e || *it != r)
+      throw std::runtime_error("Jacobian entry (" + std::to_string(r) + ", " + std::to_string(c) +
+                               ") is outside the pattern fixed at reset()");
+    return static_cast<Index>(it - p.innerIndexPtr());
+  }
+
+ private:
+  Index row0_ = 0, col0_ = 0;
+  std::vector<SparseMat::StorageIndex> outer_, inner_;
+  std::vector<Index> pos_;
+};
+
 enum class Kind { cvode_bdf, cvode_adams, arkode_erk, arkode_dirk, arkode_imex };
 
 struct Settings {
@@ -78,14 +135,19 @@ class SundialsIntegrator final : public Integrator {
     require_input(
         !use_analytic_ || sys.has_jacobian(),
         "integrator '" + info().name + "': model '" + sys.name() + "' has no analytic Jacobian");
-    lin_ = set_.lin != Lin::automatic ? set_.lin : n_ <= kAutoDenseMax ? Lin::dense : Lin::spgmr;
+    if (set_.lin == Lin::automatic) {
+      const SundialsLinearSolverChoice c = sundials_auto_linear_solver(n_, use_analytic_);
+      lin_ = c.solver == "klu" ? Lin::klu : c.solver == "spgmr" ? Lin::spgmr : Lin::dense;
+      lin_note_ = std::string(to_string(lin_)) + " (linear_solver=auto: " + c.rule + ")";
+    } else {
+      lin_ = set_.lin;
+      lin_note_ = std::string(to_string(lin_)) + " (linear_solver=" + to_string(lin_) + ")";
+    }
     require_input(lin_ != Lin::klu || use_analytic_,
                   "integrator '" + info().name +
                       "': linear_solver=klu needs the model's analytic sparse Jacobian");
-    if (use_analytic_ && needs_linear_solver()) {
-      jac_ = sys.jacobian_pattern();
-      jac_.makeCompressed();
-    }
+    force_jac_evals_ = 0;
+    if (use_analytic_ && needs_linear_solver()) build_jacobian_layout(t0, y0);
     t_ = t0;
     y_last_ = y0;
     fixed_h_ = 0;
@@ -161,53 +223,130 @@ class SundialsIntegrator final : public Integrator {
     self->sys_->rhs_implicit_part(t, yv, dv);
     return dv.allFinite() ? 0 : 1;
   }
-  void eval_jac(sunrealtype t, N_Vector y) {
-    Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), n_);
-    sys_->jacobian(t, yv, jac_);
-    jac_.makeCompressed();
+  // The fixed pattern jp_ = pattern(J) ∪ diagonal, computed once per reset(), and the maps
+  // from the model's matrices into it. Structure only: the evaluations here are not counted.
+  void build_jacobian_layout(double t0, CVecRef y0) {
+    const MechanicalSystem* ms = sys_->as_mechanical();
+    mech_ = ms != nullptr && ms->has_force_jacobians();
+    std::vector<Eigen::Triplet<double>> trips;
+    for (Index i = 0; i < n_; ++i) trips.emplace_back(i, i, 0.0);
+    if (mech_) {
+      const Index nd = ms->dofs();
+      ms->force_jacobians(t0, y0.head(nd), y0.tail(nd), k_, d_);
+      k_.makeCompressed();
+      d_.makeCompressed();
+      for (const SparseMat* b : {&k_, &d_})
+        if (b->rows() != nd || b->cols() != nd)
+          throw std::logic_error("model '" + sys_->name() + "': force Jacobian block is " +
+                                 std::to_string(b->rows()) + " x " + std::to_string(b->cols()) +
+                                 ", expected " + std::to_string(nd) + " x " + std::to_string(nd));
+      for (Index i = 0; i < nd; ++i) trips.emplace_back(i, nd + i, 1.0);
+      for (Index c = 0; c < nd; ++c) {
+        for (SparseMat::InnerIterator it(k_, c); it; ++it)
+          trips.emplace_back(nd + it.row(), c, 1.0);
+        for (SparseMat::InnerIterator it(d_, c); it; ++it)
+          trips.emplace_back(nd + it.row(), nd + c, 1.0);
+      }
+    } else {
+      jac_ = sys_->jacobian_pattern();  // compressed, the structure jacobian() fills
+      for (Index c = 0; c < jac_.outerSize(); ++c)
+        for (SparseMat::InnerIterator it(jac_, c); it; ++it) trips.emplace_back(it.row(), c, 1.0);
+    }
+    jp_.resize(n_, n_);
+    jp_.setFromTriplets(trips.begin(), trips.end());
+    jp_.makeCompressed();
+    colptr_.assign(jp_.outerIndexPtr(), jp_.outerIndexPtr() + n_ + 1);
+    rowind_.assign(jp_.innerIndexPtr(), jp_.innerIndexPtr() + jp_.nonZeros());
+    ones_.clear();
+    if (mech_) {
+      const Index nd = ms->dofs();
+      for (Index i = 0; i < nd; ++i) ones_.push_back(BlockMap::find(jp_, i, nd + i));
+      k_map_ = BlockMap(nd, 0);
+      d_map_ = BlockMap(nd, nd);
+      k_map_.build(k_, jp_);
+      d_map_.build(d_, jp_);
+    } else {
+      j_map_ = BlockMap(0, 0);
+      j_map_.build(jac_, jp_);
+    }
   }
+
+  // Writes J(t, y) into `data`, the value array of a matrix with jp_'s structure (the KLU
+  // matrix's own array, or jp_'s). No allocation once the model's blocks have their pattern.
+  void fill_jacobian(sunrealtype t, N_Vector y, double* data) {
+    Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), n_);
+    std::fill(data, data + jp_.nonZeros(), 0.0);
+    auto scatter = [&](SparseMat& m, BlockMap& map) {
+      m.makeCompressed();
+      if (!map.matches(m)) map.build(m, jp_);  // the model changed its pattern
+      map.scatter(m, data);
+    };
+    if (mech_) {
+      const Index nd = n_ / 2;
+      sys_->as_mechanical()->force_jacobians(t, yv.head(nd), yv.tail(nd), k_, d_);
+      ++force_jac_evals_;
+      for (const Index p : ones_) data[p] = 1.0;
+      scatter(k_, k_map_);
+      scatter(d_, d_map_);
+    } else {
+      sys_->jacobian(t, yv, jac_);
+      scatter(jac_, j_map_);
+    }
+  }
+
+  // Runs a Jacobian callback body: exceptions become an unrecoverable error for the library.
+  template <class F>
+  int guarded(F&& f) {
+    try {
+      f();
+      return 0;
+    } catch (const std::exception& e) {
+      callback_error_ = e.what();
+      return -1;
+    }
+  }
+
   // Dense or band SUNMatrix from the sparse J (entries outside the band are not in the pattern).
   template <bool Band>
   static int jac_matrix_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector,
                            N_Vector, N_Vector) {
     auto* self = static_cast<SundialsIntegrator*>(ud);
-    self->eval_jac(t, y);
-    SUNMatZero(j);
-    for (Index c = 0; c < self->jac_.outerSize(); ++c)
-      for (SparseMat::InnerIterator it(self->jac_, c); it; ++it) {
-        if constexpr (Band)
-          SM_ELEMENT_B(j, it.row(), c) = it.value();
-        else
-          SM_ELEMENT_D(j, it.row(), c) = it.value();
-      }
-    return 0;
+    return self->guarded([&] {
+      const SparseMat& m = self->jp_;
+      self->fill_jacobian(t, y, self->jp_.valuePtr());
+      SUNMatZero(j);
+      for (Index c = 0; c < m.outerSize(); ++c)
+        for (SparseMat::InnerIterator it(m, c); it; ++it) {
+          if constexpr (Band)
+            SM_ELEMENT_B(j, it.row(), c) = it.value();
+          else
+            SM_ELEMENT_D(j, it.row(), c) = it.value();
+        }
+    });
   }
+  // KLU: the structure is copied from the fixed pattern (SUNMatZero may have cleared it), the
+  // values written in place into the library's array.
   static int jac_sparse_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector,
                            N_Vector, N_Vector) {
     auto* self = static_cast<SundialsIntegrator*>(ud);
-    self->eval_jac(t, y);
-    const SparseMat& m = self->jac_;
-    if (SUNSparseMatrix_NNZ(j) < m.nonZeros()) return -1;
-    sunindextype* colptr = SUNSparseMatrix_IndexPointers(j);
-    sunindextype* rows = SUNSparseMatrix_IndexValues(j);
-    sunrealtype* data = SUNSparseMatrix_Data(j);
-    for (Index c = 0; c <= m.outerSize(); ++c) colptr[c] = m.outerIndexPtr()[c];
-    for (Index k = 0; k < m.nonZeros(); ++k) {
-      rows[k] = m.innerIndexPtr()[k];
-      data[k] = m.valuePtr()[k];
-    }
-    return 0;
+    return self->guarded([&] {
+      if (SUNSparseMatrix_NNZ(j) < static_cast<sunindextype>(self->rowind_.size()))
+        throw std::logic_error("KLU matrix smaller than the Jacobian pattern");
+      std::copy(self->colptr_.begin(), self->colptr_.end(), SUNSparseMatrix_IndexPointers(j));
+      std::copy(self->rowind_.begin(), self->rowind_.end(), SUNSparseMatrix_IndexValues(j));
+      self->fill_jacobian(t, y, SUNSparseMatrix_Data(j));
+    });
   }
   static int jtsetup_cb(sunrealtype t, N_Vector y, N_Vector, void* ud) {
-    static_cast<SundialsIntegrator*>(ud)->eval_jac(t, y);
-    return 0;
+    auto* self = static_cast<SundialsIntegrator*>(ud);
+    return self->guarded([&] { self->fill_jacobian(t, y, self->jp_.valuePtr()); });
   }
   static int jtimes_cb(N_Vector v, N_Vector jv, sunrealtype, N_Vector, N_Vector, void* ud,
                        N_Vector) {
     auto* self = static_cast<SundialsIntegrator*>(ud);
     Eigen::Map<const Vec> vv(N_VGetArrayPointer(v), self->n_);
     Eigen::Map<Vec> out(N_VGetArrayPointer(jv), self->n_);
-    out.noalias() = self->jac_ * vv;
+    out.noalias() = self->jp_ * vv;
     return 0;
   }
   static void err_cb(int code, const char* module, const char* function, char* msg, void* ud) {
@@ -275,9 +414,9 @@ class SundialsIntegrator final : public Integrator {
         break;
       case Lin::band: {
         Index mu = n_ - 1, ml = n_ - 1;
-        if (sys_->has_jacobian_pattern()) {
+        if (use_analytic_ || sys_->has_jacobian_pattern()) {
           mu = ml = 0;
-          const SparseMat p = sys_->jacobian_pattern();
+          const SparseMat p = use_analytic_ ? jp_ : sys_->jacobian_pattern();
           for (Index c = 0; c < p.outerSize(); ++c)
             for (SparseMat::InnerIterator it(p, c); it; ++it) {
               mu = std::max(mu, c - it.row());
@@ -289,7 +428,7 @@ class SundialsIntegrator final : public Integrator {
         break;
       }
       case Lin::klu:
-        a_ = SUNSparseMatrix(n_, n_, jac_.nonZeros(), CSC_MAT, ctx_);
+        a_ = SUNSparseMatrix(n_, n_, jp_.nonZeros(), CSC_MAT, ctx_);
         ls_ = SUNLinSol_KLU(y, a_, ctx_);
         break;
       case Lin::spgmr:
@@ -396,9 +535,12 @@ class SundialsIntegrator final : public Integrator {
     s.lin_setups = nsetups;
     s.lin_solves = needs_linear_solver() ? nni : 0;  // one linear solve per Newton iteration
     s.krylov_iters = nli;
-    // Analytic Jacobians are counted at the system boundary; difference-quotient ones here.
-    s.jac_evals = use_analytic_ ? 0 : nje;
+    // Analytic Jacobians through OdeSystem::jacobian() are counted at the system boundary,
+    // force_jacobians() calls here; difference-quotient ones are the library's count.
+    s.jac_evals = use_analytic_ ? force_jac_evals_ : nje;
     s.library_f_evals = nfe + nfi + nfels;
+    if (needs_linear_solver())
+      s.library_report = "Linear solver                = " + lin_note_ + "\n" + s.library_report;
   }
 
   Kind kind_;
@@ -411,7 +553,16 @@ class SundialsIntegrator final : public Integrator {
   Index n_ = 0;
   bool use_analytic_ = false;
   Lin lin_ = Lin::dense;  // the linear solver of this run (auto resolved)
-  SparseMat jac_;
+  std::string lin_note_;  // which solver and why, first line of the library report
+  // Analytic Jacobian: fixed pattern with current values, its structure in SUNDIALS' index type,
+  // the maps into it, the model's matrices kept between calls.
+  SparseMat jp_;
+  std::vector<sunindextype> colptr_, rowind_;
+  bool mech_ = false;  // values from MechanicalSystem::force_jacobians
+  SparseMat k_, d_, jac_;
+  BlockMap k_map_, d_map_, j_map_;
+  std::vector<Index> ones_;  // positions of the identity block's entries
+  long force_jac_evals_ = 0;
   Vec y_last_;
   double t_ = 0, fixed_h_ = 0;
   bool fixed_mode_ = false;
@@ -481,6 +632,17 @@ int dirk_order(const std::string& name) {
 }
 
 }  // namespace
+
+// A dense n x n matrix is 8n² bytes (32 MB at 2000 unknowns, 4.8 GB for cloth n = 64's 24,576)
+// and its LU costs 2n³/3 flops per setup; KLU factorises the sparse I - γJ instead, and without
+// an analytic Jacobian SPGMR needs only f and products (no n difference quotients per setup).
+SundialsLinearSolverChoice sundials_auto_linear_solver(Index unknowns, bool analytic_jacobian) {
+  const std::string size = std::to_string(unknowns) + " unknowns";
+  const std::string limit = std::to_string(kSundialsAutoDenseMax);
+  if (unknowns <= kSundialsAutoDenseMax) return {"dense", size + " <= " + limit};
+  if (analytic_jacobian) return {"klu", size + " > " + limit + " and an analytic sparse Jacobian"};
+  return {"spgmr", size + " > " + limit + " and no analytic Jacobian"};
+}
 
 void register_sundials_integrators(IntegratorRegistry& reg) {
   using P = ParamType;

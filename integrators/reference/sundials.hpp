@@ -3,9 +3,10 @@
 // SUNDIALS 7 touches one file.
 //
 //   cvode_bdf, cvode_adams   CVODE, variable order/step; adaptive only. Parameters: rtol, atol,
-//                            linear_solver = dense | band | klu | spgmr (klu uses the model's
-//                            sparse Jacobian and pattern; spgmr a Jacobian-vector product,
-//                            analytic (from the sparse J) or CVODE's difference quotient),
+//                            linear_solver = auto | dense | band | klu | spgmr (klu uses the
+//                            model's sparse Jacobian and pattern; spgmr a Jacobian-vector
+//                            product, analytic (from the sparse J) or CVODE's difference
+//                            quotient; auto: see sundials_auto_linear_solver below),
 //                            max_order, max_steps, jacobian = auto | analytic | dq.
 //   arkode_erk               ARKStep, explicit table by ARKODE name (default
 //                            ARKODE_DORMAND_PRINCE_7_4_5).
@@ -26,12 +27,33 @@
 // library_f_evals is the library's f count, which equals the boundary f count except that
 // CVODE's and ARKODE's difference-quotient Jacobians (and ARKODE's IMEX split, counted per
 // part at the boundary) are reported separately by the library (NumLinRhsEvals).
+//
+// Analytic Jacobians (matrix solvers and SPGMR's products) live in one sparse pattern fixed at
+// reset(): the pattern of J plus the whole diagonal (explicit zeros where J has none; without
+// them SUNDIALS 6's SUNMatScaleAddI rebuilds the sparse matrix quadratically, issue #10). Each
+// Jacobian callback writes values in place through index maps computed once. On a
+// MechanicalSystem with force Jacobians the values come from force_jacobians(t, x, v, K, D)
+// (J = [[0, I], [K, D]]; K and D kept between calls, one evaluation counted per call); other
+// models go through OdeSystem::jacobian().
 #pragma once
+
+#include <string>
 
 #include "core/catalog.hpp"
 
 namespace stiffbench {
 
 void register_sundials_integrators(IntegratorRegistry& reg);
+
+// linear_solver=auto of every SUNDIALS integrator with a linear solver (cvode_bdf, cvode_adams,
+// arkode_dirk, arkode_imex): a dense matrix up to kSundialsAutoDenseMax unknowns; above, KLU
+// when the run uses the model's analytic sparse Jacobian (has_jacobian() and jacobian != dq),
+// else matrix-free SPGMR (no n² matrix, no n difference quotients per Jacobian).
+inline constexpr Index kSundialsAutoDenseMax = 2000;
+struct SundialsLinearSolverChoice {
+  std::string solver;  // "dense", "klu" or "spgmr"
+  std::string rule;    // why, e.g. "24576 unknowns > 2000 and an analytic sparse Jacobian"
+};
+SundialsLinearSolverChoice sundials_auto_linear_solver(Index unknowns, bool analytic_jacobian);
 
 }  // namespace stiffbench
