@@ -175,6 +175,10 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
   pattern_.resize(n, n);
   pattern_.setFromTriplets(trips.begin(), trips.end());
   pattern_.makeCompressed();
+  diag_pattern_.resize(n, n);
+  diag_pattern_.setIdentity();
+  diag_pattern_.makeCompressed();
+  std::fill(diag_pattern_.valuePtr(), diag_pattern_.valuePtr() + n, 0.0);
   auto position = [&](Index row, Index col) {
     using StorageIndex = SparseMat::StorageIndex;
     const StorageIndex* inner = pattern_.innerIndexPtr();
@@ -186,6 +190,7 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
   };
   diag_pos_.resize(static_cast<std::size_t>(np * d * d));
   adj_pos_.resize(neighbours_.size() * static_cast<std::size_t>(d * d));
+  adj_pos_t_.resize(adj_pos_.size());
   for (Index p = 0; p < np; ++p) {
     for (Index a = 0; a < d; ++a)
       for (Index b = 0; b < d; ++b)
@@ -196,6 +201,11 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
       for (Index a = 0; a < d; ++a)
         for (Index b = 0; b < d; ++b)
           adj_pos_[static_cast<std::size_t>((e * d + a) * d + b)] = position(d * p + a, d * q + b);
+      // The transposed block (rows of q, columns of p), element [a][b] at (q a, p b).
+      for (Index a = 0; a < d; ++a)
+        for (Index b = 0; b < d; ++b)
+          adj_pos_t_[static_cast<std::size_t>((e * d + a) * d + b)] =
+              position(d * q + a, d * p + b);
     }
   }
 }
@@ -268,9 +278,62 @@ void MassSpringNetwork::blocks_impl(const double* x, const double* v, double* k_
   const MassPoint* pts = points_.data();
   const Index* dpos = diag_pos_.data();
   const Index* apos = adj_pos_.data();
+  // Without dashpots each spring's block J_s is symmetric and the same from both ends, so point
+  // p can fill its own column block instead of its row block: K_qp = J_s / m_q (0 for a pinned
+  // q), a contiguous range of the column-major storage. With dashpots (J_c is not symmetric)
+  // point p fills its rows.
+  const bool by_column = !has_dashpots_ && !d_values;
+  const Index* tpos = adj_pos_t_.data();
+  const double* inv_mass = inv_mass_.data();
+  if (by_column && k_values) {
+    for_points(num_points(), parallel(), [&](Index p) {
+      const double* xp = x + D * p;
+      for (Index e = start[p]; e < start[p + 1]; ++e)
+        for (int q = 0; q < D * D; ++q) k_values[tpos[e * D * D + q]] = 0.0;
+      double kd[D][D] = {};
+      for (Index e = start[p]; e < start[p + 1]; ++e) {
+        const Neighbour& s = nb[e];
+        const double* xq = x + D * s.other;
+        double dir[D], l2 = 0.0;
+        for (int c = 0; c < D; ++c) {
+          dir[c] = xq[c] - xp[c];
+          l2 += dir[c] * dir[c];
+        }
+        const double l = std::sqrt(l2);
+        for (int c = 0; c < D; ++c) dir[c] /= l;
+        const double across = (dd_only && l < s.rest) ? 0.0 : s.k * (1.0 - s.rest / l);
+        const double along = s.k - across;
+        const double wq = inv_mass[s.other];
+        const Index* pos = tpos + e * D * D;
+        for (int a = 0; a < D; ++a)
+          for (int b = 0; b < D; ++b) {
+            const double j = along * dir[a] * dir[b] + (a == b ? across : 0.0);
+            k_values[pos[a * D + b]] += j * wq;
+            kd[a][b] -= j;
+          }
+      }
+      const Index* pos = dpos + p * D * D;
+      const double wp = inv_mass[p];  // 0 for a pinned point: zero rows
+      for (int a = 0; a < D; ++a)
+        for (int b = 0; b < D; ++b) k_values[pos[a * D + b]] = kd[a][b] * wp;
+    });
+    return;
+  }
   for_points(num_points(), parallel(), [&](Index p) {
     const MassPoint& pt = pts[p];
-    if (pt.pinned) return;  // zero rows (the values were zeroed by the caller)
+    // This point's rows: cleared here (in parallel, no pass over the whole matrix), then summed.
+    for (Index e = start[p]; e < start[p + 1]; ++e)
+      for (int q = 0; q < D * D; ++q) {
+        if (k_values) k_values[apos[e * D * D + q]] = 0.0;
+        if (d_values) d_values[apos[e * D * D + q]] = 0.0;
+      }
+    if (pt.pinned) {  // zero rows
+      for (int q = 0; q < D * D; ++q) {
+        if (k_values) k_values[dpos[p * D * D + q]] = 0.0;
+        if (d_values) d_values[dpos[p * D * D + q]] = 0.0;
+      }
+      return;
+    }
     const double inv_m = 1.0 / pt.mass;
     const double* xp = x + D * p;
     const double* vp = v + D * p;
@@ -329,15 +392,28 @@ void MassSpringNetwork::blocks_impl(const double* x, const double* v, double* k_
 }
 
 void MassSpringNetwork::fill_blocks(CVecRef x, CVecRef v, SparseMat* k, SparseMat* d) const {
-  for (SparseMat* m : {k, d}) {
-    if (!m) continue;
-    *m = pattern_;
-    std::fill(m->valuePtr(), m->valuePtr() + m->nonZeros(), 0.0);
-  }
+  // A matrix that already has this pattern (same size and number of nonzeros, compressed: a
+  // previous result of this network) keeps its storage; only the values are written. Without
+  // dashpots D = -(γ/m) I is diagonal and gets a diagonal pattern.
+  const auto ensure = [](SparseMat* m, const SparseMat& pattern) {
+    if (!m) return;
+    if (m->rows() != pattern.rows() || m->cols() != pattern.cols() ||
+        m->nonZeros() != pattern.nonZeros() || !m->isCompressed())
+      *m = pattern;
+  };
+  ensure(k, pattern_);
+  ensure(d, has_dashpots_ ? pattern_ : diag_pattern_);
   double* kv = k ? k->valuePtr() : nullptr;
-  double* dv = d ? d->valuePtr() : nullptr;
-  detail::with_dim<1, 3>(
-      dim_, [&](auto dim) { blocks_impl<decltype(dim)::value>(x.data(), v.data(), kv, dv); });
+  double* dv = d && has_dashpots_ ? d->valuePtr() : nullptr;
+  if (kv || dv)
+    detail::with_dim<1, 3>(
+        dim_, [&](auto dim) { blocks_impl<decltype(dim)::value>(x.data(), v.data(), kv, dv); });
+  if (d && !has_dashpots_) {
+    double* dd = d->valuePtr();
+    for (Index p = 0; p < num_points(); ++p)
+      for (int c = 0; c < dim_; ++c)
+        dd[dim_ * p + c] = -opt_.point_damping * inv_mass_[static_cast<std::size_t>(p)];
+  }
 }
 
 void MassSpringNetwork::stiffness_block(double, CVecRef x, CVecRef v, SparseMat& k) const {
@@ -346,6 +422,11 @@ void MassSpringNetwork::stiffness_block(double, CVecRef x, CVecRef v, SparseMat&
 
 void MassSpringNetwork::damping_block(double, CVecRef x, CVecRef v, SparseMat& d) const {
   fill_blocks(x, v, nullptr, &d);
+}
+
+void MassSpringNetwork::force_jacobians(double, CVecRef x, CVecRef v, SparseMat& k,
+                                        SparseMat& d) const {
+  fill_blocks(x, v, &k, &d);
 }
 
 std::vector<Index> MassSpringNetwork::fixed_dofs() const {

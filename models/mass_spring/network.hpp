@@ -25,9 +25,13 @@
 //   D_c = c d dᵀ                                                              (dashpot, ∂/∂v),
 // the force derivatives are ∂f_i/∂x_j = J_s + J_c = -∂f_i/∂x_i and ∂f_i/∂v_j = D_c =
 // -∂f_i/∂v_i; J_c follows from ∂d/∂x_j = (I - d dᵀ)/l (derived in network.cpp). K = M⁻¹ ∂f/∂x
-// and D = M⁻¹ ∂f/∂v - (γ/m) I. Both are returned with ONE fixed pattern, computed once: a dim×dim
+// and D = M⁻¹ ∂f/∂v - (γ/m) I. K is returned with one fixed pattern, computed once: a dim×dim
 // block for every point's diagonal and for every ordered pair of points joined by a spring
-// (explicit zeros where a value happens to vanish, e.g. D of an undamped network).
+// (explicit zeros where a value happens to vanish); D has the same pattern when the network has
+// dashpots and the diagonal pattern otherwise. A matrix passed in that already has the pattern
+// keeps its storage (values written in place, each point's rows by the thread that owns the
+// point), so implicit solvers evaluate K and D every step without allocating;
+// force_jacobians() fills both in one pass over the springs.
 // Option `compressed_dd_only` (off by default): for compressed springs (l < L) keep only
 // k d dᵀ in J_s, dropping k (1 - L/l)(I - d dᵀ), whose negative eigenvalue makes the stiffness
 // indefinite. The Jacobian is then inexact (an approximation for implicit solvers); the forces
@@ -149,6 +153,8 @@ class MassSpringNetwork final : public MechanicalSystem {
   bool has_force_jacobians() const override { return true; }
   void stiffness_block(double t, CVecRef x, CVecRef v, SparseMat& k) const override;
   void damping_block(double t, CVecRef x, CVecRef v, SparseMat& d) const override;
+  // K and D in one pass over the springs, in place (see fill_blocks in network.cpp).
+  void force_jacobians(double t, CVecRef x, CVecRef v, SparseMat& k, SparseMat& d) const override;
   // The pinned points' dofs.
   std::vector<Index> fixed_dofs() const override;
   // ∂f/∂x of springs is a Hessian and point damping is -γI; dashpots make ∂f/∂x non-symmetric.
@@ -240,8 +246,10 @@ class MassSpringNetwork final : public MechanicalSystem {
   // Fixed pattern of K and D, and for each point's diagonal block and each adjacency entry the
   // position in valuePtr() of every block entry (row-major within the block).
   SparseMat pattern_;
-  std::vector<Index> diag_pos_;  // dim² per point
-  std::vector<Index> adj_pos_;   // dim² per adjacency entry
+  SparseMat diag_pattern_;        // D's pattern without dashpots (D = -(γ/m) I)
+  std::vector<Index> diag_pos_;   // dim² per point
+  std::vector<Index> adj_pos_;    // dim² per adjacency entry
+  std::vector<Index> adj_pos_t_;  // the same for the transposed block (rows of the neighbour)
 
   std::function<void(double, VecRef)> exact_;
 };
