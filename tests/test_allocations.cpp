@@ -1,0 +1,115 @@
+// No heap allocation inside a step of any hand-written integrator after the first (issue #10):
+// malloc, calloc, realloc and operator new (which calls malloc) are replaced in this test binary
+// by versions that count while a CountAllocations scope is alive. glibc's __libc_* entry points
+// do the work. Not built with the sanitizers, which replace the same functions (tests/CMakeLists).
+//
+// libgomp allocates a thread team each time it enters a parallel region with ONE thread (not
+// with two), so the runs use two OpenMP threads; the large cloth takes the parallel paths of the
+// network and of the velocity-form solver.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <atomic>
+#include <cstdlib>
+
+#include "core/driver.hpp"
+#include "tests/test_support.hpp"
+
+extern "C" void* __libc_malloc(std::size_t);
+extern "C" void* __libc_calloc(std::size_t, std::size_t);
+extern "C" void* __libc_realloc(void*, std::size_t);
+
+namespace {
+std::atomic<long> g_allocations{0};
+std::atomic<bool> g_counting{false};
+void count() {
+  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1);
+}
+}  // namespace
+
+extern "C" void* malloc(std::size_t n) {
+  count();
+  return __libc_malloc(n);
+}
+extern "C" void* calloc(std::size_t n, std::size_t size) {
+  count();
+  return __libc_calloc(n, size);
+}
+extern "C" void* realloc(void* p, std::size_t n) {
+  count();
+  return __libc_realloc(p, n);
+}
+
+namespace stiffbench {
+namespace {
+
+using testing_support::model;
+
+struct CountAllocations {
+  CountAllocations() {
+    g_allocations = 0;
+    g_counting = true;
+  }
+  ~CountAllocations() { g_counting = false; }
+  long count() const { return g_allocations.load(); }
+};
+
+// The counter sees allocations (a self-check, so that a silent counter cannot pass the test).
+TEST(Allocations, CounterCounts) {
+  long seen = 0;
+  {
+    CountAllocations c;
+    Vec v(1000);
+    v.setOnes();
+    std::vector<int> w(10);
+    seen = c.count() + static_cast<long>(v.sum() + w.size()) * 0;
+  }
+  EXPECT_GE(seen, 2);
+}
+
+// Every registered fixed-step integrator of the explicit, symplectic and implicit families that
+// can run on the model: reset, two steps (workspaces may grow), then ten steps with no
+// allocation. Models: a damped pinned cloth small (ldlt, serial) and large (cg, OpenMP paths),
+// and an undamped chain for the velocity-independent methods.
+TEST(Allocations, NoneInsideSteps) {
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(2);
+  const std::vector<std::pair<std::string, std::vector<std::string>>> models = {
+      {"cloth", {"n=8", "damping=0.1"}},
+      {"cloth", {"n=48", "damping=0.1"}},
+      {"spring_chain", {"n=20"}}};
+  int checked = 0;
+  for (const auto& [name, params] : models) {
+    auto sys = model(name, params);
+    for (const auto& entry : integrator_registry().entries()) {
+      const Family f = entry.info.family;
+      if (f != Family::explicit_rk && f != Family::symplectic && f != Family::implicit) continue;
+      auto integ = integrator_registry().create(entry.info.name, Params());
+      if (!integ->supports_fixed_step()) continue;
+      try {
+        check_compatible(integ->info(), *sys);
+      } catch (const BadInput&) {
+        continue;
+      }
+      Vec y = sys->initial_state();
+      SolveStats stats;
+      const double h = 1e-3;
+      integ->reset(*sys, 0.0, y);
+      for (int i = 0; i < 2; ++i)
+        ASSERT_EQ(integ->step(*sys, h * i, y, h, stats), Status::ok) << entry.info.name;
+      long allocations = 0;
+      {
+        CountAllocations c;
+        for (int i = 2; i < 12; ++i) integ->step(*sys, h * i, y, h, stats);
+        allocations = c.count();
+      }
+      EXPECT_EQ(allocations, 0) << entry.info.name << " on " << name << " " << params[0];
+      ++checked;
+    }
+  }
+  omp_set_num_threads(threads);
+  EXPECT_GE(checked, 30);  // every family is covered (about 24 methods on three models)
+}
+
+}  // namespace
+}  // namespace stiffbench
