@@ -2,6 +2,8 @@
 // systems, drivers and statistics.
 #include <gtest/gtest.h>
 
+#include "integrators/reference/sundials.hpp"
+
 #include <cmath>
 #include <limits>
 
@@ -128,11 +130,12 @@ TEST(ReferenceFixedStep, AdaptiveOnlyMethodsAreRefusedInStepStudies) {
 // the linear solver changes only how Newton's systems are solved, so at rtol = 1e-10 the
 // solutions agree to ~1e-8 (the tolerance-driven step sequences differ slightly).
 // On the mass-spring cloth when that model is registered (issue #4), otherwise on HIRES.
+// `velocity` (flexible GMRES preconditioned by the velocity-form solve) joins them on the cloth.
 TEST(ReferenceLinearSolvers, CvodeDenseBandKluSpgmrAgreeOnCloth) {
   const bool cloth = model_registry().find("cloth") != nullptr;
   auto sys = cloth ? model("cloth", {"n=5"}) : model("hires");
   Vec ref;
-  for (const auto& ls : {"dense", "band", "klu", "spgmr"}) {
+  for (const auto& ls : {"dense", "band", "klu", "spgmr", "velocity"}) {
     auto integ =
         make("cvode_bdf", {"rtol=1e-10", "atol=1e-12", std::string("linear_solver=") + ls});
     const RunResult r = run_adaptive(*sys, *integ, {0.5, 0});
@@ -146,6 +149,19 @@ TEST(ReferenceLinearSolvers, CvodeDenseBandKluSpgmrAgreeOnCloth) {
       EXPECT_GT(r.stats.krylov_iters, 0);
     }
   }
+}
+
+// linear_solver=auto: dense up to 2000 unknowns; above, velocity for mechanical models with force
+// Jacobians, KLU for other analytic sparse Jacobians, SPGMR without one. A run on a model the
+// velocity solver does not apply to is refused naming the parameter.
+TEST(ReferenceLinearSolvers, AutoChoiceBySizeAndStructure) {
+  EXPECT_EQ(sundials_auto_linear_solver(2000, true, true).solver, "dense");
+  EXPECT_EQ(sundials_auto_linear_solver(2001, true, true).solver, "velocity");
+  EXPECT_EQ(sundials_auto_linear_solver(2001, true, false).solver, "klu");
+  EXPECT_EQ(sundials_auto_linear_solver(2001, false, false).solver, "spgmr");
+  auto hires = model("hires");
+  auto integ = make("cvode_bdf", {"linear_solver=velocity"});
+  EXPECT_THROW(run_adaptive(*hires, *integ, {1.0, 0}), BadInput);
 }
 
 // Robertson's three concentrations sum to 1 for all time (the rates cancel in the sum); CVODE

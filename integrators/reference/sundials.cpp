@@ -8,6 +8,7 @@
 #include <sunlinsol/sunlinsol_band.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunlinsol/sunlinsol_klu.h>
+#include <sunlinsol/sunlinsol_spfgmr.h>
 #include <sunlinsol/sunlinsol_spgmr.h>
 #include <sunmatrix/sunmatrix_band.h>
 #include <sunmatrix/sunmatrix_dense.h>
@@ -19,12 +20,15 @@
 #include <cstdlib>
 #include <functional>
 #include <iostream>
+#include <memory>
+
+#include "integrators/implicit/velocity_form.hpp"
 
 namespace stiffbench {
 
 namespace {
 
-enum class Lin { automatic, dense, band, klu, spgmr };
+enum class Lin { automatic, dense, band, klu, spgmr, velocity };
 
 const char* to_string(Lin l) {
   switch (l) {
@@ -38,6 +42,8 @@ const char* to_string(Lin l) {
       return "klu";
     case Lin::spgmr:
       return "spgmr";
+    case Lin::velocity:
+      return "velocity";
   }
   return "?";
 }
@@ -136,8 +142,13 @@ class SundialsIntegrator final : public Integrator {
         !use_analytic_ || sys.has_jacobian(),
         "integrator '" + info().name + "': model '" + sys.name() + "' has no analytic Jacobian");
     if (set_.lin == Lin::automatic) {
-      const SundialsLinearSolverChoice c = sundials_auto_linear_solver(n_, use_analytic_);
-      lin_ = c.solver == "klu" ? Lin::klu : c.solver == "spgmr" ? Lin::spgmr : Lin::dense;
+      const MechanicalSystem* m = sys.as_mechanical();
+      const bool velocity = use_analytic_ && m && m->has_force_jacobians();
+      const SundialsLinearSolverChoice c = sundials_auto_linear_solver(n_, use_analytic_, velocity);
+      lin_ = c.solver == "klu"        ? Lin::klu
+             : c.solver == "spgmr"    ? Lin::spgmr
+             : c.solver == "velocity" ? Lin::velocity
+                                      : Lin::dense;
       lin_note_ = std::string(to_string(lin_)) + " (linear_solver=auto: " + c.rule + ")";
     } else {
       lin_ = set_.lin;
@@ -146,8 +157,18 @@ class SundialsIntegrator final : public Integrator {
     require_input(lin_ != Lin::klu || use_analytic_,
                   "integrator '" + info().name +
                       "': linear_solver=klu needs the model's analytic sparse Jacobian");
+    require_input(lin_ != Lin::velocity || (use_analytic_ && sys.as_mechanical() &&
+                                            sys.as_mechanical()->has_force_jacobians()),
+                  "integrator '" + info().name +
+                      "': linear_solver=velocity needs a mechanical model with force Jacobians "
+                      "(and jacobian=auto or analytic)");
     force_jac_evals_ = 0;
     if (use_analytic_ && needs_linear_solver()) build_jacobian_layout(t0, y0);
+    vel_.reset();
+    if (lin_ == Lin::velocity) {
+      vel_ = std::make_unique<VelocityFormSolver>();
+      vel_->reset(*sys.as_mechanical(), LinearSolverOptions{}, t0, y0);
+    }
     t_ = t0;
     y_last_ = y0;
     fixed_h_ = 0;
@@ -349,6 +370,40 @@ class SundialsIntegrator final : public Integrator {
     out.noalias() = self->jp_ * vv;
     return 0;
   }
+  // Preconditioner P = I - γJ (CVODE's Newton matrix; ARKODE's M - γJ with M = I) set up and
+  // solved in velocity form. K and D are evaluated when the library asks for a fresh Jacobian
+  // (jok false), counted with the Jacobian evaluations.
+  static constexpr double kVelocityPrecTol = 1e-4;
+  static int psetup_cb(sunrealtype t, N_Vector y, N_Vector, sunbooleantype jok,
+                       sunbooleantype* jcur, sunrealtype gamma, void* ud) {
+    auto* self = static_cast<SundialsIntegrator*>(ud);
+    return self->guarded([&] {
+      if (!jok) {
+        Eigen::Map<const Vec> yy(N_VGetArrayPointer(y), self->n_);
+        self->vel_->update(t, yy);
+        ++self->force_jac_evals_;
+      }
+      *jcur = jok ? SUNFALSE : SUNTRUE;
+      if (!self->vel_->factor(gamma)) throw std::runtime_error(self->vel_->error());
+      self->vel_->set_tolerance(kVelocityPrecTol);
+    });
+  }
+  static int psolve_cb(sunrealtype, N_Vector, N_Vector, N_Vector r, N_Vector z, sunrealtype,
+                       sunrealtype, int, void* ud) {
+    auto* self = static_cast<SundialsIntegrator*>(ud);
+    Eigen::Map<const Vec> rr(N_VGetArrayPointer(r), self->n_);
+    Eigen::Map<Vec> zz(N_VGetArrayPointer(z), self->n_);
+    zz.setZero();
+    return self->vel_->solve(rr, zz).ok ? 0 : 1;  // 1: recoverable (the library retries)
+  }
+  static int velocity_jtimes_cb(N_Vector v, N_Vector jv, sunrealtype, N_Vector, N_Vector, void* ud,
+                                N_Vector) {
+    auto* self = static_cast<SundialsIntegrator*>(ud);
+    Eigen::Map<const Vec> vv(N_VGetArrayPointer(v), self->n_);
+    Eigen::Map<Vec> out(N_VGetArrayPointer(jv), self->n_);
+    self->vel_->jacobian_times(vv, out);
+    return 0;
+  }
   static void err_cb(int code, const char* module, const char* function, char* msg, void* ud) {
     if (code > 0) return;  // warnings
     auto* self = static_cast<SundialsIntegrator*>(ud);
@@ -434,6 +489,12 @@ class SundialsIntegrator final : public Integrator {
       case Lin::spgmr:
         ls_ = SUNLinSol_SPGMR(y, SUN_PREC_NONE, 0, ctx_);
         break;
+      case Lin::velocity:
+        // Flexible GMRES, right-preconditioned by the velocity-form solve of P = I - γJ (an
+        // inner Krylov solve to a relative kVelocityPrecTol is not a fixed linear operator, hence
+        // the flexible variant); with the exact J the outer iteration converges in one or two.
+        ls_ = SUNLinSol_SPFGMR(y, SUN_PREC_RIGHT, 5, ctx_);
+        break;
     }
     if (cv) {
       ok(CVodeSetLinearSolver(mem_, ls_, a_), "CVodeSetLinearSolver");
@@ -443,6 +504,18 @@ class SundialsIntegrator final : public Integrator {
          "ARKStepSetLSetupFrequency");
     }
     if (!use_analytic_) return;  // the library's difference quotients
+    if (lin_ == Lin::velocity) {
+      // J v from the K and D of the last preconditioner set-up (a Jacobian as current as the
+      // Newton matrix of the matrix-based solvers), no per-solve Jacobian fill.
+      if (cv) {
+        ok(CVodeSetPreconditioner(mem_, psetup_cb, psolve_cb), "CVodeSetPreconditioner");
+        ok(CVodeSetJacTimes(mem_, nullptr, velocity_jtimes_cb), "CVodeSetJacTimes");
+      } else {
+        ok(ARKStepSetPreconditioner(mem_, psetup_cb, psolve_cb), "ARKStepSetPreconditioner");
+        ok(ARKStepSetJacTimes(mem_, nullptr, velocity_jtimes_cb), "ARKStepSetJacTimes");
+      }
+      return;
+    }
     if (lin_ == Lin::spgmr) {
       if (cv)
         ok(CVodeSetJacTimes(mem_, jtsetup_cb, jtimes_cb), "CVodeSetJacTimes");
@@ -552,7 +625,8 @@ class SundialsIntegrator final : public Integrator {
   const OdeSystem* sys_ = nullptr;
   Index n_ = 0;
   bool use_analytic_ = false;
-  Lin lin_ = Lin::dense;  // the linear solver of this run (auto resolved)
+  Lin lin_ = Lin::dense;                     // the linear solver of this run (auto resolved)
+  std::unique_ptr<VelocityFormSolver> vel_;  // linear_solver=velocity: the preconditioner
   std::string lin_note_;  // which solver and why, first line of the library report
   // Analytic Jacobian: fixed pattern with current values, its structure in SUNDIALS' index type,
   // the maps into it, the model's matrices kept between calls.
@@ -581,9 +655,12 @@ std::vector<ParamSpec> common_specs(bool linear) {
     s.push_back({"linear_solver",
                  P::text,
                  "auto",
-                 "dense, band, klu (sparse, needs the analytic Jacobian) or spgmr (matrix-free "
-                 "GMRES); auto: dense up to 2000 unknowns, spgmr above",
-                 {"auto", "dense", "band", "klu", "spgmr"}});
+                 "dense, band, klu (sparse, needs the analytic Jacobian), spgmr (matrix-free "
+                 "GMRES) or velocity (flexible GMRES preconditioned by the velocity-form solve "
+                 "of I - gamma J; mechanical models with force Jacobians); auto: dense up to "
+                 "2000 unknowns; above, velocity for mechanical models with force Jacobians, "
+                 "klu with another analytic sparse Jacobian, spgmr otherwise",
+                 {"auto", "dense", "band", "klu", "spgmr", "velocity"}});
     s.push_back({"jacobian",
                  P::text,
                  "auto",
@@ -603,11 +680,12 @@ Settings read_common(const Params& p, bool linear) {
   require_input(s.max_steps >= 1, "parameter 'max_steps' must be >= 1");
   if (linear) {
     const std::string& l = p.text("linear_solver");
-    s.lin = l == "band"    ? Lin::band
-            : l == "klu"   ? Lin::klu
-            : l == "spgmr" ? Lin::spgmr
-            : l == "dense" ? Lin::dense
-                           : Lin::automatic;
+    s.lin = l == "band"       ? Lin::band
+            : l == "klu"      ? Lin::klu
+            : l == "spgmr"    ? Lin::spgmr
+            : l == "velocity" ? Lin::velocity
+            : l == "dense"    ? Lin::dense
+                              : Lin::automatic;
     s.jacobian = p.text("jacobian");
   }
   return s;
@@ -636,10 +714,13 @@ int dirk_order(const std::string& name) {
 // A dense n x n matrix is 8n² bytes (32 MB at 2000 unknowns, 4.8 GB for cloth n = 64's 24,576)
 // and its LU costs 2n³/3 flops per setup; KLU factorises the sparse I - γJ instead, and without
 // an analytic Jacobian SPGMR needs only f and products (no n difference quotients per setup).
-SundialsLinearSolverChoice sundials_auto_linear_solver(Index unknowns, bool analytic_jacobian) {
+SundialsLinearSolverChoice sundials_auto_linear_solver(Index unknowns, bool analytic_jacobian,
+                                                       bool mechanical_blocks) {
   const std::string size = std::to_string(unknowns) + " unknowns";
   const std::string limit = std::to_string(kSundialsAutoDenseMax);
   if (unknowns <= kSundialsAutoDenseMax) return {"dense", size + " <= " + limit};
+  if (analytic_jacobian && mechanical_blocks)
+    return {"velocity", size + " > " + limit + " and a mechanical model with force Jacobians"};
   if (analytic_jacobian) return {"klu", size + " > " + limit + " and an analytic sparse Jacobian"};
   return {"spgmr", size + " > " + limit + " and no analytic Jacobian"};
 }

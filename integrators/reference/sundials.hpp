@@ -47,13 +47,17 @@ void register_sundials_integrators(IntegratorRegistry& reg);
 
 // linear_solver=auto of every SUNDIALS integrator with a linear solver (cvode_bdf, cvode_adams,
 // arkode_dirk, arkode_imex): a dense matrix up to kSundialsAutoDenseMax unknowns; above, KLU
-// when the run uses the model's analytic sparse Jacobian (has_jacobian() and jacobian != dq),
+// when the run uses the model's analytic sparse Jacobian (has_jacobian() and jacobian != dq) —
+// for a MechanicalSystem with force Jacobians `velocity` instead: flexible GMRES right-
+// preconditioned by the testbed's velocity-form solve of I - γJ (integrators/implicit/
+// velocity_form.hpp; KLU on the 2n first-order matrix of cloth 64² took 47 s to t = 0.5) —
 // else matrix-free SPGMR (no n² matrix, no n difference quotients per Jacobian).
 inline constexpr Index kSundialsAutoDenseMax = 2000;
 struct SundialsLinearSolverChoice {
   std::string solver;  // "dense", "klu" or "spgmr"
   std::string rule;    // why, e.g. "24576 unknowns > 2000 and an analytic sparse Jacobian"
 };
-SundialsLinearSolverChoice sundials_auto_linear_solver(Index unknowns, bool analytic_jacobian);
+SundialsLinearSolverChoice sundials_auto_linear_solver(Index unknowns, bool analytic_jacobian,
+                                                       bool mechanical_blocks = false);
 
 }  // namespace stiffbench
