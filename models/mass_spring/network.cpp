@@ -6,6 +6,7 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <random>
 #include <type_traits>
@@ -157,6 +158,42 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
         s.i, s.k, s.rest, s.damping};
   }
 
+  // Springs for the right-hand side, grouped by partition of the points (see the header).
+  {
+    // The partition count depends on the size only (not on the threads or on the parallel
+    // threshold), so the serial and the parallel path sum in the same order.
+    const Index parts = np >= 64 * kRhsPartitions ? kRhsPartitions : 1;
+    const auto part_of = [&](Index p) { return static_cast<Index>((p * parts) / np); };
+    // part_of(p) inverts p0 = np·q/parts: the first q with np·(q+1)/parts > p.
+    const auto owner = [&](Index p) {
+      Index q = part_of(p);
+      while (q + 1 < parts && np * (q + 1) / parts <= p) ++q;
+      while (q > 0 && np * q / parts > p) --q;
+      return q;
+    };
+    std::vector<Index> count(static_cast<std::size_t>(parts) + 1, 0);
+    for (const Spring& sp : springs_) {
+      const Index qi = owner(sp.i), qj = owner(sp.j);
+      ++count[static_cast<std::size_t>(qi == qj ? qi : parts)];
+    }
+    part_start_.assign(static_cast<std::size_t>(parts) + 1, 0);
+    for (Index q = 0; q < parts; ++q)
+      part_start_[static_cast<std::size_t>(q) + 1] =
+          part_start_[static_cast<std::size_t>(q)] + count[static_cast<std::size_t>(q)];
+    std::vector<Index> next(part_start_.begin(), part_start_.end() - 1);
+    next.push_back(part_start_.back());  // cross springs after the partitions' own
+    packed_.resize(springs_.size());
+    packed_damping_.assign(has_dashpots_ ? springs_.size() : 0, 0.0);
+    for (const Spring& sp : springs_) {
+      const Index qi = owner(sp.i), qj = owner(sp.j);
+      const auto slot =
+          static_cast<std::size_t>(next[static_cast<std::size_t>(qi == qj ? qi : parts)]++);
+      packed_[slot] = {static_cast<std::int32_t>(sp.i), static_cast<std::int32_t>(sp.j), sp.k,
+                       sp.rest};
+      if (has_dashpots_) packed_damping_[slot] = sp.damping;
+    }
+  }
+
   // The fixed pattern of K and D: every point's diagonal block and one block per ordered pair
   // of spring ends (pinned rows included, as explicit zeros).
   const Index d = dim_;
@@ -216,41 +253,67 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
 template <int D>
 void MassSpringNetwork::acceleration_impl(const double* x, const double* v, double* a) const {
   const double gamma = opt_.point_damping;
-  const Index* start = start_.data();
-  const Neighbour* nb = neighbours_.data();
   const MassPoint* pts = points_.data();
-  for_points(num_points(), parallel(), [&](Index p) {
+  const PackedSpring* sp = packed_.data();
+  const double* damp = packed_damping_.data();
+  const bool dashpots = has_dashpots_;
+  const Index np = num_points();
+  const Index parts = static_cast<Index>(part_start_.size()) - 1;
+  // a first holds the force sums. Each spring once: coef = k (l - L)/l (+ c (u·r)/l²), f_i +=
+  // coef r, f_j -= coef r (exactly opposite).
+  const auto spring = [&](Index e) {
+    const PackedSpring& s = sp[e];
+    const double* xi = x + D * static_cast<Index>(s.i);
+    const double* xj = x + D * static_cast<Index>(s.j);
+    double r[D], l2 = 0.0;
+    for (int c = 0; c < D; ++c) {
+      r[c] = xj[c] - xi[c];
+      l2 += r[c] * r[c];
+    }
+    const double l = std::sqrt(l2);
+    double coef = s.k * (l - s.rest) / l;
+    if (dashpots && damp[e] != 0.0) {
+      const double* vi = v + D * static_cast<Index>(s.i);
+      const double* vj = v + D * static_cast<Index>(s.j);
+      double ur = 0.0;
+      for (int c = 0; c < D; ++c) ur += (vj[c] - vi[c]) * r[c];
+      coef += damp[e] * ur / l2;
+    }
+    double* fi = a + D * static_cast<Index>(s.i);
+    double* fj = a + D * static_cast<Index>(s.j);
+    for (int c = 0; c < D; ++c) {
+      fi[c] += coef * r[c];
+      fj[c] -= coef * r[c];
+    }
+  };
+  // 1. Each partition of points (contiguous index ranges, a count fixed by the network's size,
+  //    not by the threads) clears its points and adds its interior springs.
+  const auto partition = [&](Index q) {
+    const Index p0 = np * q / parts, p1 = np * (q + 1) / parts;
+    std::fill(a + D * p0, a + D * p1, 0.0);
+    for (Index e = part_start_[static_cast<std::size_t>(q)];
+         e < part_start_[static_cast<std::size_t>(q) + 1]; ++e)
+      spring(e);
+  };
+  if (parts > 1 && parallel()) {
+#pragma omp parallel for schedule(static)
+    for (Index q = 0; q < parts; ++q) partition(q);
+  } else {
+    for (Index q = 0; q < parts; ++q) partition(q);
+  }
+  // 2. Springs between partitions, in a fixed order.
+  for (Index e = part_start_.back(); e < static_cast<Index>(packed_.size()); ++e) spring(e);
+  // 3. a = g + (f - γ v)/m; pinned points do not move.
+  for_points(np, parallel(), [&](Index p) {
     double* ap = a + D * p;
     const MassPoint& pt = pts[p];
     if (pt.pinned) {
       for (int c = 0; c < D; ++c) ap[c] = 0.0;
       return;
     }
-    const double* xp = x + D * p;
     const double* vp = v + D * p;
-    double f[D];
-    for (int c = 0; c < D; ++c) f[c] = -gamma * vp[c];
-    for (Index e = start[p]; e < start[p + 1]; ++e) {
-      const Neighbour& s = nb[e];
-      const double* xq = x + D * s.other;
-      double r[D], l2 = 0.0;
-      for (int c = 0; c < D; ++c) {
-        r[c] = xq[c] - xp[c];
-        l2 += r[c] * r[c];
-      }
-      const double l = std::sqrt(l2);
-      // f_p = k (l - L) d + c ((v_q - v_p)·d) d = coef · r with d = r/l. The same coef comes
-      // out from q's end (r and v_q - v_p flip sign), so f_q = -f_p bitwise.
-      double coef = s.k * (l - s.rest) / l;
-      if (s.damping != 0.0) {
-        const double* vq = v + D * s.other;
-        double ur = 0.0;
-        for (int c = 0; c < D; ++c) ur += (vq[c] - vp[c]) * r[c];
-        coef += s.damping * ur / l2;
-      }
-      for (int c = 0; c < D; ++c) f[c] += coef * r[c];
-    }
-    for (int c = 0; c < D; ++c) ap[c] = opt_.gravity[static_cast<std::size_t>(c)] + f[c] / pt.mass;
+    for (int c = 0; c < D; ++c)
+      ap[c] = opt_.gravity[static_cast<std::size_t>(c)] + (ap[c] - gamma * vp[c]) / pt.mass;
   });
 }
 

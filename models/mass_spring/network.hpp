@@ -61,11 +61,14 @@
 //     for uniform γ/m and an underdamped mode it is still ω). Networks with constraints return
 //     no estimate: the ODE the integrators see there is free flight plus projection.
 //
-// Right-hand side: no heap allocation per call. Per-point adjacency lists in CSR form, built
-// once, let each point sum the forces of its own springs (gather: every spring is evaluated from
-// both ends, no atomics), in parallel with OpenMP over points when the network has at least
-// `parallel_threshold` points. Each point's sum runs in a fixed order whatever thread computes
-// it, so results are bitwise identical for any thread count. K and D are filled the same way.
+// Right-hand side: no heap allocation per call, every spring evaluated once (f_i += c r,
+// f_j -= c r, exactly opposite) from a packed list (two 32-bit indices, k and L: 24 bytes).
+// Networks with at least `parallel_threshold` points split their points into kRhsPartitions
+// contiguous index ranges; each partition's interior springs are summed by one OpenMP thread
+// (a scatter into its own points only), then the few springs between partitions in a fixed
+// order, then a = g + (f - γv)/m in parallel. The partition count depends on the network, not on
+// the threads, so every point's sum runs in the same order for any thread count: results are
+// bitwise identical for 1 and 2 threads (tested). K and D are filled per point (network.cpp).
 //
 // Constraints: distance constraints C = |x_i - x_j| - L (e.g. the constrained pendulum chain),
 // enforced by project() after each step (the driver calls it; see core/ode_system.hpp). With
@@ -96,6 +99,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -238,6 +242,17 @@ class MassSpringNetwork final : public MechanicalSystem {
   std::vector<double> inv_mass_;  // per point, 0 for pinned points (projection weights)
   std::vector<bool> active_;      // per constraint: not both ends pinned
   std::vector<Coupling> constraint_couplings_;
+
+  // Right-hand side springs (see the header comment): partition q's interior springs are
+  // packed_[part_start_[q] .. part_start_[q+1]), the springs between partitions follow.
+  static constexpr Index kRhsPartitions = 32;
+  struct PackedSpring {
+    std::int32_t i, j;
+    double k, rest;
+  };
+  std::vector<PackedSpring> packed_;
+  std::vector<double> packed_damping_;  // dashpot coefficients (empty without dashpots)
+  std::vector<Index> part_start_;
 
   // CSR adjacency: springs of point p are neighbours_[start_[p] .. start_[p+1]).
   std::vector<Index> start_;
