@@ -59,6 +59,10 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
       constraints_(std::move(constraints)),
       opt_(options) {
   const std::string who = name_ + ": ";
+  // Per-item checks build their message only when they fail (a 512² cloth has 1.5 M springs).
+  const auto check = [](bool ok, const auto& message) {
+    if (!ok) throw BadInput(message());
+  };
   require_input(dim_ >= 1 && dim_ <= 3, who + "dimension must be 1, 2 or 3");
   require_input(!points_.empty(), who + "the network has no points");
   const Index np = num_points();
@@ -72,33 +76,35 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
                 who + "point damping must be >= 0");
   for (std::size_t p = 0; p < points_.size(); ++p) {
     MassPoint& pt = points_[p];
-    require_input(std::isfinite(pt.mass) && pt.mass > 0, who + item("point", p) + ": mass <= 0");
+    check(std::isfinite(pt.mass) && pt.mass > 0,
+          [&] { return who + item("point", p) + ": mass <= 0"; });
     for (int c = 0; c < 3; ++c) {
       const auto cc = static_cast<std::size_t>(c);
-      require_input(std::isfinite(pt.x[cc]) && std::isfinite(pt.v[cc]),
-                    who + item("point", p) + ": non-finite state");
+      check(std::isfinite(pt.x[cc]) && std::isfinite(pt.v[cc]),
+            [&] { return who + item("point", p) + ": non-finite state"; });
       if (c >= dim_)
-        require_input(pt.x[cc] == 0.0 && pt.v[cc] == 0.0,
-                      who + item("point", p) + ": component beyond the dimension");
+        check(pt.x[cc] == 0.0 && pt.v[cc] == 0.0,
+              [&] { return who + item("point", p) + ": component beyond the dimension"; });
     }
     if (pt.pinned) pt.v = {0.0, 0.0, 0.0};
   }
   for (std::size_t e = 0; e < springs_.size(); ++e) {
     const Spring& s = springs_[e];
-    require_input(s.i >= 0 && s.i < np && s.j >= 0 && s.j < np && s.i != s.j,
-                  who + item("spring", e) + ": bad end points");
-    require_input(std::isfinite(s.k) && s.k >= 0, who + item("spring", e) + ": stiffness < 0");
-    require_input(std::isfinite(s.rest) && s.rest >= 0,
-                  who + item("spring", e) + ": rest length < 0");
-    require_input(std::isfinite(s.damping) && s.damping >= 0,
-                  who + item("spring", e) + ": dashpot coefficient < 0");
+    check(s.i >= 0 && s.i < np && s.j >= 0 && s.j < np && s.i != s.j,
+          [&] { return who + item("spring", e) + ": bad end points"; });
+    check(std::isfinite(s.k) && s.k >= 0,
+          [&] { return who + item("spring", e) + ": stiffness < 0"; });
+    check(std::isfinite(s.rest) && s.rest >= 0,
+          [&] { return who + item("spring", e) + ": rest length < 0"; });
+    check(std::isfinite(s.damping) && s.damping >= 0,
+          [&] { return who + item("spring", e) + ": dashpot coefficient < 0"; });
   }
   for (std::size_t c = 0; c < constraints_.size(); ++c) {
     const DistanceConstraint& dc = constraints_[c];
-    require_input(dc.i >= 0 && dc.i < np && dc.j >= 0 && dc.j < np && dc.i != dc.j,
-                  who + item("constraint", c) + ": bad end points");
-    require_input(std::isfinite(dc.length) && dc.length > 0,
-                  who + item("constraint", c) + ": length <= 0");
+    check(dc.i >= 0 && dc.i < np && dc.j >= 0 && dc.j < np && dc.i != dc.j,
+          [&] { return who + item("constraint", c) + ": bad end points"; });
+    check(std::isfinite(dc.length) && dc.length > 0,
+          [&] { return who + item("constraint", c) + ": length <= 0"; });
   }
 
   // Constraint couplings: constraints c != d sharing a point p couple in G M⁻¹ Gᵀ.
@@ -196,22 +202,32 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
 
   // The fixed pattern of K and D: every point's diagonal block and one block per ordered pair
   // of spring ends (pinned rows included, as explicit zeros).
+  // Built column by column (the pattern is structurally symmetric: column block q holds the
+  // row blocks of q and of its neighbours), no triplet list.
   const Index d = dim_;
-  std::vector<Eigen::Triplet<double>> trips;
-  trips.reserve(static_cast<std::size_t>(d * d * (np + static_cast<Index>(neighbours_.size()))));
-  auto add_block = [&](Index p, Index q) {
-    for (Index a = 0; a < d; ++a)
-      for (Index b = 0; b < d; ++b) trips.emplace_back(d * p + a, d * q + b, 0.0);
-  };
-  for (Index p = 0; p < np; ++p) {
-    add_block(p, p);
-    for (Index e = start_[static_cast<std::size_t>(p)]; e < start_[static_cast<std::size_t>(p) + 1];
-         ++e)
-      add_block(p, neighbours_[static_cast<std::size_t>(e)].other);
+  {
+    std::vector<int> outer(static_cast<std::size_t>(n) + 1, 0), inner;
+    inner.reserve(static_cast<std::size_t>(d * d * (np + static_cast<Index>(neighbours_.size()))));
+    std::vector<Index> rows;
+    for (Index q = 0; q < np; ++q) {
+      rows.clear();
+      rows.push_back(q);
+      for (Index e = start_[static_cast<std::size_t>(q)];
+           e < start_[static_cast<std::size_t>(q) + 1]; ++e)
+        rows.push_back(neighbours_[static_cast<std::size_t>(e)].other);
+      std::sort(rows.begin(), rows.end());
+      rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+      for (Index b = 0; b < d; ++b) {
+        for (Index p : rows)
+          for (Index a = 0; a < d; ++a) inner.push_back(static_cast<int>(d * p + a));
+        outer[static_cast<std::size_t>(d * q + b) + 1] = static_cast<int>(inner.size());
+      }
+    }
+    const std::vector<double> zeros(inner.size(), 0.0);
+    pattern_ = Eigen::Map<const SparseMat>(n, n, static_cast<Index>(inner.size()), outer.data(),
+                                           inner.data(), zeros.data());
+    pattern_.makeCompressed();
   }
-  pattern_.resize(n, n);
-  pattern_.setFromTriplets(trips.begin(), trips.end());
-  pattern_.makeCompressed();
   diag_pattern_.resize(n, n);
   diag_pattern_.setIdentity();
   diag_pattern_.makeCompressed();
@@ -225,24 +241,26 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
     if (it == end || *it != row) throw std::logic_error("mass-spring pattern lookup failed");
     return static_cast<Index>(it - inner);
   };
+  // Every column of block q has the same row list, each row block contiguous: entry (a, b) of
+  // block (p, q) sits at position(d p, d q) + a + b · (column length). One search per block.
+  const auto block = [&](Index p, Index q, std::vector<Index>& out, std::size_t at) {
+    const Index base = position(d * p, d * q);
+    const Index len = pattern_.outerIndexPtr()[d * q + 1] - pattern_.outerIndexPtr()[d * q];
+    for (Index a = 0; a < d; ++a)
+      for (Index b = 0; b < d; ++b)
+        out[at + static_cast<std::size_t>(a * d + b)] = base + a + b * len;
+  };
   diag_pos_.resize(static_cast<std::size_t>(np * d * d));
   adj_pos_.resize(neighbours_.size() * static_cast<std::size_t>(d * d));
   adj_pos_t_.resize(adj_pos_.size());
   for (Index p = 0; p < np; ++p) {
-    for (Index a = 0; a < d; ++a)
-      for (Index b = 0; b < d; ++b)
-        diag_pos_[static_cast<std::size_t>((p * d + a) * d + b)] = position(d * p + a, d * p + b);
+    block(p, p, diag_pos_, static_cast<std::size_t>(p * d * d));
     for (Index e = start_[static_cast<std::size_t>(p)]; e < start_[static_cast<std::size_t>(p) + 1];
          ++e) {
       const Index q = neighbours_[static_cast<std::size_t>(e)].other;
-      for (Index a = 0; a < d; ++a)
-        for (Index b = 0; b < d; ++b)
-          adj_pos_[static_cast<std::size_t>((e * d + a) * d + b)] = position(d * p + a, d * q + b);
+      block(p, q, adj_pos_, static_cast<std::size_t>(e * d * d));
       // The transposed block (rows of q, columns of p), element [a][b] at (q a, p b).
-      for (Index a = 0; a < d; ++a)
-        for (Index b = 0; b < d; ++b)
-          adj_pos_t_[static_cast<std::size_t>((e * d + a) * d + b)] =
-              position(d * q + a, d * p + b);
+      block(q, p, adj_pos_t_, static_cast<std::size_t>(e * d * d));
     }
   }
 }
