@@ -657,9 +657,12 @@ std::vector<ParamSpec> common_specs(bool linear) {
                  "auto",
                  "dense, band, klu (sparse, needs the analytic Jacobian), spgmr (matrix-free "
                  "GMRES) or velocity (flexible GMRES preconditioned by the velocity-form solve "
-                 "of I - gamma J; mechanical models with force Jacobians); auto: dense up to "
-                 "2000 unknowns; above, velocity for mechanical models with force Jacobians, "
-                 "klu with another analytic sparse Jacobian, spgmr otherwise",
+                 "of I - gamma J; mechanical models with force Jacobians); auto: dense up to " +
+                     std::to_string(kSundialsAutoDenseMax) +
+                     " unknowns; above, velocity for mechanical models with force Jacobians, "
+                     "klu with another analytic sparse Jacobian, spgmr otherwise (jacobian=dq "
+                     "counts as none); solve prints the choice and the rule first in the library "
+                     "statistics",
                  {"auto", "dense", "band", "klu", "spgmr", "velocity"}});
     s.push_back({"jacobian",
                  P::text,
@@ -711,9 +714,10 @@ int dirk_order(const std::string& name) {
 
 }  // namespace
 
-// A dense n x n matrix is 8n² bytes (32 MB at 2000 unknowns, 4.8 GB for cloth n = 64's 24,576)
-// and its LU costs 2n³/3 flops per setup; KLU factorises the sparse I - γJ instead, and without
-// an analytic Jacobian SPGMR needs only f and products (no n difference quotients per setup).
+// A dense n x n matrix is 8n² bytes (4.8 GB for cloth n = 64's 24,576 unknowns) and its LU costs
+// 2n³/3 flops per setup; KLU factorises the sparse I - γJ instead, and without an analytic
+// Jacobian SPGMR needs only f and products (no n difference quotients per setup). The limit's
+// measurements are in sundials.hpp.
 SundialsLinearSolverChoice sundials_auto_linear_solver(Index unknowns, bool analytic_jacobian,
                                                        bool mechanical_blocks) {
   const std::string size = std::to_string(unknowns) + " unknowns";

@@ -52,10 +52,17 @@ void register_sundials_integrators(IntegratorRegistry& reg);
 // preconditioned by the testbed's velocity-form solve of I - γJ (integrators/implicit/
 // velocity_form.hpp; KLU on the 2n first-order matrix of cloth 64² took 47 s to t = 0.5) —
 // else matrix-free SPGMR (no n² matrix, no n difference quotients per Jacobian).
-inline constexpr Index kSundialsAutoDenseMax = 2000;
+// The dense limit is 100: SUNDIALS' own dense LU (2n³/3 flops per setup, no BLAS) is the
+// slowest choice well below that wherever the system is sparse. cvode_bdf to t = 0.5, 1 thread
+// (wall_s; dense / klu / velocity / spgmr): cloth n = 4 (96 unknowns) 0.086 / 0.022 / 0.017 /
+// 0.015 s; n = 10 (600) 7.1 / 0.27 / 0.13 / 0.09 s; n = 16 (1536, the default cloth) 74.6 /
+// 1.10 / 0.56 / 0.24 s; soft_cube defaults (384) 5.3 / 0.16 / 0.10 / 0.07 s; without a
+// Jacobian, sph_drop_2d defaults (1264) to t = 0.01 dense (difference quotients) 12.1 s, spgmr
+// 0.027 s. Every literature problem (at most 20 unknowns) stays dense.
+inline constexpr Index kSundialsAutoDenseMax = 100;
 struct SundialsLinearSolverChoice {
-  std::string solver;  // "dense", "klu" or "spgmr"
-  std::string rule;    // why, e.g. "24576 unknowns > 2000 and an analytic sparse Jacobian"
+  std::string solver;  // "dense", "klu", "spgmr" or "velocity"
+  std::string rule;    // why, e.g. "24576 unknowns > 100 and an analytic sparse Jacobian""
 };
 SundialsLinearSolverChoice sundials_auto_linear_solver(Index unknowns, bool analytic_jacobian,
                                                        bool mechanical_blocks = false);
