@@ -362,8 +362,9 @@ TEST(Cli, SphDropConvergenceFromTheSuggestedStep) {
   std::filesystem::remove_all(dir);
 }
 
-// CVODE on an SPH scene: linear_solver=auto takes matrix-free SPGMR above 2000 unknowns (the
-// 16-across dam break has 512 particles, 2048 unknowns), and the run reports its counters.
+// CVODE on an SPH scene: linear_solver=auto takes matrix-free SPGMR above 100 unknowns for a
+// model without a Jacobian (the 16-across dam break has 512 particles, 2048 unknowns), and the
+// run reports its counters.
 TEST(Cli, CvodeOnSphRunsMatrixFree) {
   const Outcome o =
       run("solve --model sph_dam_break_2d --param n=16 --integrator cvode_bdf --param rtol=1e-4 "
