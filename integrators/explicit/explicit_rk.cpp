@@ -2,6 +2,52 @@
 
 namespace stiffbench {
 
+namespace {
+
+// out_e = base_e + c_0 k_0e + c_1 k_1e + … (left to right) for e in [begin, end). out may be
+// base. M > 0 is the term count known at compile time, M = 0 a runtime count m.
+template <int M>
+void combine_range(Index begin, Index end, const double* base, int m, const double* const* k,
+                   const double* c, double* out) {
+  const int terms = M > 0 ? M : m;
+  for (Index e = begin; e < end; ++e) {
+    double acc = base[e];
+    for (int j = 0; j < terms; ++j) acc += c[j] * k[j][e];
+    out[e] = acc;
+  }
+}
+
+template <int M>
+void combine_all(Index n, const double* base, int m, const double* const* k, const double* c,
+                 double* out) {
+  if (n >= ExplicitRungeKutta::kParallelEntries) {
+    const Index chunks = 64;  // contiguous ranges; each entry's arithmetic is the same anyway
+#pragma omp parallel for schedule(static)
+    for (Index q = 0; q < chunks; ++q)
+      combine_range<M>(n * q / chunks, n * (q + 1) / chunks, base, m, k, c, out);
+  } else {
+    combine_range<M>(0, n, base, m, k, c, out);
+  }
+}
+
+void combine(Index n, const double* base, int m, const double* const* k, const double* c,
+             double* out) {
+  switch (m) {
+    case 1:
+      return combine_all<1>(n, base, m, k, c, out);
+    case 2:
+      return combine_all<2>(n, base, m, k, c, out);
+    case 3:
+      return combine_all<3>(n, base, m, k, c, out);
+    case 4:
+      return combine_all<4>(n, base, m, k, c, out);
+    default:
+      return combine_all<0>(n, base, m, k, c, out);
+  }
+}
+
+}  // namespace
+
 ExplicitRungeKutta::ExplicitRungeKutta(ButcherTableau tableau, std::string description)
     : Integrator({tableau.name,
                   Family::explicit_rk,
@@ -12,6 +58,17 @@ ExplicitRungeKutta::ExplicitRungeKutta(ButcherTableau tableau, std::string descr
       tableau_(std::move(tableau)) {
   if (!tableau_.is_explicit())
     throw std::logic_error("tableau '" + tableau_.name + "' is not explicit");
+  const int s = tableau_.stages();
+  terms_.resize(static_cast<std::size_t>(s) + 1);
+  coefs_.resize(static_cast<std::size_t>(s) + 1);
+  for (int i = 0; i <= s; ++i)
+    for (int j = 0; j < (i < s ? i : s); ++j)
+      if (const double c = i < s ? tableau_.a(i, j) : tableau_.b[j]; c != 0.0) {
+        terms_[static_cast<std::size_t>(i)].push_back(j);
+        coefs_[static_cast<std::size_t>(i)].push_back(c);
+      }
+  cols_.resize(static_cast<std::size_t>(s));
+  scaled_.resize(static_cast<std::size_t>(s));
 }
 
 void ExplicitRungeKutta::reset(const OdeSystem& sys, double, CVecRef) {
@@ -22,14 +79,28 @@ void ExplicitRungeKutta::reset(const OdeSystem& sys, double, CVecRef) {
 
 Status ExplicitRungeKutta::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats&) {
   const int s = tableau_.stages();
+  const Index n = y.size();
+  // base + Σ (h c_j) k_j over row i's non-zero terms into out.
+  const auto combine_row = [&](int i, const double* base, double* out) {
+    const auto& terms = terms_[static_cast<std::size_t>(i)];
+    const auto& coefs = coefs_[static_cast<std::size_t>(i)];
+    const int m = static_cast<int>(terms.size());
+    for (int j = 0; j < m; ++j) {
+      cols_[static_cast<std::size_t>(j)] = k_.col(terms[static_cast<std::size_t>(j)]).data();
+      scaled_[static_cast<std::size_t>(j)] = h * coefs[static_cast<std::size_t>(j)];
+    }
+    combine(n, base, m, cols_.data(), scaled_.data(), out);
+  };
   for (int i = 0; i < s; ++i) {
-    ytmp_ = y;
-    for (int j = 0; j < i; ++j)
-      if (const double aij = tableau_.a(i, j); aij != 0.0) ytmp_.noalias() += (h * aij) * k_.col(j);
-    sys.rhs(t + tableau_.c[i] * h, ytmp_, k_.col(i));
+    const double ti = t + tableau_.c[i] * h;
+    if (terms_[static_cast<std::size_t>(i)].empty()) {
+      sys.rhs(ti, y, k_.col(i));  // the stage argument is y itself
+    } else {
+      combine_row(i, y.data(), ytmp_.data());
+      sys.rhs(ti, ytmp_, k_.col(i));
+    }
   }
-  for (int i = 0; i < s; ++i)
-    if (const double bi = tableau_.b[i]; bi != 0.0) y.noalias() += (h * bi) * k_.col(i);
+  if (!terms_[static_cast<std::size_t>(s)].empty()) combine_row(s, y.data(), y.data());
   return Status::ok;
 }
 

@@ -51,7 +51,8 @@ void SplittingIntegrator::reset(const OdeSystem& sys, double, CVecRef) {
   check_compatible(info(), sys);
   mech_ = sys.as_mechanical();
   acc_.resize(mech_->dofs());
-  cached_x_.resize(mech_->dofs());
+  cached_x_.resize(sys.has_constraints() ? mech_->dofs() : 0);
+  cached_y_ = nullptr;
   cache_valid_ = false;
 }
 
@@ -66,7 +67,8 @@ Status SplittingIntegrator::step(const OdeSystem& sys, double t, VecRef y, doubl
   for (std::size_t j = 0; j < s; ++j) {
     const double kj = coeffs_.kick[j], dj = coeffs_.drift[j];
     if (kj != 0.0) {
-      const bool reuse = fsal_ && j == 0 && cache_valid_ && cached_x_ == x;
+      const bool reuse = fsal_ && j == 0 && cache_valid_ && cached_y_ == y.data() &&
+                         (!mech_->has_constraints() || cached_x_ == x);
       if (!reuse) mech_->acceleration(tj, x, v, acc_);
     }
     // Kick and drift fused in one pass (v_i += h k_j a_i, then x_i += h d_j v_i: the same
@@ -89,7 +91,8 @@ Status SplittingIntegrator::step(const OdeSystem& sys, double t, VecRef y, doubl
   }
   if (fsal_) {
     // The last kick evaluated a at the final position; keep it for the next step.
-    cached_x_ = x;
+    if (mech_->has_constraints()) cached_x_ = x;  // the driver's projection may move x
+    cached_y_ = y.data();
     cache_valid_ = true;
   }
   return Status::ok;

@@ -4,6 +4,11 @@
 // When a stage's kick is followed only by zero drifts, the acceleration it evaluates is the
 // one at the end of the step; for velocity-independent forces the next step reuses it
 // (first-same-as-last), so velocity Verlet costs one evaluation per step after the first.
+// The reuse relies on the Integrator contract (y is what the previous step left), checked in
+// O(1): same storage (y.data()), no reset in between. The one caller that edits y between steps
+// is the driver's constraint projection, so on systems with constraints the position is
+// compared with the one the cached acceleration belongs to (a copy and a compare of x per step,
+// as before); without constraints there is no whole-vector copy or compare.
 #pragma once
 
 #include <vector>
@@ -33,7 +38,8 @@ class SplittingIntegrator final : public Integrator {
   bool fsal_;  // reuse the last stage's acceleration as the next step's first
   const MechanicalSystem* mech_ = nullptr;
   Vec acc_;       // acceleration workspace
-  Vec cached_x_;  // position at which acc_ was last evaluated (for reuse)
+  Vec cached_x_;  // position at which acc_ was last evaluated (constrained systems only)
+  const double* cached_y_ = nullptr;  // storage of the state acc_ belongs to
   bool cache_valid_ = false;
 };
 

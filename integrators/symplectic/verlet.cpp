@@ -4,7 +4,26 @@ namespace stiffbench {
 
 namespace {
 constexpr Requirements kVerletNeeds{true, true, false};
+
+// body(i) for i in [0, n), over OpenMP threads when n is large (entries are independent).
+constexpr Index kParallelEntries = 50000;
+template <class Body>
+void for_entries(Index n, const Body& body) {
+  if (n >= kParallelEntries) {
+#pragma omp parallel for schedule(static)
+    for (Index i = 0; i < n; ++i) body(i);
+  } else {
+    for (Index i = 0; i < n; ++i) body(i);
+  }
 }
+
+// Whether a two-step method must start again: first step, new h, another state storage, or
+// (constrained systems, whose projection moves x) another position than the one returned.
+bool must_restart(bool started, double h, double h_last, const double* y, const double* y_last,
+                  const MechanicalSystem& sys, CVecRef x, const Vec& x_last) {
+  return !started || h != h_last || y != y_last || (sys.has_constraints() && x != x_last);
+}
+}  // namespace
 
 PositionVerlet::PositionVerlet()
     : Integrator({"verlet", Family::symplectic, 2, 1, kVerletNeeds,
@@ -16,9 +35,9 @@ void PositionVerlet::reset(const OdeSystem& sys, double, CVecRef) {
   mech_ = sys.as_mechanical();
   const Index n = mech_->dofs();
   x_prev_.resize(n);
-  x_last_.resize(n);
+  x_last_.resize(sys.has_constraints() ? n : 0);
   acc_.resize(n);
-  x_next_.resize(n);
+  y_last_ = nullptr;
   started_ = false;
 }
 
@@ -27,20 +46,34 @@ Status PositionVerlet::step(const OdeSystem& sys, double t, VecRef y, double h, 
   const Index n = mech_->dofs();
   auto x = y.head(n);
   auto v = y.tail(n);
-  if (!started_ || h != h_last_ || x != x_last_) {
+  double* xp = x.data();
+  double* vp = v.data();
+  double* prev = x_prev_.data();
+  const double* ap = acc_.data();
+  if (must_restart(started_, h, h_last_, y.data(), y_last_, *mech_, x, x_last_)) {
     // Start-up: one Taylor step from (x0, v0).
     mech_->acceleration(t, x, v, acc_);
-    x_next_ = x + h * v + (0.5 * h * h) * acc_;
+    const double c = 0.5 * h * h;
+    for_entries(n, [&](Index i) {
+      const double next = xp[i] + h * vp[i] + c * ap[i];
+      prev[i] = xp[i];
+      xp[i] = next;
+    });
     started_ = true;
   } else {
     // acc_ holds a(t, x_n) from the previous step's look-ahead.
-    x_next_ = 2.0 * x - x_prev_ + (h * h) * acc_;
+    const double hh = h * h;
+    for_entries(n, [&](Index i) {
+      const double next = 2.0 * xp[i] - prev[i] + hh * ap[i];
+      prev[i] = xp[i];
+      xp[i] = next;
+    });
   }
-  x_prev_ = x;
-  x = x_next_;
   mech_->acceleration(t + h, x, v, acc_);  // a(x_{n+1}); v is ignored (velocity-independent)
-  v = (x - x_prev_) / h + (0.5 * h) * acc_;
-  x_last_ = x;
+  const double half_h = 0.5 * h;
+  for_entries(n, [&](Index i) { vp[i] = (xp[i] - prev[i]) / h + half_h * ap[i]; });
+  if (mech_->has_constraints()) x_last_ = x;
+  y_last_ = y.data();
   h_last_ = h;
   return Status::ok;
 }
@@ -55,8 +88,9 @@ void Leapfrog::reset(const OdeSystem& sys, double, CVecRef) {
   mech_ = sys.as_mechanical();
   const Index n = mech_->dofs();
   v_half_.resize(n);
-  x_last_.resize(n);
+  x_last_.resize(sys.has_constraints() ? n : 0);
   acc_.resize(n);
+  y_last_ = nullptr;
   started_ = false;
 }
 
@@ -65,17 +99,29 @@ Status Leapfrog::step(const OdeSystem& sys, double t, VecRef y, double h, SolveS
   const Index n = mech_->dofs();
   auto x = y.head(n);
   auto v = y.tail(n);
-  if (!started_ || h != h_last_ || x != x_last_) {
+  double* xp = x.data();
+  double* vp = v.data();
+  double* half = v_half_.data();
+  const double* ap = acc_.data();
+  if (must_restart(started_, h, h_last_, y.data(), y_last_, *mech_, x, x_last_)) {
     mech_->acceleration(t, x, v, acc_);
-    v_half_ = v + (0.5 * h) * acc_;  // start-up half kick
+    const double half_h = 0.5 * h;
+    for_entries(n, [&](Index i) {
+      half[i] = vp[i] + half_h * ap[i];  // start-up half kick
+      xp[i] += h * half[i];
+    });
     started_ = true;
   } else {
-    v_half_ += h * acc_;  // acc_ = a(x_n) from the previous step
+    for_entries(n, [&](Index i) {
+      half[i] += h * ap[i];  // acc_ = a(x_n) from the previous step
+      xp[i] += h * half[i];
+    });
   }
-  x += h * v_half_;
   mech_->acceleration(t + h, x, v_half_, acc_);
-  v = v_half_ + (0.5 * h) * acc_;
-  x_last_ = x;
+  const double half_h = 0.5 * h;
+  for_entries(n, [&](Index i) { vp[i] = half[i] + half_h * ap[i]; });
+  if (mech_->has_constraints()) x_last_ = x;
+  y_last_ = y.data();
   h_last_ = h;
   return Status::ok;
 }

@@ -17,7 +17,12 @@
 //
 // In exact arithmetic both produce the velocity Verlet trajectory; they differ in round-off
 // and in what they store. Either restarts (start-up step again) when h changes or when the
-// position passed in is not the one it returned.
+// state passed in is not the one it returned: another storage (y.data()) or, on systems with
+// constraints (whose projection by the driver moves x between steps), another position (a copy
+// and a compare of x per step there only). Otherwise the Integrator contract (y is what the
+// previous step left) holds and no whole vector is copied or compared. Each vector update is one
+// fused pass, over OpenMP threads above 50,000 entries (the same arithmetic per entry, so the
+// results do not depend on the thread count).
 #pragma once
 
 #include "core/integrator.hpp"
@@ -35,7 +40,8 @@ class PositionVerlet final : public Integrator {
 
  private:
   const MechanicalSystem* mech_ = nullptr;
-  Vec x_prev_, x_last_, acc_, x_next_;
+  Vec x_prev_, x_last_, acc_;  // x_last_: constrained systems only
+  const double* y_last_ = nullptr;
   double h_last_ = 0.0;
   bool started_ = false;
 };
@@ -51,7 +57,8 @@ class Leapfrog final : public Integrator {
 
  private:
   const MechanicalSystem* mech_ = nullptr;
-  Vec v_half_, x_last_, acc_;
+  Vec v_half_, x_last_, acc_;  // x_last_: constrained systems only
+  const double* y_last_ = nullptr;
   double h_last_ = 0.0;
   bool started_ = false;
 };

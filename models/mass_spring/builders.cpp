@@ -129,6 +129,7 @@ std::unique_ptr<MassSpringNetwork> make_cloth(const ClothOptions& o) {
     }
   }
   std::vector<Spring> springs;
+  springs.reserve(static_cast<std::size_t>(6 * nx * ny));  // at most 6 per point
   const double rest = o.spacing / o.prestretch;
   const double diag = std::sqrt(2.0) * rest;
   auto add = [&](long i0, long j0, long i1, long j1, double k, double len, SpringKind kind) {

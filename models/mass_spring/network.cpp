@@ -148,6 +148,60 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
     }
   }
 
+  // Springs for the right-hand side, grouped by partition of the points (see the header).
+  {
+    // The partition count depends on the size only (not on the threads or on the parallel
+    // threshold), so the serial and the parallel path sum in the same order.
+    const Index parts = np >= 64 * kRhsPartitions ? kRhsPartitions : 1;
+    const auto part_of = [&](Index p) { return static_cast<Index>((p * parts) / np); };
+    // part_of(p) inverts p0 = np·q/parts: the first q with np·(q+1)/parts > p.
+    const auto owner = [&](Index p) {
+      Index q = part_of(p);
+      while (q + 1 < parts && np * (q + 1) / parts <= p) ++q;
+      while (q > 0 && np * q / parts > p) --q;
+      return q;
+    };
+    std::vector<std::int32_t> part(static_cast<std::size_t>(np));
+    for (Index p = 0; p < np; ++p)
+      part[static_cast<std::size_t>(p)] = static_cast<std::int32_t>(owner(p));
+    std::vector<Index> count(static_cast<std::size_t>(parts) + 1, 0);
+    for (const Spring& sp : springs_) {
+      const Index qi = part[static_cast<std::size_t>(sp.i)],
+                  qj = part[static_cast<std::size_t>(sp.j)];
+      ++count[static_cast<std::size_t>(qi == qj ? qi : parts)];
+    }
+    part_start_.assign(static_cast<std::size_t>(parts) + 1, 0);
+    for (Index q = 0; q < parts; ++q)
+      part_start_[static_cast<std::size_t>(q) + 1] =
+          part_start_[static_cast<std::size_t>(q)] + count[static_cast<std::size_t>(q)];
+    std::vector<Index> next(part_start_.begin(), part_start_.end() - 1);
+    next.push_back(part_start_.back());  // cross springs after the partitions' own
+    packed_.resize(springs_.size());
+    packed_damping_.assign(has_dashpots_ ? springs_.size() : 0, 0.0);
+    for (const Spring& sp : springs_) {
+      const Index qi = part[static_cast<std::size_t>(sp.i)],
+                  qj = part[static_cast<std::size_t>(sp.j)];
+      const auto slot =
+          static_cast<std::size_t>(next[static_cast<std::size_t>(qi == qj ? qi : parts)]++);
+      packed_[slot] = {static_cast<std::int32_t>(sp.i), static_cast<std::int32_t>(sp.j), sp.k,
+                       sp.rest};
+      if (has_dashpots_) packed_damping_[slot] = sp.damping;
+    }
+  }
+
+  // The adjacency lists and the Jacobian pattern are built on first use (build_structure): an
+  // explicit run never needs them, and for a 512² cloth they are most of the construction cost.
+}
+
+// Adjacency lists (Jacobians, stiffness estimates) and the fixed pattern of K and D with the
+// value positions of every block, built once, on first use, by whichever thread gets there first.
+void MassSpringNetwork::ensure_structure() const {
+  std::call_once(structure_once_, [this] { build_structure(); });
+}
+
+void MassSpringNetwork::build_structure() const {
+  const Index np = num_points();
+  const Index n = dofs();
   // CSR adjacency, each point's springs in the order of the spring list.
   start_.assign(static_cast<std::size_t>(np) + 1, 0);
   for (const Spring& s : springs_) {
@@ -162,42 +216,6 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
         s.j, s.k, s.rest, s.damping};
     neighbours_[static_cast<std::size_t>(fill[static_cast<std::size_t>(s.j)]++)] = {
         s.i, s.k, s.rest, s.damping};
-  }
-
-  // Springs for the right-hand side, grouped by partition of the points (see the header).
-  {
-    // The partition count depends on the size only (not on the threads or on the parallel
-    // threshold), so the serial and the parallel path sum in the same order.
-    const Index parts = np >= 64 * kRhsPartitions ? kRhsPartitions : 1;
-    const auto part_of = [&](Index p) { return static_cast<Index>((p * parts) / np); };
-    // part_of(p) inverts p0 = np·q/parts: the first q with np·(q+1)/parts > p.
-    const auto owner = [&](Index p) {
-      Index q = part_of(p);
-      while (q + 1 < parts && np * (q + 1) / parts <= p) ++q;
-      while (q > 0 && np * q / parts > p) --q;
-      return q;
-    };
-    std::vector<Index> count(static_cast<std::size_t>(parts) + 1, 0);
-    for (const Spring& sp : springs_) {
-      const Index qi = owner(sp.i), qj = owner(sp.j);
-      ++count[static_cast<std::size_t>(qi == qj ? qi : parts)];
-    }
-    part_start_.assign(static_cast<std::size_t>(parts) + 1, 0);
-    for (Index q = 0; q < parts; ++q)
-      part_start_[static_cast<std::size_t>(q) + 1] =
-          part_start_[static_cast<std::size_t>(q)] + count[static_cast<std::size_t>(q)];
-    std::vector<Index> next(part_start_.begin(), part_start_.end() - 1);
-    next.push_back(part_start_.back());  // cross springs after the partitions' own
-    packed_.resize(springs_.size());
-    packed_damping_.assign(has_dashpots_ ? springs_.size() : 0, 0.0);
-    for (const Spring& sp : springs_) {
-      const Index qi = owner(sp.i), qj = owner(sp.j);
-      const auto slot =
-          static_cast<std::size_t>(next[static_cast<std::size_t>(qi == qj ? qi : parts)]++);
-      packed_[slot] = {static_cast<std::int32_t>(sp.i), static_cast<std::int32_t>(sp.j), sp.k,
-                       sp.rest};
-      if (has_dashpots_) packed_damping_[slot] = sp.damping;
-    }
   }
 
   // The fixed pattern of K and D: every point's diagonal block and one block per ordered pair
@@ -473,6 +491,7 @@ void MassSpringNetwork::blocks_impl(const double* x, const double* v, double* k_
 }
 
 void MassSpringNetwork::fill_blocks(CVecRef x, CVecRef v, SparseMat* k, SparseMat* d) const {
+  ensure_structure();
   // A matrix that already has this pattern (same size and number of nonzeros, compressed: a
   // previous result of this network) keeps its storage; only the values are written. Without
   // dashpots D = -(γ/m) I is diagonal and gets a diagonal pattern.
@@ -615,6 +634,7 @@ void MassSpringNetwork::exact(double t, VecRef y) const {
 // Stiffness.
 
 double MassSpringNetwork::omega_max_bound(CVecRef x) const {
+  ensure_structure();
   double w2 = 0.0;
   for (Index p = 0; p < num_points(); ++p) {
     const MassPoint& pt = points_[static_cast<std::size_t>(p)];
@@ -667,6 +687,7 @@ void MassSpringNetwork::stiffness_matvec(const double* x, const double* z, doubl
 }
 
 std::pair<double, double> MassSpringNetwork::stiffness_eigen_range(CVecRef x) const {
+  ensure_structure();
   std::vector<Index> free_dofs;
   for (Index p = 0; p < num_points(); ++p)
     if (!points_[static_cast<std::size_t>(p)].pinned)

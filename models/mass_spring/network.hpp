@@ -101,6 +101,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -142,7 +143,8 @@ struct NetworkOptions {
 class MassSpringNetwork final : public MechanicalSystem {
  public:
   // Checks the data (BadInput naming the model and the offending item) and precomputes the
-  // adjacency lists and the Jacobian pattern.
+  // packed springs of the right-hand side (the adjacency lists and the Jacobian pattern are built
+  // on first use).
   MassSpringNetwork(std::string name, int dim, std::vector<MassPoint> points,
                     std::vector<Spring> springs, NetworkOptions options,
                     std::vector<DistanceConstraint> constraints = {});
@@ -215,6 +217,8 @@ class MassSpringNetwork final : public MechanicalSystem {
   template <int D>
   void stiffness_matvec(const double* x, const double* z, double* out) const;
   void fill_blocks(CVecRef x, CVecRef v, SparseMat* k, SparseMat* d) const;
+  void ensure_structure() const;  // builds the members marked "on first use" once
+  void build_structure() const;
 
   // Projection (see the header comment).
   struct Coupling {
@@ -254,17 +258,20 @@ class MassSpringNetwork final : public MechanicalSystem {
   std::vector<double> packed_damping_;  // dashpot coefficients (empty without dashpots)
   std::vector<Index> part_start_;
 
+  // Built on first use (ensure_structure; an explicit run never needs them):
   // CSR adjacency: springs of point p are neighbours_[start_[p] .. start_[p+1]).
-  std::vector<Index> start_;
-  std::vector<Neighbour> neighbours_;
+  mutable std::once_flag structure_once_;
+  mutable std::vector<Index> start_;
+  mutable std::vector<Neighbour> neighbours_;
 
   // Fixed pattern of K and D, and for each point's diagonal block and each adjacency entry the
-  // position in valuePtr() of every block entry (row-major within the block).
-  SparseMat pattern_;
-  SparseMat diag_pattern_;        // D's pattern without dashpots (D = -(γ/m) I)
-  std::vector<Index> diag_pos_;   // dim² per point
-  std::vector<Index> adj_pos_;    // dim² per adjacency entry
-  std::vector<Index> adj_pos_t_;  // the same for the transposed block (rows of the neighbour)
+  // position in valuePtr() of every block entry (row-major within the block). On first use.
+  mutable SparseMat pattern_;
+  mutable SparseMat diag_pattern_;       // D's pattern without dashpots (D = -(γ/m) I)
+  mutable std::vector<Index> diag_pos_;  // dim² per point
+  mutable std::vector<Index> adj_pos_;   // dim² per adjacency entry
+  mutable std::vector<Index>
+      adj_pos_t_;  // the same for the transposed block (rows of the neighbour)
 
   std::function<void(double, VecRef)> exact_;
 };
