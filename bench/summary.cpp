@@ -205,6 +205,13 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
   row("2-thread speed-up of each RHS, largest size of each (worst)", worst_speedup, "%.2f",
       ">= 1.8", worst_speedup >= 1.8, worst_name.empty() ? "" : "(" + worst_name + ")");
 
+  // Building the 512² cloth through the registry plus its first acceleration() (1 thread).
+  const std::string build = "build/cloth/n:512/omp:1";
+  row("cloth 512² model construction + first RHS, s", L.sec(build), "%.3g", "< 0.3",
+      L.sec(build) < 0.3,
+      "(construction alone " + fmt("%.3g", L.counter(build, "construct_s")) + " s, first RHS " +
+          fmt("%.3g", L.counter(build, "first_rhs_s")) + " s)");
+
   // Heap allocations per step of every hand-written integrator (after its first step), at 2
   // threads. At 1 thread GCC 12's libgomp allocates a team for every parallel region it enters
   // (it caches teams of 2 or more threads only), so 1-thread rows count one allocation per
