@@ -19,6 +19,9 @@ struct ButcherTableau {
   int order = 0;
   Vec b_embedded = Vec();  // optional embedded weights (size 0: none)
   int embedded_order = 0;
+  // First same as last: the last stage is evaluated at the new solution (c_s = 1 and the last
+  // row of A equals b), so an explicit method reuses it as the next step's first stage.
+  bool fsal = false;
 
   int stages() const { return static_cast<int>(b.size()); }
   bool is_explicit() const;  // strictly lower triangular A

@@ -2,6 +2,7 @@
 
 #include <map>
 
+#include "integrators/adaptive/embedded_rk.hpp"
 #include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/explicit/tableaux.hpp"
 #include "integrators/implicit/baraff_witkin.hpp"
@@ -30,6 +31,20 @@ void register_explicit_integrators(IntegratorRegistry& reg) {
     auto make = [t, desc](const Params&) { return std::make_unique<ExplicitRungeKutta>(t, desc); };
     const MethodInfo info = ExplicitRungeKutta(t, desc).info();
     reg.add({info, {}, make});
+  }
+  // Embedded pairs: fixed-step with --h, adaptive with rtol/atol (integrators/adaptive/).
+  static const std::map<std::string, std::string> embedded = {
+      {"bs3", "Bogacki-Shampine 3(2) embedded pair, FSAL; adaptive or fixed step"},
+      {"dopri5", "Dormand-Prince 5(4) embedded pair, FSAL; adaptive or fixed step"},
+      {"cash_karp", "Cash-Karp 5(4) embedded pair, fifth-order solution; adaptive or fixed step"},
+      {"rkf45", "Runge-Kutta-Fehlberg 4(5), fourth-order solution; adaptive or fixed step"},
+  };
+  for (const ButcherTableau& t : embedded_tableaux()) {
+    const std::string desc = embedded.at(t.name);
+    auto make = [t, desc](const Params& p) {
+      return std::make_unique<EmbeddedRungeKutta>(t, desc, read_controller_options(p));
+    };
+    reg.add({EmbeddedRungeKutta(t, desc, {}).info(), controller_param_specs(), make});
   }
 }
 

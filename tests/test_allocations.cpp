@@ -111,5 +111,26 @@ TEST(Allocations, NoneInsideSteps) {
   EXPECT_GE(checked, 30);  // every family is covered (about 24 methods on three models)
 }
 
+// The adaptive methods (integrators/adaptive/): after a first advance_to (workspaces, starting
+// step), further output intervals with their accepted and rejected trials allocate nothing.
+TEST(Allocations, NoneInsideAdaptiveSteps) {
+  auto sys = model("kepler", {"e=0.5"});
+  for (const std::string name : {"bs3", "dopri5", "cash_karp", "rkf45"}) {
+    auto integ = integrator_registry().create(name, Params::from_assignments({"rtol=1e-8"}));
+    Vec y = sys->initial_state();
+    SolveStats stats;
+    integ->reset(*sys, 0.0, y);
+    ASSERT_EQ(integ->advance_to(*sys, 0.5, y, stats), Status::ok);
+    long allocations = 0;
+    {
+      CountAllocations c;
+      for (int i = 2; i <= 10; ++i) integ->advance_to(*sys, 0.5 * i, y, stats);
+      allocations = c.count();
+    }
+    EXPECT_GT(stats.steps, 20) << name;
+    EXPECT_EQ(allocations, 0) << name;
+  }
+}
+
 }  // namespace
 }  // namespace stiffbench

@@ -24,14 +24,16 @@ class OrderTest : public ::testing::TestWithParam<std::string> {
 
 // Global error at t = 10 on the undamped oscillator (exact solution cos t), h = 0.1 / 2^k,
 // k = 0..5. The last pair (h = 0.00625 → 0.003125) is in the asymptotic range for every method
-// and far above round-off (smallest error, rk4's, is ~1e-10).
+// and far above round-off (smallest error, rk4's, is ~1e-10). Fifth-order methods (dopri5,
+// cash_karp) would reach round-off there (dopri5: 7e-13 at h = 0.0125), so they take
+// h = 0.4 / 2^k, k = 0..4 (last pair 0.05 → 0.025, errors 8e-10 and 2e-11).
 TEST_P(OrderTest, GlobalOrderOnHarmonicOscillator) {
   ConvergenceSpec spec;
   spec.model = "harmonic_oscillator";
   spec.integrators = {GetParam()};
   spec.t_end = 10;
-  spec.h = 0.1;
-  spec.levels = 6;
+  spec.h = order() >= 5 ? 0.4 : 0.1;
+  spec.levels = order() >= 5 ? 5 : 6;
   const auto res = run_convergence(spec, nullptr);
   const auto p = last_observed_order(res.rows, GetParam());
   ASSERT_TRUE(p.has_value());
@@ -55,14 +57,16 @@ TEST_P(OrderTest, LocalErrorSlopeOnHarmonicOscillator) {
 // The oscillator is linear, so it checks only the linear order conditions. The eccentric
 // Kepler orbit (e = 0.5, exact solution through Kepler's equation) exercises the nonlinear
 // ones. t_end = 5 is deliberately not a period: after exactly one period of this reversible
-// orbit the first-order symplectic Euler errors cancel and it shows order 2.
+// orbit the first-order symplectic Euler errors cancel and it shows order 2. Fifth-order
+// methods start at h = 0.04 (dopri5: errors 3e-10 and 9e-12 in the last pair; from h = 0.01
+// they would end at round-off, 9e-14).
 TEST_P(OrderTest, GlobalOrderOnEccentricKepler) {
   ConvergenceSpec spec;
   spec.model = "kepler";
   spec.params = Params::from_assignments({"e=0.5"});
   spec.integrators = {GetParam()};
   spec.t_end = 5;
-  spec.h = 0.01;
+  spec.h = order() >= 5 ? 0.04 : 0.01;
   spec.levels = 4;
   const auto res = run_convergence(spec, nullptr);
   const auto p = last_observed_order(res.rows, GetParam());
