@@ -8,6 +8,7 @@
 #include "integrators/implicit/baraff_witkin.hpp"
 #include "integrators/implicit/dirk.hpp"
 #include "integrators/implicit/linearly_implicit.hpp"
+#include "integrators/implicit/radau5.hpp"
 #include "integrators/reference/gsl.hpp"
 #include "integrators/reference/sundials.hpp"
 #include "integrators/symplectic/splitting.hpp"
@@ -99,6 +100,8 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
              return std::make_unique<Rosenbrock>(rosenbrock2_tableau(), ros_desc,
                                                  read_implicit_options(p, false));
            }});
+  reg.add({Radau5({}).info(), radau5_param_specs(),
+           [](const Params& p) { return std::make_unique<Radau5>(read_radau5_options(p)); }});
   // Baraff–Witkin is velocity-form by construction (no `form`), and its single Krylov solve
   // defaults to a relative 1e-6 (baraff_witkin.hpp).
   std::vector<ParamSpec> bw_specs;

@@ -1,0 +1,450 @@
+#include "integrators/implicit/radau5.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace stiffbench {
+
+const ButcherTableau& radau5_tableau() {
+  static const ButcherTableau t = [] {
+    // HW II, Table IV.5.6 (Radau IIA, s = 3).
+    const double r = std::sqrt(6.0);
+    ButcherTableau b;
+    b.name = "radau5";
+    b.order = 5;
+    b.a = Mat(3, 3);
+    b.a << (88 - 7 * r) / 360, (296 - 169 * r) / 1800, (-2 + 3 * r) / 225,  //
+        (296 + 169 * r) / 1800, (88 + 7 * r) / 360, (-2 - 3 * r) / 225,     //
+        (16 - r) / 36, (16 + r) / 36, 1.0 / 9;
+    b.b = b.a.row(2).transpose();
+    b.c = Vec(3);
+    b.c << (4 - r) / 10, (4 + r) / 10, 1.0;
+    return b;
+  }();
+  return t;
+}
+
+const Radau5Constants& radau5_constants() {
+  static const Radau5Constants k = [] {
+    const ButcherTableau& tab = radau5_tableau();
+    const Eigen::Matrix3d a = tab.a;
+    const Eigen::Matrix3d ainv = a.inverse();
+    Eigen::EigenSolver<Eigen::Matrix3d> es(ainv);
+    int real_idx = 0, pair_idx = 0;
+    for (int i = 0; i < 3; ++i) {
+      if (std::abs(es.eigenvalues()[i].imag()) < std::abs(es.eigenvalues()[real_idx].imag()))
+        real_idx = i;
+      if (es.eigenvalues()[i].imag() > es.eigenvalues()[pair_idx].imag()) pair_idx = i;
+    }
+    // A⁻¹(u + iw) = (a' + ib')(u + iw) gives A⁻¹u = a'u - b'w, A⁻¹w = b'u + a'w: with
+    // T = [t1, u, w] the lower block of T⁻¹A⁻¹T is [[a', b'], [-b', a']].
+    Radau5Constants c;
+    c.t.col(0) = es.eigenvectors().col(real_idx).real();
+    c.t.col(1) = es.eigenvectors().col(pair_idx).real();
+    c.t.col(2) = es.eigenvectors().col(pair_idx).imag();
+    c.t_inv = c.t.inverse();
+    const Eigen::Matrix3d lambda = c.t_inv * ainv * c.t;
+    c.gamma_hat = lambda(0, 0);
+    c.a = lambda(1, 1);
+    c.b = lambda(1, 2);
+    // Embedded weights of order 3 with b̂_0 = γ_0 = 1/γ̂ on f(t_n, y_n):
+    // γ_0 δ_{q0} + Σ_i b̂_i c_i^q = 1/(q+1), q = 0, 1, 2.
+    Eigen::Matrix3d v;
+    Eigen::Vector3d rhs;
+    for (int q = 0; q < 3; ++q) {
+      for (int i = 0; i < 3; ++i) v(q, i) = std::pow(tab.c[i], q);
+      rhs[q] = 1.0 / (q + 1) - (q == 0 ? 1.0 / c.gamma_hat : 0.0);
+    }
+    const Eigen::Vector3d bhat = v.partialPivLu().solve(rhs);
+    c.e = ainv.transpose() * (bhat - Eigen::Vector3d(tab.b));
+    return c;
+  }();
+  return k;
+}
+
+// --- linear systems shift·I - J ------------------------------------------------------------
+
+template <class Scalar>
+void ShiftedSolver<Scalar>::reset(Index n, bool dense) {
+  n_ = n;
+  dense_ = dense;
+  jac_inner_.clear();
+  slu_.reset();
+  if (dense_) {
+    m_.resize(n, n);
+    lu_ = Eigen::PartialPivLU<DenseM>(n);
+  } else {
+    m_.resize(0, 0);
+  }
+}
+
+template <class Scalar>
+bool ShiftedSolver<Scalar>::factor(Scalar shift, const SparseMat& jac) {
+  if (dense_) {
+    m_.setZero();
+    for (Index c = 0; c < jac.outerSize(); ++c)
+      for (SparseMat::InnerIterator it(jac, c); it; ++it) m_(it.row(), it.col()) = -it.value();
+    m_.diagonal().array() += shift;
+    lu_.compute(m_);
+    return (lu_.matrixLU().diagonal().array().abs() > 0.0).all();
+  }
+  const auto nnz = static_cast<std::size_t>(jac.nonZeros());
+  const bool same = nnz == jac_inner_.size() &&
+                    std::equal(jac_inner_.begin(), jac_inner_.end(), jac.innerIndexPtr()) &&
+                    slu_ != nullptr;
+  if (!same) {
+    // Pattern of J ∪ diagonal, the value positions of both, and the symbolic analysis (once per
+    // run unless the model's pattern changes).
+    std::vector<Eigen::Triplet<Scalar>> trip;
+    trip.reserve(nnz + static_cast<std::size_t>(n_));
+    for (Index c = 0; c < jac.outerSize(); ++c)
+      for (SparseMat::InnerIterator it(jac, c); it; ++it)
+        trip.emplace_back(static_cast<int>(it.row()), static_cast<int>(it.col()), Scalar(0));
+    for (Index i = 0; i < n_; ++i)
+      trip.emplace_back(static_cast<int>(i), static_cast<int>(i), Scalar(0));
+    sm_.resize(n_, n_);
+    sm_.setFromTriplets(trip.begin(), trip.end());
+    sm_.makeCompressed();
+    const auto position = [&](Index row, Index col) {
+      const auto* begin = sm_.innerIndexPtr() + sm_.outerIndexPtr()[col];
+      const auto* end = sm_.innerIndexPtr() + sm_.outerIndexPtr()[col + 1];
+      const auto* p = std::lower_bound(begin, end, static_cast<int>(row));
+      return static_cast<int>(p - sm_.innerIndexPtr());
+    };
+    jac_pos_.clear();
+    for (Index c = 0; c < jac.outerSize(); ++c)
+      for (SparseMat::InnerIterator it(jac, c); it; ++it)
+        jac_pos_.push_back(position(it.row(), it.col()));
+    diag_pos_.resize(static_cast<std::size_t>(n_));
+    for (Index i = 0; i < n_; ++i) diag_pos_[static_cast<std::size_t>(i)] = position(i, i);
+    jac_inner_.assign(jac.innerIndexPtr(), jac.innerIndexPtr() + nnz);
+    slu_ = std::make_unique<Eigen::SparseLU<SparseM, Eigen::COLAMDOrdering<int>>>();
+    slu_->analyzePattern(sm_);
+  }
+  Scalar* v = sm_.valuePtr();
+  std::fill(v, v + sm_.nonZeros(), Scalar(0));
+  const double* jv = jac.valuePtr();
+  for (std::size_t k = 0; k < nnz; ++k) v[jac_pos_[k]] = -jv[k];
+  for (const int p : diag_pos_) v[p] += shift;
+  slu_->factorize(sm_);
+  return slu_->info() == Eigen::Success;
+}
+
+template <class Scalar>
+void ShiftedSolver<Scalar>::solve(const CVector& rhs, CVector& out) {
+  if (dense_)
+    out.noalias() = lu_.solve(rhs);
+  else
+    out = slu_->solve(rhs);
+}
+
+template class ShiftedSolver<double>;
+template class ShiftedSolver<std::complex<double>>;
+
+// --- parameters ----------------------------------------------------------------------------
+
+std::vector<ParamSpec> radau5_param_specs() {
+  using P = ParamType;
+  std::vector<ParamSpec> s = controller_param_specs();
+  s.push_back({"newton_tol", P::real, "1e-12",
+               "fixed-step mode: Newton stops when its predicted error is below newton_tol "
+               "(1 + |y|) in the RMS norm (adaptive mode uses RADAU5's rule from rtol)"});
+  s.push_back({"newton_max_iter", P::integer, "7", "Newton iterations per step (RADAU5: 7)"});
+  s.push_back({"jacobian",
+               P::text,
+               "auto",
+               "analytic, fd_dense, fd_colored (over the model's pattern); auto: analytic where "
+               "provided, else fd_colored over a pattern, else fd_dense",
+               {"auto", "analytic", "fd_dense", "fd_colored"}});
+  s.push_back({"linear_solver",
+               P::text,
+               "auto",
+               "dense_lu or sparse_lu for the real and the complex system; auto: dense_lu up to "
+               "200 unknowns",
+               {"auto", "dense_lu", "sparse_lu"}});
+  return s;
+}
+
+Radau5Options read_radau5_options(const Params& p) {
+  Radau5Options o;
+  o.control = read_controller_options(p);
+  o.newton_tol = p.real("newton_tol");
+  require_input(o.newton_tol > 0, "parameter 'newton_tol' must be > 0");
+  o.newton_max_iter = static_cast<int>(p.integer("newton_max_iter"));
+  require_input(o.newton_max_iter >= 1, "parameter 'newton_max_iter' must be >= 1");
+  const std::string& j = p.text("jacobian");
+  o.jacobian = j == "analytic"     ? JacobianSource::analytic
+               : j == "fd_dense"   ? JacobianSource::fd_dense
+               : j == "fd_colored" ? JacobianSource::fd_colored
+                                   : JacobianSource::automatic;
+  o.linear = parse_linear_solver(p.text("linear_solver"));
+  return o;
+}
+
+// --- the integrator ------------------------------------------------------------------------
+
+namespace {
+
+ImplicitOptions core_options(const Radau5Options& o) {
+  ImplicitOptions io;
+  io.jacobian = o.jacobian;
+  io.linear.kind = o.linear;
+  io.form = SystemForm::first_order;  // J itself, also for mechanical systems
+  return io;
+}
+
+}  // namespace
+
+Radau5::Radau5(Radau5Options opt)
+    : Integrator({"radau5",
+                  Family::implicit,
+                  5,
+                  3,
+                  {},
+                  "Radau IIA order 5 (3 stages, L-stable, stiffly accurate); simplified Newton "
+                  "split into one real and one complex linear system (Hairer-Wanner IV.8); "
+                  "adaptive (rtol/atol) or fixed step"}),
+      opt_(opt),
+      core_(core_options(opt)),
+      ctrl_(opt.control, 4) {}
+
+void Radau5::reset(const OdeSystem& sys, double t0, CVecRef y0) {
+  check_compatible(info(), sys);
+  n_ = sys.dimension();
+  const bool large = n_ > LinearSolverOptions{}.dense_max;
+  require_input(opt_.jacobian != JacobianSource::automatic || !large || sys.has_jacobian() ||
+                    sys.has_jacobian_pattern(),
+                "integrator 'radau5' needs an assembled Jacobian: model '" + sys.name() +
+                    "' has neither an analytic Jacobian nor a sparsity pattern and more than " +
+                    std::to_string(LinearSolverOptions{}.dense_max) +
+                    " unknowns (give jacobian=fd_dense to use a dense one)");
+  core_.reset(sys, t0, y0);
+  const bool dense = opt_.linear == LinearSolverKind::dense_lu ||
+                     (opt_.linear == LinearSolverKind::automatic && !large);
+  real_.reset(n_, dense);
+  complex_.reset(n_, dense);
+  for (Mat* m : {&z_, &w_, &f_, &z_prev_}) m->setZero(n_, 3);
+  for (Vec* v : {&f0_, &ynew_, &scale_, &tmp_, &tmp2_, &err_, &r1_, &x1_}) v->setZero(n_);
+  r2_.setZero(n_);
+  x2_.setZero(n_);
+  eta_old_ = 1.0;
+  fact_h_ = 0.0;
+  fact_valid_ = jac_valid_ = f0_valid_ = have_prev_ = false;
+  h_prev_ = 0.0;
+  t_ = t0;
+  h_ = 0.0;
+  first_ = true;
+  trial_pending_ = false;
+  counts_ = {};
+  ctrl_.reset();
+  cached_y_ = nullptr;
+}
+
+void Radau5::ensure_jacobian(const OdeSystem& sys, double t, CVecRef y, SolveStats& stats) {
+  if (jac_valid_) return;
+  // Finite-difference Jacobians difference against f(t, y); an analytic one does not need it.
+  if (!f0_valid_ && core_.jacobian_source() != JacobianSource::analytic) {
+    sys.rhs(t, y, f0_);
+    f0_valid_ = true;
+  }
+  core_.new_step();
+  core_.update_jacobian(sys, t, y, f0_, stats);
+  jac_valid_ = true;
+  fact_valid_ = false;
+}
+
+bool Radau5::ensure_factors(double h, SolveStats& stats) {
+  if (fact_valid_ && h == fact_h_) return true;
+  const Radau5Constants& k = radau5_constants();
+  const SparseMat& jac = core_.jacobian_matrix();
+  stats.lin_setups += 2;
+  fact_h_ = h;
+  fact_valid_ = real_.factor(k.gamma_hat / h, jac) &&
+                complex_.factor(std::complex<double>(k.a, -k.b) / h, jac);
+  return fact_valid_;
+}
+
+void Radau5::starting_values(double h) {
+  if (!have_prev_) {
+    z_.setZero();
+    return;
+  }
+  // The previous step's collocation polynomial q(s), s = (t - t_{n-1})/h_prev, q(0) = 0,
+  // q(c_j) = Z_j^prev, continued to the new stages: Z_i = q(1 + c_i h/h_prev) - Z_3^prev.
+  const Vec& c = radau5_tableau().c;
+  for (int i = 0; i < 3; ++i) {
+    const double s = 1.0 + c[i] * h / h_prev_;
+    double l[3];
+    for (int j = 0; j < 3; ++j) {
+      l[j] = s / c[j];
+      for (int m = 0; m < 3; ++m)
+        if (m != j) l[j] *= (s - c[m]) / (c[j] - c[m]);
+    }
+    z_.col(i) =
+        l[0] * z_prev_.col(0) + l[1] * z_prev_.col(1) + l[2] * z_prev_.col(2) - z_prev_.col(2);
+  }
+}
+
+bool Radau5::solve_stages(const OdeSystem& sys, double t, CVecRef y, double h, bool adaptive,
+                          SolveStats& stats) {
+  const Radau5Constants& k = radau5_constants();
+  const Vec& c = radau5_tableau().c;
+  const double eps = std::numeric_limits<double>::epsilon();
+  double kappa = 1.0;
+  if (adaptive) {
+    const ControllerOptions& o = opt_.control;
+    scale_ = o.atol + o.rtol * y.array().abs();
+    kappa = std::max(10 * eps / o.rtol, std::min(0.03, std::sqrt(o.rtol)));
+  } else {
+    scale_ = opt_.newton_tol * (1.0 + y.array().abs());
+  }
+  starting_values(h);
+  w_.noalias() = z_ * k.t_inv.transpose();
+  double eta = std::pow(std::max(eta_old_, eps), 0.8);
+  double norm_old = 0.0;
+  const int kmax = opt_.newton_max_iter;
+  for (int it = 0; it < kmax; ++it) {
+    for (int i = 0; i < 3; ++i) {
+      tmp_ = y + z_.col(i);
+      sys.rhs(t + c[i] * h, tmp_, f_.col(i));
+    }
+    if (!f_.allFinite()) return false;
+    ++stats.newton_iters;
+    // Right-hand sides (T⁻¹ ⊗ I) F - h⁻¹ (Λ ⊗ I) W of the three transformed blocks.
+    r1_ = k.t_inv(0, 0) * f_.col(0) + k.t_inv(0, 1) * f_.col(1) + k.t_inv(0, 2) * f_.col(2) -
+          (k.gamma_hat / h) * w_.col(0);
+    tmp_ = k.t_inv(1, 0) * f_.col(0) + k.t_inv(1, 1) * f_.col(1) + k.t_inv(1, 2) * f_.col(2) -
+           (k.a / h) * w_.col(1) - (k.b / h) * w_.col(2);
+    tmp2_ = k.t_inv(2, 0) * f_.col(0) + k.t_inv(2, 1) * f_.col(1) + k.t_inv(2, 2) * f_.col(2) +
+            (k.b / h) * w_.col(1) - (k.a / h) * w_.col(2);
+    r2_.real() = tmp_;
+    r2_.imag() = tmp2_;
+    real_.solve(r1_, x1_);
+    complex_.solve(r2_, x2_);
+    stats.lin_solves += 2;
+    double sum = 0.0;
+    for (Index i = 0; i < n_; ++i) {
+      const double s = scale_[i];
+      const double q1 = x1_[i] / s, q2 = x2_[i].real() / s, q3 = x2_[i].imag() / s;
+      sum += q1 * q1 + q2 * q2 + q3 * q3;
+    }
+    const double norm = std::sqrt(sum / static_cast<double>(3 * n_));
+    if (!std::isfinite(norm)) return false;
+    if (it > 0) {
+      const double theta = norm / norm_old;
+      if (theta >= 0.99) return false;
+      eta = theta / (1.0 - theta);
+      // Convergence too slow to meet κ within the remaining iterations (RADAU5).
+      if (std::pow(theta, kmax - 1 - it) / (1.0 - theta) * norm > kappa) return false;
+    }
+    w_.col(0) += x1_;
+    w_.col(1) += x2_.real();
+    w_.col(2) += x2_.imag();
+    z_.noalias() = w_ * k.t.transpose();
+    // Adaptive mode may stop after one iteration on η from the previous step (RADAU5); fixed-step
+    // mode waits for a measured contraction, so that its error floor is newton_tol.
+    if ((eta * norm <= kappa && (adaptive || it > 0)) || norm == 0.0) {
+      eta_old_ = eta;
+      return true;
+    }
+    norm_old = norm;
+  }
+  return false;
+}
+
+double Radau5::estimate_error(const OdeSystem& sys, double t, CVecRef y, double h, bool refine,
+                              SolveStats& stats) {
+  const Radau5Constants& k = radau5_constants();
+  const double g = k.gamma_hat / h;
+  // (I - hγ_0 J)⁻¹ [γ_0 h f0 + Σ e_j Z_j] = (γ̂/h I - J)⁻¹ [f0 + (γ̂/h) Σ e_j Z_j].
+  tmp2_ = (g * k.e[0]) * z_.col(0) + (g * k.e[1]) * z_.col(1) + (g * k.e[2]) * z_.col(2);
+  r1_ = f0_ + tmp2_;
+  real_.solve(r1_, err_);
+  ++stats.lin_solves;
+  double err = ctrl_.norm(err_, y, ynew_);
+  if (refine && err >= 1.0) {
+    tmp_ = y + err_;
+    sys.rhs(t, tmp_, r1_);
+    r1_ += tmp2_;
+    real_.solve(r1_, err_);
+    ++stats.lin_solves;
+    err = ctrl_.norm(err_, y, ynew_);
+  }
+  return err;
+}
+
+void Radau5::accept_stages(double h) {
+  z_prev_ = z_;
+  h_prev_ = h;
+  have_prev_ = true;
+  jac_valid_ = false;
+  f0_valid_ = false;
+}
+
+Status Radau5::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) {
+  const bool continuing = have_prev_ && cached_y_ == y.data() &&
+                          std::abs(cached_t_ - t) <= 1e-12 * (std::abs(t) + std::abs(h));
+  if (!continuing) {
+    have_prev_ = false;
+    jac_valid_ = false;
+    f0_valid_ = false;
+  }
+  ensure_jacobian(sys, t, y, stats);
+  if (!ensure_factors(h, stats)) {
+    stats.message = "radau5: singular iteration matrix at t = " + std::to_string(t);
+    return Status::solver_error;
+  }
+  if (!solve_stages(sys, t, y, h, false, stats)) {
+    ++stats.newton_fails;
+    have_prev_ = false;
+    return Status::newton_failed;
+  }
+  y += z_.col(2);
+  accept_stages(h);
+  cached_y_ = y.data();
+  cached_t_ = t + h;
+  return Status::ok;
+}
+
+Status Radau5::advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) {
+  cached_y_ = nullptr;  // fixed-step continuation does not apply
+  if (h_ == 0.0) {
+    if (!f0_valid_) {
+      sys.rhs(t_, y, f0_);
+      f0_valid_ = true;
+    }
+    // The error estimate is O(h⁴): the heuristic's p = 3.
+    h_ = opt_.control.h0 > 0 ? std::min(opt_.control.h0, t_out - t_)
+                             : ctrl_.initial_step(sys, t_, y, f0_, 3, t_out - t_, tmp_, tmp2_);
+  }
+  const auto trial = [&](double t, double h) {
+    const bool after_reject = trial_pending_;
+    trial_pending_ = true;
+    if (!f0_valid_) {
+      sys.rhs(t, y, f0_);  // the error estimate needs f(t_n, y_n)
+      f0_valid_ = true;
+    }
+    ensure_jacobian(sys, t, y, stats);
+    if (!ensure_factors(h, stats)) return TrialResult{0.0, 0.5};
+    if (!solve_stages(sys, t, y, h, true, stats)) {
+      ++stats.newton_fails;
+      return TrialResult{0.0, 0.5};
+    }
+    ynew_ = y + z_.col(2);
+    return TrialResult{estimate_error(sys, t, y, h, first_ || after_reject, stats), 0.0};
+  };
+  const auto commit = [&](double, double h) {
+    y = ynew_;
+    accept_stages(h);
+    first_ = false;
+    trial_pending_ = false;
+  };
+  const Status st = advance_adaptive(ctrl_, t_, t_out, h_, counts_, stats.message, trial, commit);
+  stats.steps = counts_.accepted;
+  stats.rejected_steps = counts_.rejected;
+  return st;
+}
+
+}  // namespace stiffbench
