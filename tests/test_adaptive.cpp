@@ -100,7 +100,9 @@ double error_vs_exact(const OdeSystem& sys, const RunResult& r) {
 
 // Tolerance proportionality (HNW I §II.4): with local extrapolation the step is set by the
 // fourth-order estimate, h ∝ tol^(1/5), and the fifth-order global error ∝ h^5 ∝ tol: slope 1
-// of log(error) against log(rtol), fitted by least squares over rtol = 1e-4 .. 1e-10.
+// of log(error) against log(rtol), fitted by least squares over rtol = 1e-4 .. 1e-10 (atol =
+// rtol, output only at t_end). Measured 0.91: the pairwise slopes steepen from 0.55 (1e-4 →
+// 1e-5, steps too large for the asymptotic regime) to 1.06 (1e-9 → 1e-10).
 TEST(AdaptiveDopri5, GlobalErrorProportionalToTolerance) {
   auto sys = model("kepler", {"e=0.5"});
   std::vector<double> lx, ly;
