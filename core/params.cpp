@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 
 namespace stiffbench {
 
@@ -42,6 +43,13 @@ Params Params::from_assignments(const std::vector<std::string>& assignments) {
 }
 
 void Params::set(const std::string& key, const std::string& value) { values_[key] = value; }
+
+ParamValue::ParamValue(double v) {
+  // 17 significant digits round-trip every double through from_chars (the reader below).
+  char buf[32];
+  const int n = std::snprintf(buf, sizeof buf, "%.17g", v);
+  text_.assign(buf, static_cast<std::size_t>(n));
+}
 
 const std::string& Params::raw(const std::string& key) const {
   const auto it = values_.find(key);

@@ -6,9 +6,11 @@
 // naming the key (see Registry::create and check_all_consumed).
 #pragma once
 
+#include <initializer_list>
 #include <map>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/types.hpp"
@@ -27,9 +29,32 @@ struct ParamSpec {
 
 std::string to_string(ParamType type);
 
+// A parameter value given from C++: converts from a number, a bool or a string to the text form
+// every Params holds (what `--param` would have given). Doubles are written with 17 significant
+// digits, so they reach the consumer bit for bit.
+class ParamValue {
+ public:
+  ParamValue(double v);
+  ParamValue(int v) : text_(std::to_string(v)) {}
+  ParamValue(long v) : text_(std::to_string(v)) {}
+  ParamValue(bool v) : text_(v ? "true" : "false") {}
+  ParamValue(const char* v) : text_(v) {}
+  ParamValue(std::string v) : text_(std::move(v)) {}
+  const std::string& text() const { return text_; }
+
+ private:
+  std::string text_;
+};
+
 class Params {
  public:
   Params() = default;
+  // Typed construction: Params{{"rtol", 1e-8}, {"linear_solver", "klu"}, {"n", 32}}.
+  Params(std::initializer_list<std::pair<std::string, ParamValue>> values) {
+    for (const auto& [key, value] : values) set(key, value.text());
+  }
+  void set(const std::string& key, const ParamValue& value) { set(key, value.text()); }
+  void set(const std::string& key, const char* value) { set(key, std::string(value)); }
 
   // Parses "key=value" strings; a malformed one is BadInput naming it.
   static Params from_assignments(const std::vector<std::string>& assignments);

@@ -21,6 +21,7 @@ class Registry {
     Info info;  // has at least `std::string name`
     std::vector<ParamSpec> params;
     Factory make;
+    bool built_in = true;  // false: added from outside the library (register_model)
   };
 
   explicit Registry(std::string kind) : kind_(std::move(kind)) {}

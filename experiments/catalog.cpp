@@ -7,8 +7,10 @@
 
 namespace stiffbench {
 
-const ModelRegistry& model_registry() {
-  static const ModelRegistry reg = [] {
+namespace {
+
+ModelRegistry& mutable_model_registry() {
+  static ModelRegistry reg = [] {
     ModelRegistry r("model");
     register_problem_models(r);
     register_mass_spring_models(r);
@@ -18,8 +20,8 @@ const ModelRegistry& model_registry() {
   return reg;
 }
 
-const IntegratorRegistry& integrator_registry() {
-  static const IntegratorRegistry reg = [] {
+IntegratorRegistry& mutable_integrator_registry() {
+  static IntegratorRegistry reg = [] {
     IntegratorRegistry r("integrator");
     register_explicit_integrators(r);
     register_symplectic_integrators(r);
@@ -28,6 +30,21 @@ const IntegratorRegistry& integrator_registry() {
     return r;
   }();
   return reg;
+}
+
+}  // namespace
+
+const ModelRegistry& model_registry() { return mutable_model_registry(); }
+const IntegratorRegistry& integrator_registry() { return mutable_integrator_registry(); }
+
+void register_model(ModelRegistry::Entry entry) {
+  entry.built_in = false;
+  mutable_model_registry().add(std::move(entry));
+}
+
+void register_integrator(IntegratorRegistry::Entry entry) {
+  entry.built_in = false;
+  mutable_integrator_registry().add(std::move(entry));
 }
 
 Setup make_setup(const std::string& model, const std::vector<std::string>& integrators,

@@ -13,6 +13,19 @@ namespace stiffbench {
 const ModelRegistry& model_registry();
 const IntegratorRegistry& integrator_registry();
 
+// Adds a model or an integrator defined outside the library (a user's own right-hand side) to
+// the process-wide registries, so that every experiment, `describe` and `solve` (through
+// cli_main) find it by name. Call before using it, from one thread (the registries are not
+// locked). A name already registered is a std::logic_error. The entry's factory receives the
+// declared parameters with their defaults filled in, exactly as the built-in models do:
+//
+//   register_model({ModelInfo{"brusselator", "1D Brusselator (Hairer-Wanner II)"},
+//                   {{"n", ParamType::integer, "32", "grid points"}},
+//                   [](const Params& p) { return std::make_unique<Brusselator>(p.integer("n"));
+//                   }});
+void register_model(ModelRegistry::Entry entry);
+void register_integrator(IntegratorRegistry::Entry entry);
+
 struct Setup {
   std::unique_ptr<OdeSystem> model;
   std::vector<std::unique_ptr<Integrator>> integrators;

@@ -43,7 +43,7 @@ void list_integrators(std::ostream& out) {
   out << t.to_markdown();
 }
 
-void list_experiments(std::ostream& out) {
+Table experiments_table() {
   Table t{{"experiment", "writes", "description"}, {}};
   t.rows.push_back({"solve",
                     "trajectory CSV (t,y0,y1,...); with --frames: VTK/CSV frames, observables.csv",
@@ -72,8 +72,12 @@ void list_experiments(std::ostream& out) {
   t.rows.push_back({"report", "DIR/REPORT.md and one folder per study",
                     "the default suite: convergence, local error, energy drift, stability "
                     "limits and regions, work-precision"});
-  out << t.to_markdown();
+  return t;
 }
+
+void list_experiments(std::ostream& out) { out << experiments_table().to_markdown(); }
+
+std::string count_or_variable(int n) { return n ? std::to_string(n) : "variable"; }
 
 void print_params(const std::vector<ParamSpec>& params, std::ostream& out) {
   if (params.empty()) {
@@ -130,14 +134,24 @@ void cmd_describe(const std::string& name, std::ostream& out) {
   if (const auto* e = integrator_registry().find(name)) {
     const MethodInfo& i = e->info;
     out << "integrator " << name << ": " << i.description << "\n";
-    out << "family: " << to_string(i.family) << "\norder: " << i.order
-        << "\nevaluations per step: " << i.stages
+    out << "family: " << to_string(i.family) << "\norder: " << count_or_variable(i.order)
+        << "\nevaluations per step: " << count_or_variable(i.stages)
         << "\nrequires: " << describe_requirements(i.requires_) << "\n";
     print_params(e->params, out);
     return;
   }
+  std::vector<std::string> experiments;
+  for (const auto& row : experiments_table().rows) {
+    experiments.push_back(row[0]);
+    if (row[0] != name) continue;
+    out << "experiment " << name << ": " << row[2] << "\n";
+    out << "writes: " << row[1] << "\n";
+    out << "flags: stiffbench " << name << " --help\n";
+    return;
+  }
   throw BadInput("unknown name '" + name + "': not a model (" + join(model_registry().names()) +
-                 ") nor an integrator (" + join(integrator_registry().names()) + ")");
+                 "), an integrator (" + join(integrator_registry().names()) +
+                 ") nor an experiment (" + join(experiments) + ")");
 }
 
 void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {

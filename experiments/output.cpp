@@ -1,5 +1,7 @@
 #include "experiments/output.hpp"
 
+#include "experiments/catalog.hpp"
+
 #include <omp.h>
 
 #include <Eigen/Core>
@@ -18,6 +20,7 @@ namespace stiffbench {
 
 namespace {
 std::string g_command_line;
+bool g_command_line_set = false;
 
 std::string csv_escape(const std::string& s) {
   if (s.find_first_of(",\"\n") == std::string::npos) return s;
@@ -104,6 +107,7 @@ void require_output_dir(const std::filesystem::path& dir, const std::string& fla
 }
 
 void set_command_line(int argc, char** argv) {
+  g_command_line_set = true;
   g_command_line.clear();
   for (int i = 0; i < argc; ++i) {
     if (i) g_command_line += ' ';
@@ -130,7 +134,23 @@ nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json&
                        std::to_string(EIGEN_MINOR_VERSION);
   j["threads"] = omp_get_max_threads();
   j["date"] = date;
-  j["command_line"] = g_command_line;
+  // A program calling the studies directly has no command line: say so rather than record "".
+  if (g_command_line_set) {
+    j["caller"] = "cli";
+    j["command_line"] = g_command_line;
+  } else {
+    j["caller"] = "library";
+    j["command_line"] = nullptr;
+  }
+  // What the model is, also for one registered from outside the library (register_model).
+  if (spec.is_object() && spec.contains("model") && spec["model"].is_string()) {
+    if (const auto* e = model_registry().find(spec["model"].get<std::string>())) {
+      j["model"] = {{"name", e->info.name},
+                    {"description", e->info.description},
+                    {"source", e->info.source},
+                    {"built_in", e->built_in}};
+    }
+  }
   return j;
 }
 

@@ -5,6 +5,7 @@
 #include "experiments/stability.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdlib>
 #include <fstream>
 #include <functional>
@@ -13,6 +14,9 @@
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <sstream>
+#include <string_view>
+#include <utility>
+#include <vector>
 
 #include <unistd.h>
 
@@ -44,6 +48,38 @@ std::vector<PlotPanel> family_panels(const std::vector<std::string>& integrators
   return panels;
 }
 
+// The scripts compiled into the library (generated from plots/*.gp by cmake/embed_plots.cmake).
+const std::vector<std::pair<std::string_view, std::string_view>>& embedded_plot_scripts();
+
+namespace {
+
+// Writes the embedded scripts once per process into a private temporary folder and returns it.
+fs::path embedded_plots_dir() {
+  static const fs::path dir = [] {
+    const fs::path d = fs::temp_directory_path() /
+                       ("stiffbench-plots-" + std::to_string(::getpid()) + "-" +
+                        std::to_string(reinterpret_cast<std::uintptr_t>(&embedded_plot_scripts)));
+    fs::create_directories(d);
+    for (const auto& [name, text] : embedded_plot_scripts()) {
+      std::ofstream out(d / std::string(name), std::ios::binary);
+      out.write(text.data(), static_cast<std::streamsize>(text.size()));
+    }
+    return d;
+  }();
+  static const struct Cleanup {
+    ~Cleanup() {
+      std::error_code ec;
+      fs::remove_all(dir, ec);
+    }
+  } cleanup;
+  return dir;
+}
+
+}  // namespace
+
+// In order: $STIFFBENCH_PLOTS_DIR; <exe>/../share/stiffbench/plots (the installed or built
+// stiffbench binary); the source tree's plots/ of this build; else the copies compiled into the
+// library (a user's program linking an installed stiffbench), written to a temporary folder.
 fs::path plots_dir() {
   if (const char* env = std::getenv("STIFFBENCH_PLOTS_DIR"); env && *env) return fs::path(env);
   std::error_code ec;
@@ -52,7 +88,9 @@ fs::path plots_dir() {
     const fs::path beside = exe.parent_path().parent_path() / "share" / "stiffbench" / "plots";
     if (fs::exists(beside / "common.gp", ec)) return beside;
   }
-  return fs::path(STIFFBENCH_SOURCE_DIR) / "plots";
+  const fs::path source = fs::path(STIFFBENCH_SOURCE_DIR) / "plots";
+  if (fs::exists(source / "common.gp", ec)) return source;
+  return embedded_plots_dir();
 }
 
 namespace {

@@ -1,0 +1,264 @@
+// The stiffbench command line (experiments/cli_main.hpp). Exit codes: 0 success, 2 bad input
+// (one message on stderr naming what is wrong), 1 anything else.
+#include "experiments/cli_main.hpp"
+
+#include <CLI/CLI.hpp>
+#include <iostream>
+#include <limits>
+
+#include "experiments/catalog.hpp"
+#include "experiments/cli.hpp"
+#include "experiments/commands.hpp"
+#include "experiments/work_precision.hpp"
+
+namespace stiffbench {
+
+namespace {
+
+void add_study_flags(CLI::App* cmd, ConvergenceSpec& spec, std::string& integrators,
+                     std::vector<std::string>& params, std::string& out_dir) {
+  cmd->add_option("--model", spec.model, "model name (see `stiffbench list models`)")->required();
+  cmd->add_option("--integrators", integrators, "comma-separated integrator names")->required();
+  cmd->add_option("--param", params, "model/integrator parameter key=value (repeatable)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  cmd->add_option("--t-end", spec.t_end, "final time")->required();
+  cmd->add_option("--h", spec.h,
+                  "coarsest step size (default: the model's suggested step, where it has one)");
+  cmd->add_option("--levels", spec.levels, "number of step sizes (>= 2)")->capture_default_str();
+  cmd->add_option("--refine", spec.refine, "ratio between consecutive step sizes (> 1)")
+      ->capture_default_str();
+  cmd->add_option("--reference", spec.reference,
+                  "exact | METHOD: an adaptive integrator (cvode_bdf, cvode_adams, arkode_*, "
+                  "gsl_*) runs at --reference-rtol/--reference-atol and stops exactly at the "
+                  "reference times; a fixed-step one (e.g. rk4) runs at (finest h)/16. Default: "
+                  "exact where the model has one; a model without one needs --reference. A "
+                  "non-exact reference is cached in OUT/reference/<hash>.csv and reused by a "
+                  "run of the same build with the same model, parameters, reference and times")
+      ->capture_default_str();
+  cmd->add_option("--reference-rtol", spec.reference_rtol,
+                  "relative tolerance of an adaptive --reference (default 1e-12)");
+  cmd->add_option("--reference-atol", spec.reference_atol,
+                  "absolute tolerance of an adaptive --reference (default rtol/100)");
+  cmd->add_option("--out", out_dir, "output directory")->capture_default_str();
+}
+
+PlotOptions g_plot;  // --svg of convergence, local-error and work-precision
+
+}  // namespace
+
+int cli_main(int argc, char** argv) {
+  set_command_line(argc, argv);
+  CLI::App app{
+      "stiffbench: a testbed comparing time integrators on stiff ODEs from physically based "
+      "simulation.\nExit codes: 0 success, 2 bad input, 1 other errors."};
+  app.require_subcommand(1);
+
+  std::string list_what;
+  auto* list = app.add_subcommand("list", "list models, integrators or experiments");
+  list->add_option("what", list_what, "models | integrators | experiments (default: all)")
+      ->check(CLI::IsMember({"models", "integrators", "experiments"}));
+
+  std::string describe_name;
+  auto* describe = app.add_subcommand(
+      "describe", "parameters, defaults and properties of a model, integrator or experiment");
+  describe->add_option("name", describe_name, "model, integrator or experiment name")->required();
+
+  SolveOptions solve_opt;
+  std::vector<std::string> solve_params;
+  auto* solve =
+      app.add_subcommand("solve",
+                         "one run (fixed step with --h, else the model's suggested step or "
+                         "adaptive): final state, invariants, observables, statistics; --frames "
+                         "writes particle frames");
+  solve->add_option("--model", solve_opt.model, "model name")->required();
+  solve->add_option("--integrator", solve_opt.integrator, "integrator name")->required();
+  solve->add_option("--h", solve_opt.h,
+                    "step size (the run takes N = round(T/h) steps of T/N); omit for the adaptive "
+                    "mode of a reference integrator or the model's suggested step");
+  solve->add_option("--t-end", solve_opt.t_end,
+                    "final time (default: the model's literature end time)");
+  solve->add_option("--outputs", solve_opt.outputs, "number of output intervals in the trajectory")
+      ->capture_default_str();
+  solve->add_option("--param", solve_params, "model/integrator parameter key=value (repeatable)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  solve->add_option("--out", solve_opt.out_csv,
+                    "trajectory CSV file (columns t,y0,y1,...); with --frames, the output "
+                    "directory");
+  solve->add_option("--frames", solve_opt.frames,
+                    "write N+1 equally spaced frames into the --out directory: VTK particle "
+                    "frames (frame_NNNN.vtu, frames.pvd) for particle models, trajectory.csv "
+                    "otherwise, and observables.csv");
+  std::string solve_times;
+  solve->add_option("--times", solve_times,
+                    "output times t1,t2,... (increasing, in (t0, t_end]; without --t-end the run "
+                    "ends at the last) instead of --outputs: adaptive integrators stop exactly at "
+                    "each (no interpolation); fixed-step runs report the nearest step and print "
+                    "and write its actual t. --out gets one row per time");
+  solve->add_option("--log-outputs", solve_opt.log_outputs,
+                    "N output times log-spaced in t - t0 from --log-first to t_end: t_k = t0 + "
+                    "(t1 - t0)*((t_end - t0)/(t1 - t0))^((k-1)/(N-1)); default t1 = t0 + "
+                    "(t_end - t0)*10^-(N-1), one per decade; same stops as --times");
+  solve->add_option("--log-first", solve_opt.log_first,
+                    "first time of --log-outputs (default: N-1 decades before t_end)");
+  solve
+      ->add_option("--frame-format", solve_opt.frame_format,
+                   "particle frame files: vtu (VTK XML + frames.pvd) or vtk (legacy); a CSV "
+                   "copy of each frame is always written for gnuplot")
+      ->check(CLI::IsMember({"vtu", "vtk"}))
+      ->capture_default_str();
+
+  ConvergenceSpec conv;
+  conv.h = std::numeric_limits<double>::quiet_NaN();
+  std::string conv_integrators, conv_out = "results";
+  std::vector<std::string> conv_params;
+  auto* convergence = app.add_subcommand(
+      "convergence",
+      "global error at t_end against h = H/refine^k; writes convergence.{csv,md,json}");
+  add_study_flags(convergence, conv, conv_integrators, conv_params, conv_out);
+  convergence->add_flag("--svg", g_plot.svg, "also write the plot as SVG");
+
+  ConvergenceSpec local;
+  std::string local_integrators, local_out = "results";
+  std::vector<std::string> local_params;
+  auto* local_error = app.add_subcommand(
+      "local-error",
+      "error of one step from the initial state against h; writes local_error.{csv,md,json}");
+  local.t_end = 1.0;
+  local.h = std::numeric_limits<double>::quiet_NaN();
+  add_study_flags(local_error, local, local_integrators, local_params, local_out);
+  local_error->get_option("--t-end")->required(false)->description(
+      "unused by the local study's error; kept for symmetry");
+  local_error->add_flag("--svg", g_plot.svg, "also write the plot as SVG");
+
+  WorkPrecisionSpec wp;
+  std::string wp_integrators, wp_out = "results";
+  std::vector<std::string> wp_params;
+  auto* work_precision = app.add_subcommand(
+      "work-precision",
+      "error against work: fixed-step methods over an h ladder, references over a tolerance "
+      "ladder; writes work_precision.{csv,md,json}");
+  work_precision->add_option("--model", wp.model, "model name")->required();
+  work_precision->add_option("--integrators", wp_integrators, "comma-separated integrator names")
+      ->required();
+  work_precision
+      ->add_option("--param", wp_params, "model/integrator parameter key=value (repeatable)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  work_precision->add_option("--t-end", wp.t_end,
+                             "final time (default: the model's literature end time)");
+  work_precision->add_option("--h", wp.h,
+                             "coarsest step of fixed-step methods (default: the model's suggested "
+                             "step, else (t_end - t0)/16000)");
+  work_precision->add_option("--levels", wp.levels, "number of step sizes")->capture_default_str();
+  work_precision->add_option("--refine", wp.refine, "ratio between step sizes")
+      ->capture_default_str();
+  work_precision
+      ->add_option("--tol-levels", wp.tol_levels, "number of tolerances (factor 10 apart)")
+      ->capture_default_str();
+  work_precision->add_option("--rtol-max", wp.rtol_max, "loosest relative tolerance")
+      ->capture_default_str();
+  work_precision->add_option("--atol-factor", wp.atol_factor, "atol = atol_factor * rtol")
+      ->capture_default_str();
+  work_precision->add_option("--repeats", wp.repeats, "runs per setting; wall time is the minimum")
+      ->capture_default_str();
+  work_precision
+      ->add_option("--reference", wp.reference,
+                   "exact | METHOD; default: exact where available, else cvode_bdf")
+      ->capture_default_str();
+  work_precision
+      ->add_option("--reference-rtol", wp.reference_rtol, "rtol of an adaptive reference run")
+      ->capture_default_str();
+  work_precision
+      ->add_option("--reference-atol", wp.reference_atol, "atol of an adaptive reference run")
+      ->capture_default_str();
+  work_precision->add_option("--out", wp_out, "output directory")->capture_default_str();
+  work_precision->add_flag("--svg", g_plot.svg, "also write the plot as SVG");
+
+  ReportOptions report_opt;
+  auto* report = app.add_subcommand("report", "run the default suite and write DIR/REPORT.md");
+  report->add_option("--out", report_opt.out_dir, "output directory")->capture_default_str();
+  report->add_flag("--quick", report_opt.quick, "fewer step sizes (a smoke run)");
+  report->add_flag("--svg", report_opt.svg, "also write each plot as SVG");
+
+  add_stability_command(app);
+  add_region_command(app);
+  add_energy_command(app);
+  add_plot_command(app);
+
+  if (argc > 1 && argv[1][0] != '-') {
+    bool known = false;
+    std::vector<std::string> names;
+    for (const auto* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+      names.push_back(sub->get_name());
+      known = known || sub->get_name() == argv[1];
+    }
+    if (!known) {
+      std::cerr << "stiffbench: unknown command '" << argv[1] << "'; known: " << join(names)
+                << "\n";
+      return 2;
+    }
+  }
+  // Subcommands registered by add_*_command run inside parse() (their callbacks), so one try
+  // covers parsing and running.
+  try {
+    app.parse(argc, argv);
+    if (*list) cmd_list(list_what, std::cout);
+    if (*describe) cmd_describe(describe_name, std::cout);
+    if (*solve) {
+      solve_opt.params = Params::from_assignments(solve_params);
+      if (solve->count("--times")) solve_opt.times = parse_times(solve_times);
+      cmd_solve(solve_opt, std::cout, std::cerr);
+    }
+    if (*convergence || *local_error) {
+      const bool is_local = local_error->parsed();
+      ConvergenceSpec& spec = is_local ? local : conv;
+      spec.integrators =
+          split_list(is_local ? local_integrators : conv_integrators, "--integrators");
+      spec.params = Params::from_assignments(is_local ? local_params : conv_params);
+      const std::string& dir = is_local ? local_out : conv_out;
+      spec.cache_dir = dir;
+      const std::string name = is_local ? "local_error" : "convergence";
+      require_output_dir(dir);
+      const ConvergenceResult res =
+          is_local ? run_local_error(spec, &std::cerr) : run_convergence(spec, &std::cerr);
+      write_convergence_outputs(dir, name, spec, res, is_local);
+      std::cout << (is_local ? local_error_table(res) : convergence_table(res)).to_markdown();
+      std::cout << "\nwrote " << dir << "/" << name << ".{csv,md,json}\n";
+      const std::filesystem::path csv = std::filesystem::path(dir) / (name + ".csv");
+      if (plot_convergence(csv, (is_local ? "Local error: " : "Global error: ") + spec.model,
+                           is_local, g_plot, std::cerr))
+        std::cout << "plot: " << dir << "/" << name << ".png\n";
+    }
+    if (*work_precision) {
+      wp.integrators = split_list(wp_integrators, "--integrators");
+      wp.params = Params::from_assignments(wp_params);
+      require_output_dir(wp_out);
+      const WorkPrecisionResult res = run_work_precision(wp, &std::cerr);
+      write_work_precision_outputs(wp_out, wp, res);
+      std::cout << work_precision_table(res).to_markdown();
+      std::cout << "\nwrote " << wp_out << "/work_precision.{csv,md,json}\n";
+      if (plot_work_precision(std::filesystem::path(wp_out) / "work_precision.csv",
+                              "Work-precision: " + wp.model, g_plot, std::cerr))
+        std::cout << "plot: " << wp_out << "/work_precision.png\n";
+    }
+    if (*report) cmd_report(report_opt, std::cout, std::cerr);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "stiffbench: " << e.what() << "\n";
+    return 2;
+  } catch (const BadInput& e) {
+    std::cerr << "stiffbench: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "stiffbench: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace stiffbench

@@ -1,0 +1,42 @@
+// stiffbench's public API: everything a program needs to study time integrators on its own
+// ODE system. Include this one header (<stiffbench/stiffbench.hpp>) and link
+// stiffbench::stiffbench (find_package(stiffbench) after `cmake --install`, or add_subdirectory).
+//
+// Stable (kept source-compatible within a minor version):
+//   core/types.hpp, core/params.hpp        Vec/Index, Params (typed: Params{{"rtol", 1e-8}}),
+//                                           ParamSpec, BadInput
+//   core/ode_system.hpp                     OdeSystem (y' = f(t, y)) and MechanicalSystem
+//   core/integrator.hpp, core/solve_stats.hpp, core/driver.hpp
+//                                           the integrator face, counters, fixed-step and
+//                                           adaptive drivers
+//   core/registry.hpp, core/catalog.hpp, experiments/catalog.hpp
+//                                           the registries, make_setup, register_model and
+//                                           register_integrator for a user's own entries
+//   experiments/convergence.hpp, local error (same header), experiments/work_precision.hpp,
+//   experiments/stability.hpp, experiments/energy.hpp, experiments/region.hpp
+//                                           the studies: spec in, records out, CSV/Markdown/JSON
+//                                           writers
+//   experiments/output.hpp, experiments/plotting.hpp
+//                                           tables, atomic files, run metadata, gnuplot plots
+//   experiments/cli_main.hpp                the whole command line as cli_main(argc, argv)
+// Every other installed header (the models' and integrators' own classes, commands.hpp) is
+// public but may change between versions.
+#pragma once
+
+#include "core/catalog.hpp"
+#include "core/driver.hpp"
+#include "core/integrator.hpp"
+#include "core/ode_system.hpp"
+#include "core/params.hpp"
+#include "core/registry.hpp"
+#include "core/solve_stats.hpp"
+#include "core/types.hpp"
+#include "experiments/catalog.hpp"
+#include "experiments/cli_main.hpp"
+#include "experiments/convergence.hpp"
+#include "experiments/energy.hpp"
+#include "experiments/output.hpp"
+#include "experiments/plotting.hpp"
+#include "experiments/region.hpp"
+#include "experiments/stability.hpp"
+#include "experiments/work_precision.hpp"
