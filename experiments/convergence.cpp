@@ -584,4 +584,17 @@ void write_convergence_outputs(const std::string& dir, const std::string& name,
   write_file_atomic(d / (name + ".json"), meta.dump(2) + "\n");
 }
 
+ConvergenceResult convergence_study(ConvergenceSpec spec, const std::string& dir, bool local,
+                                    std::ostream* progress, std::ostream& err,
+                                    const PlotOptions& plot) {
+  require_output_dir(dir);
+  if (spec.cache_dir.empty()) spec.cache_dir = dir;
+  const std::string name = local ? "local_error" : "convergence";
+  ConvergenceResult res = local ? run_local_error(spec, progress) : run_convergence(spec, progress);
+  write_convergence_outputs(dir, name, spec, res, local);
+  plot_convergence(std::filesystem::path(dir) / (name + ".csv"),
+                   (local ? "Local error: " : "Global error: ") + spec.model, local, plot, err);
+  return res;
+}
+
 }  // namespace stiffbench

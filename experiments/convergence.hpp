@@ -42,6 +42,7 @@
 #include "core/params.hpp"
 #include "core/solve_stats.hpp"
 #include "experiments/output.hpp"
+#include "experiments/plotting.hpp"
 
 namespace stiffbench {
 
@@ -107,5 +108,13 @@ Table local_error_table(const ConvergenceResult& r);  // the local_error.csv con
 // `local` selects the local-error expectation (order + 1) in the Markdown summary.
 void write_convergence_outputs(const std::string& dir, const std::string& name,
                                const ConvergenceSpec& spec, const ConvergenceResult& r, bool local);
+
+// What `stiffbench convergence` / `local-error` do, for a program that links the library: checks
+// that DIR can be written, runs the study (progress lines to `progress` when non-null; the
+// reference cache in DIR unless spec.cache_dir is set), writes DIR/NAME.{csv,md,json} and draws
+// DIR/NAME.png when gnuplot is installed (warnings to `err`).
+ConvergenceResult convergence_study(ConvergenceSpec spec, const std::string& dir, bool local,
+                                    std::ostream* progress, std::ostream& err,
+                                    const PlotOptions& plot = {});
 
 }  // namespace stiffbench

@@ -216,4 +216,15 @@ void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpe
   write_file_atomic(d / "work_precision.json", meta.dump(2) + "\n");
 }
 
+WorkPrecisionResult work_precision_study(const WorkPrecisionSpec& spec, const std::string& dir,
+                                         std::ostream* progress, std::ostream& err,
+                                         const PlotOptions& plot) {
+  require_output_dir(dir);
+  WorkPrecisionResult res = run_work_precision(spec, progress);
+  write_work_precision_outputs(dir, spec, res);
+  plot_work_precision(std::filesystem::path(dir) / "work_precision.csv",
+                      "Work-precision: " + spec.model, plot, err);
+  return res;
+}
+
 }  // namespace stiffbench

@@ -17,6 +17,7 @@
 #include "core/params.hpp"
 #include "core/solve_stats.hpp"
 #include "experiments/output.hpp"
+#include "experiments/plotting.hpp"
 
 namespace stiffbench {
 
@@ -63,5 +64,12 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& spec, std::ostre
 Table work_precision_table(const WorkPrecisionResult& r);
 void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpec& spec,
                                   const WorkPrecisionResult& r);
+
+// What `stiffbench work-precision` does, for a program that links the library: checks DIR, runs
+// the study, writes DIR/work_precision.{csv,md,json} and draws DIR/work_precision.png when
+// gnuplot is installed.
+WorkPrecisionResult work_precision_study(const WorkPrecisionSpec& spec, const std::string& dir,
+                                         std::ostream* progress, std::ostream& err,
+                                         const PlotOptions& plot = {});
 
 }  // namespace stiffbench
