@@ -28,5 +28,6 @@ void add_stability_command(CLI::App& app);
 void add_region_command(CLI::App& app);
 void add_energy_command(CLI::App& app);
 void add_plot_command(CLI::App& app);
+void add_run_commands(CLI::App& app);  // run SPEC.toml and merge (experiments/cli_run.cpp)
 
 }  // namespace stiffbench

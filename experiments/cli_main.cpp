@@ -186,6 +186,7 @@ int cli_main(int argc, char** argv) {
   add_region_command(app);
   add_energy_command(app);
   add_plot_command(app);
+  add_run_commands(app);
 
   if (argc > 1 && argv[1][0] != '-') {
     bool known = false;

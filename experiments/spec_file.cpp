@@ -1,0 +1,280 @@
+#include "experiments/spec_file.hpp"
+
+#include <toml++/toml.h>
+#include <algorithm>
+#include <map>
+#include <sstream>
+
+#include "core/params.hpp"
+#include "core/types.hpp"
+#include "experiments/output.hpp"
+
+namespace stiffbench {
+
+namespace {
+
+using Type = SpecScalar::Type;
+
+// The keys of each kind (besides kind, integrators and [params]) and their types; the names
+// and meanings are those of the command's flags.
+const std::map<std::string, std::map<std::string, Type>>& kind_keys() {
+  static const std::map<std::string, std::map<std::string, Type>> keys = [] {
+    const std::map<std::string, Type> study = {
+        {"model", Type::text},          {"t_end", Type::real},         {"h", Type::real},
+        {"levels", Type::integer},      {"refine", Type::real},        {"reference", Type::text},
+        {"reference_rtol", Type::real}, {"reference_atol", Type::real}};
+    std::map<std::string, Type> wp = study;
+    wp["tol_levels"] = Type::integer;
+    wp["rtol_max"] = Type::real;
+    wp["atol_factor"] = Type::real;
+    wp["repeats"] = Type::integer;
+    const std::map<std::string, Type> stability = {
+        {"model", Type::text},        {"sweep", Type::text},        {"rel_tol", Type::real},
+        {"periods", Type::real},      {"min_steps", Type::integer}, {"horizon", Type::real},
+        {"growth", Type::real},       {"criterion", Type::text},    {"norm_growth", Type::real},
+        {"perturbation", Type::real}, {"seed", Type::integer},      {"h_cap_factor", Type::real},
+        {"max_steps", Type::integer}, {"ray", Type::text},          {"dense_limit", Type::integer}};
+    const std::map<std::string, Type> energy = {{"model", Type::text},
+                                                {"h", Type::real},
+                                                {"t_end", Type::real},
+                                                {"samples", Type::integer},
+                                                {"invariant", Type::text}};
+    const std::map<std::string, Type> region = {{"box", Type::text}, {"resolution", Type::integer}};
+    return std::map<std::string, std::map<std::string, Type>>{
+        {"convergence", study},   {"local-error", study}, {"work-precision", wp},
+        {"stability", stability}, {"energy", energy},     {"region", region}};
+  }();
+  return keys;
+}
+
+std::string type_name(Type t) {
+  switch (t) {
+    case Type::real:
+      return "a number";
+    case Type::integer:
+      return "an integer";
+    case Type::boolean:
+      return "a boolean";
+    case Type::text:
+      return "a string";
+  }
+  return "?";
+}
+
+std::string where_of(const std::string& file, const toml::node& n) {
+  const auto& s = n.source();
+  return file + ":" + std::to_string(s.begin.line) + ":" + std::to_string(s.begin.column);
+}
+
+// A scalar node as SpecScalar; BadInput for tables, arrays and dates.
+SpecScalar scalar_of(const toml::node& n, const std::string& where, const std::string& path) {
+  SpecScalar s;
+  if (const auto* v = n.as_floating_point()) {
+    s.type = Type::real;
+    s.text = format_full(v->get());
+  } else if (const auto* i = n.as_integer()) {
+    s.type = Type::integer;
+    s.text = std::to_string(i->get());
+  } else if (const auto* b = n.as_boolean()) {
+    s.type = Type::boolean;
+    s.text = b->get() ? "true" : "false";
+  } else if (const auto* t = n.as_string()) {
+    s.type = Type::text;
+    s.text = t->get();
+  } else {
+    throw BadInput(where + ": key '" + path + "': expected a value or a list of values");
+  }
+  return s;
+}
+
+SpecEntry entry_of(const toml::node& n, const std::string& path, const std::string& key,
+                   const std::string& where) {
+  SpecEntry e;
+  e.path = path;
+  e.key = key;
+  e.where = where;
+  if (const auto* arr = n.as_array()) {
+    e.is_list = true;
+    if (arr->empty()) spec_error(e, "empty list (a sweep needs at least one value)");
+    for (const auto& item : *arr) e.values.push_back(scalar_of(item, where, path));
+  } else {
+    e.values.push_back(scalar_of(n, where, path));
+  }
+  return e;
+}
+
+// Checks the value types of a top-level key against the kind's table.
+void check_setting(const std::string& kind, const SpecEntry& e) {
+  const auto& keys = kind_keys().at(kind);
+  const auto it = keys.find(e.key);
+  if (it == keys.end()) {
+    std::vector<std::string> known = {"kind", "integrators", "params"};
+    for (const auto& [k, t] : keys) known.push_back(k);
+    spec_error(e, "unknown key for a " + kind + " spec; known: " + join(known));
+  }
+  for (const auto& v : e.values) {
+    const bool ok = v.type == it->second || (it->second == Type::real && v.type == Type::integer);
+    if (!ok) spec_error(e, "expected " + type_name(it->second) + ", got '" + v.text + "'");
+  }
+}
+
+void put(std::vector<SpecEntry>& list, SpecEntry e) {
+  for (auto& x : list) {
+    if (x.key == e.key) {
+      x = std::move(e);
+      return;
+    }
+  }
+  list.push_back(std::move(e));
+}
+
+}  // namespace
+
+nlohmann::json SpecScalar::to_json() const {
+  switch (type) {
+    case Type::real:
+      return std::stod(text);
+    case Type::integer:
+      return std::stol(text);
+    case Type::boolean:
+      return text == "true";
+    case Type::text:
+      return text;
+  }
+  return text;
+}
+
+const std::vector<std::string>& spec_kinds() {
+  static const std::vector<std::string> kinds = [] {
+    std::vector<std::string> k;
+    for (const auto& [name, keys] : kind_keys()) k.push_back(name);
+    return k;
+  }();
+  return kinds;
+}
+
+void spec_error(const SpecEntry& e, const std::string& message) {
+  throw BadInput(e.where + ": key '" + e.path + "': " + message);
+}
+
+nlohmann::json SpecFile::to_json() const {
+  nlohmann::json j;
+  j["kind"] = kind;
+  j["integrators"] = integrators;
+  auto value = [](const SpecEntry& e) {
+    if (!e.is_list) return e.values.front().to_json();
+    nlohmann::json a = nlohmann::json::array();
+    for (const auto& v : e.values) a.push_back(v.to_json());
+    return a;
+  };
+  for (const auto& e : settings) j[e.key] = value(e);
+  j["params"] = nlohmann::json::object();
+  for (const auto& e : params) j["params"][e.key] = value(e);
+  return j;
+}
+
+SpecFile load_spec_file(const std::string& file, const std::vector<std::string>& sets) {
+  toml::table root;
+  try {
+    root = toml::parse_file(file);
+  } catch (const toml::parse_error& err) {
+    const auto& b = err.source().begin;
+    throw BadInput(file + ":" + std::to_string(b.line) + ":" + std::to_string(b.column) + ": " +
+                   std::string(err.description()));
+  }
+  SpecFile spec;
+  spec.file = file;
+  const toml::node* kind = root.get("kind");
+  if (!kind || !kind->is_string())
+    throw BadInput(file + ": key 'kind' missing or not a string; one of " + join(spec_kinds()));
+  spec.kind = kind->as_string()->get();
+  if (!kind_keys().count(spec.kind))
+    throw BadInput(where_of(file, *kind) + ": key 'kind': unknown kind '" + spec.kind +
+                   "'; known: " + join(spec_kinds()));
+
+  std::vector<SpecEntry> settings, params;
+  SpecEntry integrators;
+  for (const auto& [k, node] : root) {
+    const std::string key(k.str());
+    const std::string where = where_of(file, node);
+    if (key == "kind") continue;
+    if (key == "params") {
+      const auto* table = node.as_table();
+      if (!table) throw BadInput(where + ": key 'params': expected a table ([params])");
+      for (const auto& [pk, pnode] : *table) {
+        const std::string pkey(pk.str());
+        params.push_back(entry_of(pnode, "params." + pkey, pkey, where_of(file, pnode)));
+      }
+      continue;
+    }
+    if (node.is_table())
+      throw BadInput(where + ": key '" + key + "': unknown table (only [params] is a table)");
+    SpecEntry e = entry_of(node, key, key, where);
+    if (key == "integrators")
+      integrators = std::move(e);
+    else
+      settings.push_back(std::move(e));
+  }
+
+  // --set KEY=VALUE: VALUE parsed as TOML; a bare word that is not TOML is a string.
+  for (const auto& s : sets) {
+    const auto eq = s.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw BadInput("--set '" + s + "': expected KEY=VALUE (KEY like t_end or params.n)");
+    const std::string path = s.substr(0, eq), text = s.substr(eq + 1);
+    toml::table parsed;
+    try {
+      parsed = toml::parse("v = " + text);
+    } catch (const toml::parse_error&) {
+      parsed = toml::table{{"v", text}};
+    }
+    const std::string where = "--set " + s;
+    const toml::node& node = *parsed.get("v");
+    if (path == "kind") throw BadInput(where + ": the kind cannot be changed");
+    if (path.rfind("params.", 0) == 0) {
+      const std::string key = path.substr(7);
+      if (key.empty() || key.find('.') != std::string::npos)
+        throw BadInput(where + ": expected params.NAME");
+      put(params, entry_of(node, path, key, where));
+    } else if (path.find('.') != std::string::npos) {
+      throw BadInput(where + ": unknown table in '" + path + "' (only params.NAME is dotted)");
+    } else if (path == "integrators") {
+      integrators = entry_of(node, path, path, where);
+    } else {
+      put(settings, entry_of(node, path, path, where));
+    }
+  }
+
+  for (const auto& e : settings) check_setting(spec.kind, e);
+  if (!integrators.values.empty()) {
+    spec.integrators_where = integrators.where;
+    for (const auto& v : integrators.values) {
+      if (v.type != Type::text) spec_error(integrators, "expected integrator names (strings)");
+      if (!integrators.is_list) {  // "a,b,c" as on the command line
+        std::stringstream ss(v.text);
+        std::string item;
+        while (std::getline(ss, item, ',')) {
+          if (item.empty()) spec_error(integrators, "empty name in '" + v.text + "'");
+          spec.integrators.push_back(item);
+        }
+      } else {
+        spec.integrators.push_back(v.text);
+      }
+    }
+  } else if (spec.kind != "region") {
+    throw BadInput(file + ": key 'integrators' missing (a list of integrator names)");
+  }
+  if (spec.kind != "region") {
+    const bool has_model = std::any_of(settings.begin(), settings.end(),
+                                       [](const auto& e) { return e.key == "model"; });
+    if (!has_model) throw BadInput(file + ": key 'model' missing");
+  }
+  auto by_key = [](const SpecEntry& a, const SpecEntry& b) { return a.key < b.key; };
+  std::sort(settings.begin(), settings.end(), by_key);
+  std::sort(params.begin(), params.end(), by_key);
+  spec.settings = std::move(settings);
+  spec.params = std::move(params);
+  return spec;
+}
+
+}  // namespace stiffbench

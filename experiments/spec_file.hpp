@@ -1,0 +1,54 @@
+// Spec files of `stiffbench run`: one experiment kind per TOML file, keys named like the
+// flags of that experiment's command (`--t-end` is `t_end`), model and integrator parameters in
+// a [params] table. Any list-valued key (a top-level key other than `integrators`, or a
+// parameter) is a sweep dimension. Every error (unknown key, wrong type, empty list, a value a
+// flag would refuse) is BadInput naming the file, line and key (README "Spec files and
+// sweeps").
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace stiffbench {
+
+// One scalar of a spec: its text (as a --param value would be written) and its TOML type.
+struct SpecScalar {
+  enum class Type { real, integer, boolean, text };
+  Type type = Type::text;
+  std::string text;
+  nlohmann::json to_json() const;
+};
+
+// One key: a scalar, or a list of scalars (a sweep dimension).
+struct SpecEntry {
+  std::string path;  // "t_end" or "params.n" (the --set spelling)
+  std::string key;   // "t_end" or "n"
+  std::vector<SpecScalar> values;
+  bool is_list = false;
+  std::string where;  // "FILE:LINE:COLUMN" or "--set KEY=VALUE"
+};
+
+struct SpecFile {
+  std::string file;
+  std::string kind;                      // convergence | local-error | work-precision | ...
+  std::vector<std::string> integrators;  // not a sweep dimension: each point runs all of them
+  std::string integrators_where;
+  std::vector<SpecEntry> settings;  // top-level keys (model, t_end, ...), sorted by key
+  std::vector<SpecEntry> params;    // [params], sorted by key
+  nlohmann::json to_json() const;   // canonical form (hashed for shards, stored in run.json)
+};
+
+// The experiment kinds `run` accepts.
+const std::vector<std::string>& spec_kinds();
+
+// Reads and checks FILE, applies --set KEY=VALUE overrides (VALUE in TOML syntax, e.g. 0.5,
+// [8,16], "rk4"; a bare word is a string). Checks keys and value types for the kind; the
+// names of models, integrators and parameters are checked when the sweep is expanded.
+SpecFile load_spec_file(const std::string& file, const std::vector<std::string>& sets);
+
+// BadInput with "WHERE: key 'KEY': MESSAGE".
+[[noreturn]] void spec_error(const SpecEntry& e, const std::string& message);
+
+}  // namespace stiffbench

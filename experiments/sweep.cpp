@@ -1,0 +1,725 @@
+#include "experiments/sweep.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "core/types.hpp"
+#include "experiments/catalog.hpp"
+#include "experiments/convergence.hpp"
+#include "experiments/energy.hpp"
+#include "experiments/output.hpp"
+#include "experiments/progress.hpp"
+#include "experiments/region.hpp"
+#include "experiments/spec_file.hpp"
+#include "experiments/stability.hpp"
+#include "experiments/work_precision.hpp"
+
+namespace stiffbench {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// ---- expansion ----------------------------------------------------------------------------
+
+struct Point {
+  std::map<std::string, SpecScalar> settings;  // top-level key -> value
+  Params params;
+  std::vector<std::string> tags;  // values of the sweep dimensions, in dimension order
+  std::string label;              // "n=8, t_end=1"
+};
+
+struct Expansion {
+  std::vector<const SpecEntry*> dims;
+  std::vector<Point> points;
+  long units_per_point = 1;
+  long units() const { return static_cast<long>(points.size()) * units_per_point; }
+};
+
+Expansion expand(const SpecFile& spec) {
+  Expansion ex;
+  std::vector<const SpecEntry*> all;
+  for (const auto& e : spec.settings) all.push_back(&e);
+  for (const auto& e : spec.params) all.push_back(&e);
+  for (const auto* e : all)
+    if (e->is_list) ex.dims.push_back(e);
+  long n = 1;
+  for (const auto* d : ex.dims) n *= static_cast<long>(d->values.size());
+  for (long p = 0; p < n; ++p) {
+    Point pt;
+    // Digits of p in the mixed radix of the dimensions, the last dimension fastest.
+    std::vector<std::size_t> idx(ex.dims.size());
+    long rest = p;
+    for (std::size_t d = ex.dims.size(); d-- > 0;) {
+      const long size = static_cast<long>(ex.dims[d]->values.size());
+      idx[d] = static_cast<std::size_t>(rest % size);
+      rest /= size;
+    }
+    for (const auto* e : all) {
+      std::size_t k = 0;
+      for (std::size_t d = 0; d < ex.dims.size(); ++d)
+        if (ex.dims[d] == e) k = idx[d];
+      const SpecScalar& v = e->values[k];
+      if (e->path.rfind("params.", 0) == 0)
+        pt.params.set(e->key, v.text);
+      else
+        pt.settings[e->key] = v;
+    }
+    for (std::size_t d = 0; d < ex.dims.size(); ++d) {
+      const std::string& v = ex.dims[d]->values[idx[d]].text;
+      pt.tags.push_back(v);
+      pt.label += (d ? ", " : "") + ex.dims[d]->path + "=" + v;
+    }
+    ex.points.push_back(std::move(pt));
+  }
+  ex.units_per_point = spec.kind == "region"
+                           ? 1
+                           : static_cast<long>(std::max<std::size_t>(1, spec.integrators.size()));
+  return ex;
+}
+
+// ---- building the experiment specs of one point ----------------------------------------------
+
+const SpecScalar* get(const Point& p, const std::string& key) {
+  const auto it = p.settings.find(key);
+  return it == p.settings.end() ? nullptr : &it->second;
+}
+double real_or(const Point& p, const std::string& key, double dflt) {
+  const SpecScalar* v = get(p, key);
+  return v ? std::stod(v->text) : dflt;
+}
+long int_or(const Point& p, const std::string& key, long dflt) {
+  const SpecScalar* v = get(p, key);
+  return v ? std::stol(v->text) : dflt;
+}
+std::string text_or(const Point& p, const std::string& key, const std::string& dflt) {
+  const SpecScalar* v = get(p, key);
+  return v ? v->text : dflt;
+}
+std::optional<double> real_opt(const Point& p, const std::string& key) {
+  const SpecScalar* v = get(p, key);
+  return v ? std::optional<double>(std::stod(v->text)) : std::nullopt;
+}
+
+ConvergenceSpec convergence_spec(const SpecFile& s, const Point& p) {
+  ConvergenceSpec c;
+  c.model = text_or(p, "model", "");
+  c.params = p.params;
+  c.integrators = s.integrators;
+  if (s.kind == "convergence" && !get(p, "t_end"))
+    throw BadInput(s.file + ": key 't_end' missing (required for convergence)");
+  c.t_end = real_or(p, "t_end", 1.0);
+  c.h = real_or(p, "h", std::numeric_limits<double>::quiet_NaN());
+  c.levels = static_cast<int>(int_or(p, "levels", c.levels));
+  c.refine = real_or(p, "refine", c.refine);
+  c.reference = text_or(p, "reference", c.reference);
+  c.reference_rtol = real_opt(p, "reference_rtol");
+  c.reference_atol = real_opt(p, "reference_atol");
+  return c;
+}
+
+WorkPrecisionSpec work_precision_spec(const SpecFile& s, const Point& p) {
+  WorkPrecisionSpec w;
+  w.model = text_or(p, "model", "");
+  w.params = p.params;
+  w.integrators = s.integrators;
+  w.t_end = real_or(p, "t_end", w.t_end);
+  w.h = real_or(p, "h", w.h);
+  w.levels = static_cast<int>(int_or(p, "levels", w.levels));
+  w.refine = real_or(p, "refine", w.refine);
+  w.tol_levels = static_cast<int>(int_or(p, "tol_levels", w.tol_levels));
+  w.rtol_max = real_or(p, "rtol_max", w.rtol_max);
+  w.atol_factor = real_or(p, "atol_factor", w.atol_factor);
+  w.repeats = static_cast<int>(int_or(p, "repeats", w.repeats));
+  w.reference = text_or(p, "reference", w.reference);
+  w.reference_rtol = real_or(p, "reference_rtol", w.reference_rtol);
+  w.reference_atol = real_or(p, "reference_atol", w.reference_atol);
+  return w;
+}
+
+StabilitySpec stability_spec(const SpecFile& s, const Point& p) {
+  StabilitySpec st;
+  st.model = text_or(p, "model", "");
+  st.params = p.params;
+  st.integrators = s.integrators;
+  if (const SpecScalar* sw = get(p, "sweep"))
+    parse_sweep(sw->text, st.sweep_param, st.sweep_values);
+  st.rel_tol = real_or(p, "rel_tol", st.rel_tol);
+  st.periods = real_or(p, "periods", st.periods);
+  st.min_steps = int_or(p, "min_steps", st.min_steps);
+  st.horizon = real_opt(p, "horizon");
+  st.growth = real_or(p, "growth", st.growth);
+  st.criterion = text_or(p, "criterion", st.criterion);
+  st.norm_growth = real_or(p, "norm_growth", st.norm_growth);
+  st.perturbation = real_or(p, "perturbation", st.perturbation);
+  st.seed = static_cast<unsigned long>(int_or(p, "seed", static_cast<long>(st.seed)));
+  st.h_cap_factor = real_or(p, "h_cap_factor", st.h_cap_factor);
+  st.max_steps = int_or(p, "max_steps", st.max_steps);
+  st.ray = text_or(p, "ray", st.ray);
+  st.dense_limit = static_cast<Index>(int_or(p, "dense_limit", static_cast<long>(st.dense_limit)));
+  return st;
+}
+
+EnergySpec energy_spec(const SpecFile& s, const Point& p) {
+  EnergySpec e;
+  e.model = text_or(p, "model", "");
+  e.params = p.params;
+  e.integrators = s.integrators;
+  e.h = real_or(p, "h", e.h);
+  e.t_end = real_or(p, "t_end", e.t_end);
+  e.samples = int_or(p, "samples", e.samples);
+  e.invariant = text_or(p, "invariant", e.invariant);
+  return e;
+}
+
+RegionSpec region_spec(const SpecFile& s, const Point& p) {
+  RegionSpec r;
+  r.integrators = s.integrators;
+  if (const SpecScalar* b = get(p, "box")) r.box = parse_region_box(b->text);
+  r.resolution = static_cast<int>(int_or(p, "resolution", r.resolution));
+  return r;
+}
+
+// The study's own columns (from an empty result).
+std::vector<std::string> study_columns(const std::string& kind) {
+  if (kind == "convergence") return convergence_table(ConvergenceResult{}).columns;
+  if (kind == "local-error") return local_error_table(ConvergenceResult{}).columns;
+  if (kind == "work-precision") return work_precision_table(WorkPrecisionResult{}).columns;
+  if (kind == "stability") return stability_table(StabilityResult{}).columns;
+  if (kind == "energy") return energy_summary_table(EnergyResult{}).columns;
+  return region_limits_table(RegionResult{}).columns;
+}
+
+// Runs one unit (integrators: the unit's; all of them for region) and returns its table.
+Table run_unit(const SpecFile& s, const Point& p, const std::vector<std::string>& integrators,
+               const std::string& out_dir) {
+  if (s.kind == "convergence" || s.kind == "local-error") {
+    ConvergenceSpec c = convergence_spec(s, p);
+    c.integrators = integrators;
+    c.cache_dir = out_dir;
+    return s.kind == "convergence" ? convergence_table(run_convergence(c, nullptr))
+                                   : local_error_table(run_local_error(c, nullptr));
+  }
+  if (s.kind == "work-precision") {
+    WorkPrecisionSpec w = work_precision_spec(s, p);
+    w.integrators = integrators;
+    return work_precision_table(run_work_precision(w, nullptr));
+  }
+  if (s.kind == "stability") {
+    StabilitySpec st = stability_spec(s, p);
+    st.integrators = integrators;
+    return stability_table(run_stability(st, nullptr));
+  }
+  if (s.kind == "energy") {
+    EnergySpec e = energy_spec(s, p);
+    e.integrators = integrators;
+    return energy_summary_table(run_energy(e, nullptr));
+  }
+  return region_limits_table(run_region(region_spec(s, p)));
+}
+
+const SpecEntry* find_entry(const std::vector<SpecEntry>& list, const std::string& key) {
+  for (const auto& e : list)
+    if (e.key == key) return &e;
+  return nullptr;
+}
+
+// Checks names and parameters of one point with the registries (no model is created) and the
+// experiment spec's own validation; BadInput naming the file, line and key.
+void validate_point(const SpecFile& s, const Point& p) {
+  const std::string at = p.label.empty() ? "" : " (sweep point " + p.label + ")";
+  try {
+    std::vector<const ModelRegistry::Entry*> none;
+    const ModelRegistry::Entry* model = nullptr;
+    if (s.kind != "region") {
+      const std::string name = text_or(p, "model", "");
+      model = model_registry().find(name);
+      if (!model)
+        spec_error(*find_entry(s.settings, "model"),
+                   "unknown model '" + name + "'; known: " + join(model_registry().names()));
+    } else if (!p.params.empty()) {
+      spec_error(s.params.front(), "a region spec takes no parameters");
+    }
+    std::vector<const IntegratorRegistry::Entry*> integ;
+    for (const auto& name : s.integrators) {
+      const auto* e = integrator_registry().find(name);
+      if (!e)
+        throw BadInput(s.integrators_where + ": key 'integrators': unknown integrator '" + name +
+                       "'; known: " + join(integrator_registry().names()));
+      integ.push_back(e);
+    }
+    const std::string reference = text_or(p, "reference", "auto");
+    if (const auto* e = integrator_registry().find(reference)) integ.push_back(e);
+    for (const auto& [key, value] : p.params.values()) {
+      const SpecEntry& entry = *find_entry(s.params, key);
+      Params one;
+      one.set(key, value);
+      std::set<std::string> consumed;
+      try {
+        if (model)
+          resolve_params(model->params, one, &consumed, "model '" + model->info.name + "'");
+        for (const auto* e : integ)
+          resolve_params(e->params, one, &consumed, "integrator '" + e->info.name + "'");
+      } catch (const BadInput& err) {
+        spec_error(entry, err.what());
+      }
+      if (!consumed.count(key)) {
+        std::string accepted = model ? model_registry().accepted_keys(model->info.name) : "";
+        for (const auto* e : integ)
+          accepted += "; " + integrator_registry().accepted_keys(e->info.name);
+        spec_error(entry, "unknown parameter; " + accepted);
+      }
+    }
+    if (s.kind == "convergence" || s.kind == "local-error") convergence_spec(s, p).validate();
+    if (s.kind == "stability") stability_spec(s, p).validate();
+    if (s.kind == "energy") energy_spec(s, p).validate();
+    if (s.kind == "region") region_spec(s, p).validate();
+    if (s.kind == "work-precision") work_precision_spec(s, p);
+  } catch (const BadInput& e) {
+    const std::string msg = e.what();
+    if (msg.rfind(s.file, 0) == 0 || msg.rfind("--set", 0) == 0) throw BadInput(msg + at);
+    throw BadInput(s.file + at + ": " + msg);
+  }
+}
+
+// ---- CSV -------------------------------------------------------------------------------------
+
+std::string csv_field(std::string s) {
+  std::replace(s.begin(), s.end(), '\n', ' ');
+  std::replace(s.begin(), s.end(), '\r', ' ');
+  if (s.find_first_of(",\"") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+std::string csv_line(const std::vector<std::string>& fields) {
+  std::string line;
+  for (std::size_t i = 0; i < fields.size(); ++i) line += (i ? "," : "") + csv_field(fields[i]);
+  return line + "\n";
+}
+
+std::vector<std::string> parse_csv_line(const std::string& line) {
+  std::vector<std::string> out(1);
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        out.back() += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        out.back() += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      out.emplace_back();
+    } else {
+      out.back() += c;
+    }
+  }
+  return out;
+}
+
+struct UnitRows {
+  std::vector<std::string> lines;  // complete lines with '\n'
+  bool ok = true;
+};
+
+// Reads a run CSV: the header line and the complete units (all `unit_rows` rows present); a
+// torn last line (no newline) and incomplete units are dropped.
+struct CsvContent {
+  std::string header;
+  std::map<long, UnitRows> units;
+  long dropped_rows = 0;
+};
+
+CsvContent read_run_csv(const fs::path& path) {
+  CsvContent c;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return c;
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string text = ss.str();
+  std::size_t pos = 0;
+  std::vector<std::string> columns;
+  std::size_t status_col = 0;
+  std::map<long, std::pair<long, UnitRows>> partial;  // unit -> (expected rows, rows)
+  while (pos < text.size()) {
+    const std::size_t nl = text.find('\n', pos);
+    if (nl == std::string::npos) break;  // torn last line
+    const std::string line = text.substr(pos, nl - pos);
+    pos = nl + 1;
+    if (c.header.empty()) {
+      c.header = line + "\n";
+      columns = parse_csv_line(line);
+      status_col = static_cast<std::size_t>(
+          std::find(columns.begin(), columns.end(), "unit_status") - columns.begin());
+      continue;
+    }
+    const auto f = parse_csv_line(line);
+    if (f.size() != columns.size() || columns.size() < 2) {
+      ++c.dropped_rows;
+      continue;
+    }
+    try {
+      const long unit = std::stol(f[0]);
+      auto& [expected, rows] = partial[unit];
+      expected = std::stol(f[1]);
+      rows.lines.push_back(line + "\n");
+      if (status_col < f.size() && f[status_col] != "ok") rows.ok = false;
+    } catch (const std::exception&) {
+      ++c.dropped_rows;
+    }
+  }
+  for (auto& [unit, er] : partial) {
+    if (static_cast<long>(er.second.lines.size()) == er.first)
+      c.units[unit] = std::move(er.second);
+    else
+      c.dropped_rows += static_cast<long>(er.second.lines.size());
+  }
+  return c;
+}
+
+std::string csv_name(const std::string& kind) {
+  std::string n = kind;
+  std::replace(n.begin(), n.end(), '-', '_');
+  return n + ".csv";
+}
+
+std::string hex16(std::uint64_t h) {
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+std::string spec_hash(const SpecFile& s) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (unsigned char c : s.to_json().dump()) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return hex16(h);
+}
+
+void write_all(const fs::path& path, const std::string& header,
+               const std::map<long, UnitRows>& units) {
+  std::string text = header;
+  for (const auto& [u, rows] : units)
+    for (const auto& l : rows.lines) text += l;
+  write_file_atomic(path, text);
+}
+
+nlohmann::json read_json(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw BadInput(path.string() + " not found (not a folder written by `stiffbench run`)");
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const std::exception& e) {
+    throw BadInput(path.string() + ": " + e.what());
+  }
+}
+
+std::string shell_quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+void write_slurm(const RunOptions& opt, const SpecFile& spec, const Expansion& ex,
+                 std::ostream& out) {
+  const int n = opt.slurm_tasks;
+  const fs::path dir = fs::absolute(opt.out_dir);
+  const fs::path slurm = dir / "slurm";
+  require_output_dir(slurm);
+  std::error_code ec;
+  fs::path bin = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) bin = "stiffbench";
+  const std::string spec_abs = fs::absolute(opt.spec_file).string();
+  std::string sets;
+  for (const auto& s : opt.sets) sets += " --set " + shell_quote(s);
+  auto header = [&](const std::string& name) {
+    std::string h = "#!/bin/bash\n#SBATCH --job-name=" + name + "\n";
+    if (!opt.partition.empty()) h += "#SBATCH --partition=" + opt.partition + "\n";
+    if (!opt.time_limit.empty()) h += "#SBATCH --time=" + opt.time_limit + "\n";
+    return h;
+  };
+  std::string array = header("stiffbench-" + spec.kind);
+  array += "#SBATCH --array=0-" + std::to_string(n - 1) + "\n";
+  array += "#SBATCH --ntasks=1\n";
+  array += "#SBATCH --output=" + (slurm / "shard-%a.log").string() + "\n";
+  array += "# One shard of " + std::to_string(ex.units()) + " units of " + spec_abs +
+           " per array task; exit code " + std::to_string(kExitRowsFailed) +
+           " (rows failed, recorded in the CSV) counts as success so the merge job runs.\n";
+  array += "set -u\n";
+  array += "task=${SLURM_ARRAY_TASK_ID}\n";
+  array += shell_quote(bin.string()) + " run " + shell_quote(spec_abs) + sets +
+           " --shard ${task}/" + std::to_string(n) + " --out " + shell_quote(dir.string()) +
+           "/shard-${task} --resume\n";
+  array += "rc=$?\n";
+  array += "if [ \"$rc\" -eq " + std::to_string(kExitRowsFailed) + " ]; then exit 0; fi\n";
+  array += "exit $rc\n";
+  std::string merge = header("stiffbench-merge");
+  merge += "#SBATCH --ntasks=1\n";
+  merge += "#SBATCH --output=" + (slurm / "merge.log").string() + "\n";
+  merge += "exec " + shell_quote(bin.string()) + " merge --out " + shell_quote(dir.string());
+  for (int i = 0; i < n; ++i)
+    merge += " " + shell_quote((dir / ("shard-" + std::to_string(i))).string());
+  merge += "\n";
+  std::string submit =
+      "#!/bin/bash\n# Submits the job array, then the merge job after it succeeded.\nset -euo "
+      "pipefail\n";
+  submit +=
+      "array_id=$(sbatch --parsable " + shell_quote((slurm / "array.sbatch").string()) + ")\n";
+  submit += "array_id=${array_id%%;*}\n";
+  submit += "merge_id=$(sbatch --parsable --dependency=afterok:${array_id} " +
+            shell_quote((slurm / "merge.sbatch").string()) + ")\n";
+  submit += "merge_id=${merge_id%%;*}\n";
+  submit += "echo \"array job ${array_id}, merge job ${merge_id}\"\n";
+  write_file_atomic(slurm / "array.sbatch", array);
+  write_file_atomic(slurm / "merge.sbatch", merge);
+  write_file_atomic(slurm / "submit.sh", submit);
+  fs::permissions(slurm / "submit.sh", fs::perms::owner_exec | fs::perms::group_exec,
+                  fs::perm_options::add);
+  out << "wrote " << (slurm / "array.sbatch").string() << " (job array of " << n << " tasks over "
+      << ex.units() << " units)\n";
+  out << "wrote " << (slurm / "merge.sbatch").string() << " (merges into " << dir.string() << ")\n";
+  out << "wrote " << (slurm / "submit.sh").string() << "\n";
+  out << "submit with: bash " << (slurm / "submit.sh").string() << "\n";
+}
+
+}  // namespace
+
+void parse_shard(const std::string& arg, int& index, int& count) {
+  const auto slash = arg.find('/');
+  try {
+    std::size_t a = 0, b = 0;
+    if (slash == std::string::npos) throw BadInput("");
+    index = std::stoi(arg.substr(0, slash), &a);
+    count = std::stoi(arg.substr(slash + 1), &b);
+    if (a != slash || b != arg.size() - slash - 1) throw BadInput("");
+  } catch (const std::exception&) {
+    throw BadInput("--shard '" + arg + "': expected I/N with integers 0 <= I < N");
+  }
+  if (count < 1 || index < 0 || index >= count)
+    throw BadInput("--shard '" + arg + "': expected I/N with 0 <= I < N");
+}
+
+int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
+  const SpecFile spec = load_spec_file(opt.spec_file, opt.sets);
+  const Expansion ex = expand(spec);
+  for (const auto& p : ex.points) validate_point(spec, p);
+  if (opt.slurm_tasks < 0) throw BadInput("--slurm: expected a number of tasks >= 1");
+
+  const std::string kind = spec.kind;
+  const long per_point = ex.units_per_point;
+  auto unit_integrators = [&](long u) {
+    if (kind == "region") return spec.integrators;
+    return std::vector<std::string>{spec.integrators[static_cast<std::size_t>(u % per_point)]};
+  };
+  out << spec.file << ": " << kind << ", " << ex.points.size() << " point(s) x "
+      << (kind == "region" ? 1 : per_point) << " integrator unit(s) = " << ex.units()
+      << " unit(s)\n";
+  if (opt.check_only) {
+    for (std::size_t i = 0; i < ex.points.size(); ++i)
+      out << "  point " << i << ": " << (ex.points[i].label.empty() ? "-" : ex.points[i].label)
+          << "\n";
+    return 0;
+  }
+  if (opt.slurm_tasks > 0) {
+    write_slurm(opt, spec, ex, out);
+    return 0;
+  }
+
+  const fs::path dir = opt.out_dir;
+  require_output_dir(dir);
+  const fs::path csv = dir / csv_name(kind);
+  const std::string hash = spec_hash(spec);
+
+  // Columns: unit, unit_rows, tags, study columns, unit_status, unit_message.
+  const std::vector<std::string> study = study_columns(kind);
+  std::vector<std::string> columns = {"unit", "unit_rows"};
+  for (const auto* d : ex.dims) {
+    const bool clash = std::find(study.begin(), study.end(), d->path) != study.end() ||
+                       d->path == "unit" || d->path == "unit_rows";
+    columns.push_back(clash ? "spec." + d->path : d->path);
+  }
+  columns.insert(columns.end(), study.begin(), study.end());
+  columns.push_back("unit_status");
+  columns.push_back("unit_message");
+  const std::string header = csv_line(columns);
+
+  std::map<long, UnitRows> done;
+  if (opt.resume && fs::exists(csv)) {
+    const nlohmann::json prev = read_json(dir / "run.json");
+    if (prev.value("spec_hash", "") != hash)
+      throw BadInput("--resume: " + dir.string() + " holds a run of a different spec (hash " +
+                     prev.value("spec_hash", "?") + ", this spec " + hash + ")");
+    if (prev.value("shard", "") !=
+        std::to_string(opt.shard_index) + "/" + std::to_string(opt.shard_count))
+      throw BadInput("--resume: " + dir.string() + " holds shard " + prev.value("shard", "?"));
+    CsvContent c = read_run_csv(csv);
+    if (!c.header.empty() && c.header != header)
+      throw BadInput("--resume: " + csv.string() + " has different columns");
+    done = std::move(c.units);
+    if (c.dropped_rows > 0)
+      err << "resume: dropped " << c.dropped_rows << " row(s) of incomplete units\n";
+  }
+  write_all(csv, header, done);  // the kept units (or the header alone)
+
+  nlohmann::json run;
+  run["spec"] = spec.to_json();
+  run["spec_file"] = fs::absolute(spec.file).string();
+  run["spec_hash"] = hash;
+  run["kind"] = kind;
+  run["csv"] = csv_name(kind);
+  nlohmann::json dims = nlohmann::json::array();
+  for (const auto* d : ex.dims) {
+    nlohmann::json values = nlohmann::json::array();
+    for (const auto& v : d->values) values.push_back(v.to_json());
+    dims.push_back({{"key", d->path}, {"values", values}});
+  }
+  run["dimensions"] = dims;
+  run["points"] = ex.points.size();
+  run["units"] = ex.units();
+  run["shard"] = std::to_string(opt.shard_index) + "/" + std::to_string(opt.shard_count);
+  run["sets"] = opt.sets;
+  run["metadata"] = run_metadata("run", spec.to_json());
+  write_file_atomic(dir / "run.json", run.dump(2) + "\n");
+
+  std::vector<long> todo;
+  long in_shard = 0;
+  for (long u = 0; u < ex.units(); ++u) {
+    if (u % opt.shard_count != opt.shard_index) continue;
+    ++in_shard;
+    if (!done.count(u)) todo.push_back(u);
+  }
+  if (opt.resume)
+    out << "resume: " << (in_shard - static_cast<long>(todo.size())) << " of " << in_shard
+        << " unit(s) already done\n";
+
+  std::FILE* f = std::fopen(csv.c_str(), "ab");
+  if (!f) throw BadInput("--out: cannot append to " + csv.string());
+  Progress progress(&err, "run", static_cast<long>(todo.size()));
+  const std::size_t n_study = study.size();
+  const auto model_col = std::find(study.begin(), study.end(), "model") - study.begin();
+  const auto integ_col = std::find(study.begin(), study.end(), "integrator") - study.begin();
+  const auto status_col = std::find(study.begin(), study.end(), "status") - study.begin();
+  for (const long u : todo) {
+    const Point& p = ex.points[static_cast<std::size_t>(u / per_point)];
+    const std::vector<std::string> integ = unit_integrators(u);
+    std::vector<std::vector<std::string>> rows;
+    std::string unit_status = "ok", message;
+    try {
+      const Table t = run_unit(spec, p, integ, dir.string());
+      rows = t.rows;
+      for (const auto& r : rows) {
+        const std::string st = static_cast<std::size_t>(status_col) < n_study
+                                   ? r[static_cast<std::size_t>(status_col)]
+                                   : "ok";
+        if (st != "ok" && st != "stable_up_to" && st != "unstable_for_all_h") {
+          unit_status = "failed";
+          message = "a row has status " + st;
+        }
+      }
+      if (rows.empty()) {
+        unit_status = "failed";
+        message = "no rows";
+      }
+    } catch (const std::exception& e) {
+      unit_status = "error";
+      message = e.what();
+      rows.clear();
+    }
+    if (rows.empty()) {
+      std::vector<std::string> r(n_study);
+      if (static_cast<std::size_t>(model_col) < n_study)
+        r[static_cast<std::size_t>(model_col)] = text_or(p, "model", "");
+      if (static_cast<std::size_t>(integ_col) < n_study && integ.size() == 1)
+        r[static_cast<std::size_t>(integ_col)] = integ.front();
+      rows.push_back(std::move(r));
+    }
+    UnitRows& ur = done[u];
+    ur.ok = unit_status == "ok";
+    for (const auto& r : rows) {
+      std::vector<std::string> fields = {std::to_string(u), std::to_string(rows.size())};
+      fields.insert(fields.end(), p.tags.begin(), p.tags.end());
+      fields.insert(fields.end(), r.begin(), r.end());
+      fields.push_back(unit_status);
+      fields.push_back(message);
+      const std::string line = csv_line(fields);
+      std::fputs(line.c_str(), f);
+      std::fflush(f);
+      ur.lines.push_back(line);
+    }
+    if (!ur.ok)
+      err << "unit " << u << " (" << join(integ) << (p.label.empty() ? "" : ", ") << p.label
+          << "): " << unit_status << ": " << message << "\n";
+    progress.tick(join(integ) + (p.label.empty() ? "" : ", " + p.label));
+  }
+  std::fclose(f);
+  write_all(csv, header, done);  // sorted by unit
+
+  long failed = 0;
+  for (const auto& [u, rows] : done) failed += rows.ok ? 0 : 1;
+  out << "wrote " << csv.string() << " (" << done.size() << " unit(s)";
+  if (failed) out << ", " << failed << " failed";
+  out << ") and " << (dir / "run.json").string() << "\n";
+  return failed ? kExitRowsFailed : 0;
+}
+
+int merge_shards(const std::string& out_dir, const std::vector<std::string>& dirs,
+                 std::ostream& out, std::ostream& err) {
+  if (dirs.empty()) throw BadInput("merge: no shard folders given");
+  nlohmann::json first;
+  std::string header;
+  std::map<long, UnitRows> units;
+  for (const auto& d : dirs) {
+    const nlohmann::json run = read_json(fs::path(d) / "run.json");
+    if (first.is_null()) {
+      first = run;
+    } else if (run.value("spec_hash", "") != first.value("spec_hash", "")) {
+      throw BadInput("merge: " + d + " holds a different spec (hash " +
+                     run.value("spec_hash", "?") + ") than " + dirs.front() + " (hash " +
+                     first.value("spec_hash", "?") + ")");
+    }
+    const CsvContent c = read_run_csv(fs::path(d) / run.value("csv", ""));
+    if (c.header.empty()) throw BadInput("merge: " + d + " has no rows file");
+    if (header.empty()) header = c.header;
+    if (c.header != header) throw BadInput("merge: " + d + " has different columns");
+    for (const auto& [u, rows] : c.units) units.emplace(u, rows);
+  }
+  const fs::path dir = out_dir;
+  require_output_dir(dir);
+  const std::string name = first.value("csv", "run.csv");
+  write_all(dir / name, header, units);
+  const long total = first.value("units", 0L);
+  std::vector<std::string> missing;
+  for (long u = 0; u < total; ++u)
+    if (!units.count(u)) missing.push_back(std::to_string(u));
+  long failed = 0;
+  for (const auto& [u, rows] : units) failed += rows.ok ? 0 : 1;
+  nlohmann::json run = first;
+  run["shard"] = "merged";
+  run["merged_from"] = dirs;
+  run["missing_units"] = missing;
+  write_file_atomic(dir / "run.json", run.dump(2) + "\n");
+  out << "merged " << units.size() << " of " << total << " unit(s) from " << dirs.size()
+      << " folder(s) into " << (dir / name).string() << "\n";
+  if (!missing.empty()) err << "merge: missing units: " << join(missing) << "\n";
+  if (failed) err << "merge: " << failed << " unit(s) failed (unit_status in the CSV)\n";
+  return missing.empty() && failed == 0 ? 0 : kExitRowsFailed;
+}
+
+}  // namespace stiffbench

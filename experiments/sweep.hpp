@@ -1,0 +1,51 @@
+// The run engine of `stiffbench run` (README "Spec files and sweeps").
+//
+// Expansion: the sweep dimensions are the list-valued top-level keys (sorted by name), then the
+// list-valued [params] keys (sorted by name); the points are their cartesian product with the
+// LAST dimension varying fastest. A work unit is one point × one integrator (integrators in
+// spec order, fastest): unit index = point index × (number of integrators) + integrator index.
+// A region spec has one unit per point (all its integrators).
+//
+// Rows: OUT/<kind>.csv (kind with '-' as '_') holds, per row, `unit` (the unit index),
+// `unit_rows` (how many rows that unit wrote), one column per sweep dimension (its --set name,
+// prefixed `spec.` where it collides with a study column), the study's own columns (those of
+// the single-experiment CSV; energy: energy_summary.csv's; region: region_limits.csv's), and
+// `unit_status` (ok | failed: a row's status is not ok | error: the unit threw) with
+// `unit_message`. Units are appended as they finish (one line per write, flushed); at the end
+// the file is rewritten sorted by unit. --resume keeps the units whose rows are all present
+// (a torn last line is dropped) and runs the others.
+#pragma once
+
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace stiffbench {
+
+// Exit code of `run` and `merge` when a unit failed or (merge) units are missing.
+inline constexpr int kExitRowsFailed = 3;
+
+struct RunOptions {
+  std::string spec_file;
+  std::vector<std::string> sets;  // --set KEY=VALUE
+  std::string out_dir = "results";
+  bool resume = false;
+  int shard_index = 0, shard_count = 1;  // --shard I/N
+  bool check_only = false;               // --check: validate and print the expansion
+  int slurm_tasks = 0;                   // --slurm N: write job scripts instead of running
+  std::string partition, time_limit;     // --partition, --time
+};
+
+// Returns the exit code (0, or kExitRowsFailed). BadInput for any spec or option error, before
+// any unit runs.
+int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err);
+
+// `stiffbench merge --out OUT DIR...`; returns 0, or kExitRowsFailed when units are missing or
+// failed. BadInput when the folders hold different specs.
+int merge_shards(const std::string& out_dir, const std::vector<std::string>& dirs,
+                 std::ostream& out, std::ostream& err);
+
+// "I/N" of --shard (BadInput naming --shard unless 0 <= I < N).
+void parse_shard(const std::string& arg, int& index, int& count);
+
+}  // namespace stiffbench

@@ -1,0 +1,250 @@
+// `stiffbench run SPEC.toml`, --shard + merge, --resume after SIGKILL, --slurm, spec errors
+// (experiments/sweep.hpp). Runs the real binary like test_cli.cpp.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kSource = fs::path(__FILE__).parent_path().parent_path();
+const std::string kSweep = (kSource / "experiments/specs/sweep_spring_chain.toml").string();
+
+struct Outcome {
+  int code = -1;
+  std::string out, err;
+};
+
+Outcome run(const std::string& args) {
+  const fs::path err_file = fs::temp_directory_path() / ("sweep_err_" + std::to_string(::getpid()));
+  const std::string cmd = std::string(STIFFBENCH_BIN) + " " + args + " 2>" + err_file.string();
+  Outcome o;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  char buf[4096];
+  while (std::size_t n = std::fread(buf, 1, sizeof buf, p)) o.out.append(buf, n);
+  const int status = ::pclose(p);
+  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream e(err_file);
+  std::stringstream ss;
+  ss << e.rdbuf();
+  o.err = ss.str();
+  fs::remove(err_file);
+  return o;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// The CSV with the wall_s column removed (the only column that differs between runs).
+std::string without_wall_time(const std::string& csv) {
+  std::istringstream in(csv);
+  std::string line, out;
+  long wall = -1;
+  while (std::getline(in, line)) {
+    std::vector<std::string> f;
+    std::stringstream ls(line);
+    std::string item;
+    while (std::getline(ls, item, ',')) f.push_back(item);
+    if (wall < 0) wall = std::find(f.begin(), f.end(), "wall_s") - f.begin();
+    for (std::size_t i = 0; i < f.size(); ++i)
+      if (static_cast<long>(i) != wall) out += f[i] + ",";
+    out += "\n";
+  }
+  return out;
+}
+
+long count_lines(const std::string& s) { return std::count(s.begin(), s.end(), '\n'); }
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("stiffbench_sweep_" + name);
+  fs::remove_all(d);
+  return d;
+}
+
+// 4 chain lengths x 3 integrators = 12 units of 4 step levels each.
+TEST(Sweep, ShardsMergedReproduceTheUnshardedRun) {
+  const fs::path base = fresh_dir("shards");
+  const Outcome full = run("run " + kSweep + " --out " + (base / "full").string());
+  ASSERT_EQ(full.code, 0) << full.err;
+  const std::string csv = slurp(base / "full/convergence.csv");
+  // Header + 12 units x 4 levels (the spec's n list and integrators, levels = 4).
+  EXPECT_EQ(count_lines(csv), 1 + 12 * 4);
+  for (int i = 0; i < 2; ++i) {
+    const Outcome s = run("run " + kSweep + " --shard " + std::to_string(i) + "/2 --out " +
+                          (base / ("shard-" + std::to_string(i))).string());
+    ASSERT_EQ(s.code, 0) << s.err;
+    // Every other unit: 6 units x 4 rows.
+    EXPECT_EQ(count_lines(slurp(base / ("shard-" + std::to_string(i)) / "convergence.csv")),
+              1 + 6 * 4);
+  }
+  const Outcome m = run("merge --out " + (base / "merged").string() + " " +
+                        (base / "shard-0").string() + " " + (base / "shard-1").string());
+  ASSERT_EQ(m.code, 0) << m.err;
+  EXPECT_EQ(without_wall_time(slurp(base / "merged/convergence.csv")), without_wall_time(csv));
+  EXPECT_NE(without_wall_time(csv), without_wall_time(slurp(base / "shard-0/convergence.csv")));
+
+  // One shard alone: the 6 units of the other one are reported missing (exit 3).
+  const Outcome partial =
+      run("merge --out " + (base / "partial").string() + " " + (base / "shard-0").string());
+  EXPECT_EQ(partial.code, 3);
+  EXPECT_NE(partial.err.find("missing units: 1, 3, 5, 7, 9, 11"), std::string::npos) << partial.err;
+
+  // A shard of another spec (t_end changed) is refused.
+  const Outcome other =
+      run("run " + kSweep + " --set t_end=2 --shard 1/2 --out " + (base / "other").string());
+  ASSERT_EQ(other.code, 0) << other.err;
+  const Outcome refused = run("merge --out " + (base / "bad").string() + " " +
+                              (base / "shard-0").string() + " " + (base / "other").string());
+  EXPECT_EQ(refused.code, 2);
+  EXPECT_NE(refused.err.find("different spec"), std::string::npos) << refused.err;
+}
+
+TEST(Sweep, KilledRunResumesToTheSameCsv) {
+  const fs::path base = fresh_dir("resume");
+  // Larger than the spec's default (about 3 s here) so that the kill lands mid-sweep.
+  const std::string sets = " --set t_end=20 --set levels=6 --set 'params.n=[16,32,64,128]' --out ";
+  const Outcome full = run("run " + kSweep + sets + (base / "full").string());
+  ASSERT_EQ(full.code, 0) << full.err;
+  const std::string csv = slurp(base / "full/convergence.csv");
+  ASSERT_EQ(count_lines(csv), 1 + 12 * 6);
+
+  const fs::path part = base / "killed";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const std::string out = part.string();
+    ::execl(STIFFBENCH_BIN, STIFFBENCH_BIN, "run", kSweep.c_str(), "--set", "t_end=20", "--set",
+            "levels=6", "--set", "params.n=[16,32,64,128]", "--out", out.c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // Wait for 3 complete units (18 rows), then SIGKILL.
+  long rows = 0;
+  const auto start = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - start < std::chrono::seconds(20)) {
+    rows = count_lines(slurp(part / "convergence.csv"));
+    if (rows >= 1 + 18) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "the run finished before it was killed";
+  const long at_kill = count_lines(slurp(part / "convergence.csv"));
+  EXPECT_LT(at_kill, 1 + 12 * 6);
+  // A torn write: a row of unit 11 without its newline, as a kill in the middle of a write
+  // leaves it; --resume drops it.
+  { std::ofstream(part / "convergence.csv", std::ios::app) << "11,6,128,spring_chain,sdi"; }
+
+  const Outcome resumed = run("run " + kSweep + sets + part.string() + " --resume");
+  ASSERT_EQ(resumed.code, 0) << resumed.err;
+  EXPECT_NE(resumed.out.find("already done"), std::string::npos) << resumed.out;
+  EXPECT_EQ(without_wall_time(slurp(part / "convergence.csv")), without_wall_time(csv));
+
+  // --resume of a different spec into the same folder is refused.
+  const Outcome wrong = run("run " + kSweep + " --out " + part.string() + " --resume");
+  EXPECT_EQ(wrong.code, 2);
+}
+
+TEST(Sweep, FailingUnitIsRecordedAndExitCodeIsThree) {
+  // Forward Euler on Prothero-Robinson with lambda = -1e6 at h = 0.1: h·lambda = -1e5 lies far
+  // outside its stability interval [-2, 0], so it blows up; backward Euler is A-stable.
+  const fs::path base = fresh_dir("fail");
+  fs::create_directories(base);
+  const fs::path spec = base / "fail.toml";
+  std::ofstream(spec) << "kind = \"convergence\"\nmodel = \"prothero_robinson\"\n"
+                         "integrators = [\"euler\", \"backward_euler\"]\nt_end = 10\nh = 0.1\n"
+                         "levels = 2\n[params]\nlambda = -1e6\n";
+  const Outcome o = run("run " + spec.string() + " --out " + (base / "out").string());
+  EXPECT_EQ(o.code, 3) << o.err;
+  const std::string csv = slurp(base / "out/convergence.csv");
+  EXPECT_EQ(count_lines(csv), 1 + 2 * 2);
+  EXPECT_NE(csv.find("euler,1,0.1,100,,,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",failed,a row has status"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("backward_euler"), std::string::npos);
+}
+
+struct SpecError {
+  std::string text, set, expected;
+};
+
+TEST(Sweep, SpecErrorsNameFileLineAndKey) {
+  const fs::path base = fresh_dir("errors");
+  fs::create_directories(base);
+  const std::string head =
+      "kind = \"convergence\"\nmodel = \"spring_chain\"\nintegrators = [\"rk4\"]\nt_end = 1\n";
+  const std::vector<SpecError> cases = {
+      {head + "levelz = 3\n", "", "bad.toml:5:10: key 'levelz': unknown key"},
+      {head + "levels = 2.5\n", "", "bad.toml:5:10: key 'levels': expected an integer"},
+      {head + "[params]\nn = []\n", "", "bad.toml:6:5: key 'params.n': empty list"},
+      {head + "[params]\nnn = [4, 8]\n", "", "bad.toml:6:6: key 'params.nn': unknown parameter"},
+      {"kind = \"convergence\"\nmodel = [\"spring_chain\", \"nope\"]\nintegrators = [\"rk4\"]\n"
+       "t_end = 1\n",
+       "", "bad.toml:2:9: key 'model': unknown model 'nope'"},
+      {head, "--set levels=1", "levels"},
+      {head, "--set t_end=abc", "--set t_end=abc: key 't_end': expected a number"},
+      {head + "[params]\nn = [4, 8]\n", "--set params.k=x", "--set params.k=x: key 'params.k'"},
+  };
+  for (const auto& c : cases) {
+    const fs::path spec = base / "bad.toml";
+    std::ofstream(spec) << c.text;
+    const Outcome o =
+        run("run " + spec.string() + " " + c.set + " --out " + (base / "out").string());
+    EXPECT_EQ(o.code, 2) << c.expected;
+    EXPECT_NE(o.err.find(c.expected), std::string::npos) << o.err;
+    EXPECT_EQ(count_lines(o.err), 1) << o.err;
+    // Reported before any row ran.
+    EXPECT_FALSE(fs::exists(base / "out/convergence.csv"));
+  }
+}
+
+TEST(Sweep, EverySpecInTheRepositoryValidates) {
+  int n = 0;
+  for (const auto& e : fs::directory_iterator(kSource / "experiments/specs")) {
+    if (e.path().extension() != ".toml") continue;
+    ++n;
+    const Outcome o = run("run " + e.path().string() + " --check");
+    EXPECT_EQ(o.code, 0) << e.path() << ": " << o.err;
+  }
+  EXPECT_GE(n, 1);
+}
+
+TEST(Sweep, SlurmWritesAnArrayAndADependentMergeJob) {
+  const fs::path base = fresh_dir("slurm");
+  const Outcome o =
+      run("run " + kSweep + " --slurm 4 --partition debug --time 00:10:00 --out " + base.string());
+  ASSERT_EQ(o.code, 0) << o.err;
+  const std::string array = slurp(base / "slurm/array.sbatch");
+  EXPECT_EQ(array.rfind("#!/bin/bash\n", 0), 0u);
+  EXPECT_NE(array.find("#SBATCH --array=0-3\n"), std::string::npos) << array;
+  EXPECT_NE(array.find("#SBATCH --partition=debug\n"), std::string::npos);
+  EXPECT_NE(array.find("#SBATCH --time=00:10:00\n"), std::string::npos);
+  EXPECT_NE(array.find("--shard ${task}/4"), std::string::npos) << array;
+  EXPECT_NE(array.find("task=${SLURM_ARRAY_TASK_ID}"), std::string::npos);
+  EXPECT_NE(array.find("'" + kSweep + "'"), std::string::npos) << array;
+  const std::string merge = slurp(base / "slurm/merge.sbatch");
+  EXPECT_NE(merge.find(" merge --out '" + base.string() + "'"), std::string::npos) << merge;
+  EXPECT_NE(merge.find("/shard-3'"), std::string::npos);
+  const std::string submit = slurp(base / "slurm/submit.sh");
+  EXPECT_NE(submit.find("--dependency=afterok:${array_id}"), std::string::npos) << submit;
+  for (const char* f : {"array.sbatch", "merge.sbatch", "submit.sh"})
+    EXPECT_EQ(std::system(("bash -n " + (base / "slurm" / f).string()).c_str()), 0) << f;
+}
+
+}  // namespace
