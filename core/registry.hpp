@@ -32,6 +32,16 @@ class Registry {
     entries_.push_back(std::move(entry));
   }
 
+  // Replaces the entry of the same name, or adds it.
+  void add_or_replace(Entry entry) {
+    for (auto& e : entries_)
+      if (e.info.name == entry.info.name) {
+        e = std::move(entry);
+        return;
+      }
+    entries_.push_back(std::move(entry));
+  }
+
   const Entry* find(const std::string& name) const {
     for (const auto& e : entries_)
       if (e.info.name == name) return &e;

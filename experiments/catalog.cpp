@@ -9,6 +9,8 @@ namespace stiffbench {
 
 namespace {
 
+constexpr const char* kRegisteredSystem = "user system (register_system)";
+
 ModelRegistry& mutable_model_registry() {
   static ModelRegistry reg = [] {
     ModelRegistry r("model");
@@ -40,6 +42,26 @@ const IntegratorRegistry& integrator_registry() { return mutable_integrator_regi
 void register_model(ModelRegistry::Entry entry) {
   entry.built_in = false;
   mutable_model_registry().add(std::move(entry));
+}
+
+std::string register_system(SystemFactory factory, std::string name) {
+  require_input(static_cast<bool>(factory), "register_system: empty factory");
+  auto probe = factory();
+  require_input(probe != nullptr, "register_system: the factory returned no system");
+  if (name.empty()) name = probe->name();
+  if (const auto* e = model_registry().find(name))
+    require_input(!e->built_in && e->info.source == kRegisteredSystem,
+                  "register_system: '" + name + "' is already a model; choose another name");
+  ModelRegistry::Entry entry;
+  entry.info.name = name;
+  entry.info.description = "system object given to a study";
+  entry.info.mechanical = probe->as_mechanical() != nullptr;
+  entry.info.exact = probe->has_exact();
+  entry.info.source = kRegisteredSystem;
+  entry.built_in = false;
+  entry.make = [f = std::move(factory)](const Params&) { return f(); };
+  mutable_model_registry().add_or_replace(std::move(entry));
+  return name;
 }
 
 void register_integrator(IntegratorRegistry::Entry entry) {

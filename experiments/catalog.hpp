@@ -2,6 +2,7 @@
 // integrators from one Params bag with the unknown-key check.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -25,6 +26,17 @@ const IntegratorRegistry& integrator_registry();
 //                   }});
 void register_model(ModelRegistry::Entry entry);
 void register_integrator(IntegratorRegistry::Entry entry);
+
+// A user's system object for the studies that take one (run_convergence, run_local_error,
+// run_work_precision with a SystemFactory): makes a fresh copy for every run.
+using SystemFactory = std::function<std::unique_ptr<OdeSystem>()>;
+
+// Registers `factory` as a model without parameters named `name` (empty: the system's name()),
+// replacing a system registered earlier under that name by this function, and returns the name.
+// A built-in model's or register_model's name is BadInput (it would be shadowed). Results and
+// the reference cache know the system by this name and its initial state: give different
+// systems different names.
+std::string register_system(SystemFactory factory, std::string name = "");
 
 struct Setup {
   std::unique_ptr<OdeSystem> model;

@@ -597,4 +597,16 @@ ConvergenceResult convergence_study(ConvergenceSpec spec, const std::string& dir
   return res;
 }
 
+ConvergenceResult run_convergence(ConvergenceSpec spec, const SystemFactory& system,
+                                  std::ostream* progress) {
+  spec.model = register_system(system, spec.model);
+  return run_convergence(static_cast<const ConvergenceSpec&>(spec), progress);
+}
+
+ConvergenceResult run_local_error(ConvergenceSpec spec, const SystemFactory& system,
+                                  std::ostream* progress) {
+  spec.model = register_system(system, spec.model);
+  return run_local_error(static_cast<const ConvergenceSpec&>(spec), progress);
+}
+
 }  // namespace stiffbench

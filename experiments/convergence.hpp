@@ -41,6 +41,7 @@
 
 #include "core/params.hpp"
 #include "core/solve_stats.hpp"
+#include "experiments/catalog.hpp"
 #include "experiments/output.hpp"
 #include "experiments/plotting.hpp"
 
@@ -92,6 +93,13 @@ struct ConvergenceResult {
 // Progress lines go to `progress` when non-null.
 ConvergenceResult run_convergence(const ConvergenceSpec& spec, std::ostream* progress);
 ConvergenceResult run_local_error(const ConvergenceSpec& spec, std::ostream* progress);
+// The same on a user's system object: `system` makes a fresh copy per run; spec.model is the
+// name it is registered under (register_system; empty: the system's name()), spec.params then
+// holds integrator parameters only.
+ConvergenceResult run_convergence(ConvergenceSpec spec, const SystemFactory& system,
+                                  std::ostream* progress);
+ConvergenceResult run_local_error(ConvergenceSpec spec, const SystemFactory& system,
+                                  std::ostream* progress);
 
 // Least-squares slope of log(error) against log(h) over the last `points` ok rows of one
 // integrator (the asymptotic range); empty when fewer than two usable rows.

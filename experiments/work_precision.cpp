@@ -227,4 +227,10 @@ WorkPrecisionResult work_precision_study(const WorkPrecisionSpec& spec, const st
   return res;
 }
 
+WorkPrecisionResult run_work_precision(WorkPrecisionSpec spec, const SystemFactory& system,
+                                       std::ostream* progress) {
+  spec.model = register_system(system, spec.model);
+  return run_work_precision(static_cast<const WorkPrecisionSpec&>(spec), progress);
+}
+
 }  // namespace stiffbench

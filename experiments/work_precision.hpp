@@ -16,6 +16,7 @@
 
 #include "core/params.hpp"
 #include "core/solve_stats.hpp"
+#include "experiments/catalog.hpp"
 #include "experiments/output.hpp"
 #include "experiments/plotting.hpp"
 
@@ -61,6 +62,9 @@ struct WorkPrecisionResult {
 };
 
 WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& spec, std::ostream* progress);
+// The same on a user's system object (see run_convergence with a SystemFactory).
+WorkPrecisionResult run_work_precision(WorkPrecisionSpec spec, const SystemFactory& system,
+                                       std::ostream* progress);
 Table work_precision_table(const WorkPrecisionResult& r);
 void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpec& spec,
                                   const WorkPrecisionResult& r);

@@ -160,6 +160,49 @@ TEST(LibraryApi, DescribeKnowsExperimentsAndVariableOrders) {
   EXPECT_EQ(run_cli({"describe", "no_such_thing"}, &out), 2);
 }
 
+TEST(LibraryApi, StudiesOnASystemObjectMatchTheNamedModel) {
+  // The same system given as an object (a factory of the built-in kepler model with e = 0.5)
+  // and by name: every row's error must agree bit for bit.
+  const Params model_params{{"e", 0.5}};
+  const SystemFactory kepler = [&] { return model_registry().create("kepler", model_params); };
+  ConvergenceSpec by_name;
+  by_name.model = "kepler";
+  by_name.params = model_params;
+  by_name.integrators = {"rk4", "velocity_verlet"};
+  by_name.t_end = 2;
+  by_name.h = 0.05;
+  by_name.levels = 3;
+  ConvergenceSpec by_object = by_name;
+  by_object.model = "my_kepler";
+  by_object.params = Params{};
+  const auto a = run_convergence(by_name, nullptr);
+  const auto b = run_convergence(by_object, kepler, nullptr);
+  ASSERT_EQ(a.rows.size(), b.rows.size());
+  for (std::size_t k = 0; k < a.rows.size(); ++k) {
+    EXPECT_EQ(a.rows[k].error, b.rows[k].error) << k;
+    EXPECT_EQ(b.rows[k].model, "my_kepler");
+  }
+  WorkPrecisionSpec wp;
+  wp.model = "kepler";
+  wp.params = model_params;
+  wp.integrators = {"rk4", "cvode_adams"};
+  wp.t_end = 2;
+  wp.h = 0.05;
+  wp.levels = 2;
+  wp.tol_levels = 2;
+  wp.repeats = 1;
+  wp.reference = "exact";
+  WorkPrecisionSpec wp_object = wp;
+  wp_object.model = "my_kepler";
+  wp_object.params = Params{};
+  const auto c = run_work_precision(wp, nullptr);
+  const auto d = run_work_precision(wp_object, kepler, nullptr);
+  ASSERT_EQ(c.rows.size(), d.rows.size());
+  for (std::size_t k = 0; k < c.rows.size(); ++k) EXPECT_EQ(c.rows[k].error, d.rows[k].error) << k;
+  // A built-in model's name cannot be taken by a system object.
+  EXPECT_THROW(register_system(kepler, "kepler"), BadInput);
+}
+
 TEST(LibraryApi, RegisteringANameTwiceIsAnError) {
   register_decay();
   EXPECT_THROW(register_decay(), std::logic_error);
