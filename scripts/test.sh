@@ -26,6 +26,18 @@ for kind in convergence local_error energy region stability work_precision; do
   fi
 done
 
+# --- Slurm smoke test (scripts/slurm-smoke.sh, issue 11): a 4-task job array of
+# experiments/specs/sweep_spring_chain.toml on a single-node Slurm started on localhost, merged
+# and compared with the unsharded run (about 10 s). Without root (it installs packages and
+# starts daemons) the same comparison with the 4 shards run locally.
+echo "== Slurm smoke test"
+if [ "$(id -u)" = 0 ]; then
+  "$root/scripts/slurm-smoke.sh" "$root/build"
+else
+  "$root/scripts/slurm-smoke.sh" --local "$root/build"
+fi
+# --- end of the Slurm smoke block
+
 if [ "${STIFFBENCH_SKIP_SANITIZE:-0}" != "1" ]; then
   echo "== ASan + UBSan build and tests"
   CMAKE_BUILD_TYPE=RelWithDebInfo "$root/scripts/build.sh" "$root/build-sanitize" \
