@@ -529,8 +529,9 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     return std::vector<std::string>{spec.integrators[static_cast<std::size_t>(u % per_point)]};
   };
   out << spec.file << ": " << kind << ", " << ex.points.size() << " point(s) x "
-      << (kind == "region" ? 1 : per_point) << " integrator unit(s) = " << ex.units()
-      << " unit(s)\n";
+      << (kind == "region" ? std::string("1 unit (all integrators)")
+                           : std::to_string(per_point) + " integrator(s)")
+      << " = " << ex.units() << " unit(s)\n";
   if (opt.check_only) {
     for (std::size_t i = 0; i < ex.points.size(); ++i)
       out << "  point " << i << ": " << (ex.points[i].label.empty() ? "-" : ex.points[i].label)
@@ -592,6 +593,9 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   }
   run["dimensions"] = dims;
   run["points"] = ex.points.size();
+  nlohmann::json labels = nlohmann::json::array();
+  for (const auto& p : ex.points) labels.push_back(p.label);
+  run["point_labels"] = labels;  // point i: its sweep values (units i*k .. i*k+k-1)
   run["units"] = ex.units();
   run["shard"] = std::to_string(opt.shard_index) + "/" + std::to_string(opt.shard_count);
   run["sets"] = opt.sets;

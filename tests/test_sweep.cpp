@@ -162,6 +162,37 @@ TEST(Sweep, KilledRunResumesToTheSameCsv) {
   EXPECT_EQ(wrong.code, 2);
 }
 
+TEST(Sweep, ExpansionOrderAndRowTags) {
+  // Dimensions: top-level keys by name (h), then parameters by name (params.n), the last one
+  // fastest; units: point x integrator, integrators in spec order. h also names a study column
+  // (the step actually used), so its tag column is spec.h.
+  const fs::path base = fresh_dir("order");
+  const Outcome o =
+      run("run " + kSweep + " --set 'h=[0.02,0.01]' --set 'params.n=[8,4]' " +
+          "--set 'integrators=[\"rk4\",\"sdirk2\"]' --set levels=2 --out " + base.string());
+  ASSERT_EQ(o.code, 0) << o.err;
+  std::istringstream csv(slurp(base / "convergence.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line.rfind("unit,unit_rows,spec.h,params.n,model,integrator,order,h,", 0), 0u) << line;
+  std::vector<std::string> prefixes;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> f;
+    std::stringstream ls(line);
+    std::string item;
+    while (std::getline(ls, item, ',')) f.push_back(item);
+    ASSERT_GE(f.size(), 6u);
+    prefixes.push_back(f[0] + "," + f[1] + "," + f[2] + "," + f[3] + "," + f[5]);
+  }
+  // 4 points x 2 integrators = 8 units of 2 rows (levels = 2).
+  const std::vector<std::string> expected = {
+      "0,2,0.02,8,rk4", "0,2,0.02,8,rk4", "1,2,0.02,8,sdirk2", "1,2,0.02,8,sdirk2",
+      "2,2,0.02,4,rk4", "2,2,0.02,4,rk4", "3,2,0.02,4,sdirk2", "3,2,0.02,4,sdirk2",
+      "4,2,0.01,8,rk4", "4,2,0.01,8,rk4", "5,2,0.01,8,sdirk2", "5,2,0.01,8,sdirk2",
+      "6,2,0.01,4,rk4", "6,2,0.01,4,rk4", "7,2,0.01,4,sdirk2", "7,2,0.01,4,sdirk2"};
+  EXPECT_EQ(prefixes, expected);
+}
+
 TEST(Sweep, FailingUnitIsRecordedAndExitCodeIsThree) {
   // Forward Euler on Prothero-Robinson with lambda = -1e6 at h = 0.1: h·lambda = -1e5 lies far
   // outside its stability interval [-2, 0], so it blows up; backward Euler is A-stable.
