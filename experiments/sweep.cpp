@@ -421,6 +421,38 @@ void write_all(const fs::path& path, const std::string& header,
   write_file_atomic(path, text);
 }
 
+// OUT/<kind>.md: the rows as a Markdown table (reals in short form; unit_rows left out), written
+// beside the CSV once every unit is present (unsharded run or complete merge).
+void write_markdown(const fs::path& csv_path, const std::string& header,
+                    const std::map<long, UnitRows>& units) {
+  std::string h = header;
+  while (!h.empty() && (h.back() == '\n' || h.back() == '\r')) h.pop_back();
+  const std::vector<std::string> cols = parse_csv_line(h);
+  const auto skip = std::find(cols.begin(), cols.end(), "unit_rows") - cols.begin();
+  Table t;
+  for (std::size_t i = 0; i < cols.size(); ++i)
+    if (static_cast<long>(i) != skip) t.columns.push_back(cols[i]);
+  for (const auto& [u, rows] : units)
+    for (std::string l : rows.lines) {
+      while (!l.empty() && (l.back() == '\n' || l.back() == '\r')) l.pop_back();
+      const std::vector<std::string> f = parse_csv_line(l);
+      std::vector<std::string> r;
+      for (std::size_t i = 0; i < f.size(); ++i) {
+        if (static_cast<long>(i) == skip) continue;
+        const std::string& v = f[i];
+        char* end = nullptr;
+        const double x = v.empty() ? 0.0 : std::strtod(v.c_str(), &end);
+        const bool real = !v.empty() && end && *end == '\0' &&
+                          v.find_first_of(".eE") != std::string::npos && std::isfinite(x);
+        r.push_back(real ? format_short(x) : v);
+      }
+      t.rows.push_back(std::move(r));
+    }
+  fs::path md = csv_path;
+  md.replace_extension(".md");
+  write_file_atomic(md, t.to_markdown());
+}
+
 nlohmann::json read_json(const fs::path& path) {
   std::ifstream in(path);
   if (!in) throw BadInput(path.string() + " not found (not a folder written by `stiffbench run`)");
@@ -674,6 +706,8 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   }
   std::fclose(f);
   write_all(csv, header, done);  // sorted by unit
+  if (opt.shard_count == 1 && static_cast<long>(done.size()) == ex.units())
+    write_markdown(csv, header, done);
 
   long failed = 0;
   for (const auto& [u, rows] : done) failed += rows.ok ? 0 : 1;
@@ -719,6 +753,7 @@ int merge_shards(const std::string& out_dir, const std::vector<std::string>& dir
   run["merged_from"] = dirs;
   run["missing_units"] = missing;
   write_file_atomic(dir / "run.json", run.dump(2) + "\n");
+  if (missing.empty()) write_markdown(dir / name, header, units);
   out << "merged " << units.size() << " of " << total << " unit(s) from " << dirs.size()
       << " folder(s) into " << (dir / name).string() << "\n";
   if (!missing.empty()) err << "merge: missing units: " << join(missing) << "\n";

@@ -13,7 +13,8 @@
 // `unit_status` (ok | failed: a row's status is not ok | error: the unit threw) with
 // `unit_message`. Units are appended as they finish (one line per write, flushed); at the end
 // the file is rewritten sorted by unit. --resume keeps the units whose rows are all present
-// (a torn last line is dropped) and runs the others.
+// (a torn last line is dropped) and runs the others. With every unit present (unsharded run,
+// complete merge) the rows are also written as a Markdown table, OUT/<kind>.md.
 #pragma once
 
 #include <iosfwd>

@@ -98,11 +98,16 @@ TEST(Sweep, ShardsMergedReproduceTheUnshardedRun) {
   ASSERT_EQ(m.code, 0) << m.err;
   EXPECT_EQ(without_wall_time(slurp(base / "merged/convergence.csv")), without_wall_time(csv));
   EXPECT_NE(without_wall_time(csv), without_wall_time(slurp(base / "shard-0/convergence.csv")));
+  // The Markdown table: only for a complete set of units, one line per row plus 2 header lines.
+  EXPECT_EQ(count_lines(slurp(base / "full/convergence.md")), 2 + 12 * 4);
+  EXPECT_EQ(count_lines(slurp(base / "merged/convergence.md")), 2 + 12 * 4);
+  EXPECT_FALSE(fs::exists(base / "shard-0/convergence.md"));
 
   // One shard alone: the 6 units of the other one are reported missing (exit 3).
   const Outcome partial =
       run("merge --out " + (base / "partial").string() + " " + (base / "shard-0").string());
   EXPECT_EQ(partial.code, 3);
+  EXPECT_FALSE(fs::exists(base / "partial/convergence.md"));
   EXPECT_NE(partial.err.find("missing units: 1, 3, 5, 7, 9, 11"), std::string::npos) << partial.err;
 
   // A shard of another spec (t_end changed) is refused.
