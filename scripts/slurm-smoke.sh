@@ -27,10 +27,19 @@ N=4
 T=$(mktemp -d /tmp/stiffbench-slurm.XXXXXX)
 started=()
 cleanup() {
+  local pids=()
   for pidfile in "${started[@]}"; do
-    [[ -f "$pidfile" ]] && kill "$(cat "$pidfile")" 2>/dev/null || true
+    [[ -f "$pidfile" ]] && pids+=("$(cat "$pidfile")") && kill "${pids[-1]}" 2>/dev/null || true
   done
-  if [[ -z "${KEEP:-}" ]]; then rm -rf "$T"; else echo "slurm-smoke: kept $T"; fi
+  # The daemons write their state while they shut down: wait for them (at most 10 s) before
+  # removing their folders.
+  for _ in $(seq 100); do
+    local alive=0
+    for pid in "${pids[@]}"; do kill -0 "$pid" 2>/dev/null && alive=1; done
+    ((alive)) || break
+    sleep 0.1
+  done
+  if [[ -z "${KEEP:-}" ]]; then rm -rf "$T" || true; else echo "slurm-smoke: kept $T"; fi
 }
 trap cleanup EXIT
 
