@@ -11,6 +11,7 @@
 #include "integrators/implicit/radau5.hpp"
 #include "integrators/reference/gsl.hpp"
 #include "integrators/reference/sundials.hpp"
+#include "integrators/symplectic/composition.hpp"
 #include "integrators/symplectic/splitting.hpp"
 #include "integrators/symplectic/verlet.hpp"
 
@@ -63,6 +64,13 @@ void register_symplectic_integrators(IntegratorRegistry& reg) {
       return std::make_unique<SplittingIntegrator>(c, vel_indep, desc);
     };
     reg.add({SplittingIntegrator(c, vel_indep, desc).info(), {}, make});
+  }
+  // Compositions of velocity Verlet (composition.hpp): velocity-independent forces only.
+  for (const CompositionMethod& m : composition_methods()) {
+    auto make = [c = m.splitting, desc = m.description](const Params&) {
+      return std::make_unique<SplittingIntegrator>(c, true, desc);
+    };
+    reg.add({SplittingIntegrator(m.splitting, true, m.description).info(), {}, make});
   }
   reg.add({PositionVerlet().info(), {}, [](const Params&) {
              return std::make_unique<PositionVerlet>();
