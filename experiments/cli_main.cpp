@@ -49,6 +49,9 @@ PlotOptions g_plot;  // --svg of convergence, local-error and work-precision
 
 int cli_main(int argc, char** argv) {
   set_command_line(argc, argv);
+  const struct ForgetCommandLine {
+    ~ForgetCommandLine() { clear_command_line(); }
+  } forget;
   CLI::App app{
       "stiffbench: a testbed comparing time integrators on stiff ODEs from physically based "
       "simulation.\nExit codes: 0 success, 2 bad input, 1 other errors."};

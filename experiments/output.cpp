@@ -115,6 +115,11 @@ void set_command_line(int argc, char** argv) {
   }
 }
 
+void clear_command_line() {
+  g_command_line_set = false;
+  g_command_line.clear();
+}
+
 nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json& spec) {
   const auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
   std::tm tm{};

@@ -36,7 +36,9 @@ void require_output_dir(const std::filesystem::path& dir, const std::string& fla
 // count, date, command line.
 nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json& spec);
 
-// The command line of this process, set once by main().
+// The command line recorded in run metadata: set by cli_main() for the duration of its run
+// (cleared again when it returns, so later library calls in the same process record none).
 void set_command_line(int argc, char** argv);
+void clear_command_line();
 
 }  // namespace stiffbench

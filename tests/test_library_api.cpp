@@ -152,6 +152,19 @@ TEST(LibraryApi, CliRunsRecordTheirCommandLine) {
   EXPECT_EQ(j["caller"], "cli");
   EXPECT_NE(j["command_line"].get<std::string>().find("--model dahlquist"), std::string::npos);
   EXPECT_EQ(j["model"]["built_in"], true);
+  // A library call after cli_main() has returned records no command line again.
+  ConvergenceSpec spec;
+  spec.model = "dahlquist";
+  spec.integrators = {"rk4"};
+  spec.t_end = 1;
+  spec.h = 0.1;
+  spec.levels = 2;
+  std::ostringstream err;
+  convergence_study(spec, (dir / "lib").string(), false, nullptr, err);
+  std::ifstream lib_js(dir / "lib" / "convergence.json");
+  const auto lib = nlohmann::json::parse(lib_js);
+  EXPECT_EQ(lib["caller"], "library");
+  EXPECT_TRUE(lib["command_line"].is_null());
   std::filesystem::remove_all(dir);
 }
 
