@@ -33,6 +33,11 @@ struct MethodInfo {
   int stages = 0;  // f (or acceleration) evaluations per step, after start-up
   Requirements requires_ = {};
   std::string description;
+  // The method class within its family ("embedded RK pair", "Rosenbrock", "Gauss collocation")
+  // and the literature reference, for `list integrators` and `describe` (built-in methods get
+  // them from integrators/method_notes.cpp when registered).
+  std::string kind = {};
+  std::string reference = {};
 };
 
 // Human-readable list of requirements ("mechanical system, velocity-independent acceleration").
