@@ -115,7 +115,8 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
       {&ros3p_tableau(),
        "ROS3P Rosenbrock 3(2) of Lang & Verwer (BIT 41, 2001): 3 stages (2 f evaluations), "
        "gamma = 1/2 + sqrt(3)/6, A-stable, R(inf) = 1 - sqrt(3); adaptive (rtol/atol) or fixed "
-       "step"},
+       "step. Its error estimate is zero on linear autonomous problems (the embedded method has "
+       "the same stability function): there only h_max limits the adaptive step"},
       {&rodas4_tableau(),
        "RODAS4 Rosenbrock 4(3) of Hairer & Wanner (Solving ODEs II, 2nd ed., Springer 1996; "
        "code RODAS): 6 stages, gamma = 1/4, L-stable, stiffly accurate; adaptive (rtol/atol) "

@@ -282,10 +282,10 @@ void Rosenbrock::linearise(const OdeSystem& sys, double t, CVecRef y, SolveStats
   sys.rhs(t, y, fs_.col(0));
   core_.update_jacobian(sys, t, y, fs_.col(0), stats);
   if (need_ft_) {
-    // f_t = (-3 f(t) + 4 f(t + δ) - f(t + 2δ)) / (2δ) + O(δ²), δ ≈ ε^(1/3) max(1, |t|): its
-    // error enters y⁺ unfiltered (see the header), so a forward difference's √ε would set an
-    // error floor ∝ h.
-    const double t1 = t + 6.0554544523933395e-06 * std::max(1.0, std::abs(t));
+    // f_t = (-3 f(t) + 4 f(t + δ) - f(t + 2δ)) / (2δ) + O(δ²) with δ = max(ε^⅓, ε^⅔ |t|) (see
+    // the header): ε^⅓ balances truncation and round-off on an O(1) time scale; the second term
+    // keeps δ a million ulps of t when |t| is large.
+    const double t1 = t + std::max(6.0554544523933395e-06, 3.6668528625997858e-11 * std::abs(t));
     const double dt = t1 - t;  // representable
     sys.rhs(t1, y, ft_);
     sys.rhs(t + 2.0 * dt, y, rhs_);
