@@ -10,8 +10,9 @@
 // Rosenbrock methods (Hairer–Wanner II §IV.7, eq. (7.4)), as tableau data (α, Γ, b, b̂):
 //   (I - hγJ) k_i = h f(t + α_i h, y + Σ_{j<i} α_ij k_j) + γ_i h² f_t + hJ Σ_{j<i} γ_ij k_j,
 //   y⁺ = y + Σ b_i k_i,  ŷ⁺ = y + Σ b̂_i k_i,   γ_i = Σ_{j<=i} γ_ij,  α_i = Σ_j α_ij.
-// The integrator runs the equivalent form without Jacobian products (HW II §IV.7, eq. (7.25);
-// the form of their codes ROS4 and RODAS): with u_i = Σ_{j<=i} γ_ij k_j,
+// The integrator runs the equivalent form without Jacobian products (HW II §IV.7, section
+// "Implementation of Rosenbrock-type methods"; the form of their codes ROS4 and RODAS): with u_i =
+// Σ_{j<=i} γ_ij k_j,
 //   (I - hγJ) u_i = hγ [ f(t + α_i h, y + Σ_{j<i} a_ij u_j) + Σ_{j<i} (c_ij/h) u_j + γ_i h f_t ],
 //   y⁺ = y + Σ m_i u_i,   (a_ij) = αΓ⁻¹, (c_ij) = diag(1/γ) - Γ⁻¹, m = bᵀΓ⁻¹, m̂ = b̂ᵀΓ⁻¹,
 // so every stage costs one f evaluation and one solve with the one factored matrix I - hγJ.
@@ -23,7 +24,7 @@
 // forward difference (δ = √ε max(1, |t|)) rodas4 on Prothero–Robinson λ = -1 stalls at ~7e-12
 // (observed order -0.5 from h = 0.0125 to 0.00625), with δ = ε^⅓ max(1, |t|) it shows 3.7 there
 // (errors ~1e-12), and with this δ it keeps order 4 down to 4e-14 (tests/test_rosenbrock.cpp).
-// Order conditions (HW II §IV.7, Theorem 7.3 and Table 7.1): Σ_i w_i Φ_i(τ) = 1/γ(τ) over the
+// Order conditions (HW II §IV.7, Table 7.1 up to order 4): Σ_i w_i Φ_i(τ) = 1/γ(τ) over the
 // rooted trees τ, where Φ multiplies, along each edge from a vertex to its son, by α_jk when the
 // vertex has two or more sons and by β_jk = α_jk + γ_jk (the diagonal γ included) when it has
 // exactly one.
@@ -89,7 +90,7 @@ struct RosenbrockTableau {
   Index stages() const { return b.size(); }
   Mat gamma_full() const;  // Γ = gamma_lower + γ I
   // Largest |Σ w_i Φ_i(τ) - 1/γ(τ)| over the rooted trees τ with exactly p vertices (the
-  // conditions of HW II Theorem 7.3, see above). Defined for 1 <= p <= 6.
+  // conditions of HW II §IV.7, see above). Defined for 1 <= p <= 6.
   double order_defect(const Vec& weights, int p) const;
 };
 
