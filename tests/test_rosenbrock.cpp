@@ -90,10 +90,11 @@ TEST(RosenbrockTableaux, OrderConditionsOfBothRows) {
   EXPECT_GT(table_defect(ros2, ros2.b, 3), 1e-4);
 }
 
-// ROS3P typed in closed form reproduces the transformed coefficients published for it (the
-// 16-digit values of Lang & Verwer's method in Hairer–Wanner's form, as used by codes such as
-// OrdinaryDiffEq's ROS3P): a21 = a31 = 1/γ, c21 = -1.607695154586736, c31 = -2√3, c32 = -√3,
-// m = (2, 1/√3, 1 - 1/√3), m̂ = (2.113248654051871, 1, 0.4226497308103742).
+// ROS3P typed in closed form reproduces the 16-digit transformed coefficients (Hairer–Wanner's
+// form) that Rosenbrock codes distribute for Lang & Verwer's method (the same values appear in
+// several independent public codes, in C++, MATLAB and Python): a21 = a31 = 1/γ,
+// c21 = -1.607695154586736, c31 = -2√3, c32 = -√3, m = (2, 1/√3, 1 - 1/√3),
+// m̂ = (2.113248654051871, 1, 0.4226497308103742).
 TEST(RosenbrockTableaux, Ros3pTransformedCoefficients) {
   const RosenbrockTransformed r = transform(ros3p_tableau());
   const double tol = 1e-14;
