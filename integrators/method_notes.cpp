@@ -79,6 +79,11 @@ const std::map<std::string, MethodNote>& method_notes() {
        {"Rosenbrock",
         "J. G. Verwer, E. J. Spee, J. G. Blom & W. Hundsdorfer, SIAM J. Sci. Comput. 20 (1999) "
         "1456-1480"}},
+      {"ros3p",
+       {"Rosenbrock (embedded pair)",
+        "J. Lang & J. G. Verwer, ROS3P - an accurate third-order Rosenbrock solver designed for "
+        "parabolic problems, BIT Numer. Math. 41 (2001) 731-738"}},
+      {"rodas4", {"Rosenbrock (embedded pair)", cite(kHW, "Sect. VI.4 (RODAS)")}},
       {"radau5", {"Radau IIA collocation", cite(kHW, "Sect. IV.8 (RADAU5)")}},
       {"baraff_witkin",
        {"linearly implicit (velocity form)",
