@@ -86,12 +86,12 @@ class AngleChain final : public OdeSystem {
   int n_;
 };
 
-// The angle chain's Cartesian state at t by dopri5 at rtol = 1e-13, atol = 1e-15. Measured:
-// loosening to rtol = 1e-11 changes it by < 1e-10 at t = 1 (n = 5), so it is accurate to far below
-// the 1e-7 of RATTLE's smallest error used here.
+// The angle chain's Cartesian state at t by dopri5 at rtol = 1e-13, atol = 1e-15. Measured at
+// t = 1 (n = 5): loosening to rtol = 1e-12 changes it by 6.3e-14, to 1e-11 by 6.4e-13, so it is
+// accurate far below RATTLE's smallest error used here (9.3e-6).
 Vec reference_chain(int n, double t, double rtol = 1e-13) {
   AngleChain sys(n);
-  auto integ = make("dopri5", {"rtol=" + std::to_string(rtol), "atol=1e-15"});
+  auto integ = integrator_registry().create("dopri5", Params{{"rtol", rtol}, {"atol", 1e-15}});
   AdaptiveOptions opt;
   opt.t_end = t;
   const RunResult r = run_adaptive(sys, *integ, opt);
@@ -130,7 +130,9 @@ TEST(Rattle, AngleChainReferenceIsConsistent) {
 }
 
 // Observed order 2 (within 0.2) on the 5-link constrained chain at t = 1 against the angle-chain
-// reference, h = 4e-3 / 2^k. Errors are max-norm over positions and velocities.
+// reference, h = 4e-3 / 2^k. Errors are max-norm over positions and velocities; measured
+// 5.95e-4, 1.49e-4, 3.72e-5, 9.30e-6 (orders 2.00). Velocity Verlet with the projection:
+// 5.98e-3 and 3.00e-3 at h = 1e-3 and 5e-4.
 TEST(Rattle, SecondOrderOnConstrainedChain) {
   auto sys = chain(5);
   const Vec ref = reference_chain(5, 1.0);
@@ -171,10 +173,12 @@ TEST(Rattle, SinglePendulumMatchesEllipticSolution) {
   }
   EXPECT_NEAR(std::log2(err[0] / err[1]), 2.0, 0.2) << err[0] << " " << err[1];
   EXPECT_NEAR(std::log2(err[1] / err[2]), 2.0, 0.2) << err[1] << " " << err[2];
+  EXPECT_LT(err[2], 1e-5);  // measured 4.2e-5, 1.04e-5, 2.6e-6: converging to the exact motion
 }
 
 // |g(x)| <= 1e-12 and |G(x) v| <= 1e-12 after every step (the solver stops at 1e-14 max(1, |x|)
 // and 1e-14 max(1, |v|); |x| <= 1 and |v| ~ 2 here), over 2000 steps of the 5-link chain.
+// Measured: max|g| = 8.0e-15, max|G v| = 3.3e-16.
 TEST(Rattle, ConstraintsHoldAtEveryStep) {
   auto sys = chain(5);
   const HolonomicConstraints& c = constraints_of(*sys);
@@ -203,8 +207,9 @@ TEST(Rattle, ConstraintsHoldAtEveryStep) {
 
 // Symplectic and symmetric: the energy error oscillates at O(h²) without drift. Over 20,000 steps
 // (t = 40, h = 2e-3) the largest |E - E0| in the last quarter is no larger than in the first
-// (a drift would grow it), and stays small. Velocity Verlet with the end-of-step projection
-// dissipates energy steadily (network.hpp) and shows the difference.
+// (a drift would grow it). Measured per quarter: 1.37e-5, 1.52e-5, 1.33e-5, 1.39e-5 (E0 = -5.17).
+// Velocity Verlet with the end-of-step projection dissipates energy steadily (network.hpp):
+// 0.11, 0.20, 0.27, 0.33.
 TEST(Rattle, EnergyErrorBoundedWithoutDrift) {
   auto sys = chain(5);
   const auto energy = sys->invariants().front().value;
@@ -224,13 +229,14 @@ TEST(Rattle, EnergyErrorBoundedWithoutDrift) {
   };
   const auto rattle = quarters("rattle");
   EXPECT_LE(rattle[3], 1.2 * rattle[0]);
-  EXPECT_LE(rattle[3], 1e-3 * std::abs(e0));
+  EXPECT_LE(*std::max_element(rattle.begin(), rattle.end()), 3e-5);
   const auto verlet = quarters("velocity_verlet");
-  EXPECT_GT(verlet[3], 3 * rattle[3]);
+  EXPECT_GT(verlet[3], 2 * verlet[0]);
+  EXPECT_GT(verlet[3], 1000 * rattle[3]);
 }
 
 // Symmetric method: a step of +h followed by a step of -h returns to the start (up to the
-// constraint solves' tolerance), from a generic state on the manifold.
+// constraint solves' tolerance), from a generic state on the manifold. Measured: 2.8e-14.
 TEST(Rattle, StepBackwardUndoesStep) {
   auto sys = chain(5);
   Vec y = run(*sys, "rattle", 1e-3, 0.3).y;
@@ -251,7 +257,9 @@ TEST(Rattle, OneEvaluationPerStepAndNoProjection) {
   const RunResult r = run(*sys, "rattle", 1e-3, 0.5);
   EXPECT_EQ(r.n_steps, 500);
   EXPECT_EQ(r.stats.f_evals, 501);
-  EXPECT_GE(r.stats.newton_iters, 500);  // at least one Newton update per step
+  // At least one Newton update per step (measured 979 over 500 steps: two each, quadratic).
+  EXPECT_GE(r.stats.newton_iters, 500);
+  EXPECT_LE(r.stats.newton_iters, 1500);
   Vec y = sys->initial_state();
   auto integ = make("rattle");
   SolveStats stats;
@@ -304,8 +312,9 @@ TEST(Rattle, RefusesSystemsWithoutConstraints) {
     } catch (const BadInput& e) {
       const std::string msg = e.what();
       EXPECT_NE(msg.find("integrator 'rattle'"), std::string::npos) << msg;
-      if (sys->as_mechanical())
+      if (sys->as_mechanical()) {
         EXPECT_NE(msg.find("needs holonomic constraints"), std::string::npos) << msg;
+      }
     }
   }
   // Constrained but damped: the velocity Verlet kick needs a(x) alone.
