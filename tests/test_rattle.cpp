@@ -298,6 +298,38 @@ TEST(Rattle, NetworkConstraintJacobianMatchesFiniteDifferences) {
   EXPECT_EQ(jac.valuePtr(), values);
 }
 
+// A step that cannot satisfy the constraint is reported, never returned silently wrong: a single
+// Newton iteration (newton_max_iter=1) leaves max|g| above the 1e-14 tolerance at h = 0.02 (the
+// quadratic convergence needs two or three, see OneEvaluationPerStepAndNoProjection), and a
+// duplicated constraint makes G M⁻¹ Gᵀ singular. Bad parameters are BadInput.
+TEST(Rattle, ReportsFailedConstraintSolves) {
+  auto sys = chain(5);
+  auto integ = make("rattle", {"newton_max_iter=1"});
+  FixedStepOptions opt;
+  opt.h = 0.02;
+  opt.t_end = 0.2;
+  const RunResult r = run_fixed_step(*sys, *integ, opt);
+  EXPECT_EQ(r.stats.status, Status::newton_failed);
+  EXPECT_NE(r.stats.message.find("did not converge in 1 Newton"), std::string::npos)
+      << r.stats.message;
+  EXPECT_EQ(r.stats.newton_fails, 1);
+
+  std::vector<MassPoint> pts(3);
+  pts[0].pinned = true;
+  pts[1].x = {0.2, 0.0, 0.0};
+  pts[2].x = {0.4, 0.0, 0.0};
+  NetworkOptions net;
+  net.gravity = {0.0, -9.81, 0.0};
+  const MassSpringNetwork dup("duplicated", 2, pts, {}, net,
+                              {{0, 1, 0.2}, {1, 2, 0.2}, {2, 1, 0.2}});
+  const RunResult d = run(dup, "rattle", 1e-3, 0.01);
+  EXPECT_NE(d.stats.status, Status::ok);
+  EXPECT_NE(d.stats.message.find("dependent constraints"), std::string::npos) << d.stats.message;
+
+  EXPECT_THROW(make("rattle", {"constraint_tol=0"}), BadInput);
+  EXPECT_THROW(make("rattle", {"newton_max_iter=0"}), BadInput);
+}
+
 // RATTLE needs constraints offered through holonomic_constraints() and velocity-independent
 // forces: refused with BadInput otherwise, before any step.
 TEST(Rattle, RefusesSystemsWithoutConstraints) {

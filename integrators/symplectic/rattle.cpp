@@ -108,10 +108,13 @@ Status Rattle::step(const OdeSystem& sys, double t, VecRef y, double h, SolveSta
   step_ = x_bar_;  // the iterate x^k
   lambda_.setZero();
   const double xtol = opt_.constraint_tol * std::max(1.0, max_abs(x_bar_));
-  bool converged = m == 0;
+  bool converged = m == 0, singular = false;
   for (int iter = 0; !converged; ++iter) {
     cons_->constraint_values(step_, g_val_);
-    if (!g_val_.allFinite()) break;
+    if (!g_val_.allFinite()) {
+      singular = true;  // a NaN multiplier from a (numerically) singular solve
+      break;
+    }
     if (max_abs(g_val_) <= xtol) {
       converged = true;
       break;
@@ -122,7 +125,10 @@ Status Rattle::step(const OdeSystem& sys, double t, VecRef y, double h, SolveSta
     lu_.compute(jac);
     ++stats.lin_setups;
     ++stats.newton_iters;
-    if (lu_.info() != Eigen::Success) break;
+    if (lu_.info() != Eigen::Success) {
+      singular = true;
+      break;
+    }
     lambda_ += lu_.solve(g_val_);
     ++stats.lin_solves;
     step_ = x_bar_ - wgt_ * lambda_;
@@ -130,9 +136,13 @@ Status Rattle::step(const OdeSystem& sys, double t, VecRef y, double h, SolveSta
   if (!converged) {
     ++stats.newton_fails;
     std::ostringstream msg;
-    msg << "rattle: the position constraint g(x) = 0 did not converge in " << opt_.newton_max_iter
-        << " Newton iterations at t = " << t + h << " (max|g| = " << max_abs(g_val_)
-        << ", tolerance " << xtol << ")";
+    msg << "rattle: the position constraint g(x) = 0 ";
+    if (singular)
+      msg << "could not be solved at t = " << t + h
+          << ": singular G M^-1 G^T (dependent constraints?)";
+    else
+      msg << "did not converge in " << opt_.newton_max_iter << " Newton iterations at t = " << t + h
+          << " (max|g| = " << max_abs(g_val_) << ", tolerance " << xtol << ")";
     stats.message = msg.str();
     return Status::newton_failed;
   }
