@@ -134,6 +134,7 @@ Status Rattle::step(const OdeSystem& sys, double t, VecRef y, double h, SolveSta
     step_ = x_bar_ - wgt_ * lambda_;
   }
   if (!converged) {
+    started_ = false;  // g_new_ holds a Newton iterate's G now: a retry starts afresh
     ++stats.newton_fails;
     std::ostringstream msg;
     msg << "rattle: the position constraint g(x) = 0 ";
@@ -156,6 +157,7 @@ Status Rattle::step(const OdeSystem& sys, double t, VecRef y, double h, SolveSta
   if (m > 0) {
     cons_->constraint_jacobian(x, g_new_);
     if (!project_velocity(v, stats)) {
+      started_ = false;
       ++stats.newton_fails;
       stats.message = "rattle: the velocity constraint G(x) v = 0 could not be solved at t = " +
                       std::to_string(t + h) + " (singular G M^-1 G^T: dependent constraints?)";
