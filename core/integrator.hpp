@@ -24,6 +24,9 @@ struct Requirements {
   bool mechanical = false;            // y = [x; v] split (MechanicalSystem)
   bool velocity_independent = false;  // a(t, x) must not depend on v
   bool jacobian = false;              // an analytic Jacobian (otherwise finite differences)
+  // Holonomic constraints offered as equations (MechanicalSystem::holonomic_constraints()); the
+  // method enforces them itself, so the driver does not project after its steps.
+  bool constraints = false;
 };
 
 struct MethodInfo {

@@ -12,6 +12,7 @@
 #include "integrators/reference/gsl.hpp"
 #include "integrators/reference/sundials.hpp"
 #include "integrators/symplectic/composition.hpp"
+#include "integrators/symplectic/rattle.hpp"
 #include "integrators/symplectic/splitting.hpp"
 #include "integrators/symplectic/verlet.hpp"
 
@@ -76,6 +77,9 @@ void register_symplectic_integrators(IntegratorRegistry& reg) {
              return std::make_unique<PositionVerlet>();
            }});
   reg.add({Leapfrog().info(), {}, [](const Params&) { return std::make_unique<Leapfrog>(); }});
+  // RATTLE: constrained systems only (holonomic_constraints(), core/constraints.hpp).
+  reg.add({Rattle({}).info(), rattle_param_specs(),
+           [](const Params& p) { return std::make_unique<Rattle>(read_rattle_options(p)); }});
 }
 
 void register_implicit_integrators(IntegratorRegistry& reg) {

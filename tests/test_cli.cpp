@@ -89,6 +89,9 @@ INSTANTIATE_TEST_SUITE_P(
                 "solve --model harmonic_oscillator --param gamma=0.1 --integrator leapfrog --h 0.1 "
                 "--t-end 1",
                 "leapfrog"},
+        BadCase{"rattle_on_unconstrained",
+                "solve --model pendulum_chain --integrator rattle --h 0.01 --t-end 0.1",
+                "holonomic constraints"},
         BadCase{"model_param_out_of_range",
                 "solve --model kepler --param e=1.5 --integrator rk4 --h 0.1 --t-end 1", "'e'"},
         BadCase{"missing_flag", "solve --model kepler --integrator rk4 --h 0.1", "--t-end"},
