@@ -66,6 +66,11 @@ const std::map<std::string, MethodNote>& method_notes() {
       {"blanes_moan",
        {"optimised splitting",
         "S. Blanes & P. C. Moan, J. Comput. Appl. Math. 142 (2002) 313-330 (SRKN_6^b)"}},
+      {"rattle",
+       {"constrained splitting (RATTLE)",
+        "H. C. Andersen, Rattle: a \"velocity\" version of the Shake algorithm for molecular "
+        "dynamics calculations, J. Comput. Phys. 52 (1983) 24-34; " +
+            cite(kGNI, "Sect. VII.1")}},
       // Implicit one-step and multistep methods.
       {"backward_euler", {"implicit RK", cite(kHW, "Sect. IV.3")}},
       {"implicit_midpoint", {"Gauss collocation (1 stage)", cite(kGNI, "Sect. II.1")}},

@@ -2,6 +2,7 @@
 // bad value, and the output files' column names.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -148,7 +149,8 @@ TEST(Cli, DescribeListsParametersWithDefaults) {
 // The circular Kepler orbit returns to its initial state after one period 2π; rk4 with
 // h = 1e-3 has a global error ~1e-13 there (measured), far inside 1e-9.
 TEST(Cli, SolveKeplerOnePeriodReturnsToStart) {
-  const auto csv = std::filesystem::temp_directory_path() / "sb_kepler_traj.csv";
+  const auto csv = std::filesystem::temp_directory_path() /
+                   ("sb_kepler_traj_" + std::to_string(::getpid()) + ".csv");
   const Outcome o =
       run("solve --model kepler --integrator rk4 --h 0.001 --t-end 6.283185307179586 --outputs 10 "
           "--out " +
@@ -183,7 +185,8 @@ TEST(Cli, UnstableRunExitsZeroAndSaysSo) {
 }
 
 TEST(Cli, ConvergenceWritesContractFiles) {
-  const auto dir = std::filesystem::temp_directory_path() / "sb_conv_test";
+  const auto dir = std::filesystem::temp_directory_path() /
+                   (std::string("sb_conv_test") + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   const Outcome o =
       run("convergence --model harmonic_oscillator --integrators euler,rk4 --t-end 1 --h 0.1 "
@@ -233,7 +236,8 @@ std::string join_cells(const std::vector<std::string>& cells) {
 
 // Implicit rows of convergence.csv carry their Jacobian and linear-solve counts (issue #3).
 TEST(Cli, ConvergenceRowsOfImplicitMethodsCountJacobiansAndSolves) {
-  const auto dir = std::filesystem::temp_directory_path() / "sb_conv_implicit";
+  const auto dir = std::filesystem::temp_directory_path() /
+                   (std::string("sb_conv_implicit") + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   const Outcome o =
       run("convergence --model harmonic_oscillator --integrators "
@@ -259,7 +263,8 @@ TEST(Cli, ConvergenceRowsOfImplicitMethodsCountJacobiansAndSolves) {
 // rtol from 1e-5): within every method, sorted by f evaluations, the error at t_end falls.
 // (--repeats only changes the wall-time column, so 1 repeat checks the same numbers.)
 TEST(Cli, WorkPrecisionOnHiresErrorFallsAsWorkRises) {
-  const auto dir = std::filesystem::temp_directory_path() / "sb_wp_hires";
+  const auto dir = std::filesystem::temp_directory_path() /
+                   (std::string("sb_wp_hires") + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   const Outcome o =
       run("work-precision --model hires --integrators "
@@ -311,7 +316,8 @@ TEST(Cli, ListsAndDescribesTheSphScenes) {
 // Issue #8, "done when" 2: solve without --h runs at the suggested step, says so, and writes
 // 21 VTK frames (+ CSV copies) and observables.csv with the front, which starts at a = 0.146.
 TEST(Cli, SolveDamBreakWritesFramesAtTheSuggestedStep) {
-  const auto dir = std::filesystem::temp_directory_path() / "sb_sph_frames";
+  const auto dir = std::filesystem::temp_directory_path() /
+                   (std::string("sb_sph_frames") + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   const Outcome o =
       run("solve --model sph_dam_break_2d --integrator symplectic_euler --t-end 0.25 --frames 20 "
@@ -347,7 +353,8 @@ TEST(Cli, SolveDamBreakWritesFramesAtTheSuggestedStep) {
 // of heun, rk4 and velocity Verlet are within 0.3 of 2, 4, 2 (measured at the default 20 across:
 // 2.08, 3.96, 2.03).
 TEST(Cli, SphDropConvergenceFromTheSuggestedStep) {
-  const auto dir = std::filesystem::temp_directory_path() / "sb_sph_conv";
+  const auto dir = std::filesystem::temp_directory_path() /
+                   (std::string("sb_sph_conv") + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   const Outcome o =
       run("convergence --model sph_drop_2d --param n=12 --integrators heun,rk4,velocity_verlet "
@@ -388,7 +395,8 @@ TEST(Cli, CvodeOnSphRunsMatrixFree) {
 // the limits table on stdout (rk4's imaginary-axis limit 2√2 = 2.8284, REFERENCES.md); an
 // integrator without stability data is bad input naming it.
 TEST(Cli, RegionWritesContractFiles) {
-  const auto dir = std::filesystem::temp_directory_path() / "sb_region_cli";
+  const auto dir = std::filesystem::temp_directory_path() /
+                   (std::string("sb_region_cli") + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   const Outcome o = run("region --integrators rk4,heun,kutta3,sdirk3 --out " + dir.string());
   ASSERT_EQ(o.code, 0) << o.err;
@@ -412,7 +420,8 @@ TEST(Cli, RegionWritesContractFiles) {
 // OUT/reference/<hash>.csv, the second says it reuses it; a tolerance with a fixed-step reference
 // and a decreasing --times are bad input naming the flag; --log-outputs writes one row per time.
 TEST(Cli, AdaptiveReferenceCacheAndOutputTimes) {
-  const auto dir = std::filesystem::temp_directory_path() / "sb_refcache_cli";
+  const auto dir = std::filesystem::temp_directory_path() /
+                   (std::string("sb_refcache_cli") + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   const std::string conv =
       "convergence --model van_der_pol --param form=mu --param mu=1 "
@@ -457,7 +466,8 @@ TEST(Cli, AdaptiveReferenceCacheAndOutputTimes) {
 // ratios near 1 (symplectic Euler: 2/ω_max, REFERENCES.md) and Euler marked
 // unstable_for_all_h; a malformed --sweep and an unwritable --out are bad input before any run.
 TEST(Cli, StabilityWritesContractFiles) {
-  const auto dir = std::filesystem::temp_directory_path() / "sb_stability_cli";
+  const auto dir = std::filesystem::temp_directory_path() /
+                   (std::string("sb_stability_cli") + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   const Outcome o = run(
       "stability --model spring_chain --integrators symplectic_euler,euler --out " + dir.string());

@@ -2,6 +2,7 @@
 // --reference-rtol/--reference-atol), their cache in the output folder, and solve's output
 // times (--times, --log-outputs).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -20,7 +21,8 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("sb_refcache_" + name);
+  const fs::path d =
+      fs::temp_directory_path() / ("sb_refcache_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   return d;
 }

@@ -3,6 +3,7 @@
 // independently from each tableau (ButcherTableau::stability), the polyline contract of the
 // CSV, the fitted box, and the refusals.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -94,7 +95,8 @@ std::vector<std::vector<std::string>> read_csv(const std::filesystem::path& file
 TEST(RegionExperiment, CsvPointsLieOnTheBoundaryInOrder) {
   const RegionSpec spec = four_methods();
   const RegionResult r = run_region(spec);
-  const auto dir = std::filesystem::temp_directory_path() / "sb_region_test";
+  const auto dir = std::filesystem::temp_directory_path() /
+                   (std::string("sb_region_test") + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   write_region_outputs(dir, spec, r);
   const auto rows = read_csv(dir / "region.csv");

@@ -74,7 +74,8 @@ std::string without_wall_time(const std::string& csv) {
 long count_lines(const std::string& s) { return std::count(s.begin(), s.end(), '\n'); }
 
 fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("stiffbench_sweep_" + name);
+  const fs::path d =
+      fs::temp_directory_path() / ("stiffbench_sweep_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   return d;
 }
