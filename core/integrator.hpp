@@ -16,7 +16,7 @@
 
 namespace stiffbench {
 
-enum class Family { explicit_rk, implicit, symplectic, reference };
+enum class Family { explicit_rk, implicit, symplectic, reference, graphics };
 std::string to_string(Family f);
 
 // What an integrator needs from the system.
@@ -24,6 +24,7 @@ struct Requirements {
   bool mechanical = false;            // y = [x; v] split (MechanicalSystem)
   bool velocity_independent = false;  // a(t, x) must not depend on v
   bool jacobian = false;              // an analytic Jacobian (otherwise finite differences)
+  bool spring_network = false;        // the system's springs (OdeSystem::spring_network())
 };
 
 struct MethodInfo {

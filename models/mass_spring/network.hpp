@@ -96,6 +96,11 @@
 // projected schemes are first-order accurate and slowly dissipate energy (measured in
 // tests/test_mass_spring.cpp).
 // constraint_residual() is max |C| (absolute).
+//
+// Spring view (core/springs.hpp): spring_network() lists the springs (i, j, L, k, c), masses,
+// pins, gravity and point damping for the graphics solvers (XPBD, projective dynamics), which
+// work on the springs directly. Built on first use (it copies the spring list). Constraints are
+// not in it: the driver still projects after every step.
 #pragma once
 
 #include <array>
@@ -108,6 +113,7 @@
 #include <Eigen/SparseCholesky>
 
 #include "core/ode_system.hpp"
+#include "core/springs.hpp"
 
 namespace stiffbench {
 
@@ -168,6 +174,8 @@ class MassSpringNetwork final : public MechanicalSystem {
 
   std::vector<Invariant> invariants() const override;
   std::optional<double> stiffness(double t, CVecRef y) const override;
+
+  const SpringNetworkView* spring_network() const override;
 
   bool has_constraints() const override { return !constraints_.empty(); }
   void project(double t, VecRef y) const override;
@@ -274,6 +282,9 @@ class MassSpringNetwork final : public MechanicalSystem {
       adj_pos_t_;  // the same for the transposed block (rows of the neighbour)
 
   std::function<void(double, VecRef)> exact_;
+
+  mutable std::once_flag view_once_;  // spring_network(), built on first use
+  mutable SpringNetworkView view_;
 };
 
 }  // namespace stiffbench
