@@ -65,10 +65,10 @@ void Xpbd::reset(const OdeSystem& sys, double /*t0*/, CVecRef y0) {
     if (!acts(s)) continue;
     const double wi = inv_mass_[static_cast<std::size_t>(s.i)];
     const double wj = inv_mass_[static_cast<std::size_t>(s.j)];
-    const int ni = wi > 0 ? count[static_cast<std::size_t>(s.i)] : 0;
-    const int nj = wj > 0 ? count[static_cast<std::size_t>(s.j)] : 0;
-    constraints_.push_back({s.i, s.j, s.rest, 1.0 / s.k, s.damping, wi, wj,
-                            1.0 / static_cast<double>(std::max(ni, nj))});
+    // n_i w_i + n_j w_j: the Gershgorin bound of this constraint's row of J W Jᵀ (Jacobi).
+    const double busy =
+        count[static_cast<std::size_t>(s.i)] * wi + count[static_cast<std::size_t>(s.j)] * wj;
+    constraints_.push_back({s.i, s.j, s.rest, 1.0 / s.k, s.damping, wi, wj, busy});
   }
   const Index n = net_->dim * np;
   x_start_.resize(n);
@@ -102,10 +102,10 @@ void Xpbd::sweep(double* x, double hs) {
     const double alpha = s.compliance * inv_h2;          // α̃ = α/h_s²
     const double gamma = s.damping * s.compliance / hs;  // γ_c = α̃ β̃ / h_s = c/(k h_s)
     const double lam = lambda_[static_cast<Index>(c)];
-    double dl =
-        (-(l - s.rest) - alpha * lam - gamma * rel) / ((1.0 + gamma) * (s.wi + s.wj) + alpha);
+    const double diag = (1.0 + gamma) * (s.wi + s.wj) + alpha;
+    double dl = (-(l - s.rest) - alpha * lam - gamma * rel) / diag;
     if constexpr (Jacobi) {
-      dl *= s.jacobi_scale;
+      dl *= diag / ((1.0 + gamma) * s.busy + alpha);  // ω_c <= 1, -> 1 as h_s -> 0
       for (int d = 0; d < D; ++d) {
         dx[D * s.i + d] -= s.wi * n[d] * dl;
         dx[D * s.j + d] += s.wj * n[d] * dl;
