@@ -5,6 +5,18 @@
 
 namespace stiffbench {
 
+namespace {
+
+// By field name, so a field added to Requirements later cannot shift these.
+Requirements spring_network_requirements() {
+  Requirements r;
+  r.mechanical = true;
+  r.spring_network = true;
+  return r;
+}
+
+}  // namespace
+
 std::vector<ParamSpec> projective_dynamics_param_specs() {
   return {{"iterations", ParamType::integer, "10",
            "local/global iterations per step (each: one projection of every spring, one "
@@ -21,8 +33,7 @@ ProjectiveDynamicsOptions read_projective_dynamics_options(const Params& p) {
 }
 
 ProjectiveDynamics::ProjectiveDynamics(ProjectiveDynamicsOptions opt)
-    : Integrator({"projective_dynamics", Family::graphics, 1, 0,
-                  Requirements{true, false, false, true},
+    : Integrator({"projective_dynamics", Family::graphics, 1, 0, spring_network_requirements(),
                   "projective dynamics / fast mass-spring (Liu, Bargteil, O'Brien & Kavan "
                   "2013): local/global iterations of backward Euler, M + h^2 L factorised once "
                   "per h; needs a spring network without dashpots"}),

@@ -5,6 +5,18 @@
 
 namespace stiffbench {
 
+namespace {
+
+// By field name, so a field added to Requirements later cannot shift these.
+Requirements spring_network_requirements() {
+  Requirements r;
+  r.mechanical = true;
+  r.spring_network = true;
+  return r;
+}
+
+}  // namespace
+
 std::vector<ParamSpec> xpbd_param_specs() {
   return {{"substeps", ParamType::integer, "1",
            "substeps per step h, each of size h/substeps with its own prediction and "
@@ -33,7 +45,7 @@ XpbdOptions read_xpbd_options(const Params& p) {
 }
 
 Xpbd::Xpbd(XpbdOptions opt)
-    : Integrator({"xpbd", Family::graphics, 1, 0, Requirements{true, false, false, true},
+    : Integrator({"xpbd", Family::graphics, 1, 0, spring_network_requirements(),
                   "XPBD (Macklin, Mueller & Chentanez 2016): springs as compliant distance "
                   "constraints, compliance 1/k, multipliers reset each substep; substeps "
                   "(Macklin et al. 2019), Gauss-Seidel or Jacobi sweeps; needs a spring network"}),
