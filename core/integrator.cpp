@@ -12,6 +12,8 @@ std::string to_string(Family f) {
       return "symplectic";
     case Family::reference:
       return "reference";
+    case Family::graphics:
+      return "graphics";
   }
   return "?";
 }
@@ -22,6 +24,7 @@ std::string describe_requirements(const Requirements& r) {
   if (r.velocity_independent) parts.emplace_back("velocity-independent acceleration");
   if (r.jacobian) parts.emplace_back("Jacobian");
   if (r.constraints) parts.emplace_back("holonomic constraints");
+  if (r.spring_network) parts.emplace_back("spring network");
   std::string out;
   for (std::size_t i = 0; i < parts.size(); ++i) out += (i ? ", " : "") + parts[i];
   return out.empty() ? "-" : out;
@@ -52,6 +55,12 @@ void check_compatible(const MethodInfo& info, const OdeSystem& sys) {
                    " needs holonomic constraints g(x) = 0 (a constrained mechanical system, "
                    "e.g. pendulum_chain with constrained=true); model '" +
                    sys.name() + "' offers none");
+  }
+  if (info.requires_.spring_network && !sys.spring_network()) {
+    throw BadInput(who +
+                   " needs a spring network (a mass-spring model listing its springs, "
+                   "e.g. cloth, spring_chain, soft_cube, pendulum_chain); model '" +
+                   sys.name() + "' is not one");
   }
 }
 

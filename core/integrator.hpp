@@ -16,7 +16,7 @@
 
 namespace stiffbench {
 
-enum class Family { explicit_rk, implicit, symplectic, reference };
+enum class Family { explicit_rk, implicit, symplectic, reference, graphics };
 std::string to_string(Family f);
 
 // What an integrator needs from the system.
@@ -27,6 +27,7 @@ struct Requirements {
   // Holonomic constraints offered as equations (MechanicalSystem::holonomic_constraints()); the
   // method enforces them itself, so the driver does not project after its steps.
   bool constraints = false;
+  bool spring_network = false;        // the system's springs (OdeSystem::spring_network())
 };
 
 struct MethodInfo {

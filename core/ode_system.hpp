@@ -28,6 +28,7 @@ struct Invariant {
 
 class MechanicalSystem;
 class HolonomicConstraints;  // core/constraints.hpp
+struct SpringNetworkView;  // core/springs.hpp
 
 // A model's suggested fixed step (its CFL or diffusion limit) and the rule that gave it, e.g.
 // "CFL 0.4 h/c, h = 0.0114 (support radius), c = 23.9 m/s". Fixed-step commands and studies run
@@ -131,6 +132,9 @@ class OdeSystem {
 
   // Non-null for systems with y = [x; v].
   virtual const MechanicalSystem* as_mechanical() const { return nullptr; }
+
+  // Non-null for mass-spring networks that list their springs (core/springs.hpp).
+  virtual const SpringNetworkView* spring_network() const { return nullptr; }
 
   const EvalCounters& counters() const { return counters_; }
   void reset_counters() const { counters_ = {}; }

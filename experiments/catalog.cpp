@@ -29,6 +29,7 @@ IntegratorRegistry& mutable_integrator_registry() {
     register_explicit_integrators(r);
     register_symplectic_integrators(r);
     register_implicit_integrators(r);
+    register_graphics_integrators(r);
     register_reference_integrators(r);
     annotate_built_in_integrators(r);
     return r;

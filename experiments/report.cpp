@@ -34,8 +34,10 @@ std::vector<SuiteItem> default_suite(bool quick) {
   // in the work-precision studies).
   std::vector<std::string> all, general;  // general: methods for first-order systems
   for (const auto& e : integrator_registry().entries()) {
-    // rattle needs a constrained system; the suite's models have none.
+    // rattle needs a constrained system, xpbd/projective_dynamics a spring network: the
+    // suite's models are neither.
     if (e.info.family == Family::reference || e.info.requires_.constraints) continue;
+    if (e.info.requires_.spring_network) continue;
     all.push_back(e.info.name);
     if (!e.info.requires_.mechanical) general.push_back(e.info.name);
   }

@@ -93,6 +93,16 @@ const std::map<std::string, MethodNote>& method_notes() {
       {"baraff_witkin",
        {"linearly implicit (velocity form)",
         "D. Baraff & A. Witkin, Large steps in cloth simulation, SIGGRAPH 1998, 43-54"}},
+      // Graphics solvers for stiff springs.
+      {"xpbd",
+       {"position-based (compliant constraints)",
+        "M. Macklin, M. Mueller & N. Chentanez, XPBD: position-based simulation of compliant "
+        "constrained dynamics, Motion in Games (MIG) 2016, 49-54; substeps: M. Macklin et al., "
+        "Small steps in physics simulation, SCA 2019"}},
+      {"projective_dynamics",
+       {"local/global backward Euler",
+        "T. Liu, A. W. Bargteil, J. F. O'Brien & L. Kavan, Fast simulation of mass-spring "
+        "systems, ACM Trans. Graph. 32(6) (SIGGRAPH Asia 2013) 214"}},
       // Library references.
       {"cvode_bdf", {"library: CVODE", kSundials}},
       {"cvode_adams", {"library: CVODE", kSundials}},

@@ -5,6 +5,8 @@
 #include "integrators/adaptive/embedded_rk.hpp"
 #include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/explicit/tableaux.hpp"
+#include "integrators/graphics/projective_dynamics.hpp"
+#include "integrators/graphics/xpbd.hpp"
 #include "integrators/implicit/baraff_witkin.hpp"
 #include "integrators/implicit/dirk.hpp"
 #include "integrators/implicit/linearly_implicit.hpp"
@@ -154,6 +156,16 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
   }
   reg.add({BaraffWitkin({}).info(), bw_specs, [](const Params& p) {
              return std::make_unique<BaraffWitkin>(read_implicit_options(p, false));
+           }});
+}
+
+// The graphics community's solvers for stiff springs (integrators/graphics/): they work on the
+// system's springs and refuse models that do not list them.
+void register_graphics_integrators(IntegratorRegistry& reg) {
+  reg.add({Xpbd({}).info(), xpbd_param_specs(),
+           [](const Params& p) { return std::make_unique<Xpbd>(read_xpbd_options(p)); }});
+  reg.add({ProjectiveDynamics({}).info(), projective_dynamics_param_specs(), [](const Params& p) {
+             return std::make_unique<ProjectiveDynamics>(read_projective_dynamics_options(p));
            }});
 }
 

@@ -67,9 +67,9 @@ TEST(Allocations, CounterCounts) {
   EXPECT_GE(seen, 2);
 }
 
-// Every registered fixed-step integrator of the explicit, symplectic and implicit families that
-// can run on the model: reset, two steps (workspaces may grow), then ten steps with no
-// allocation. Models: a damped pinned cloth small (ldlt, serial) and large (cg, OpenMP paths),
+// Every registered fixed-step integrator of the explicit, symplectic, implicit and graphics
+// families that can run on the model: reset, two steps (workspaces may grow), then ten steps with
+// no allocation. Models: a damped pinned cloth small (ldlt, serial) and large (cg, OpenMP paths),
 // and an undamped chain for the velocity-independent methods.
 TEST(Allocations, NoneInsideSteps) {
   const int threads = omp_get_max_threads();
@@ -83,7 +83,9 @@ TEST(Allocations, NoneInsideSteps) {
     auto sys = model(name, params);
     for (const auto& entry : integrator_registry().entries()) {
       const Family f = entry.info.family;
-      if (f != Family::explicit_rk && f != Family::symplectic && f != Family::implicit) continue;
+      if (f != Family::explicit_rk && f != Family::symplectic && f != Family::implicit &&
+          f != Family::graphics)
+        continue;
       auto integ = integrator_registry().create(entry.info.name, Params());
       if (!integ->supports_fixed_step()) continue;
       // radau5 above 200 unknowns factors with Eigen's SparseLU, which allocates in factorize();

@@ -194,6 +194,23 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
   // explicit run never needs them, and for a 512² cloth they are most of the construction cost.
 }
 
+const SpringNetworkView* MassSpringNetwork::spring_network() const {
+  std::call_once(view_once_, [this] {
+    view_.dim = dim_;
+    view_.mass.resize(points_.size());
+    view_.pinned.resize(points_.size());
+    for (std::size_t p = 0; p < points_.size(); ++p) {
+      view_.mass[p] = points_[p].mass;
+      view_.pinned[p] = points_[p].pinned;
+    }
+    view_.springs.reserve(springs_.size());
+    for (const Spring& s : springs_) view_.springs.push_back({s.i, s.j, s.rest, s.k, s.damping});
+    view_.gravity = opt_.gravity;
+    view_.point_damping = opt_.point_damping;
+  });
+  return &view_;
+}
+
 // Adjacency lists (Jacobians, stiffness estimates) and the fixed pattern of K and D with the
 // value positions of every block, built once, on first use, by whichever thread gets there first.
 void MassSpringNetwork::ensure_structure() const {

@@ -101,6 +101,11 @@
 // with g = C over the active constraints only (m = those not joining two pinned points, in list
 // order) and G = ∂C/∂x (row c: -n_c at point i's dofs, +n_c at j's, pinned ends included: their
 // inverse mass is 0). The driver does not call project() after such a method's steps.
+//
+// Spring view (core/springs.hpp): spring_network() lists the springs (i, j, L, k, c), masses,
+// pins, gravity and point damping for the graphics solvers (XPBD, projective dynamics), which
+// work on the springs directly. Built on first use (it copies the spring list). Constraints are
+// not in it: the driver still projects after every step.
 #pragma once
 
 #include <array>
@@ -114,6 +119,7 @@
 
 #include "core/constraints.hpp"
 #include "core/ode_system.hpp"
+#include "core/springs.hpp"
 
 namespace stiffbench {
 
@@ -174,6 +180,8 @@ class MassSpringNetwork final : public MechanicalSystem, public HolonomicConstra
 
   std::vector<Invariant> invariants() const override;
   std::optional<double> stiffness(double t, CVecRef y) const override;
+
+  const SpringNetworkView* spring_network() const override;
 
   bool has_constraints() const override { return !constraints_.empty(); }
   void project(double t, VecRef y) const override;
@@ -289,6 +297,9 @@ class MassSpringNetwork final : public MechanicalSystem, public HolonomicConstra
       adj_pos_t_;  // the same for the transposed block (rows of the neighbour)
 
   std::function<void(double, VecRef)> exact_;
+
+  mutable std::once_flag view_once_;  // spring_network(), built on first use
+  mutable SpringNetworkView view_;
 };
 
 }  // namespace stiffbench
