@@ -37,11 +37,14 @@
 // Adaptive mode: the error estimate e = h Σ (b_i - b̂_i) k_i is O(h^(p̂+1)) with p̂ = min(order,
 // embedded order); with error_filter=on (default) it is replaced by (I - hγJ)⁻¹ e with the
 // iteration matrix already factored for the last stage (one more linear solve). The filter
-// leaves e = O(h^(p̂+1)) for non-stiff components ((I - hγJ)⁻¹ = I + O(h)) and damps the stiff
-// ones, where the embedded row is not L-stable (Shampine's filter, as in Hairer–Wanner IV.8 for
-// radau5). The shared controller (integrators/adaptive/controller.hpp) runs with k = p̂ + 1.
-// A Newton or linear-solver failure rejects the trial and retries with h/2 (counted in
-// rejected_steps; Newton failures also in newton_fails). The Newton tolerance of a trial (in
+// leaves e = O(h^(p̂+1)) for non-stiff components ((I - hγJ)⁻¹ = I + O(h)) and divides a stiff
+// component's by 1 - hγλ (Shampine's filter, as in Hairer–Wanner IV.8 for radau5). The embedded
+// rows are not L-stable: on y' = λy the raw estimate is (R(hλ) - R̂(hλ)) y, and TR-BDF2's R̂ grows
+// like -(√2/3) hλ (the raw estimate of a stiff component ∝ |hλ|, the filtered one bounded),
+// esdirk43's R̂(∞) = -0.15 (values from the tableaux, tests/test_esdirk_gauss.cpp).
+// The shared controller (integrators/adaptive/controller.hpp) runs with k = p̂ + 1. A Newton or
+// linear-solver failure rejects the trial and retries with h/2 (counted in rejected_steps;
+// Newton failures also in newton_fails). The Newton tolerance of a trial (in
 // ImplicitCore's norm, relative to 1 + |z_i|) is max(0.01 min_i (atol + rtol |y_i|)/(1 + |y_i|),
 // 1e-14), in place of newton_tol: the Newton error stays two orders below the error the
 // controller allows in every component (else the estimate measures Newton noise and the steps
