@@ -67,7 +67,7 @@ TEST(EsdirkTableau, OrderConditionsAndStructure) {
   const ButcherTableau& tr = esdirk("trbdf2");
   EXPECT_NEAR(tr.c[1], 2.0 - std::numbers::sqrt2, 1e-15);
   EXPECT_NEAR(tr.a(1, 1), 1.0 - std::numbers::sqrt2 / 2.0, 1e-15);
-  // ARK4(3)6L[2]SA: γ = 1/4 and the nodes of Kennedy & Carpenter's Table 6.
+  // ARK4(3)6L[2]SA: γ = 1/4 and Kennedy & Carpenter's nodes.
   const ButcherTableau& kc = esdirk("esdirk43");
   EXPECT_EQ(kc.a(1, 1), 0.25);
   const Vec c{{0.0, 0.5, 83.0 / 250, 31.0 / 50, 17.0 / 20, 1.0}};
@@ -133,7 +133,7 @@ TEST(EsdirkTableau, LStable) {
 // --- Gauss tableaux -----------------------------------------------------------------------
 
 // Order conditions up to 2s, symplecticity (Cooper's condition b_i a_ij + b_j a_ji = b_i b_j,
-// HLW GNI Thm VI.4.3) and symmetry (a_{s+1-i,s+1-j} + a_ij = b_j, GNI Thm V.2.3).
+// GNI §VI.4) and symmetry (a_{s+1-i,s+1-j} + a_ij = b_j, GNI §V.2).
 TEST(GaussTableau, OrderSymplecticSymmetric) {
   for (const int s : {2, 3}) {
     const ButcherTableau& t = gauss_tableau(s);
@@ -152,7 +152,7 @@ TEST(GaussTableau, OrderSymplecticSymmetric) {
   }
 }
 
-// R(z) is the diagonal Padé approximant of e^z (Ehle 1969; Hairer–Wanner II, §IV.5): s = 2:
+// R(z) is the diagonal Padé approximant of e^z (Ehle 1969; Hairer–Wanner II, Ch. IV): s = 2:
 // (1 + z/2 + z²/12)/(1 - z/2 + z²/12); s = 3: (1 + z/2 + z²/10 + z³/120)/(1 - z/2 + z²/10 -
 // z³/120); so |R(iy)| = 1 (no damping on the imaginary axis) and |R(x)| < 1 for x < 0.
 TEST(GaussTableau, StabilityFunctionIsDiagonalPade) {

@@ -42,7 +42,8 @@ std::vector<ButcherTableau> build() {
   return all;
 }
 
-ButcherTableau make_pair(std::string name, int order, int embedded_order, Mat a, Vec b, Vec b_hat) {
+ButcherTableau make_embedded(std::string name, int order, int embedded_order, Mat a, Vec b,
+                             Vec b_hat) {
   ButcherTableau t = make(std::move(name), order, std::move(a), std::move(b));
   t.b_embedded = std::move(b_hat);
   t.embedded_order = embedded_order;
@@ -53,16 +54,16 @@ ButcherTableau make_pair(std::string name, int order, int embedded_order, Mat a,
 std::vector<ButcherTableau> build_esdirk() {
   std::vector<ButcherTableau> all;
   {
-    // Hosea & Shampine (1996), Appl. Numer. Math. 20, §2: TR-BDF2 of Bank et al. (1985) as a
+    // Hosea & Shampine (1996), Appl. Numer. Math. 20: TR-BDF2 of Bank et al. (1985) as a
     // one-step ESDIRK; the embedded row is their third-order companion formula.
     const double g = 2.0 - std::sqrt(2.0), d = g / 2.0, w = std::sqrt(2.0) / 4.0;
-    all.push_back(make_pair("trbdf2", 2, 3, Mat{{0.0, 0.0, 0.0}, {d, d, 0.0}, {w, w, d}},
-                            Vec{{w, w, d}},
-                            Vec{{(1.0 - w) / 3.0, (3.0 * w + 1.0) / 3.0, d / 3.0}}));
+    all.push_back(make_embedded("trbdf2", 2, 3, Mat{{0.0, 0.0, 0.0}, {d, d, 0.0}, {w, w, d}},
+                                Vec{{w, w, d}},
+                                Vec{{(1.0 - w) / 3.0, (3.0 * w + 1.0) / 3.0, d / 3.0}}));
   }
   {
-    // Kennedy & Carpenter (2003), Appl. Numer. Math. 44, Table 6 (implicit part of
-    // ARK4(3)6L[2]SA): γ = 1/4.
+    // Kennedy & Carpenter (2003), Appl. Numer. Math. 44 (implicit part of ARK4(3)6L[2]SA):
+    // γ = 1/4.
     const double q = 0.25;
     Mat a = Mat::Zero(6, 6);
     a(1, 0) = q;
@@ -83,7 +84,7 @@ std::vector<ButcherTableau> build_esdirk() {
     const Vec b = a.row(5).transpose();
     const Vec b_hat{{4586570599.0 / 29645900160.0, 0.0, 178811875.0 / 945068544.0,
                      814220225.0 / 1159782912.0, -3700637.0 / 11593932.0, 61727.0 / 225920.0}};
-    all.push_back(make_pair("esdirk43", 4, 3, std::move(a), b, b_hat));
+    all.push_back(make_embedded("esdirk43", 4, 3, std::move(a), b, b_hat));
   }
   return all;
 }

@@ -3,7 +3,7 @@
 // and symmetric (Hairer, Lubich & Wanner, Geometric Numerical Integration, §II.1.3, §VI.4;
 // Butcher 1964). Fixed step.
 //
-// Tableaux (HNW I, Table II.7.4 and II.7.5; c the zeros of the shifted Legendre polynomial):
+// Tableaux (Hairer–Nørsett–Wanner I, §II.7; c the zeros of the shifted Legendre polynomial):
 //   s = 2: c = ½ ∓ √3/6,  A = [[¼, ¼ - √3/6], [¼ + √3/6, ¼]],  b = (½, ½)
 //   s = 3: c = ½ - √15/10, ½, ½ + √15/10, b = (5/18, 4/9, 5/18),
 //          A = [[5/36, 2/9 - √15/15, 5/36 - √15/30],
