@@ -86,7 +86,9 @@ RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0
     const Status s = integ.step(sys, r.t, r.y, r.h, r.stats);
     r.t = (k + 1 == n) ? opt.t_end : t0 + static_cast<double>(k + 1) * r.h;
     ++r.stats.steps;
-    if (s == Status::ok && sys.has_constraints()) sys.project(r.t, r.y);
+    // Methods that enforce the constraints themselves (rattle) are not projected afterwards.
+    if (s == Status::ok && sys.has_constraints() && !integ.info().requires_.constraints)
+      sys.project(r.t, r.y);
     if (s != Status::ok) {
       r.stats.status = s;
       if (r.stats.message.empty())

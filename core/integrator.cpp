@@ -21,6 +21,7 @@ std::string describe_requirements(const Requirements& r) {
   if (r.mechanical) parts.emplace_back("mechanical system");
   if (r.velocity_independent) parts.emplace_back("velocity-independent acceleration");
   if (r.jacobian) parts.emplace_back("Jacobian");
+  if (r.constraints) parts.emplace_back("holonomic constraints");
   std::string out;
   for (std::size_t i = 0; i < parts.size(); ++i) out += (i ? ", " : "") + parts[i];
   return out.empty() ? "-" : out;
@@ -45,6 +46,12 @@ void check_compatible(const MethodInfo& info, const OdeSystem& sys) {
   }
   if (info.requires_.jacobian && !sys.has_jacobian()) {
     throw BadInput(who + " needs an analytic Jacobian; model '" + sys.name() + "' has none");
+  }
+  if (info.requires_.constraints && !(mech && mech->holonomic_constraints())) {
+    throw BadInput(who +
+                   " needs holonomic constraints g(x) = 0 (a constrained mechanical system, "
+                   "e.g. pendulum_chain with constrained=true); model '" +
+                   sys.name() + "' offers none");
   }
 }
 

@@ -24,6 +24,9 @@ struct Requirements {
   bool mechanical = false;            // y = [x; v] split (MechanicalSystem)
   bool velocity_independent = false;  // a(t, x) must not depend on v
   bool jacobian = false;              // an analytic Jacobian (otherwise finite differences)
+  // Holonomic constraints offered as equations (MechanicalSystem::holonomic_constraints()); the
+  // method enforces them itself, so the driver does not project after its steps.
+  bool constraints = false;
 };
 
 struct MethodInfo {
@@ -33,6 +36,11 @@ struct MethodInfo {
   int stages = 0;  // f (or acceleration) evaluations per step, after start-up
   Requirements requires_ = {};
   std::string description;
+  // The method class within its family ("embedded RK pair", "Rosenbrock", "Gauss collocation")
+  // and the literature reference, for `list integrators` and `describe` (built-in methods get
+  // them from integrators/method_notes.cpp when registered).
+  std::string kind = {};
+  std::string reference = {};
 };
 
 // Human-readable list of requirements ("mechanical system, velocity-independent acceleration").

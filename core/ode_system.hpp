@@ -27,6 +27,7 @@ struct Invariant {
 };
 
 class MechanicalSystem;
+class HolonomicConstraints;  // core/constraints.hpp
 
 // A model's suggested fixed step (its CFL or diffusion limit) and the rule that gave it, e.g.
 // "CFL 0.4 h/c, h = 0.0114 (support radius), c = 23.9 m/s". Fixed-step commands and studies run
@@ -120,7 +121,8 @@ class OdeSystem {
   virtual ParticleFrame particles(double /*t*/, CVecRef /*y*/) const { return {}; }
 
   // Optional holonomic constraints C(y) = 0 enforced strictly, not by forces. The fixed-step
-  // driver calls project() after every accepted step of every integrator; the model projects
+  // driver calls project() after every accepted step of every integrator except those that
+  // enforce the constraints themselves (Requirements::constraints: rattle); the model projects
   // y back onto the constraint manifold (positions, then velocities onto its tangent space)
   // with the method its header documents. constraint_residual() is max |C| (an observable).
   virtual bool has_constraints() const { return false; }
@@ -191,6 +193,10 @@ class MechanicalSystem : public OdeSystem {
   virtual bool symmetric_force_jacobians() const { return false; }
 
   bool has_jacobian() const override { return has_force_jacobians(); }
+
+  // Optional holonomic constraints g(x) = 0 as equations (core/constraints.hpp), for methods that
+  // enforce them themselves; nullptr when the model offers none.
+  virtual const HolonomicConstraints* holonomic_constraints() const { return nullptr; }
 
  protected:
   virtual void eval_acceleration(double t, CVecRef x, CVecRef v, VecRef a) const = 0;

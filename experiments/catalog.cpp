@@ -2,6 +2,7 @@
 
 #include <set>
 
+#include "integrators/method_notes.hpp"
 #include "integrators/register.hpp"
 #include "models/register.hpp"
 
@@ -29,6 +30,7 @@ IntegratorRegistry& mutable_integrator_registry() {
     register_symplectic_integrators(r);
     register_implicit_integrators(r);
     register_reference_integrators(r);
+    annotate_built_in_integrators(r);
     return r;
   }();
   return reg;

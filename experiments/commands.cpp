@@ -32,12 +32,23 @@ void list_models(std::ostream& out) {
   out << t.to_markdown();
 }
 
+// "fixed", "adaptive" or "fixed, adaptive": what a default-constructed instance supports.
+std::string step_modes(const IntegratorRegistry::Entry& e) {
+  const auto integ = integrator_registry().create(e.info.name, Params{});
+  std::vector<std::string> modes;
+  if (integ->supports_fixed_step()) modes.push_back("fixed");
+  if (integ->supports_adaptive()) modes.push_back("adaptive");
+  return join(modes, ", ");
+}
+
 void list_integrators(std::ostream& out) {
-  Table t{{"integrator", "family", "order", "stages", "requires", "description"}, {}};
+  Table t{{"integrator", "family", "kind", "order", "stages", "step", "requires", "description"},
+          {}};
   for (const auto& e : integrator_registry().entries()) {
     const MethodInfo& m = e.info;
-    t.rows.push_back({m.name, to_string(m.family), m.order ? std::to_string(m.order) : "variable",
-                      m.stages ? std::to_string(m.stages) : "variable",
+    t.rows.push_back({m.name, to_string(m.family), m.kind.empty() ? "-" : m.kind,
+                      m.order ? std::to_string(m.order) : "variable",
+                      m.stages ? std::to_string(m.stages) : "variable", step_modes(e),
                       describe_requirements(m.requires_), m.description});
   }
   out << t.to_markdown();
@@ -134,7 +145,10 @@ void cmd_describe(const std::string& name, std::ostream& out) {
   if (const auto* e = integrator_registry().find(name)) {
     const MethodInfo& i = e->info;
     out << "integrator " << name << ": " << i.description << "\n";
-    out << "family: " << to_string(i.family) << "\norder: " << count_or_variable(i.order)
+    out << "family: " << to_string(i.family);
+    if (!i.kind.empty()) out << " (" << i.kind << ")";
+    out << "\nreference: " << (i.reference.empty() ? "none given" : i.reference)
+        << "\nstep: " << step_modes(*e) << "\norder: " << count_or_variable(i.order)
         << "\nevaluations per step: " << count_or_variable(i.stages)
         << "\nrequires: " << describe_requirements(i.requires_) << "\n";
     print_params(e->params, out);

@@ -13,6 +13,7 @@
 #include "integrators/reference/gsl.hpp"
 #include "integrators/reference/sundials.hpp"
 #include "integrators/symplectic/composition.hpp"
+#include "integrators/symplectic/rattle.hpp"
 #include "integrators/symplectic/splitting.hpp"
 #include "integrators/symplectic/verlet.hpp"
 
@@ -77,6 +78,9 @@ void register_symplectic_integrators(IntegratorRegistry& reg) {
              return std::make_unique<PositionVerlet>();
            }});
   reg.add({Leapfrog().info(), {}, [](const Params&) { return std::make_unique<Leapfrog>(); }});
+  // RATTLE: constrained systems only (holonomic_constraints(), core/constraints.hpp).
+  reg.add({Rattle({}).info(), rattle_param_specs(),
+           [](const Params& p) { return std::make_unique<Rattle>(read_rattle_options(p)); }});
 }
 
 void register_implicit_integrators(IntegratorRegistry& reg) {
@@ -128,6 +132,27 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
              return std::make_unique<Rosenbrock>(rosenbrock2_tableau(), ros_desc,
                                                  read_implicit_options(p, false));
            }});
+  // Rosenbrock pairs with an embedded estimate: fixed-step with --h, adaptive with rtol/atol.
+  std::vector<ParamSpec> ros_adaptive_specs = controller_param_specs();
+  ros_adaptive_specs.insert(ros_adaptive_specs.end(), linear_specs.begin(), linear_specs.end());
+  const std::vector<std::pair<const RosenbrockTableau*, std::string>> ros_pairs = {
+      {&ros3p_tableau(),
+       "ROS3P Rosenbrock 3(2) of Lang & Verwer (BIT 41, 2001): 3 stages (2 f evaluations), "
+       "gamma = 1/2 + sqrt(3)/6, A-stable, R(inf) = 1 - sqrt(3); adaptive (rtol/atol) or fixed "
+       "step. Its error estimate is zero on linear autonomous problems (the embedded method has "
+       "the same stability function): there only h_max limits the adaptive step"},
+      {&rodas4_tableau(),
+       "RODAS4 Rosenbrock 4(3) of Hairer & Wanner (Solving ODEs II, 2nd ed., Springer 1996; "
+       "code RODAS): 6 stages, gamma = 1/4, L-stable, stiffly accurate; adaptive (rtol/atol) "
+       "or fixed step"},
+  };
+  for (const auto& [tab, desc] : ros_pairs) {
+    auto make = [tab = tab, desc = desc](const Params& p) {
+      return std::make_unique<Rosenbrock>(*tab, desc, read_implicit_options(p, false),
+                                          read_controller_options(p));
+    };
+    reg.add({Rosenbrock(*tab, desc, {}).info(), ros_adaptive_specs, make});
+  }
   reg.add({Radau5({}).info(), radau5_param_specs(),
            [](const Params& p) { return std::make_unique<Radau5>(read_radau5_options(p)); }});
   for (const int s : {2, 3}) {

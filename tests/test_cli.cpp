@@ -89,6 +89,9 @@ INSTANTIATE_TEST_SUITE_P(
                 "solve --model harmonic_oscillator --param gamma=0.1 --integrator leapfrog --h 0.1 "
                 "--t-end 1",
                 "leapfrog"},
+        BadCase{"rattle_on_unconstrained",
+                "solve --model pendulum_chain --integrator rattle --h 0.01 --t-end 0.1",
+                "holonomic constraints"},
         BadCase{"model_param_out_of_range",
                 "solve --model kepler --param e=1.5 --integrator rk4 --h 0.1 --t-end 1", "'e'"},
         BadCase{"missing_flag", "solve --model kepler --integrator rk4 --h 0.1", "--t-end"},
@@ -123,12 +126,15 @@ TEST(Cli, ListIntegratorsShowsAllThirteenWithFamilyAndOrder) {
   const Outcome o = run("list integrators");
   ASSERT_EQ(o.code, 0);
   for (const char* row :
-       {"| euler | explicit | 1 |", "| heun | explicit | 2 |", "| midpoint | explicit | 2 |",
-        "| ralston | explicit | 2 |", "| kutta3 | explicit | 3 |", "| ssprk3 | explicit | 3 |",
-        "| rk4 | explicit | 4 |", "| rk38 | explicit | 4 |",
-        "| symplectic_euler | symplectic | 1 |", "| symplectic_euler_x | symplectic | 1 |",
-        "| verlet | symplectic | 2 |", "| velocity_verlet | symplectic | 2 |",
-        "| leapfrog | symplectic | 2 |"})
+       {"| euler | explicit | explicit RK | 1 |", "| heun | explicit | explicit RK | 2 |",
+        "| midpoint | explicit | explicit RK | 2 |", "| ralston | explicit | explicit RK | 2 |",
+        "| kutta3 | explicit | explicit RK | 3 |", "| ssprk3 | explicit | explicit RK (SSP) | 3 |",
+        "| rk4 | explicit | explicit RK | 4 |", "| rk38 | explicit | explicit RK | 4 |",
+        "| symplectic_euler | symplectic | splitting | 1 |",
+        "| symplectic_euler_x | symplectic | splitting | 1 |",
+        "| verlet | symplectic | two-step (Stormer-Verlet) | 2 |",
+        "| velocity_verlet | symplectic | splitting | 2 |",
+        "| leapfrog | symplectic | splitting (staggered) | 2 |"})
     EXPECT_NE(o.out.find(row), std::string::npos) << row;
 }
 

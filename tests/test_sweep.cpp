@@ -19,7 +19,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kSource = fs::path(__FILE__).parent_path().parent_path();
+// Absolute: with a compiler launcher that rewrites paths (ccache base_dir) __FILE__ is relative
+// to the build folder, while the runner writes absolute spec paths into its job scripts.
+const fs::path kSource = fs::absolute(fs::path(__FILE__)).parent_path().parent_path();
 const std::string kSweep = (kSource / "experiments/specs/sweep_spring_chain.toml").string();
 
 struct Outcome {

@@ -89,7 +89,7 @@ TEST(VelocityForm, AutoSolverChoice) {
 TEST(VelocityForm, TrajectoriesEqualFirstOrderForm) {
   const std::vector<std::string> methods = {
       "backward_euler", "implicit_midpoint",   "trapezoidal", "sdirk2", "sdirk3",
-      "bdf2",           "semi_implicit_euler", "rosenbrock2"};
+      "bdf2",           "semi_implicit_euler", "rosenbrock2", "ros3p",  "rodas4"};
   for (const std::string dashpot : {"0", "0.5"}) {
     auto sys = model("cloth", {"n=5", "damping=0.1", "dashpot=" + dashpot});
     FixedStepOptions opt;

@@ -90,12 +90,12 @@ struct AdaptiveCounts {
   long rejected = 0;
 };
 
-// Advances from t to exactly t_out: the step that would pass t_out is shortened to end on it
-// (no interpolation). trial(t, h) -> TrialResult computes a candidate step without committing
-// it; commit(t, h) makes the candidate the new state. h is the proposed next step on entry and
-// on exit (a step shortened to land on t_out does not shrink the proposal for the next call).
-// Fails with solver_error (message set) after opt.max_steps trials in this call or when h falls
-// below 16 ulp of t.
+// Advances from t to exactly t_out: the step that would pass t_out (or end a few ulps before it)
+// is shortened (stretched) to end on it (no interpolation). trial(t, h) -> TrialResult computes a
+// candidate step without committing it; commit(t, h) makes the candidate the new state. h is the
+// proposed next step on entry and on exit (a step shortened to land on t_out does not shrink the
+// proposal for the next call). Fails with solver_error (message set) after opt.max_steps trials in
+// this call or when h falls below 16 ulp of t.
 template <class Trial, class Commit>
 Status advance_adaptive(StepController& ctrl, double& t, double t_out, double& h,
                         AdaptiveCounts& counts, std::string& message, Trial&& trial,
@@ -109,7 +109,11 @@ Status advance_adaptive(StepController& ctrl, double& t, double t_out, double& h
       return Status::solver_error;
     }
     double h_try = std::min(h, opt.h_max);
-    const bool last = t + h_try >= t_out;
+    // A step that would end a few ulps short of t_out lands on it: otherwise rounding in t (e.g.
+    // steps of exactly h_max) leaves a last step of a few ulps, which the test below rejects as
+    // too small.
+    const bool last = t + h_try >= t_out - 64.0 * std::numeric_limits<double>::epsilon() *
+                                               std::max(1.0, std::abs(t_out));
     if (last) h_try = t_out - t;
     if (h_try <= 16.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t))) {
       message =

@@ -115,6 +115,7 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
     active_[c] = !(points_[static_cast<std::size_t>(dc.i)].pinned &&
                    points_[static_cast<std::size_t>(dc.j)].pinned);
     if (!active_[c]) continue;
+    active_list_.push_back(static_cast<Index>(c));
     touching[static_cast<std::size_t>(dc.i)].push_back(static_cast<Index>(c));
     touching[static_cast<std::size_t>(dc.j)].push_back(static_cast<Index>(c));
   }
@@ -948,6 +949,55 @@ void MassSpringNetwork::project_velocities_gauss_seidel(const double* x, double*
       }
     }
     if (converged) break;
+  }
+}
+
+// g_r = l - L for active constraint r = (i, j), l = |x_j - x_i|.
+void MassSpringNetwork::constraint_values(CVecRef x, VecRef g) const {
+  for (std::size_t r = 0; r < active_list_.size(); ++r) {
+    const DistanceConstraint& dc = constraints_[static_cast<std::size_t>(active_list_[r])];
+    double l2 = 0.0;
+    for (int k = 0; k < dim_; ++k) {
+      const double d = x[dim_ * dc.j + k] - x[dim_ * dc.i + k];
+      l2 += d * d;
+    }
+    g[static_cast<Index>(r)] = std::sqrt(l2) - dc.length;
+  }
+}
+
+// Row r of G: ∂l/∂x_i = -n, ∂l/∂x_j = +n with n = (x_j - x_i)/l (NaN at l = 0, where the
+// direction is undefined; the caller's solve then fails). The pattern (2·dim entries per row) is
+// built once; later calls with that pattern write the values in place.
+void MassSpringNetwork::constraint_jacobian(CVecRef x, SparseMat& jac) const {
+  const Index m = constraint_count();
+  const Index per_row = 2 * dim_;
+  if (jac.rows() != m || jac.cols() != dofs() || jac.nonZeros() != m * per_row ||
+      !jac.isCompressed()) {
+    std::vector<Eigen::Triplet<double>> trips;
+    trips.reserve(static_cast<std::size_t>(m * per_row));
+    for (Index r = 0; r < m; ++r) {
+      const DistanceConstraint& dc = constraints_[static_cast<std::size_t>(active_list_[r])];
+      for (int k = 0; k < dim_; ++k) {
+        trips.emplace_back(r, dim_ * dc.i + k, 0.0);
+        trips.emplace_back(r, dim_ * dc.j + k, 0.0);
+      }
+    }
+    jac.resize(m, dofs());
+    jac.setFromTriplets(trips.begin(), trips.end());
+    jac.makeCompressed();
+  }
+  for (Index r = 0; r < m; ++r) {
+    const DistanceConstraint& dc = constraints_[static_cast<std::size_t>(active_list_[r])];
+    double d[3] = {0.0, 0.0, 0.0}, l2 = 0.0;
+    for (int k = 0; k < dim_; ++k) {
+      d[k] = x[dim_ * dc.j + k] - x[dim_ * dc.i + k];
+      l2 += d[k] * d[k];
+    }
+    const double l = std::sqrt(l2);
+    for (int k = 0; k < dim_; ++k) {
+      jac.coeffRef(r, dim_ * dc.i + k) = -d[k] / l;
+      jac.coeffRef(r, dim_ * dc.j + k) = d[k] / l;
+    }
   }
 }
 

@@ -96,6 +96,11 @@
 // projected schemes are first-order accurate and slowly dissipate energy (measured in
 // tests/test_mass_spring.cpp).
 // constraint_residual() is max |C| (absolute).
+// The same constraints are offered as equations (core/constraints.hpp) to methods that enforce
+// them themselves (rattle): holonomic_constraints() is this network when it has constraints,
+// with g = C over the active constraints only (m = those not joining two pinned points, in list
+// order) and G = ∂C/∂x (row c: -n_c at point i's dofs, +n_c at j's, pinned ends included: their
+// inverse mass is 0). The driver does not call project() after such a method's steps.
 #pragma once
 
 #include <array>
@@ -107,6 +112,7 @@
 
 #include <Eigen/SparseCholesky>
 
+#include "core/constraints.hpp"
 #include "core/ode_system.hpp"
 
 namespace stiffbench {
@@ -140,7 +146,7 @@ struct NetworkOptions {
   Index parallel_threshold = 2048;  // points; below this the right-hand side runs serially
 };
 
-class MassSpringNetwork final : public MechanicalSystem {
+class MassSpringNetwork final : public MechanicalSystem, public HolonomicConstraints {
  public:
   // Checks the data (BadInput naming the model and the offending item) and precomputes the
   // packed springs of the right-hand side (the adjacency lists and the Jacobian pattern are built
@@ -172,6 +178,14 @@ class MassSpringNetwork final : public MechanicalSystem {
   bool has_constraints() const override { return !constraints_.empty(); }
   void project(double t, VecRef y) const override;
   double constraint_residual(CVecRef y) const override;
+
+  // The constraints as equations (see the header comment); nullptr without constraints.
+  const HolonomicConstraints* holonomic_constraints() const override {
+    return constraints_.empty() ? nullptr : this;
+  }
+  Index constraint_count() const override { return static_cast<Index>(active_list_.size()); }
+  void constraint_values(CVecRef x, VecRef g) const override;
+  void constraint_jacobian(CVecRef x, SparseMat& jac) const override;
 
   // An exact solution supplied by a builder (the linear chain's normal modes).
   void set_exact(std::function<void(double, VecRef)> exact) { exact_ = std::move(exact); }
@@ -243,8 +257,9 @@ class MassSpringNetwork final : public MechanicalSystem {
   bool velocity_dependent_ = false;
   bool has_dashpots_ = false;
   Vec y0_, dof_mass_;
-  std::vector<double> inv_mass_;  // per point, 0 for pinned points (projection weights)
-  std::vector<bool> active_;      // per constraint: not both ends pinned
+  std::vector<double> inv_mass_;    // per point, 0 for pinned points (projection weights)
+  std::vector<bool> active_;        // per constraint: not both ends pinned
+  std::vector<Index> active_list_;  // the active constraints' indices (rows of g and G)
   std::vector<Coupling> constraint_couplings_;
 
   // Right-hand side springs (see the header comment): partition q's interior springs are

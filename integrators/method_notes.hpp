@@ -1,0 +1,28 @@
+// The method class ("kind") and the literature reference of every built-in integrator, which
+// `list integrators` and `describe NAME` print. Kept in one table so a reviewer can check the
+// citations in one place; tests/test_method_notes.cpp checks every built-in integrator has one.
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "core/catalog.hpp"
+
+namespace stiffbench {
+
+struct MethodNote {
+  std::string kind;       // e.g. "embedded RK pair", "Rosenbrock", "Gauss collocation"
+  std::string reference;  // authors, venue, year (and section where it is a textbook)
+};
+
+// The whole table, by integrator name.
+const std::map<std::string, MethodNote>& method_notes();
+
+// The note for a built-in integrator, or nullptr.
+const MethodNote* method_note(const std::string& name);
+
+// Fills MethodInfo::kind and ::reference of the registered built-in integrators from the table
+// (entries that already carry a reference are left alone).
+void annotate_built_in_integrators(IntegratorRegistry& reg);
+
+}  // namespace stiffbench

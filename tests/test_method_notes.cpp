@@ -1,0 +1,52 @@
+// Every built-in integrator carries its method class and literature reference, and `list` /
+// `describe` print them (issue 12, Done-when 3).
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+#include "experiments/catalog.hpp"
+#include "experiments/commands.hpp"
+#include "integrators/method_notes.hpp"
+
+namespace stiffbench {
+namespace {
+
+TEST(MethodNotes, EveryBuiltInIntegratorHasKindAndReference) {
+  for (const auto& e : integrator_registry().entries()) {
+    if (!e.built_in) continue;
+    EXPECT_FALSE(e.info.kind.empty()) << e.info.name << " has no kind in method_notes.cpp";
+    EXPECT_FALSE(e.info.reference.empty()) << e.info.name << " has no reference";
+  }
+}
+
+TEST(MethodNotes, TableNamesOnlyRegisteredIntegrators) {
+  // A stale entry (a renamed or removed method) would never be printed.
+  for (const auto& [name, note] : method_notes())
+    EXPECT_NE(integrator_registry().find(name), nullptr) << name << " is not registered";
+}
+
+TEST(MethodNotes, DescribePrintsReferenceAndStepModes) {
+  std::ostringstream dp;
+  cmd_describe("dopri5", dp);
+  EXPECT_NE(dp.str().find("family: explicit (embedded RK pair)"), std::string::npos) << dp.str();
+  EXPECT_NE(dp.str().find("reference: J. R. Dormand & P. J. Prince"), std::string::npos);
+  EXPECT_NE(dp.str().find("step: fixed, adaptive"), std::string::npos) << dp.str();
+  std::ostringstream cv;
+  cmd_describe("cvode_bdf", cv);
+  EXPECT_NE(cv.str().find("\nstep: adaptive\n"), std::string::npos) << cv.str();
+  std::ostringstream rk;
+  cmd_describe("rk4", rk);
+  EXPECT_NE(rk.str().find("\nstep: fixed\n"), std::string::npos) << rk.str();
+}
+
+TEST(MethodNotes, ListShowsKindAndStepColumns) {
+  std::ostringstream out;
+  cmd_list("integrators", out);
+  const std::string s = out.str();
+  EXPECT_NE(s.find("| integrator | family | kind | order | stages | step |"), std::string::npos)
+      << s.substr(0, 300);
+  EXPECT_NE(s.find("| radau5 | implicit | Radau IIA collocation |"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace stiffbench
