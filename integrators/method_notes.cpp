@@ -90,6 +90,25 @@ const std::map<std::string, MethodNote>& method_notes() {
         "parabolic problems, BIT Numer. Math. 41 (2001) 731-738"}},
       {"rodas4", {"Rosenbrock (embedded pair)", cite(kHW, "Sect. VI.4 (RODAS)")}},
       {"radau5", {"Radau IIA collocation", cite(kHW, "Sect. IV.8 (RADAU5)")}},
+      {"trbdf2",
+       {"ESDIRK (embedded pair)",
+        "R. E. Bank, W. M. Coughran, W. Fichtner, E. H. Grosse, D. J. Rose & R. K. Smith, "
+        "Transient simulation of silicon devices and circuits, IEEE Trans. Computer-Aided Design "
+        "4 (1985) 436-451; as an ESDIRK pair: M. E. Hosea & L. F. Shampine, Analysis and "
+        "implementation of TR-BDF2, Appl. Numer. Math. 20 (1996) 21-37"}},
+      {"esdirk43",
+       {"ESDIRK (embedded pair)",
+        "C. A. Kennedy & M. H. Carpenter, Additive Runge-Kutta schemes for "
+        "convection-diffusion-reaction equations, Appl. Numer. Math. 44 (2003) 139-181 "
+        "(ESDIRK4(3)6L[2]SA, the implicit part of ARK4(3)6L[2]SA)"}},
+      {"gauss4",
+       {"Gauss collocation (2 stages)",
+        "J. C. Butcher, Implicit Runge-Kutta processes, Math. Comp. 18 (1964) 50-64; " +
+            cite(kGNI, "Sect. II.1.3, VI.4")}},
+      {"gauss6",
+       {"Gauss collocation (3 stages)",
+        "J. C. Butcher, Implicit Runge-Kutta processes, Math. Comp. 18 (1964) 50-64; " +
+            cite(kGNI, "Sect. II.1.3, VI.4")}},
       {"baraff_witkin",
        {"linearly implicit (velocity form)",
         "D. Baraff & A. Witkin, Large steps in cloth simulation, SIGGRAPH 1998, 43-54"}},

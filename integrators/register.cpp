@@ -9,6 +9,7 @@
 #include "integrators/graphics/xpbd.hpp"
 #include "integrators/implicit/baraff_witkin.hpp"
 #include "integrators/implicit/dirk.hpp"
+#include "integrators/implicit/gauss.hpp"
 #include "integrators/implicit/linearly_implicit.hpp"
 #include "integrators/implicit/radau5.hpp"
 #include "integrators/reference/gsl.hpp"
@@ -101,6 +102,25 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
     };
     reg.add({DirkIntegrator(t, desc, {}).info(), newton_specs, make});
   }
+  // ESDIRK pairs with an embedded estimate: fixed step with --h, adaptive with rtol/atol.
+  static const std::map<std::string, std::string> esdirk = {
+      {"trbdf2",
+       "TR-BDF2 (Bank et al. 1985, IEEE Trans. CAD 4; as an ESDIRK 2(3) pair after Hosea & "
+       "Shampine 1996, Appl. Numer. Math. 20), gamma = 2 - sqrt(2); L-stable, stiffly "
+       "accurate, FSAL; adaptive or fixed step"},
+      {"esdirk43",
+       "ESDIRK4(3)6L[2]SA, implicit part of ARK4(3)6L[2]SA (Kennedy & Carpenter 2003, Appl. "
+       "Numer. Math. 44), gamma = 1/4; L-stable, stiffly accurate, FSAL; adaptive or fixed step"},
+  };
+  const auto esdirk_specs = esdirk_param_specs();
+  for (const ButcherTableau& t : esdirk_tableaux()) {
+    const std::string desc = esdirk.at(t.name);
+    auto make = [t, desc](const Params& p) {
+      return std::make_unique<DirkIntegrator>(t, desc, read_implicit_options(p, true),
+                                              read_controller_options(p), read_error_filter(p));
+    };
+    reg.add({DirkIntegrator(t, desc, {}).info(), esdirk_specs, make});
+  }
   reg.add({Bdf2Integrator({}).info(), newton_specs, [](const Params& p) {
              return std::make_unique<Bdf2Integrator>(read_implicit_options(p, true));
            }});
@@ -137,6 +157,11 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
   }
   reg.add({Radau5({}).info(), radau5_param_specs(),
            [](const Params& p) { return std::make_unique<Radau5>(read_radau5_options(p)); }});
+  for (const int s : {2, 3}) {
+    reg.add({GaussCollocation(s, {}).info(), gauss_param_specs(), [s](const Params& p) {
+               return std::make_unique<GaussCollocation>(s, read_gauss_options(p));
+             }});
+  }
   // Baraff–Witkin is velocity-form by construction (no `form`), and its single Krylov solve
   // defaults to a relative 1e-6 (baraff_witkin.hpp).
   std::vector<ParamSpec> bw_specs;

@@ -1,10 +1,15 @@
 #include "integrators/implicit/dirk.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace stiffbench {
 
 namespace {
+
+// Floor of the adaptive Newton tolerance (relative to 1 + |z_i|): a few hundred ulps.
+constexpr double kMinAdaptiveNewtonTol = 1e-14;
 
 ButcherTableau make(std::string name, int order, Mat a, Vec b) {
   ButcherTableau t;
@@ -37,7 +42,59 @@ std::vector<ButcherTableau> build() {
   return all;
 }
 
+ButcherTableau make_embedded(std::string name, int order, int embedded_order, Mat a, Vec b,
+                             Vec b_hat) {
+  ButcherTableau t = make(std::move(name), order, std::move(a), std::move(b));
+  t.b_embedded = std::move(b_hat);
+  t.embedded_order = embedded_order;
+  t.fsal = true;  // explicit first stage, stiffly accurate: k_s serves as the next k_1
+  return t;
+}
+
+std::vector<ButcherTableau> build_esdirk() {
+  std::vector<ButcherTableau> all;
+  {
+    // Hosea & Shampine (1996), Appl. Numer. Math. 20: TR-BDF2 of Bank et al. (1985) as a
+    // one-step ESDIRK; the embedded row is their third-order companion formula.
+    const double g = 2.0 - std::sqrt(2.0), d = g / 2.0, w = std::sqrt(2.0) / 4.0;
+    all.push_back(make_embedded("trbdf2", 2, 3, Mat{{0.0, 0.0, 0.0}, {d, d, 0.0}, {w, w, d}},
+                                Vec{{w, w, d}},
+                                Vec{{(1.0 - w) / 3.0, (3.0 * w + 1.0) / 3.0, d / 3.0}}));
+  }
+  {
+    // Kennedy & Carpenter (2003), Appl. Numer. Math. 44 (implicit part of ARK4(3)6L[2]SA):
+    // γ = 1/4.
+    const double q = 0.25;
+    Mat a = Mat::Zero(6, 6);
+    a(1, 0) = q;
+    a(2, 0) = 8611.0 / 62500.0;
+    a(2, 1) = -1743.0 / 31250.0;
+    a(3, 0) = 5012029.0 / 34652500.0;
+    a(3, 1) = -654441.0 / 2922500.0;
+    a(3, 2) = 174375.0 / 388108.0;
+    a(4, 0) = 15267082809.0 / 155376265600.0;
+    a(4, 1) = -71443401.0 / 120774400.0;
+    a(4, 2) = 730878875.0 / 902184768.0;
+    a(4, 3) = 2285395.0 / 8070912.0;
+    a(5, 0) = 82889.0 / 524892.0;
+    a(5, 2) = 15625.0 / 83664.0;
+    a(5, 3) = 69875.0 / 102672.0;
+    a(5, 4) = -2260.0 / 8211.0;
+    for (int i = 1; i < 6; ++i) a(i, i) = q;
+    const Vec b = a.row(5).transpose();
+    const Vec b_hat{{4586570599.0 / 29645900160.0, 0.0, 178811875.0 / 945068544.0,
+                     814220225.0 / 1159782912.0, -3700637.0 / 11593932.0, 61727.0 / 225920.0}};
+    all.push_back(make_embedded("esdirk43", 4, 3, std::move(a), b, b_hat));
+  }
+  return all;
+}
+
 }  // namespace
+
+const std::vector<ButcherTableau>& esdirk_tableaux() {
+  static const std::vector<ButcherTableau> all = build_esdirk();
+  return all;
+}
 
 const std::vector<ButcherTableau>& implicit_tableaux() {
   static const std::vector<ButcherTableau> all = build();
@@ -58,7 +115,7 @@ void DirkStepper::reset(Index n) {
 }
 
 Status DirkStepper::step(ImplicitCore& core, const OdeSystem& sys, double t, VecRef y, double h,
-                         SolveStats& stats) {
+                         SolveStats& stats, bool k1_given) {
   const int s = tableau_.stages();
   core.new_step();
   z_ = y;  // predictor for the first implicit stage; later stages start from the previous z
@@ -69,7 +126,7 @@ Status DirkStepper::step(ImplicitCore& core, const OdeSystem& sys, double t, Vec
     const double ti = t + tableau_.c[i] * h;
     const double aii = tableau_.a(i, i);
     if (aii == 0.0) {
-      sys.rhs(ti, psi_, k_.col(i));
+      if (i > 0 || !k1_given) sys.rhs(ti, psi_, k_.col(i));
       z_ = psi_;
       continue;
     }
@@ -84,24 +141,142 @@ Status DirkStepper::step(ImplicitCore& core, const OdeSystem& sys, double t, Vec
   return Status::ok;
 }
 
-DirkIntegrator::DirkIntegrator(ButcherTableau tableau, std::string description, ImplicitOptions opt)
+void DirkStepper::embedded_difference(double h, VecRef e) const {
+  e.setZero();
+  for (int i = 0; i < tableau_.stages(); ++i)
+    if (const double d = tableau_.b[i] - tableau_.b_embedded[i]; d != 0.0)
+      e.noalias() += (h * d) * k_.col(i);
+}
+
+std::vector<ParamSpec> esdirk_param_specs() {
+  std::vector<ParamSpec> specs = implicit_param_specs(true);
+  for (ParamSpec& s : specs)
+    if (s.key == "newton_tol")
+      s.help =
+          "fixed-step mode: Newton tolerance on residual or update (weighted max-norm), each step "
+          "may carry an error of this order; adaptive mode uses 0.01 of the controller's "
+          "scale min_i (atol + rtol |y_i|)/(1 + |y_i|), at least 1e-14";
+  for (ParamSpec& s : controller_param_specs()) specs.push_back(std::move(s));
+  specs.push_back({"error_filter",
+                   ParamType::text,
+                   "on",
+                   "adaptive mode: filter the embedded error estimate with (I - h gamma J)^-1 "
+                   "(damps stiff components, one more linear solve per trial) or use it raw",
+                   {"on", "off"}});
+  return specs;
+}
+
+bool read_error_filter(const Params& p) { return p.text("error_filter") == "on"; }
+
+DirkIntegrator::DirkIntegrator(ButcherTableau tableau, std::string description, ImplicitOptions opt,
+                               ControllerOptions control, bool error_filter)
     : Integrator({tableau.name,
                   Family::implicit,
                   tableau.order,
-                  tableau.stages(),
+                  tableau.stages() - (tableau.fsal ? 1 : 0),
                   {},
                   std::move(description)}),
       stepper_(std::move(tableau)),
-      core_(std::move(opt)) {}
+      core_(opt),
+      filter_(error_filter),
+      newton_tol_(opt.newton_tol),
+      control_(control) {
+  const ButcherTableau& t = stepper_.tableau();
+  const bool explicit_first = t.a(0, 0) == 0.0;
+  adaptive_ = t.b_embedded.size() == t.b.size() && explicit_first;
+  fsal_ = t.fsal && explicit_first;
+  if (adaptive_) ctrl_ = StepController(control_, std::min(t.order, t.embedded_order) + 1);
+}
 
 void DirkIntegrator::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   check_compatible(info(), sys);
   core_.reset(sys, t0, y0);
-  stepper_.reset(sys.dimension());
+  core_.set_newton_tol(newton_tol_);
+  const Index n = sys.dimension();
+  stepper_.reset(n);
+  for (Vec* v : {&ynew_, &err_, &work_, &work2_}) v->setZero(n);
+  t_ = t0;
+  h_ = 0.0;
+  k1_valid_ = false;
+  counts_ = {};
+  ctrl_.reset();
+  cache_valid_ = false;
+  cached_y_ = nullptr;
+  const MechanicalSystem* m = sys.as_mechanical();
+  constrained_ = m && m->has_constraints();
+  if (constrained_) cached_values_.resize(n);
 }
 
 Status DirkIntegrator::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) {
-  return stepper_.step(core_, sys, t, y, h, stats);
+  // The driver computes step k's start as t0 + k·h, which may differ from the cached t + h by
+  // rounding: the time test only rules out a restart elsewhere.
+  const bool reuse = fsal_ && cache_valid_ && cached_y_ == y.data() &&
+                     std::abs(cached_t_ - t) <= 1e-12 * (std::abs(t) + std::abs(h)) &&
+                     (!constrained_ || cached_values_ == y);
+  cache_valid_ = false;
+  const Status st = stepper_.step(core_, sys, t, y, h, stats, reuse);
+  if (st != Status::ok || !fsal_) return st;
+  stepper_.last_stage_to_first();
+  cache_valid_ = true;
+  cached_y_ = y.data();
+  cached_t_ = t + h;
+  if (constrained_) cached_values_ = y;
+  return st;
+}
+
+Status DirkIntegrator::advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) {
+  if (!adaptive_) return Integrator::advance_to(sys, t_out, y, stats);
+  cache_valid_ = false;  // fixed-step continuation does not apply
+  const ButcherTableau& tab = stepper_.tableau();
+  const double gamma = tab.a(tab.stages() - 1, tab.stages() - 1);
+  if (!k1_valid_) {
+    sys.rhs(t_, y, stepper_.first_stage());
+    k1_valid_ = true;
+  }
+  if (h_ == 0.0) {
+    const int p = std::min(tab.order, tab.embedded_order);
+    h_ = control_.h0 > 0
+             ? std::min(control_.h0, t_out - t_)
+             : ctrl_.initial_step(sys, t_, y, stepper_.first_stage(), p, t_out - t_, work_, work2_);
+  }
+  const auto trial = [&](double t, double h) {
+    if (!k1_valid_) {
+      sys.rhs(t, y, stepper_.first_stage());
+      k1_valid_ = true;
+    }
+    // Newton tolerance two orders below the controller's scale (see the header).
+    double tol = std::numeric_limits<double>::infinity();
+    for (Index i = 0; i < y.size(); ++i) {
+      const double ay = std::abs(y[i]);
+      tol = std::min(tol, (control_.atol + control_.rtol * ay) / (1.0 + ay));
+    }
+    core_.set_newton_tol(std::max(0.01 * tol, kMinAdaptiveNewtonTol));
+    ynew_ = y;
+    const Status st = stepper_.step(core_, sys, t, ynew_, h, stats, true);
+    if (st != Status::ok || !ynew_.allFinite()) {
+      stats.message.clear();  // the trial is retried with a smaller step
+      return TrialResult{0.0, 0.5};
+    }
+    stepper_.embedded_difference(h, err_);
+    if (filter_) {
+      if (!core_.prepare(h * gamma, stats)) return TrialResult{0.0, 0.5};
+      work_.setZero();
+      if (!core_.solve(err_, work_, stats)) return TrialResult{0.0, 0.5};
+      err_ = work_;
+    }
+    return TrialResult{ctrl_.norm(err_, y, ynew_), 0.0};
+  };
+  const auto commit = [&](double, double) {
+    y = ynew_;
+    if (fsal_)
+      stepper_.last_stage_to_first();
+    else
+      k1_valid_ = false;
+  };
+  const Status st = advance_adaptive(ctrl_, t_, t_out, h_, counts_, stats.message, trial, commit);
+  stats.steps = counts_.accepted;
+  stats.rejected_steps = counts_.rejected;
+  return st;
 }
 
 Bdf2Integrator::Bdf2Integrator(ImplicitOptions opt)

@@ -14,6 +14,42 @@
 //                                                                order 3, L-stable
 // The L-stable ones are stiffly accurate (b = last row of A), so y⁺ = z_s exactly.
 //
+// ESDIRK pairs with an embedded estimate (esdirk_tableaux(); fixed step with --h, adaptive with
+// rtol/atol). The first stage is explicit (a_11 = 0, k_1 = f(t, y)), every other diagonal entry
+// is γ, and the last row of A is b (stiffly accurate, c_s = 1):
+//   trbdf2    TR-BDF2 (Bank et al. 1985, in the form of Hosea & Shampine 1996): γ = 2 - √2,
+//             d = γ/2, w = √2/4, c = (0, γ, 1), A = [[0,0,0],[d,d,0],[w,w,d]], b = (w, w, d),
+//             b̂ = ((1-w)/3, (3w+1)/3, d/3); order 2, embedded order 3, L-stable
+//   esdirk43  ESDIRK4(3)6L[2]SA, the implicit tableau of the ARK4(3)6L[2]SA pair of Kennedy &
+//             Carpenter (2003): γ = 1/4, c = (0, 1/2, 83/250, 31/50, 17/20, 1), rational
+//             coefficients typed from the paper; order 4 (L-stable), embedded order 3 (A-stable)
+// The order conditions of both rows and R(∞) = 0 are checked in tests/test_esdirk_gauss.cpp.
+//
+// f evaluations: stage 1 of a step is f(t, y). Because the method is stiffly accurate, k_s
+// (recovered from the last stage equation, see above) is f(t + h, y⁺) up to the Newton
+// residual, and the next step takes it as its k_1 (FSAL): a fixed-step run evaluates f(t0, y0)
+// once, an adaptive run once at the start (plus one for the starting-step heuristic), and a
+// rejected trial keeps k_1. Each implicit stage costs (its Newton iterations + 1) evaluations
+// (ImplicitCore), plus finite-difference Jacobian columns. In fixed-step mode k_1 is reused only
+// when step() continues where the last one ended (same t and storage; on constrained systems
+// also the same values), as the explicit FSAL pairs do.
+//
+// Adaptive mode: the error estimate e = h Σ (b_i - b̂_i) k_i is O(h^(p̂+1)) with p̂ = min(order,
+// embedded order); with error_filter=on (default) it is replaced by (I - hγJ)⁻¹ e with the
+// iteration matrix already factored for the last stage (one more linear solve). The filter
+// leaves e = O(h^(p̂+1)) for non-stiff components ((I - hγJ)⁻¹ = I + O(h)) and divides a stiff
+// component's by 1 - hγλ (Shampine's filter, as in Hairer–Wanner IV.8 for radau5). The embedded
+// rows are not L-stable: on y' = λy the raw estimate is (R(hλ) - R̂(hλ)) y, and TR-BDF2's R̂ grows
+// like -(√2/3) hλ (the raw estimate of a stiff component ∝ |hλ|, the filtered one bounded),
+// esdirk43's R̂(∞) = -0.15 (values from the tableaux, tests/test_esdirk_gauss.cpp).
+// The shared controller (integrators/adaptive/controller.hpp) runs with k = p̂ + 1. A Newton or
+// linear-solver failure rejects the trial and retries with h/2 (counted in rejected_steps;
+// Newton failures also in newton_fails). The Newton tolerance of a trial (in
+// ImplicitCore's norm, relative to 1 + |z_i|) is max(0.01 min_i (atol + rtol |y_i|)/(1 + |y_i|),
+// 1e-14), in place of newton_tol: the Newton error stays two orders below the error the
+// controller allows in every component (else the estimate measures Newton noise and the steps
+// collapse), and loose tolerances do not pay for Newton iterations to 1e-12.
+//
 // bdf2: y_{n+1} - 4/3 y_n + 1/3 y_{n-1} = 2/3 h f(t_{n+1}, y_{n+1}), order 2, L-stable
 //   (A-stable with R(∞) = 0). Start-up: the first step (and any step after h changes or after
 //   y was changed from outside, e.g. by a constraint projection) is one sdirk2 step, whose
@@ -24,21 +60,30 @@
 
 #include "core/integrator.hpp"
 #include "core/tableau.hpp"
+#include "integrators/adaptive/controller.hpp"
 #include "integrators/implicit/implicit_core.hpp"
 
 namespace stiffbench {
 
 const std::vector<ButcherTableau>& implicit_tableaux();
 const ButcherTableau& implicit_tableau(const std::string& name);
+// ESDIRK pairs with embedded weights (b_embedded): trbdf2, esdirk43.
+const std::vector<ButcherTableau>& esdirk_tableaux();
 
 // One DIRK step with a shared ImplicitCore (used by DirkIntegrator and by BDF2's start-up).
 class DirkStepper {
  public:
   explicit DirkStepper(ButcherTableau tableau) : tableau_(std::move(tableau)) {}
   void reset(Index n);
+  // k1_given: an explicit first stage is already in first_stage() (= f(t, y)), not evaluated.
   Status step(ImplicitCore& core, const OdeSystem& sys, double t, VecRef y, double h,
-              SolveStats& stats);
+              SolveStats& stats, bool k1_given = false);
   const ButcherTableau& tableau() const { return tableau_; }
+  VecRef first_stage() { return k_.col(0); }
+  // After a step: the stiffly accurate last stage k_s ≈ f(t + h, y⁺) becomes the next k_1.
+  void last_stage_to_first() { k_.col(0) = k_.col(tableau_.stages() - 1); }
+  // After a step of size h: e = h Σ (b_i - b̂_i) k_i.
+  void embedded_difference(double h, VecRef e) const;
 
  private:
   ButcherTableau tableau_;
@@ -46,11 +91,15 @@ class DirkStepper {
   Vec psi_, z_, fz_;
 };
 
+// Adaptive (advance_to) when the tableau has embedded weights and an explicit first stage.
 class DirkIntegrator final : public Integrator {
  public:
-  DirkIntegrator(ButcherTableau tableau, std::string description, ImplicitOptions opt);
+  DirkIntegrator(ButcherTableau tableau, std::string description, ImplicitOptions opt,
+                 ControllerOptions control = {}, bool error_filter = true);
+  bool supports_adaptive() const override { return adaptive_; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
+  Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) override;
   std::optional<LinearStability> linear_stability() const override {
     return tableau_stability(stepper_.tableau());
   }
@@ -59,7 +108,26 @@ class DirkIntegrator final : public Integrator {
  private:
   DirkStepper stepper_;
   ImplicitCore core_;
+  bool adaptive_ = false, fsal_ = false, filter_ = true;
+  double newton_tol_ = 1e-12;  // the user's (core_ gets a per-trial value in adaptive mode)
+  ControllerOptions control_;
+  StepController ctrl_;
+  Vec ynew_, err_, work_, work2_;
+  // Adaptive state.
+  double t_ = 0.0, h_ = 0.0;
+  bool k1_valid_ = false;
+  AdaptiveCounts counts_;
+  // Fixed-step FSAL cache.
+  const double* cached_y_ = nullptr;
+  double cached_t_ = 0.0;
+  bool cache_valid_ = false, constrained_ = false;
+  Vec cached_values_;
 };
+
+// Parameters of the ESDIRK pairs: the implicit family's (with Newton), the controller's and
+// error_filter; and the reader of the last.
+std::vector<ParamSpec> esdirk_param_specs();
+bool read_error_filter(const Params& p);
 
 class Bdf2Integrator final : public Integrator {
  public:

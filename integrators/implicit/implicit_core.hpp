@@ -99,6 +99,9 @@ class ImplicitCore {
   // out = J v with the current J (assembled) or a finite-difference product (matrix-free).
   void jacobian_times(CVecRef v, VecRef out, SolveStats& stats);
 
+  // Newton tolerance of the following solves (adaptive DIRK pairs set it per trial).
+  void set_newton_tol(double tol) { opt_.newton_tol = tol; }
+
   // Newton on z = ψ + hγ f(t, z). z holds the initial guess; on success fz = f(t, z).
   Status solve_stage(const OdeSystem& sys, double t, CVecRef psi, double hg, VecRef z, VecRef fz,
                      SolveStats& stats);

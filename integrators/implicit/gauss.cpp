@@ -1,0 +1,319 @@
+#include "integrators/implicit/gauss.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace stiffbench {
+
+namespace {
+
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+
+ButcherTableau build_tableau(int s) {
+  ButcherTableau t;
+  if (s == 2) {
+    const double r = std::sqrt(3.0) / 6.0;
+    t.name = "gauss4";
+    t.order = 4;
+    t.a = Mat{{0.25, 0.25 - r}, {0.25 + r, 0.25}};
+    t.b = Vec{{0.5, 0.5}};
+  } else if (s == 3) {
+    const double r = std::sqrt(15.0);
+    t.name = "gauss6";
+    t.order = 6;
+    t.a = Mat{{5.0 / 36, 2.0 / 9 - r / 15, 5.0 / 36 - r / 30},
+              {5.0 / 36 + r / 24, 2.0 / 9, 5.0 / 36 - r / 24},
+              {5.0 / 36 + r / 30, 2.0 / 9 + r / 15, 5.0 / 36}};
+    t.b = Vec{{5.0 / 18, 4.0 / 9, 5.0 / 18}};
+  } else {
+    throw std::logic_error("gauss_tableau: 2 or 3 stages");
+  }
+  t.c = t.a.rowwise().sum();
+  return t;
+}
+
+GaussConstants build_constants(int s) {
+  const ButcherTableau& tab = gauss_tableau(s);
+  const Mat ainv = tab.a.inverse();
+  Eigen::EigenSolver<Mat> es(ainv);
+  GaussConstants k;
+  k.t.resize(s, s);
+  int col = 0;
+  // Real eigenvalues first (|Im| below 1e-12 of the spectral radius; A⁻¹ of a Gauss method has
+  // at most one), then one column pair per eigenvalue with positive imaginary part:
+  // A⁻¹(u + iw) = (a + ib)(u + iw) gives A⁻¹u = a u - b w, A⁻¹w = b u + a w, so with columns
+  // (u, w) the block of T⁻¹A⁻¹T is [[a, b], [-b, a]].
+  const double scale = es.eigenvalues().cwiseAbs().maxCoeff();
+  for (int i = 0; i < s; ++i)
+    if (std::abs(es.eigenvalues()[i].imag()) <= 1e-12 * scale) {
+      k.t.col(col++) = es.eigenvectors().col(i).real();
+      k.real.push_back(es.eigenvalues()[i].real());
+    }
+  for (int i = 0; i < s; ++i)
+    if (es.eigenvalues()[i].imag() > 1e-12 * scale) {
+      k.t.col(col++) = es.eigenvectors().col(i).real();
+      k.t.col(col++) = es.eigenvectors().col(i).imag();
+      k.a.push_back(es.eigenvalues()[i].real());
+      k.b.push_back(es.eigenvalues()[i].imag());
+    }
+  if (col != s) throw std::logic_error("gauss: unexpected eigenstructure of A^-1");
+  k.t_inv = k.t.inverse();
+  k.lambda = k.t_inv * ainv * k.t;
+  k.d = ainv.transpose() * tab.b;
+  return k;
+}
+
+// dst.col(i) = Σ_j coef(i, j) src.col(j) (dst = src coefᵀ), column by column: no temporaries.
+void combine_columns(const Mat& src, const Mat& coef, Mat& dst) {
+  for (Index i = 0; i < dst.cols(); ++i) {
+    dst.col(i) = coef(i, 0) * src.col(0);
+    for (Index j = 1; j < src.cols(); ++j) dst.col(i) += coef(i, j) * src.col(j);
+  }
+}
+
+}  // namespace
+
+const ButcherTableau& gauss_tableau(int stages) {
+  static const ButcherTableau t2 = build_tableau(2), t3 = build_tableau(3);
+  if (stages == 2) return t2;
+  if (stages == 3) return t3;
+  throw std::logic_error("gauss_tableau: 2 or 3 stages");
+}
+
+const GaussConstants& gauss_constants(int stages) {
+  static const GaussConstants k2 = build_constants(2), k3 = build_constants(3);
+  if (stages == 2) return k2;
+  if (stages == 3) return k3;
+  throw std::logic_error("gauss_constants: 2 or 3 stages");
+}
+
+std::vector<ParamSpec> gauss_param_specs() {
+  using P = ParamType;
+  return {
+      {"newton_tol", P::real, "1e-15",
+       "Newton stops when its predicted error is below newton_tol (1 + |y|) in the RMS norm, or "
+       "when the update stagnates below it (round-off); looser values perturb the symplectic map"},
+      {"newton_max_iter", P::integer, "20", "simplified Newton iterations per step"},
+      {"jacobian",
+       P::text,
+       "auto",
+       "analytic, fd_dense, fd_colored (over the model's pattern); auto: analytic where "
+       "provided, else fd_colored over a pattern, else fd_dense",
+       {"auto", "analytic", "fd_dense", "fd_colored"}},
+      {"linear_solver",
+       P::text,
+       "auto",
+       "dense_lu or sparse_lu for the transformed n x n systems; auto: dense_lu up to 200 "
+       "unknowns",
+       {"auto", "dense_lu", "sparse_lu"}},
+  };
+}
+
+GaussOptions read_gauss_options(const Params& p) {
+  GaussOptions o;
+  o.newton_tol = p.real("newton_tol");
+  require_input(o.newton_tol > 0, "parameter 'newton_tol' must be > 0");
+  o.newton_max_iter = static_cast<int>(p.integer("newton_max_iter"));
+  require_input(o.newton_max_iter >= 1, "parameter 'newton_max_iter' must be >= 1");
+  const std::string& j = p.text("jacobian");
+  o.jacobian = j == "analytic"     ? JacobianSource::analytic
+               : j == "fd_dense"   ? JacobianSource::fd_dense
+               : j == "fd_colored" ? JacobianSource::fd_colored
+                                   : JacobianSource::automatic;
+  o.linear = parse_linear_solver(p.text("linear_solver"));
+  return o;
+}
+
+namespace {
+
+ImplicitOptions core_options(const GaussOptions& o) {
+  ImplicitOptions io;
+  io.jacobian = o.jacobian;
+  io.linear.kind = o.linear;
+  io.form = SystemForm::first_order;  // J itself, also for mechanical systems
+  return io;
+}
+
+std::string describe(int s) {
+  return s == 2 ? "Gauss-Legendre collocation, 2 stages, order 4 (Butcher 1964, Math. Comp. 18; "
+                  "Hairer, Lubich & Wanner, Geometric Numerical Integration, Springer 2006): "
+                  "symplectic, symmetric, A-stable with |R(iy)| = 1; transformed simplified "
+                  "Newton; fixed step"
+                : "Gauss-Legendre collocation, 3 stages, order 6 (Butcher 1964, Math. Comp. 18; "
+                  "Hairer, Lubich & Wanner, Geometric Numerical Integration, Springer 2006): "
+                  "symplectic, symmetric, A-stable with |R(iy)| = 1; transformed simplified "
+                  "Newton; fixed step";
+}
+
+}  // namespace
+
+GaussCollocation::GaussCollocation(int stages, GaussOptions opt)
+    : Integrator({gauss_tableau(stages).name,
+                  Family::implicit,
+                  gauss_tableau(stages).order,
+                  stages,
+                  {},
+                  describe(stages)}),
+      s_(stages),
+      tableau_(gauss_tableau(stages)),
+      k_(gauss_constants(stages)),
+      opt_(opt),
+      core_(core_options(opt)) {
+  real_.resize(k_.real.size());
+  complex_.resize(k_.a.size());
+}
+
+void GaussCollocation::reset(const OdeSystem& sys, double t0, CVecRef y0) {
+  check_compatible(info(), sys);
+  n_ = sys.dimension();
+  const bool large = n_ > LinearSolverOptions{}.dense_max;
+  require_input(opt_.jacobian != JacobianSource::automatic || !large || sys.has_jacobian() ||
+                    sys.has_jacobian_pattern(),
+                "integrator '" + info().name + "' needs an assembled Jacobian: model '" +
+                    sys.name() +
+                    "' has neither an analytic Jacobian nor a sparsity pattern and more than " +
+                    std::to_string(LinearSolverOptions{}.dense_max) +
+                    " unknowns (give jacobian=fd_dense to use a dense one)");
+  core_.reset(sys, t0, y0);
+  const bool dense = opt_.linear == LinearSolverKind::dense_lu ||
+                     (opt_.linear == LinearSolverKind::automatic && !large);
+  for (auto& r : real_) r.reset(n_, dense);
+  for (auto& c : complex_) c.reset(n_, dense);
+  for (Mat* m : {&z_, &w_, &f_, &z_prev_}) m->setZero(n_, s_);
+  for (Vec* v : {&f0_, &scale_, &tmp_, &r1_, &x1_}) v->setZero(n_);
+  r2_.setZero(n_);
+  x2_.setZero(n_);
+  h_prev_ = 0.0;
+  have_prev_ = false;
+  cached_y_ = nullptr;
+}
+
+void GaussCollocation::starting_values(double h) {
+  if (!have_prev_) {
+    z_.setZero();
+    return;
+  }
+  // The previous step's collocation polynomial q(σ), σ = (t - t_{n-1})/h_prev, through q(0) = 0
+  // and q(c_j) = Z_j^prev, continued to the new nodes: Z_i = q(1 + c_i h/h_prev) - q(1).
+  const Vec& c = tableau_.c;
+  const auto basis = [&](double x, int j) {
+    double l = x / c[j];
+    for (int m = 0; m < s_; ++m)
+      if (m != j) l *= (x - c[m]) / (c[j] - c[m]);
+    return l;
+  };
+  for (int i = 0; i < s_; ++i) {
+    const double x = 1.0 + c[i] * h / h_prev_;
+    z_.col(i).setZero();
+    for (int j = 0; j < s_; ++j) z_.col(i) += (basis(x, j) - basis(1.0, j)) * z_prev_.col(j);
+  }
+}
+
+bool GaussCollocation::solve_stages(const OdeSystem& sys, double t, CVecRef y, double h,
+                                    SolveStats& stats) {
+  const Vec& c = tableau_.c;
+  scale_ = 1.0 + y.array().abs();
+  starting_values(h);
+  combine_columns(z_, k_.t_inv, w_);
+  const std::size_t nr = k_.real.size();
+  double norm_old = 0.0;
+  for (int it = 0; it < opt_.newton_max_iter; ++it) {
+    for (int i = 0; i < s_; ++i) {
+      tmp_ = y + z_.col(i);
+      sys.rhs(t + c[i] * h, tmp_, f_.col(i));
+    }
+    if (!f_.allFinite()) return false;
+    ++stats.newton_iters;
+    double sum = 0.0;
+    // Real blocks: (γ/h I - J) ΔW_j = (T⁻¹F)_j - (γ/h) W_j.
+    for (std::size_t r = 0; r < nr; ++r) {
+      const Index j = static_cast<Index>(r);
+      r1_ = (-k_.real[r] / h) * w_.col(j);
+      for (int i = 0; i < s_; ++i) r1_ += k_.t_inv(j, i) * f_.col(i);
+      real_[r].solve(r1_, x1_);
+      ++stats.lin_solves;
+      w_.col(j) += x1_;
+      sum += (x1_.array() / scale_.array()).square().sum();
+    }
+    // Complex pairs: ((a - ib)/h I - J)(ΔW_j + iΔW_{j+1}) = r_j + i r_{j+1}.
+    for (std::size_t p = 0; p < k_.a.size(); ++p) {
+      const Index j = static_cast<Index>(nr + 2 * p);
+      const double a = k_.a[p] / h, b = k_.b[p] / h;
+      tmp_ = -a * w_.col(j) - b * w_.col(j + 1);
+      for (int i = 0; i < s_; ++i) tmp_ += k_.t_inv(j, i) * f_.col(i);
+      r2_.real() = tmp_;
+      tmp_ = b * w_.col(j) - a * w_.col(j + 1);
+      for (int i = 0; i < s_; ++i) tmp_ += k_.t_inv(j + 1, i) * f_.col(i);
+      r2_.imag() = tmp_;
+      complex_[p].solve(r2_, x2_);
+      ++stats.lin_solves;
+      w_.col(j) += x2_.real();
+      w_.col(j + 1) += x2_.imag();
+      sum += (x2_.real().array() / scale_.array()).square().sum() +
+             (x2_.imag().array() / scale_.array()).square().sum();
+    }
+    combine_columns(w_, k_.t, z_);
+    const double norm = std::sqrt(sum / static_cast<double>(s_ * n_));
+    if (!std::isfinite(norm)) return false;
+    if (norm == 0.0) return true;
+    if (it > 0) {
+      const double theta = norm / norm_old;
+      if (theta >= 0.99) {
+        // No contraction: rounding noise (updates at a few hundred ulps of Z, or below the
+        // tolerance) ends the iteration as converged; anything larger is divergence.
+        double zsum = 0.0;
+        for (int i = 0; i < s_; ++i) zsum += (z_.col(i).array() / scale_.array()).square().sum();
+        const double znorm = std::sqrt(zsum / static_cast<double>(s_ * n_));
+        return norm <= std::max(opt_.newton_tol, 100.0 * kEps * znorm);
+      }
+      if (theta / (1.0 - theta) * norm <= opt_.newton_tol) return true;
+    }
+    norm_old = norm;
+  }
+  return false;
+}
+
+Status GaussCollocation::step(const OdeSystem& sys, double t, VecRef y, double h,
+                              SolveStats& stats) {
+  const bool continuing = have_prev_ && cached_y_ == y.data() &&
+                          std::abs(cached_t_ - t) <= 1e-12 * (std::abs(t) + std::abs(h));
+  if (!continuing) have_prev_ = false;
+  // J at (t_n, y_n); finite differences difference against f(t_n, y_n).
+  if (core_.jacobian_source() != JacobianSource::analytic) sys.rhs(t, y, f0_);
+  core_.new_step();
+  core_.update_jacobian(sys, t, y, f0_, stats);
+  const SparseMat& jac = core_.jacobian_matrix();
+  bool ok = true;
+  for (std::size_t r = 0; r < real_.size(); ++r) {
+    ++stats.lin_setups;
+    ok = ok && real_[r].factor(k_.real[r] / h, jac);
+  }
+  for (std::size_t p = 0; p < complex_.size(); ++p) {
+    ++stats.lin_setups;
+    ok = ok && complex_[p].factor(std::complex<double>(k_.a[p], -k_.b[p]) / h, jac);
+  }
+  if (!ok) {
+    stats.message = info().name + ": singular iteration matrix at t = " + std::to_string(t);
+    return Status::solver_error;
+  }
+  if (!solve_stages(sys, t, y, h, stats)) {
+    ++stats.newton_fails;
+    have_prev_ = false;
+    stats.message = info().name +
+                    ": simplified Newton did not converge at t = " + std::to_string(t) +
+                    " (h = " + std::to_string(h) + ")";
+    return Status::newton_failed;
+  }
+  for (int j = 0; j < s_; ++j) y += k_.d[j] * z_.col(j);
+  z_prev_ = z_;
+  h_prev_ = h;
+  have_prev_ = true;
+  cached_y_ = y.data();
+  cached_t_ = t + h;
+  return Status::ok;
+}
+
+}  // namespace stiffbench

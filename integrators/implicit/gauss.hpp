@@ -1,0 +1,108 @@
+// Gauss–Legendre collocation with s = 2 (gauss4, order 4) and s = 3 (gauss6, order 6) stages:
+// implicit, A-stable with |R(iy)| = 1 (R is the diagonal Padé approximant of e^z), symplectic
+// and symmetric (Hairer, Lubich & Wanner, Geometric Numerical Integration, §II.1.3, §VI.4;
+// Butcher 1964). Fixed step.
+//
+// Tableaux (Hairer–Nørsett–Wanner I, §II.7; c the zeros of the shifted Legendre polynomial):
+//   s = 2: c = ½ ∓ √3/6,  A = [[¼, ¼ - √3/6], [¼ + √3/6, ¼]],  b = (½, ½)
+//   s = 3: c = ½ - √15/10, ½, ½ + √15/10, b = (5/18, 4/9, 5/18),
+//          A = [[5/36, 2/9 - √15/15, 5/36 - √15/30],
+//               [5/36 + √15/24, 2/9, 5/36 - √15/24],
+//               [5/36 + √15/30, 2/9 + √15/15, 5/36]]
+//
+// Stage equations for Z_i = Y_i - y_n:  Z = h (A ⊗ I) F(Z),  y_{n+1} = y_n + Σ_j d_j Z_j with
+// dᵀ = bᵀA⁻¹ (equal to y_n + h Σ b_i f(Y_i) at the solution; no further f evaluations, HW II
+// IV.8). Simplified Newton with J = ∂f/∂y at (t_n, y_n): instead of the Kronecker system
+// (I - hA ⊗ J) ΔZ = -G of size s·n, the variables W = (T⁻¹ ⊗ I) Z with T⁻¹ A⁻¹ T = Λ
+// block-diagonal (real 1×1 blocks γ for real eigenvalues of A⁻¹, 2×2 blocks [[a, b], [-b, a]]
+// for pairs a ± ib; T from A⁻¹'s eigenvectors, computed at start-up and checked in the tests)
+// give independent systems
+//   (γ/h I - J) ΔW_j = r_j              (real eigenvalue)
+//   ((a - ib)/h I - J)(ΔW_j + iΔW_{j+1}) = r_j + i r_{j+1}   (complex pair)
+// with r = (T⁻¹ ⊗ I) F - h⁻¹ (Λ ⊗ I) W, the transformation of radau5 (HW II §IV.8). Gauss4's
+// A⁻¹ has one complex pair (one complex n×n system per iteration), gauss6's one real
+// eigenvalue and one pair (one real and one complex system). The linear solvers are radau5's
+// ShiftedSolver: dense LU up to 200 unknowns or with linear_solver=dense_lu, Eigen SparseLU over
+// the pattern of J otherwise or with linear_solver=sparse_lu.
+//
+// Newton: starting values from the previous step's collocation polynomial when the step
+// continues the last one (zero otherwise); θ_k = ‖ΔW_k‖/‖ΔW_{k-1}‖, η_k = θ_k/(1 - θ_k), RMS
+// norm scaled by 1 + |y_n,i|. Converged after at least one iteration when η_k ‖ΔW_k‖ ≤
+// newton_tol, or when contraction has stopped (θ ≥ 0.99) with ‖ΔW_k‖ ≤ max(newton_tol,
+// 100 ε ‖Z‖): the update is rounding noise. The default newton_tol = 1e-15 iterates to round-off,
+// so that the step is the symplectic map itself and the energy error of long runs stays bounded
+// without drift (GNI §VIII.6); a looser tolerance adds a non-symplectic perturbation of that size
+// each step. Failure (θ ≥ 0.99 above tolerance, non-finite values, newton_max_iter iterations) ends
+// the run with newton_failed.
+//
+// Counting: s f evaluations per Newton iteration; lin_setups +1 per factorisation (real or
+// complex), lin_solves +1 per system solved; J at every step (analytic, or finite differences
+// through the shared ImplicitCore, always the first-order form of mechanical systems). The
+// dense path allocates nothing per step; Eigen's SparseLU allocates in factorize().
+#pragma once
+
+#include <complex>
+#include <vector>
+
+#include "core/integrator.hpp"
+#include "core/tableau.hpp"
+#include "integrators/implicit/implicit_core.hpp"
+#include "integrators/implicit/radau5.hpp"
+
+namespace stiffbench {
+
+// s = 2 or 3.
+const ButcherTableau& gauss_tableau(int stages);
+
+struct GaussOptions {
+  double newton_tol = 1e-15;
+  int newton_max_iter = 20;
+  JacobianSource jacobian = JacobianSource::automatic;
+  LinearSolverKind linear = LinearSolverKind::automatic;
+};
+
+std::vector<ParamSpec> gauss_param_specs();
+GaussOptions read_gauss_options(const Params& p);
+
+// The transformation of the Newton iteration (exposed for the tests): T⁻¹ A⁻¹ T = Λ with the
+// real eigenvalues first, then one 2×2 block [[a, b], [-b, a]] per complex pair.
+struct GaussConstants {
+  Mat t, t_inv, lambda;
+  std::vector<double> real;  // real eigenvalues of A⁻¹ (Λ's leading 1×1 blocks)
+  std::vector<double> a, b;  // complex pairs a ± ib (Λ's 2×2 blocks)
+  Vec d;                     // dᵀ = bᵀ A⁻¹
+};
+const GaussConstants& gauss_constants(int stages);
+
+class GaussCollocation final : public Integrator {
+ public:
+  GaussCollocation(int stages, GaussOptions opt);
+
+  void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
+  Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
+  std::optional<LinearStability> linear_stability() const override {
+    return tableau_stability(tableau_);
+  }
+
+ private:
+  bool solve_stages(const OdeSystem& sys, double t, CVecRef y, double h, SolveStats& stats);
+  void starting_values(double h);
+
+  int s_;
+  const ButcherTableau& tableau_;
+  const GaussConstants& k_;
+  GaussOptions opt_;
+  ImplicitCore core_;
+  std::vector<ShiftedSolver<double>> real_;
+  std::vector<ShiftedSolver<std::complex<double>>> complex_;
+  Index n_ = 0;
+  Mat z_, w_, f_, z_prev_;
+  Vec f0_, scale_, tmp_, r1_, x1_;
+  Eigen::VectorXcd r2_, x2_;
+  double h_prev_ = 0.0;
+  bool have_prev_ = false;
+  const double* cached_y_ = nullptr;
+  double cached_t_ = 0.0;
+};
+
+}  // namespace stiffbench
