@@ -10,6 +10,8 @@ std::string to_string(Family f) {
       return "implicit";
     case Family::symplectic:
       return "symplectic";
+    case Family::splitting:
+      return "splitting";
     case Family::reference:
       return "reference";
   }
@@ -21,6 +23,7 @@ std::string describe_requirements(const Requirements& r) {
   if (r.mechanical) parts.emplace_back("mechanical system");
   if (r.velocity_independent) parts.emplace_back("velocity-independent acceleration");
   if (r.jacobian) parts.emplace_back("Jacobian");
+  if (r.grid_fluid) parts.emplace_back("grid fluid operators (fluid_2d)");
   std::string out;
   for (std::size_t i = 0; i < parts.size(); ++i) out += (i ? ", " : "") + parts[i];
   return out.empty() ? "-" : out;
@@ -45,6 +48,12 @@ void check_compatible(const MethodInfo& info, const OdeSystem& sys) {
   }
   if (info.requires_.jacobian && !sys.has_jacobian()) {
     throw BadInput(who + " needs an analytic Jacobian; model '" + sys.name() + "' has none");
+  }
+  if (info.requires_.grid_fluid && !sys.as_grid_fluid()) {
+    throw BadInput(who +
+                   " runs only on grid fluid models (fluid_2d): it composes their "
+                   "advection, diffusion and projection operators; model '" +
+                   sys.name() + "' has none");
   }
 }
 

@@ -16,7 +16,8 @@
 
 namespace stiffbench {
 
-enum class Family { explicit_rk, implicit, symplectic, reference };
+// splitting: schemes that compose a model's own operators (stable_fluids), not f.
+enum class Family { explicit_rk, implicit, symplectic, splitting, reference };
 std::string to_string(Family f);
 
 // What an integrator needs from the system.
@@ -24,6 +25,7 @@ struct Requirements {
   bool mechanical = false;            // y = [x; v] split (MechanicalSystem)
   bool velocity_independent = false;  // a(t, x) must not depend on v
   bool jacobian = false;              // an analytic Jacobian (otherwise finite differences)
+  bool grid_fluid = false;            // the GridFluid operators (core/grid_fluid.hpp)
 };
 
 struct MethodInfo {

@@ -33,6 +33,7 @@ std::vector<PlotPanel> family_panels(const std::vector<std::string>& integrators
       {"explicit", "explicit Runge-Kutta"},
       {"symplectic", "symplectic"},
       {"implicit", "implicit"},
+      {"splitting", "splitting schemes"},
       {"reference", "library references"},
       {"other", "other"}};
   std::vector<PlotPanel> panels;

@@ -35,6 +35,7 @@ std::vector<SuiteItem> default_suite(bool quick) {
   std::vector<std::string> all, general;  // general: methods for first-order systems
   for (const auto& e : integrator_registry().entries()) {
     if (e.info.family == Family::reference) continue;
+    if (e.info.requires_.grid_fluid) continue;  // stable_fluids: fluid_2d only
     all.push_back(e.info.name);
     if (!e.info.requires_.mechanical) general.push_back(e.info.name);
   }

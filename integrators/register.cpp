@@ -5,6 +5,7 @@
 #include "integrators/adaptive/embedded_rk.hpp"
 #include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/explicit/tableaux.hpp"
+#include "integrators/fluid/stable_fluids.hpp"
 #include "integrators/implicit/baraff_witkin.hpp"
 #include "integrators/implicit/dirk.hpp"
 #include "integrators/implicit/linearly_implicit.hpp"
@@ -130,6 +131,11 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
   reg.add({BaraffWitkin({}).info(), bw_specs, [](const Params& p) {
              return std::make_unique<BaraffWitkin>(read_implicit_options(p, false));
            }});
+}
+
+void register_splitting_integrators(IntegratorRegistry& reg) {
+  reg.add(
+      {StableFluids().info(), {}, [](const Params&) { return std::make_unique<StableFluids>(); }});
 }
 
 void register_reference_integrators(IntegratorRegistry& reg) {

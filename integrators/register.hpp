@@ -8,6 +8,8 @@ namespace stiffbench {
 void register_explicit_integrators(IntegratorRegistry& reg);
 void register_symplectic_integrators(IntegratorRegistry& reg);
 void register_implicit_integrators(IntegratorRegistry& reg);
+// Splitting schemes for particular model classes (stable_fluids: grid fluids).
+void register_splitting_integrators(IntegratorRegistry& reg);
 // The library references (integrators/reference/).
 void register_reference_integrators(IntegratorRegistry& reg);
 
