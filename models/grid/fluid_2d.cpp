@@ -302,6 +302,11 @@ std::vector<std::pair<double, double>> Fluid2d::centreline_u(CVecRef yv) const {
   return out;
 }
 
+std::optional<double> Fluid2d::end_time() const {
+  if (!periodic_) return std::nullopt;
+  return 1.0 / (16.0 * std::numbers::pi * std::numbers::pi * nu_);
+}
+
 std::optional<double> Fluid2d::stiffness(double, CVecRef) const {
   return 8.0 * nu_ / (dx_ * dx_) + 2.0 * speed_ / dx_;
 }
