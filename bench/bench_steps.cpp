@@ -364,6 +364,7 @@ void register_step_benchmarks(const Config& cfg) {
   const double h = 1e-3;
   for (const auto& e : integrator_registry().entries()) {
     if (e.info.family == Family::reference) continue;
+    if (e.info.requires_.grid_fluid) continue;  // stable_fluids: grid fluids only, not cloth
     const std::string name = e.info.name;
     add(
         "step/" + name + "/cloth:" + std::to_string(side) + omp_suffix(2),

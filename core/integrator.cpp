@@ -10,6 +10,8 @@ std::string to_string(Family f) {
       return "implicit";
     case Family::symplectic:
       return "symplectic";
+    case Family::splitting:
+      return "splitting";
     case Family::reference:
       return "reference";
     case Family::graphics:
@@ -25,6 +27,7 @@ std::string describe_requirements(const Requirements& r) {
   if (r.jacobian) parts.emplace_back("Jacobian");
   if (r.constraints) parts.emplace_back("holonomic constraints");
   if (r.spring_network) parts.emplace_back("spring network");
+  if (r.grid_fluid) parts.emplace_back("grid fluid operators (fluid_2d)");
   std::string out;
   for (std::size_t i = 0; i < parts.size(); ++i) out += (i ? ", " : "") + parts[i];
   return out.empty() ? "-" : out;
@@ -61,6 +64,12 @@ void check_compatible(const MethodInfo& info, const OdeSystem& sys) {
                    " needs a spring network (a mass-spring model listing its springs, "
                    "e.g. cloth, spring_chain, soft_cube, pendulum_chain); model '" +
                    sys.name() + "' is not one");
+  }
+  if (info.requires_.grid_fluid && !sys.as_grid_fluid()) {
+    throw BadInput(who +
+                   " runs only on grid fluid models (fluid_2d): it composes their "
+                   "advection, diffusion and projection operators; model '" +
+                   sys.name() + "' has none");
   }
 }
 

@@ -16,7 +16,9 @@
 
 namespace stiffbench {
 
-enum class Family { explicit_rk, implicit, symplectic, reference, graphics };
+// graphics: the graphics community's spring solvers (xpbd, projective_dynamics);
+// splitting: schemes that compose a model's own operators (stable_fluids), not f.
+enum class Family { explicit_rk, implicit, symplectic, graphics, splitting, reference };
 std::string to_string(Family f);
 
 // What an integrator needs from the system.
@@ -28,6 +30,7 @@ struct Requirements {
   // method enforces them itself, so the driver does not project after its steps.
   bool constraints = false;
   bool spring_network = false;        // the system's springs (OdeSystem::spring_network())
+  bool grid_fluid = false;            // the GridFluid operators (core/grid_fluid.hpp)
 };
 
 struct MethodInfo {

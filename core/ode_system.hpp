@@ -29,6 +29,7 @@ struct Invariant {
 class MechanicalSystem;
 class HolonomicConstraints;  // core/constraints.hpp
 struct SpringNetworkView;  // core/springs.hpp
+class GridFluid;
 
 // A model's suggested fixed step (its CFL or diffusion limit) and the rule that gave it, e.g.
 // "CFL 0.4 h/c, h = 0.0114 (support radius), c = 23.9 m/s". Fixed-step commands and studies run
@@ -49,6 +50,25 @@ struct ParticleFrame {
   std::vector<double> positions;  // 3 per point (unused components 0)
   std::vector<Field> fields;
   Index points() const { return static_cast<Index>(positions.size() / 3); }
+};
+
+// One snapshot of a grid model for frame output (VTK image data): cell-centred fields on an
+// nx × ny grid of square cells of side `spacing` whose lower-left corner is `origin`. Values are
+// stored cell by cell, x fastest (the VTK order); vector fields have 3 components.
+struct GridFrame {
+  int nx = 0, ny = 0;
+  double origin_x = 0, origin_y = 0, spacing = 1;
+  std::vector<ParticleFrame::Field> cell_fields;
+  Index cells() const { return static_cast<Index>(nx) * ny; }
+};
+
+// A table a model derives from its state for output beside the frames, e.g. a velocity profile
+// along a line; `solve --frames` writes it as DIR/<name>.csv at every frame (so the file holds the
+// last frame's values).
+struct Profile {
+  std::string name;
+  std::vector<std::string> columns;
+  std::vector<std::vector<double>> rows;
 };
 
 class OdeSystem {
@@ -121,6 +141,12 @@ class OdeSystem {
   virtual bool has_particles() const { return false; }
   virtual ParticleFrame particles(double /*t*/, CVecRef /*y*/) const { return {}; }
 
+  // Grid view for frame output (`solve --frames N --out DIR` writes VTK image data from it).
+  virtual bool has_grid() const { return false; }
+  virtual GridFrame grid_frame(double /*t*/, CVecRef /*y*/) const { return {}; }
+  // Profiles written beside the frames (see Profile).
+  virtual std::vector<Profile> profiles(double /*t*/, CVecRef /*y*/) const { return {}; }
+
   // Optional holonomic constraints C(y) = 0 enforced strictly, not by forces. The fixed-step
   // driver calls project() after every accepted step of every integrator except those that
   // enforce the constraints themselves (Requirements::constraints: rattle); the model projects
@@ -135,6 +161,9 @@ class OdeSystem {
 
   // Non-null for mass-spring networks that list their springs (core/springs.hpp).
   virtual const SpringNetworkView* spring_network() const { return nullptr; }
+  // Non-null for Eulerian grid fluids that expose their operators to splitting schemes
+  // (core/grid_fluid.hpp; stable_fluids requires it).
+  virtual const GridFluid* as_grid_fluid() const { return nullptr; }
 
   const EvalCounters& counters() const { return counters_; }
   void reset_counters() const { counters_ = {}; }

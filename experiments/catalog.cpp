@@ -18,6 +18,7 @@ ModelRegistry& mutable_model_registry() {
     register_problem_models(r);
     register_mass_spring_models(r);
     register_sph_models(r);
+    register_grid_models(r);
     return r;
   }();
   return reg;
@@ -30,6 +31,7 @@ IntegratorRegistry& mutable_integrator_registry() {
     register_symplectic_integrators(r);
     register_implicit_integrators(r);
     register_graphics_integrators(r);
+    register_splitting_integrators(r);
     register_reference_integrators(r);
     annotate_built_in_integrators(r);
     return r;

@@ -273,7 +273,9 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
                   "--frame-format must be vtu or vtk (got '" + opt.frame_format + "')");
     frame_writer = std::make_unique<FrameWriter>(
         sys, opt.out_csv, opt.frame_format == "vtk" ? FrameFormat::vtk : FrameFormat::vtu);
-    traj_path = sys.has_particles() ? "" : (frame_writer->dir() / "trajectory.csv").string();
+    traj_path = sys.has_particles() || sys.has_grid()
+                    ? ""
+                    : (frame_writer->dir() / "trajectory.csv").string();
   }
   std::ostringstream traj;
   if (!traj_path.empty()) {
@@ -429,6 +431,11 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
     if (sys.has_particles())
       out << ", VTK frames in " << dir.string() << "/frame_*."
           << (opt.frame_format == "vtk" ? "vtk" : "vtu (frames.pvd)");
+    if (sys.has_grid())
+      out << ", VTK image data in " << dir.string() << "/frame_*."
+          << (opt.frame_format == "vtk" ? "vtk" : "vti (frames.pvd)");
+    for (const Profile& p : sys.profiles(r.t, r.y))
+      out << ", " << (dir / (p.name + ".csv")).string();
     out << "\n";
     // Plots of the last frame (pressure) and, for a dam break, of the front against K&O.
     if (sys.has_particles() && frame_writer->frames() > 0) {

@@ -4,7 +4,11 @@
 // DIR/frame_0000.vtk, ... (POLYDATA with vertices) — and the same frame as CSV for gnuplot
 // (DIR/frame_0000.csv: x,y,z, then one column per scalar field and vector component, e.g.
 // density,pressure,velocity_x,velocity_y,velocity_z,fluid); for every model, DIR/observables.csv
-// (t, then the model's invariants and observables, one row per frame).
+// (t, then the model's invariants and observables, one row per frame). A grid model (has_grid)
+// writes VTK image data instead — XML DIR/frame_0000.vti (ImageData, one cell per grid cell,
+// CellData from its GridFrame) in the same frames.pvd collection, or legacy STRUCTURED_POINTS
+// DIR/frame_0000.vtk with CELL_DATA — and the frame CSV at the cell centres. Every model's
+// profiles() are written as DIR/<name>.csv at every frame (the last frame's values remain).
 // Files are rewritten atomically after every frame, so an interrupted run leaves a complete
 // collection and table of the frames written so far.
 #pragma once
@@ -25,6 +29,12 @@ std::string vtu_text(const ParticleFrame& frame);
 std::string legacy_vtk_text(const ParticleFrame& frame, double t);
 // The CSV text of one frame (header x,y,z,<fields>).
 std::string frame_csv_text(const ParticleFrame& frame);
+// The VTK XML ImageData text of a grid frame (ASCII Float64 cell data).
+std::string vti_text(const GridFrame& frame);
+// The legacy VTK STRUCTURED_POINTS text of a grid frame (CELL_DATA).
+std::string legacy_vtk_grid_text(const GridFrame& frame, double t);
+// The grid frame as points at the cell centres (for the frame CSV).
+ParticleFrame cell_centres(const GridFrame& frame);
 
 class FrameWriter {
  public:

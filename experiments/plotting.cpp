@@ -34,6 +34,7 @@ std::vector<PlotPanel> family_panels(const std::vector<std::string>& integrators
       {"symplectic", "symplectic"},
       {"implicit", "implicit"},
       {"graphics", "graphics (spring solvers)"},
+      {"splitting", "splitting schemes"},
       {"reference", "library references"},
       {"other", "other"}};
   std::vector<PlotPanel> panels;

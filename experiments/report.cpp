@@ -38,6 +38,7 @@ std::vector<SuiteItem> default_suite(bool quick) {
     // suite's models are neither.
     if (e.info.family == Family::reference || e.info.requires_.constraints) continue;
     if (e.info.requires_.spring_network) continue;
+    if (e.info.requires_.grid_fluid) continue;  // stable_fluids: fluid_2d only
     all.push_back(e.info.name);
     if (!e.info.requires_.mechanical) general.push_back(e.info.name);
   }

@@ -122,6 +122,8 @@ const std::map<std::string, MethodNote>& method_notes() {
        {"local/global backward Euler",
         "T. Liu, A. W. Bargteil, J. F. O'Brien & L. Kavan, Fast simulation of mass-spring "
         "systems, ACM Trans. Graph. 32(6) (SIGGRAPH Asia 2013) 214"}},
+      {"stable_fluids",
+       {"operator splitting (semi-Lagrangian)", "J. Stam, Stable fluids, SIGGRAPH 1999, 121-128"}},
       // Library references.
       {"cvode_bdf", {"library: CVODE", kSundials}},
       {"cvode_adams", {"library: CVODE", kSundials}},

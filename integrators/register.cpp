@@ -7,6 +7,7 @@
 #include "integrators/explicit/tableaux.hpp"
 #include "integrators/graphics/projective_dynamics.hpp"
 #include "integrators/graphics/xpbd.hpp"
+#include "integrators/fluid/stable_fluids.hpp"
 #include "integrators/implicit/baraff_witkin.hpp"
 #include "integrators/implicit/dirk.hpp"
 #include "integrators/implicit/gauss.hpp"
@@ -192,6 +193,11 @@ void register_graphics_integrators(IntegratorRegistry& reg) {
   reg.add({ProjectiveDynamics({}).info(), projective_dynamics_param_specs(), [](const Params& p) {
              return std::make_unique<ProjectiveDynamics>(read_projective_dynamics_options(p));
            }});
+}
+
+void register_splitting_integrators(IntegratorRegistry& reg) {
+  reg.add(
+      {StableFluids().info(), {}, [](const Params&) { return std::make_unique<StableFluids>(); }});
 }
 
 void register_reference_integrators(IntegratorRegistry& reg) {

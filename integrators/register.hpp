@@ -10,6 +10,8 @@ void register_symplectic_integrators(IntegratorRegistry& reg);
 void register_implicit_integrators(IntegratorRegistry& reg);
 // XPBD and projective dynamics (integrators/graphics/): mass-spring networks only.
 void register_graphics_integrators(IntegratorRegistry& reg);
+// Splitting schemes for particular model classes (stable_fluids: grid fluids).
+void register_splitting_integrators(IntegratorRegistry& reg);
 // The library references (integrators/reference/).
 void register_reference_integrators(IntegratorRegistry& reg);
 

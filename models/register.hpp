@@ -8,5 +8,6 @@ namespace stiffbench {
 void register_problem_models(ModelRegistry& reg);
 void register_mass_spring_models(ModelRegistry& reg);
 void register_sph_models(ModelRegistry& reg);
+void register_grid_models(ModelRegistry& reg);
 
 }  // namespace stiffbench

@@ -6,7 +6,8 @@
 #               npanels='1'; pmethods1='cvode_bdf sdirk3'; ptitle1='implicit'; ttl='title'; \
 #               plotdir='plots'" plots/work_precision.gp
 #
-# Columns: 2 integrator, 4 error, 5 f_evals, 9 wall_s.
+# Columns: 2 integrator, 4 error, 5 f_evals, 9 wall_s. Rows without f evaluations (stable_fluids
+# composes the model's operators and never evaluates f) are left out of the f-evaluation panel.
 panelh = 460
 load plotdir."/common.gp"
 # Two panels (f evaluations, wall time) per family: override the layout of common.gp.
@@ -27,12 +28,18 @@ do for [K=1:np] {
   stats csvfile every ::1 using (inlist(strcol(2), m) && column(4) > 0 ? $4 : NaN) nooutput
   valid = exists("STATS_records") ? STATS_records : 0
   undefine STATS_*
-  if (valid == 0) { eval empty_panel_on }
+  stats csvfile every ::1 using (inlist(strcol(2), m) && column(4) > 0 && column(5) > 0 ? $4 : NaN) nooutput
+  fvalid = exists("STATS_records") ? STATS_records : 0
+  undefine STATS_*
+  if (fvalid == 0) { eval empty_panel_on }
+  if (fvalid == 0 && valid > 0) { set label 99 "no f evaluations (see the wall-time panel)" at graph 0.5, 0.5 center }
   set xlabel "error at t_{end} (max-norm)"
   set ylabel "f evaluations"
   set title ptitle(K)." - f evaluations" noenhanced
-  plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 ? $4 : NaN):5 \
+  plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 && column(5) > 0 ? $4 : NaN):5 \
        with linespoints lt j title word(m, j)
+  eval empty_panel_off
+  if (valid == 0) { eval empty_panel_on }
   set ylabel "wall time [s] (minimum over repeats)"
   set title ptitle(K)." - wall time" noenhanced
   plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 ? $4 : NaN):9 \

@@ -313,6 +313,34 @@ TEST(Cli, ListsAndDescribesTheSphScenes) {
     EXPECT_NE(d.out.find(key), std::string::npos) << key;
 }
 
+// Issue 13, "done when" 3: solve on the cavity writes VTK image data frames (one .vti per frame in
+// frames.pvd, no trajectory), observables.csv and centreline.csv (y, u: n rows).
+TEST(Cli, SolveCavityWritesImageDataFramesAndCentreline) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("sb_cavity_frames_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  const Outcome o =
+      run("solve --model fluid_2d --param scene=cavity --param n=8 --integrator rk4 --h 0.01 "
+          "--t-end 0.1 --frames 5 --out " +
+          dir.string());
+  ASSERT_EQ(o.code, 0) << o.err;
+  for (int k = 0; k <= 5; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%04d.vti", k);
+    EXPECT_TRUE(std::filesystem::exists(dir / name)) << name;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "trajectory.csv"));
+  EXPECT_NE(o.out.find("centreline.csv"), std::string::npos) << o.out;
+  const auto rows = read_csv(dir / "centreline.csv");
+  ASSERT_EQ(rows.size(), 9u);
+  EXPECT_EQ(rows.front(), (std::vector<std::string>{"y", "u"}));
+  EXPECT_DOUBLE_EQ(std::stod(rows[1][0]), 0.0625);  // the first cell centre, Δx/2
+  const auto obs = read_csv(dir / "observables.csv");
+  ASSERT_EQ(obs.size(), 7u);
+  EXPECT_EQ(obs.front(), (std::vector<std::string>{"t", "kinetic_energy", "max_divergence"}));
+  std::filesystem::remove_all(dir);
+}
+
 // Issue #8, "done when" 2: solve without --h runs at the suggested step, says so, and writes
 // 21 VTK frames (+ CSV copies) and observables.csv with the front, which starts at a = 0.146.
 TEST(Cli, SolveDamBreakWritesFramesAtTheSuggestedStep) {

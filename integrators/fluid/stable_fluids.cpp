@@ -1,0 +1,37 @@
+#include "integrators/fluid/stable_fluids.hpp"
+
+#include "core/grid_fluid.hpp"
+
+namespace stiffbench {
+
+namespace {
+Requirements fluid_needs() {
+  Requirements r;
+  r.grid_fluid = true;
+  return r;
+}
+}  // namespace
+
+StableFluids::StableFluids()
+    : Integrator({"stable_fluids", Family::splitting, 1, 0, fluid_needs(),
+                  "Stam's stable fluids (1999): body force, semi-Lagrangian advection, implicit "
+                  "diffusion, pressure projection; grid fluids only (fluid_2d)"}) {}
+
+void StableFluids::reset(const OdeSystem& sys, double, CVecRef y0) {
+  check_compatible(info(), sys);
+  w1_.resize(y0.size());
+  w2_.resize(y0.size());
+}
+
+Status StableFluids::step(const OdeSystem& sys, double, VecRef y, double h, SolveStats& stats) {
+  const GridFluid* fluid = sys.as_grid_fluid();
+  w1_ = y;
+  fluid->add_body_force(h, w1_);
+  fluid->advect(h, w1_, w1_, w2_);
+  stats.lin_solves += fluid->diffuse(h, w2_, w1_);
+  stats.lin_solves += fluid->project_divergence_free(w1_);
+  y = w1_;
+  return y.allFinite() ? Status::ok : Status::unstable;
+}
+
+}  // namespace stiffbench

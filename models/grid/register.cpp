@@ -1,0 +1,101 @@
+// Registration of the Eulerian grid models (models/grid/) with their parameters.
+#include <cmath>
+
+#include "models/grid/fluid_2d.hpp"
+#include "models/grid/heat_2d.hpp"
+#include "models/register.hpp"
+
+namespace stiffbench {
+
+namespace {
+
+using P = ParamType;
+
+int grid_int(const Params& p, const std::string& key, const std::string& model, long lo, long hi) {
+  const long v = p.integer(key);
+  require_input(v >= lo && v <= hi, model + ": parameter '" + key + "' must be in [" +
+                                        std::to_string(lo) + ", " + std::to_string(hi) + "] (got " +
+                                        std::to_string(v) + ")");
+  return static_cast<int>(v);
+}
+
+void add_heat(ModelRegistry& reg) {
+  reg.add({{"heat_2d",
+            "heat equation u' = nu Laplace(u) on an n x n grid (5-point stencil), a sine mode; "
+            "stiffness knob nu/dx^2",
+            false, true,
+            "exact solution exp(lambda t) u0 of the semi-discrete system (lambda the stencil's "
+            "eigenvalue of the mode)"},
+           {{"n", P::integer, "32", "grid points per direction (unknowns n^2)"},
+            {"nu", P::real, "1", "diffusivity nu (> 0)"},
+            {"boundary",
+             P::text,
+             "periodic",
+             "periodic (cell centres, dx = 1/n) or dirichlet (u = 0, interior nodes, dx = "
+             "1/(n+1))",
+             {"periodic", "dirichlet"}},
+            {"kx", P::integer, "1", "mode number along x"},
+            {"ky", P::integer, "1", "mode number along y"}},
+           [](const Params& p) {
+             const int n = grid_int(p, "n", "heat_2d", 3, 4096);
+             const auto b = p.text("boundary") == "dirichlet" ? Heat2d::Boundary::dirichlet
+                                                              : Heat2d::Boundary::periodic;
+             return std::make_unique<Heat2d>(n, p.real("nu"), b,
+                                             grid_int(p, "kx", "heat_2d", 1, 4096),
+                                             grid_int(p, "ky", "heat_2d", 1, 4096));
+           }});
+}
+
+void add_fluid(ModelRegistry& reg) {
+  reg.add({{"fluid_2d",
+            "incompressible Navier-Stokes on a MAC grid, u' = P[-(u.grad)u + nu Laplace(u) + g] "
+            "(pressure projection); scenes taylor_green (periodic) and cavity (lid-driven); "
+            "observables kinetic_energy, max_divergence",
+            false, false,
+            "Taylor-Green: kinetic energy decays as exp(-16 pi^2 t/Re) (REFERENCES.md); cavity: "
+            "Ghia, Ghia & Shin 1982 centreline profiles"},
+           {{"scene",
+             P::text,
+             "taylor_green",
+             "taylor_green (periodic unit box, u = sin 2pi x cos 2pi y) or cavity (walls, lid "
+             "at y = 1, starting at rest)",
+             {"taylor_green", "cavity"}},
+            {"n", P::integer, "32", "cells per direction (unknowns about 2 n^2)"},
+            {"re", P::real, "100", "Reynolds number U L / nu (U = 1 or the lid speed, L = 1)"},
+            {"lid", P::real, "1", "cavity lid speed U along x"},
+            {"gravity", P::real, "0", "body force along -y"},
+            {"solver",
+             P::text,
+             "cholesky",
+             "pressure Poisson solver: cholesky (sparse LDLT factorised once per grid) or cg",
+             {"cholesky", "cg"}},
+            {"advection",
+             P::text,
+             "linear",
+             "interpolation of the semi-Lagrangian advection (stable_fluids only): linear "
+             "(Stam 1999) or cubic (Catmull-Rom)",
+             {"linear", "cubic"}}},
+           [](const Params& p) {
+             Fluid2dOptions o;
+             o.scene = p.text("scene") == "cavity" ? Fluid2dOptions::Scene::cavity
+                                                   : Fluid2dOptions::Scene::taylor_green;
+             o.n = grid_int(p, "n", "fluid_2d", 4, 2048);
+             o.re = p.real("re");
+             o.lid = p.real("lid");
+             o.gravity = p.real("gravity");
+             o.solver = p.text("solver") == "cg" ? Fluid2dOptions::Solver::cg
+                                                 : Fluid2dOptions::Solver::cholesky;
+             o.advection = p.text("advection") == "cubic" ? Fluid2dOptions::Advection::cubic
+                                                          : Fluid2dOptions::Advection::linear;
+             return std::make_unique<Fluid2d>(o);
+           }});
+}
+
+}  // namespace
+
+void register_grid_models(ModelRegistry& reg) {
+  add_heat(reg);
+  add_fluid(reg);
+}
+
+}  // namespace stiffbench
