@@ -278,6 +278,13 @@ int cli_main(int argc, char** argv) {
     std::cerr << "stiffbench: error: " << e.what() << "\n";
     return 1;
   }
+  // A run that ended with status error (the model or the integrator threw mid-run) is a failed
+  // row: its table was written, and the exit code says so (README).
+  if (const long faults = fault_count(); faults > 0) {
+    std::cerr << "stiffbench: " << faults << " run" << (faults == 1 ? "" : "s")
+              << " ended with status error (see the status and message columns)\n";
+    return kExitRowsFailed;
+  }
   return 0;
 }
 
