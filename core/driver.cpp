@@ -1,9 +1,9 @@
 #include "core/driver.hpp"
 
-#include <limits>
-
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace stiffbench {
@@ -34,7 +34,21 @@ double max_norm(const Vec& y) {
   return nan ? std::numeric_limits<double>::quiet_NaN() : m;
 }
 
+std::atomic<long> g_faults{0};
+
+// A model or integrator that threw mid-run: the run ends here with status error and the
+// exception's message; the study goes on with its other rows.
+void record_fault(RunResult& r, const std::exception& e, double t_goal) {
+  r.stats.status = Status::error;
+  std::ostringstream msg;
+  msg << "exception in the step from t = " << r.t << " towards " << t_goal << ": " << e.what();
+  r.stats.message = msg.str();
+  ++g_faults;
+}
+
 }  // namespace
+
+long fault_count() { return g_faults.load(); }
 
 long fixed_step_count(double t0, double t_end, double h, long max_steps) {
   require_input(std::isfinite(h) && h > 0,
@@ -83,7 +97,15 @@ RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0
   integ.reset(sys, t0, r.y);
   if (observer) observer(r.t, r.y);
   for (long k = 0; k < n; ++k) {
-    const Status s = integ.step(sys, r.t, r.y, r.h, r.stats);
+    Status s = Status::ok;
+    try {
+      s = integ.step(sys, r.t, r.y, r.h, r.stats);
+    } catch (const BadInput&) {
+      throw;  // a setting refused lazily is still bad input
+    } catch (const std::exception& e) {
+      record_fault(r, e, r.t + r.h);
+      break;
+    }
     r.t = (k + 1 == n) ? opt.t_end : t0 + static_cast<double>(k + 1) * r.h;
     ++r.stats.steps;
     // Methods that enforce the constraints themselves (rattle) are not projected afterwards.
@@ -148,7 +170,15 @@ RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOp
   integ.reset(sys, t0, r.y);
   if (observer) observer(r.t, r.y);
   for (const double t_out : stops) {
-    const Status s = integ.advance_to(sys, t_out, r.y, r.stats);
+    Status s = Status::ok;
+    try {
+      s = integ.advance_to(sys, t_out, r.y, r.stats);
+    } catch (const BadInput&) {
+      throw;
+    } catch (const std::exception& e) {
+      record_fault(r, e, t_out);
+      break;
+    }
     if (s != Status::ok) {
       r.stats.status = s;
       break;

@@ -64,4 +64,11 @@ struct AdaptiveOptions {
 RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOptions& opt,
                        const Observer& observer = {});
 
+// Faults inside a run (issue 14): an exception other than BadInput thrown by the model or the
+// integrator during run_fixed_step* or run_adaptive ends that run with Status::error and the
+// exception's message (the state is the last one reached) instead of ending the study. NaN or
+// Inf in the state ends it with Status::unstable. This counts the runs that ended with error in
+// this process; the command line exits with kExitRowsFailed (3) when it is not zero.
+long fault_count();
+
 }  // namespace stiffbench

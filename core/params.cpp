@@ -1,5 +1,7 @@
 #include "core/params.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -27,6 +29,46 @@ std::string join(const std::vector<std::string>& items, const std::string& sep) 
     out += items[i];
   }
   return out;
+}
+
+std::vector<std::string> closest_names(const std::string& name,
+                                       const std::vector<std::string>& known) {
+  // Levenshtein distance (insert, delete, substitute), case-insensitive.
+  auto lower = [](char c) { return static_cast<char>(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c); };
+  auto distance = [&](const std::string& a, const std::string& b) {
+    std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+      cur[0] = i;
+      for (std::size_t j = 1; j <= b.size(); ++j)
+        cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1,
+                           prev[j - 1] + (lower(a[i - 1]) == lower(b[j - 1]) ? 0 : 1)});
+      std::swap(prev, cur);
+    }
+    return prev[b.size()];
+  };
+  const std::size_t max_distance = std::max<std::size_t>(2, name.size() / 3);
+  std::vector<std::pair<std::size_t, std::string>> scored;
+  for (const auto& k : known) {
+    const bool prefix =
+        name.size() >= 3 && k.size() > name.size() && k.compare(0, name.size(), name) == 0;
+    const std::size_t d = prefix ? 1 : distance(name, k);
+    if (d <= max_distance && k != name) scored.emplace_back(d, k);
+  }
+  std::stable_sort(scored.begin(), scored.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < scored.size() && i < 3; ++i) out.push_back(scored[i].second);
+  return out;
+}
+
+std::string did_you_mean(const std::string& name, const std::vector<std::string>& known) {
+  const auto close = closest_names(name, known);
+  if (close.empty()) return "";
+  std::string s = "; did you mean ";
+  for (std::size_t i = 0; i < close.size(); ++i)
+    s += (i == 0 ? "" : i + 1 == close.size() ? " or " : ", ") + ("'" + close[i] + "'");
+  return s + "?";
 }
 
 Params Params::from_assignments(const std::vector<std::string>& assignments) {
@@ -134,10 +176,12 @@ Params resolve_params(const std::vector<ParamSpec>& specs, const Params& user,
 }
 
 void check_all_consumed(const Params& user, const std::set<std::string>& consumed,
-                        const std::string& accepted_summary) {
+                        const std::string& accepted_summary,
+                        const std::vector<std::string>& known_keys) {
   for (const auto& [key, value] : user.values()) {
     if (!consumed.count(key)) {
-      throw BadInput("unknown parameter '" + key + "' (" + accepted_summary + ")");
+      throw BadInput("unknown parameter '" + key + "'" + did_you_mean(key, known_keys) + " (" +
+                     accepted_summary + ")");
     }
   }
 }

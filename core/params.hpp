@@ -86,9 +86,18 @@ class Params {
 Params resolve_params(const std::vector<ParamSpec>& specs, const Params& user,
                       std::set<std::string>* consumed, const std::string& owner);
 
-// BadInput naming the first user key that no consumer took, with what each consumer accepts.
+// BadInput naming the first user key that no consumer took, the closest of `known_keys` and what
+// each consumer accepts.
 void check_all_consumed(const Params& user, const std::set<std::string>& consumed,
-                        const std::string& accepted_summary);
+                        const std::string& accepted_summary,
+                        const std::vector<std::string>& known_keys = {});
+
+// The known names closest to `name` (edit distance at most max(2, |name|/3), or `name` a prefix
+// of them), best first, at most three: for "did you mean" hints.
+std::vector<std::string> closest_names(const std::string& name,
+                                       const std::vector<std::string>& known);
+// "; did you mean 'x' or 'y'?" or "" when nothing is close.
+std::string did_you_mean(const std::string& name, const std::vector<std::string>& known);
 
 // "k1, k2, k3" for messages.
 std::string join(const std::vector<std::string>& items, const std::string& sep = ", ");

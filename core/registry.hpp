@@ -48,10 +48,17 @@ class Registry {
     return nullptr;
   }
 
+  Entry* find_mutable(const std::string& name) {
+    for (auto& e : entries_)
+      if (e.info.name == name) return &e;
+    return nullptr;
+  }
+
   // BadInput naming the unknown name and listing the known ones.
   const Entry& at(const std::string& name) const {
     if (const Entry* e = find(name)) return *e;
-    throw BadInput("unknown " + kind_ + " '" + name + "'; known: " + join(names()));
+    throw BadInput("unknown " + kind_ + " '" + name + "'" + did_you_mean(name, names()) +
+                   "; known: " + join(names()));
   }
 
   std::vector<std::string> names() const {

@@ -15,6 +15,8 @@ std::string to_string(Status s) {
       return "newton_failed";
     case Status::solver_error:
       return "solver_error";
+    case Status::error:
+      return "error";
   }
   return "?";
 }

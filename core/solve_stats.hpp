@@ -7,7 +7,9 @@
 
 namespace stiffbench {
 
-enum class Status { ok, unstable, newton_failed, solver_error };
+// error: the model or the integrator threw during the run (a fault, not a numerical outcome);
+// the driver ends that run with this status and the exception's message (core/driver.hpp).
+enum class Status { ok, unstable, newton_failed, solver_error, error };
 
 std::string to_string(Status s);
 

@@ -1,6 +1,10 @@
 #include "experiments/catalog.hpp"
 
+#include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <set>
+#include <sstream>
 
 #include "integrators/method_notes.hpp"
 #include "integrators/register.hpp"
@@ -77,6 +81,11 @@ void register_integrator(IntegratorRegistry::Entry entry) {
 Setup make_setup(const std::string& model, const std::vector<std::string>& integrators,
                  const Params& user) {
   Setup s;
+  // Look the model up first so an unknown name is reported as such, then check the sizes
+  // before anything is allocated.
+  model_registry().at(model);
+  for (const auto& name : integrators) integrator_registry().at(name);
+  check_run_size(model, integrators, user);
   std::set<std::string> consumed;
   std::string accepted = model_registry().accepted_keys(model);
   // Look every name up before creating anything, so the first error is the unknown name.
@@ -88,8 +97,165 @@ Setup make_setup(const std::string& model, const std::vector<std::string>& integ
     if (!integrator_registry().at(name).params.empty())
       accepted += "; " + integrator_registry().accepted_keys(name);
   }
-  check_all_consumed(user, consumed, accepted);
+  std::vector<std::string> keys;
+  for (const auto& p : model_registry().at(model).params) keys.push_back(p.key);
+  for (const auto& name : integrators)
+    for (const auto& p : integrator_registry().at(name).params) keys.push_back(p.key);
+  check_all_consumed(user, consumed, accepted, keys);
   return s;
+}
+
+namespace {
+double g_memory_limit = 0;  // --max-memory; 0: the available memory
+
+double available_memory() {
+  std::ifstream in("/proc/meminfo");
+  std::string key, unit;
+  double kb = 0;
+  while (in >> key >> kb) {
+    std::getline(in, unit);
+    if (key == "MemAvailable:") return kb * 1024.0;
+  }
+  return 0;  // unknown: only --max-memory and kMaxDimension apply
+}
+
+// Work vectors of a run: the integrators' stages and workspaces (Radau5: 3 complex stages and
+// Newton vectors; extrapolation-free), the driver's outputs and the model's scratch; generous.
+constexpr double kWorkVectors = 48;
+// Sparse matrices: value + index (12 bytes) for the Jacobian, the iteration matrix and an LU
+// or Cholesky factor with fill (x4).
+constexpr double kSparseCopies = 6;
+
+bool uses_dense(const Params& p) {
+  auto is = [&](const char* key, std::initializer_list<const char*> values) {
+    if (!p.contains(key)) return false;
+    for (const char* v : values)
+      if (p.values().at(key) == v) return true;
+    return false;
+  };
+  return is("linear_solver", {"dense_lu", "dense"}) || is("jacobian", {"fd_dense"});
+}
+}  // namespace
+
+std::string format_bytes(double bytes) {
+  const char* units[] = {"bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
+  int u = 0;
+  while (bytes >= 1024.0 && u < 6) {
+    bytes /= 1024.0;
+    ++u;
+  }
+  char buf[64];
+  if (u == 0)
+    std::snprintf(buf, sizeof buf, "%.0f bytes", bytes);
+  else
+    std::snprintf(buf, sizeof buf, "%.3g %s", bytes, units[u]);
+  return buf;
+}
+
+double parse_memory_size(const std::string& text, const std::string& flag) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    throw BadInput(flag + ": '" + text + "' is not a size (bytes, or a number with K, M, G or T)");
+  }
+  std::string suffix = text.substr(used);
+  if (suffix.size() == 3 && (suffix.substr(1) == "iB" || suffix.substr(1) == "ib"))
+    suffix = suffix.substr(0, 1);
+  else if (suffix.size() == 2 && (suffix[1] == 'B' || suffix[1] == 'b'))
+    suffix = suffix.substr(0, 1);
+  double scale = 1;
+  if (suffix.empty() || suffix == "B")
+    scale = 1;
+  else if (suffix == "K" || suffix == "k")
+    scale = 1024.0;
+  else if (suffix == "M" || suffix == "m")
+    scale = 1024.0 * 1024;
+  else if (suffix == "G" || suffix == "g")
+    scale = 1024.0 * 1024 * 1024;
+  else if (suffix == "T" || suffix == "t")
+    scale = 1024.0 * 1024 * 1024 * 1024;
+  else
+    throw BadInput(flag + ": '" + text + "' is not a size (bytes, or a number with K, M, G or T)");
+  require_input(std::isfinite(v) && v > 0,
+                flag + ": '" + text + "' must be a positive finite size");
+  return v * scale;
+}
+
+void set_memory_limit(double bytes) { g_memory_limit = bytes; }
+
+double memory_limit(std::string* source) {
+  if (g_memory_limit > 0) {
+    if (source) *source = "--max-memory";
+    return g_memory_limit;
+  }
+  if (source) *source = "the memory available on this machine (raise or lower with --max-memory)";
+  return available_memory();
+}
+
+RunMemory estimate_run_memory(const std::string& model, const std::vector<std::string>& integrators,
+                              const Params& user) {
+  RunMemory m;
+  const auto& entry = model_registry().at(model);
+  if (!entry.info.size) return m;
+  // The model's parameters with defaults; a value that does not parse is reported here exactly
+  // as the model's creation would report it.
+  m.model = entry.info.size(resolve_params(entry.params, user, nullptr, "model '" + model + "'"));
+  const double n = m.model.dimension;
+  m.state_bytes = kWorkVectors * 8.0 * n;
+  for (const auto& name : integrators) {
+    const auto& ie = integrator_registry().at(name);
+    if (ie.info.family != Family::implicit && ie.info.family != Family::reference) continue;
+    const Params ip = resolve_params(ie.params, user, nullptr, "integrator '" + name + "'");
+    m.jacobian_bytes = std::max(m.jacobian_bytes, kSparseCopies * 12.0 * m.model.jacobian_nonzeros);
+    if (uses_dense(ip)) {
+      // Jacobian, iteration matrix and LU factor: three n x n doubles (Radau5's complex system
+      // is of the same order).
+      const double dense = 3.0 * 8.0 * n * n;
+      if (dense > m.dense_bytes) {
+        m.dense_bytes = dense;
+        m.dense_integrator = name;
+      }
+    }
+  }
+  return m;
+}
+
+void check_run_size(const std::string& model, const std::vector<std::string>& integrators,
+                    const Params& user) {
+  const RunMemory m = estimate_run_memory(model, integrators, user);
+  if (m.model.dimension <= 0) return;
+  char dim[64];
+  std::snprintf(dim, sizeof dim, "%.4g", m.model.dimension);
+  const std::string what =
+      "model '" + model + "' with " + m.model.driver + " has " + dim + " unknowns";
+  require_input(m.model.dimension <= kMaxDimension,
+                what + ", more than the largest supported system (" +
+                    std::to_string(static_cast<long long>(kMaxDimension)) +
+                    " unknowns: sparse matrices index with 32-bit integers); reduce " +
+                    m.model.driver);
+  std::string source;
+  const double limit = memory_limit(&source);
+  if (limit <= 0) return;  // unknown available memory and no --max-memory
+  if (m.dense_bytes > 0 && m.total() > limit) {
+    throw BadInput(what + ": integrator '" + m.dense_integrator +
+                   "' with dense linear algebra would need about " + format_bytes(m.total()) +
+                   " (dense matrices " + format_bytes(m.dense_bytes) + "), more than the limit " +
+                   format_bytes(limit) + " (" + source +
+                   "); use a sparse or matrix-free option instead (--param linear_solver=auto, "
+                   "sparse_lu, klu, cg or gmres; jacobian=auto, analytic or matrix_free) or "
+                   "reduce " +
+                   m.model.driver);
+  }
+  require_input(m.total() <= limit, what + ": the run would need about " + format_bytes(m.total()) +
+                                        " (model " + format_bytes(m.model.model_bytes) +
+                                        ", state and work vectors " + format_bytes(m.state_bytes) +
+                                        (m.jacobian_bytes > 0 ? ", Jacobian and factors " +
+                                                                    format_bytes(m.jacobian_bytes)
+                                                              : std::string()) +
+                                        "), more than the limit " + format_bytes(limit) + " (" +
+                                        source + "); reduce " + m.model.driver);
 }
 
 std::vector<std::string> split_list(const std::string& s, const std::string& flag) {

@@ -49,6 +49,42 @@ struct Setup {
 Setup make_setup(const std::string& model, const std::vector<std::string>& integrators,
                  const Params& user);
 
+// ---- Sizes and memory (issue 14) -------------------------------------------------------------
+// A run is checked before anything is allocated: the model's ModelSize (from its parameters)
+// plus what the integrators add is compared with a size limit (kMaxDimension: Eigen's sparse
+// matrices index with int) and with the memory limit: --max-memory, else the memory the machine
+// has available now (MemAvailable of /proc/meminfo).
+inline constexpr double kMaxDimension = 2147483647.0;
+
+struct RunMemory {
+  ModelSize model;
+  double state_bytes = 0;        // state and work vectors (integrator stages, outputs)
+  double jacobian_bytes = 0;     // sparse Jacobian, iteration matrix and its factors
+  double dense_bytes = 0;        // dense matrices of integrators that use dense linear algebra
+  std::string dense_integrator;  // the first such integrator (for the message)
+  double total() const { return model.model_bytes + state_bytes + jacobian_bytes + dense_bytes; }
+};
+
+// The estimate for `model` run by `integrators` with the user's parameters (a model without a
+// size estimate, registered from outside, gives dimension 0 and is not checked).
+RunMemory estimate_run_memory(const std::string& model, const std::vector<std::string>& integrators,
+                              const Params& user);
+
+// BadInput naming the parameter, the memory the run would need and the limit, when it exceeds
+// the limit or kMaxDimension; dense linear algebra on a large system is refused with a pointer
+// to the sparse and matrix-free options. Called by make_setup before anything is created.
+void check_run_size(const std::string& model, const std::vector<std::string>& integrators,
+                    const Params& user);
+
+// --max-memory: bytes, or a number with K/M/G/T (powers of 1024), e.g. 512M, 8G. 0 (default):
+// the available memory. BadInput naming the flag for anything else.
+double parse_memory_size(const std::string& text, const std::string& flag = "--max-memory");
+void set_memory_limit(double bytes);
+// The limit in force (bytes) and where it comes from ("--max-memory" or "available memory").
+double memory_limit(std::string* source = nullptr);
+// "1.5 GiB" for messages.
+std::string format_bytes(double bytes);
+
 // Splits "a,b,c" (empty items are BadInput naming the flag).
 std::vector<std::string> split_list(const std::string& s, const std::string& flag);
 

@@ -6,9 +6,11 @@
 #include <iostream>
 #include <limits>
 
+#include "core/driver.hpp"
 #include "experiments/catalog.hpp"
 #include "experiments/cli.hpp"
 #include "experiments/commands.hpp"
+#include "experiments/sweep.hpp"
 #include "experiments/work_precision.hpp"
 
 namespace stiffbench {
@@ -191,6 +193,17 @@ int cli_main(int argc, char** argv) {
   add_plot_command(app);
   add_run_commands(app);
 
+  // --max-memory on every command that builds models (checked by make_setup before anything is
+  // allocated; README "Sizes and memory").
+  for (const char* name : {"solve", "convergence", "local-error", "work-precision", "stability",
+                           "energy", "run", "report"}) {
+    if (auto* sub = app.get_subcommand(name)) {
+      sub->add_option_function<std::string>(
+          "--max-memory", [](const std::string& v) { set_memory_limit(parse_memory_size(v)); },
+          "refuse a run whose estimated memory exceeds this (bytes, or with K/M/G/T; default: "
+          "the memory available now)");
+    }
+  }
   if (argc > 1 && argv[1][0] != '-') {
     bool known = false;
     std::vector<std::string> names;
@@ -199,8 +212,8 @@ int cli_main(int argc, char** argv) {
       known = known || sub->get_name() == argv[1];
     }
     if (!known) {
-      std::cerr << "stiffbench: unknown command '" << argv[1] << "'; known: " << join(names)
-                << "\n";
+      std::cerr << "stiffbench: unknown command '" << argv[1] << "'" << did_you_mean(argv[1], names)
+                << "; known: " << join(names) << "\n";
       return 2;
     }
   }
@@ -253,14 +266,24 @@ int cli_main(int argc, char** argv) {
   } catch (const CLI::CallForAllHelp& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
+    remove_created_output_dirs();
     std::cerr << "stiffbench: " << e.what() << "\n";
     return 2;
   } catch (const BadInput& e) {
+    // A refused run leaves no trace: output folders created for it are removed when empty.
+    remove_created_output_dirs();
     std::cerr << "stiffbench: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "stiffbench: error: " << e.what() << "\n";
     return 1;
+  }
+  // A run that ended with status error (the model or the integrator threw mid-run) is a failed
+  // row: its table was written, and the exit code says so (README).
+  if (const long faults = fault_count(); faults > 0) {
+    std::cerr << "stiffbench: " << faults << " run" << (faults == 1 ? "" : "s")
+              << " ended with status error (see the status and message columns)\n";
+    return kExitRowsFailed;
   }
   return 0;
 }

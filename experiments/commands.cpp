@@ -163,9 +163,13 @@ void cmd_describe(const std::string& name, std::ostream& out) {
     out << "flags: stiffbench " << name << " --help\n";
     return;
   }
-  throw BadInput("unknown name '" + name + "': not a model (" + join(model_registry().names()) +
-                 "), an integrator (" + join(integrator_registry().names()) +
-                 ") nor an experiment (" + join(experiments) + ")");
+  std::vector<std::string> all = model_registry().names();
+  for (const auto& n : integrator_registry().names()) all.push_back(n);
+  for (const auto& n : experiments) all.push_back(n);
+  throw BadInput("unknown name '" + name + "'" + did_you_mean(name, all) + ": not a model (" +
+                 join(model_registry().names()) + "), an integrator (" +
+                 join(integrator_registry().names()) + ") nor an experiment (" + join(experiments) +
+                 ")");
 }
 
 void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
@@ -268,6 +272,11 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   // particles (particle models write VTK frames instead).
   std::unique_ptr<FrameWriter> frame_writer;
   std::string traj_path = opt.out_csv;
+  // The output is checked before the run: an unwritable path is bad input now, not after it.
+  if (frames)
+    require_output_dir(opt.out_csv, "--out");
+  else if (!opt.out_csv.empty())
+    require_output_file(opt.out_csv, "--out");
   if (frames) {
     require_input(opt.frame_format == "vtu" || opt.frame_format == "vtk",
                   "--frame-format must be vtu or vtk (got '" + opt.frame_format + "')");

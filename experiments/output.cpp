@@ -5,10 +5,12 @@
 #include <omp.h>
 
 #include <Eigen/Core>
+#include <cerrno>
 #include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <fstream>
 #include <sstream>
@@ -60,27 +62,6 @@ std::string Table::to_markdown() const {
   return os.str();
 }
 
-std::string format_full(double x) {
-  if (std::isnan(x)) return "nan";
-  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
-  char buf[64];
-  // Shortest representation that round-trips.
-  const auto res = std::to_chars(buf, buf + sizeof buf, x);
-  return std::string(buf, res.ptr);
-}
-
-std::string format_short(double x, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*e", digits, x);
-  return buf;
-}
-
-std::string format_fixed(double x, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, x);
-  return buf;
-}
-
 void write_file_atomic(const std::filesystem::path& path, const std::string& content) {
   if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
   const auto tmp = std::filesystem::path(path.string() + ".tmp");
@@ -94,16 +75,81 @@ void write_file_atomic(const std::filesystem::path& path, const std::string& con
   std::filesystem::rename(tmp, path);
 }
 
+namespace {
+// Folders require_output_dir created in this process (outermost first), so a run refused as bad
+// input afterwards leaves nothing behind (remove_created_output_dirs).
+std::vector<std::filesystem::path> g_created_dirs;
+}  // namespace
+
 void require_output_dir(const std::filesystem::path& dir, const std::string& flag) {
+  namespace fs = std::filesystem;
   std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  const auto probe = dir / ".stiffbench_write_test";
-  {
-    std::ofstream f(probe, std::ios::binary | std::ios::trunc);
-    require_input(!ec && f.good(), flag + " " + dir.string() + ": cannot create or write there" +
-                                       (ec ? " (" + ec.message() + ")" : std::string()));
+  // The folders that do not exist yet, outermost first: removed again if the probe fails.
+  std::vector<fs::path> missing;
+  for (fs::path p = dir; !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+    missing.insert(missing.begin(), p);
+    if (p == p.parent_path()) break;
   }
-  std::filesystem::remove(probe, ec);
+  for (fs::path p = dir; !p.empty(); p = p.parent_path()) {
+    // A file where a folder is needed.
+    if (fs::exists(p, ec) && !fs::is_directory(p, ec))
+      throw BadInput(flag + " " + dir.string() + ": cannot create or write there (" + p.string() +
+                     " is a file, not a folder)");
+    if (p == p.parent_path()) break;
+  }
+  ec.clear();
+  fs::create_directories(dir, ec);
+  auto undo = [&] {
+    std::error_code ignore;
+    for (auto it = missing.rbegin(); it != missing.rend(); ++it) fs::remove(*it, ignore);
+  };
+  if (ec) {
+    undo();
+    throw BadInput(flag + " " + dir.string() + ": cannot create the folder (" + ec.message() + ")");
+  }
+  const auto probe = dir / ".stiffbench_write_test";
+  bool ok = false;
+  int error = 0;
+  {
+    errno = 0;
+    std::ofstream f(probe, std::ios::binary | std::ios::trunc);
+    ok = f.good();
+    error = errno;
+  }
+  fs::remove(probe, ec);
+  if (!ok) {
+    const std::string reason = error ? std::strerror(error) : "cannot create a file";
+    undo();
+    throw BadInput(flag + " " + dir.string() + ": cannot write there (" + reason + ")");
+  }
+  for (const auto& p : missing) g_created_dirs.push_back(p);
+}
+
+void require_output_file(const std::filesystem::path& file, const std::string& flag) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  require_input(!file.empty() && file.filename() != "." && file.filename() != "..",
+                flag + " '" + file.string() + "': a folder, not a file name");
+  if (fs::is_directory(file, ec))
+    throw BadInput(flag + " " + file.string() + ": is a folder; give a file name");
+  const fs::path parent = file.has_parent_path() ? file.parent_path() : fs::path(".");
+  try {
+    require_output_dir(parent, flag);
+  } catch (const BadInput& e) {
+    // Name the file the user gave, with the folder's reason.
+    std::string msg = e.what();
+    const std::string head = flag + " " + parent.string() + ": ";
+    if (msg.rfind(head, 0) == 0) msg = msg.substr(head.size());
+    throw BadInput(flag + " " + file.string() + ": " + msg);
+  }
+}
+
+void remove_created_output_dirs() {
+  std::error_code ec;
+  // Innermost first; fs::remove leaves a folder that is not empty.
+  for (auto it = g_created_dirs.rbegin(); it != g_created_dirs.rend(); ++it)
+    std::filesystem::remove(*it, ec);
+  g_created_dirs.clear();
 }
 
 void set_command_line(int argc, char** argv) {

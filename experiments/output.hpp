@@ -29,8 +29,13 @@ std::string format_fixed(double x, int digits = 3);
 void write_file_atomic(const std::filesystem::path& path, const std::string& content);
 
 // Creates DIR and checks that a file can be written there, before an experiment runs; BadInput
-// naming `flag` and the directory otherwise.
+// naming `flag`, the directory and the reason otherwise (and nothing is left behind).
 void require_output_dir(const std::filesystem::path& dir, const std::string& flag = "--out");
+// The same for an output file: its folder can be created and written, and FILE is not a folder.
+void require_output_file(const std::filesystem::path& file, const std::string& flag = "--out");
+// Removes the folders require_output_dir created in this process that are still empty: called
+// when a command ends in bad input, so a refused run leaves no trace.
+void remove_created_output_dirs();
 
 // Metadata common to every experiment: spec, versions, compiler, flags, git revision, thread
 // count, date, command line.

@@ -23,6 +23,7 @@
 #include "core/params.hpp"
 #include "experiments/build_info.hpp"
 #include "experiments/catalog.hpp"
+#include "experiments/csv.hpp"
 
 namespace stiffbench {
 
@@ -97,15 +98,6 @@ fs::path plots_dir() {
 
 namespace {
 
-std::vector<std::string> split_csv_line(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cell;
-  std::istringstream in(line);
-  while (std::getline(in, cell, ',')) out.push_back(cell);
-  if (!line.empty() && line.back() == ',') out.emplace_back();
-  return out;
-}
-
 // A value for a gnuplot single-quoted string inside a shell double-quoted argument: single
 // quotes are doubled, characters the shell would expand are dropped.
 std::string gnuplot_quote(const std::string& value) {
@@ -127,23 +119,11 @@ std::string join_spaces(const std::vector<std::string>& v) {
 }  // namespace
 
 std::vector<std::string> csv_column_values(const fs::path& csv, const std::string& column) {
-  std::ifstream in(csv);
-  std::string line;
-  if (!in || !std::getline(in, line)) return {};
-  const auto header = split_csv_line(line);
-  std::size_t col = header.size();
-  for (std::size_t i = 0; i < header.size(); ++i)
-    if (header[i] == column) col = i;
-  if (col == header.size()) return {};
-  std::vector<std::string> values;
-  while (std::getline(in, line)) {
-    const auto cells = split_csv_line(line);
-    if (col >= cells.size()) continue;
-    bool seen = false;
-    for (const auto& v : values) seen = seen || v == cells[col];
-    if (!seen) values.push_back(cells[col]);
-  }
-  return values;
+  std::ifstream in(csv, std::ios::binary);
+  if (!in) return {};
+  std::stringstream text;
+  text << in.rdbuf();
+  return csv_column_values_in(text.str(), column);
 }
 
 bool run_plot(const std::string& script, const fs::path& out_stem, const PlotVars& vars,

@@ -110,7 +110,8 @@ void check_setting(const std::string& kind, const SpecEntry& e) {
   if (it == keys.end()) {
     std::vector<std::string> known = {"kind", "integrators", "params"};
     for (const auto& [k, t] : keys) known.push_back(k);
-    spec_error(e, "unknown key for a " + kind + " spec; known: " + join(known));
+    spec_error(e, "unknown key for a " + kind + " spec" + did_you_mean(e.key, known) +
+                      "; known: " + join(known));
   }
   for (const auto& v : e.values) {
     const bool ok = v.type == it->second || (it->second == Type::real && v.type == Type::integer);
@@ -189,8 +190,8 @@ SpecFile load_spec_file(const std::string& file, const std::vector<std::string>&
     throw BadInput(file + ": key 'kind' missing or not a string; one of " + join(spec_kinds()));
   spec.kind = kind->as_string()->get();
   if (!kind_keys().count(spec.kind))
-    throw BadInput(where_of(file, *kind) + ": key 'kind': unknown kind '" + spec.kind +
-                   "'; known: " + join(spec_kinds()));
+    throw BadInput(where_of(file, *kind) + ": key 'kind': unknown kind '" + spec.kind + "'" +
+                   did_you_mean(spec.kind, spec_kinds()) + "; known: " + join(spec_kinds()));
 
   std::vector<SpecEntry> settings, params;
   SpecEntry integrators;

@@ -14,6 +14,7 @@
 #include "core/types.hpp"
 #include "experiments/catalog.hpp"
 #include "experiments/convergence.hpp"
+#include "experiments/csv.hpp"
 #include "experiments/energy.hpp"
 #include "experiments/output.hpp"
 #include "experiments/progress.hpp"
@@ -307,89 +308,13 @@ std::string csv_line(const std::vector<std::string>& fields) {
   return line + "\n";
 }
 
-std::vector<std::string> parse_csv_line(const std::string& line) {
-  std::vector<std::string> out(1);
-  bool quoted = false;
-  for (std::size_t i = 0; i < line.size(); ++i) {
-    const char c = line[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
-        out.back() += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        out.back() += c;
-      }
-    } else if (c == '"') {
-      quoted = true;
-    } else if (c == ',') {
-      out.emplace_back();
-    } else {
-      out.back() += c;
-    }
-  }
-  return out;
-}
-
-struct UnitRows {
-  std::vector<std::string> lines;  // complete lines with '\n'
-  bool ok = true;
-};
-
-// Reads a run CSV: the header line and the complete units (all `unit_rows` rows present); a
-// torn last line (no newline) and incomplete units are dropped.
-struct CsvContent {
-  std::string header;
-  std::map<long, UnitRows> units;
-  long dropped_rows = 0;
-};
-
+// Reads a run CSV (experiments/csv.hpp): the header and the complete units.
 CsvContent read_run_csv(const fs::path& path) {
-  CsvContent c;
   std::ifstream in(path, std::ios::binary);
-  if (!in) return c;
+  if (!in) return {};
   std::stringstream ss;
   ss << in.rdbuf();
-  const std::string text = ss.str();
-  std::size_t pos = 0;
-  std::vector<std::string> columns;
-  std::size_t status_col = 0;
-  std::map<long, std::pair<long, UnitRows>> partial;  // unit -> (expected rows, rows)
-  while (pos < text.size()) {
-    const std::size_t nl = text.find('\n', pos);
-    if (nl == std::string::npos) break;  // torn last line
-    const std::string line = text.substr(pos, nl - pos);
-    pos = nl + 1;
-    if (c.header.empty()) {
-      c.header = line + "\n";
-      columns = parse_csv_line(line);
-      status_col = static_cast<std::size_t>(
-          std::find(columns.begin(), columns.end(), "unit_status") - columns.begin());
-      continue;
-    }
-    const auto f = parse_csv_line(line);
-    if (f.size() != columns.size() || columns.size() < 2) {
-      ++c.dropped_rows;
-      continue;
-    }
-    try {
-      const long unit = std::stol(f[0]);
-      auto& [expected, rows] = partial[unit];
-      expected = std::stol(f[1]);
-      rows.lines.push_back(line + "\n");
-      if (status_col < f.size() && f[status_col] != "ok") rows.ok = false;
-    } catch (const std::exception&) {
-      ++c.dropped_rows;
-    }
-  }
-  for (auto& [unit, er] : partial) {
-    if (static_cast<long>(er.second.lines.size()) == er.first)
-      c.units[unit] = std::move(er.second);
-    else
-      c.dropped_rows += static_cast<long>(er.second.lines.size());
-  }
-  return c;
+  return parse_run_csv(ss.str());
 }
 
 std::string csv_name(const std::string& kind) {

@@ -28,6 +28,17 @@ for kind in convergence local_error energy region stability work_precision; do
   fi
 done
 
+# --- Determinism and fuzzing (issue 14): the same command twice and 1 vs 2 threads give
+# identical CSVs (about 20 s); the libFuzzer targets of fuzz/ built with clang (about a minute
+# and a half) and run 30 s each on their seed corpus.
+echo "== Determinism"
+"$root/scripts/check-determinism.sh" "$root/build"
+echo "== Fuzzing (30 s per target)"
+start=$(date +%s)
+"$root/scripts/fuzz.sh" "$root/build-fuzz"
+echo "fuzzing took $(( $(date +%s) - start )) s"
+# --- end of the determinism and fuzzing block
+
 # --- Slurm smoke test (scripts/slurm-smoke.sh, issue 11): a 4-task job array of
 # experiments/specs/sweep_spring_chain.toml on a single-node Slurm started on localhost, merged
 # and compared with the unsharded run (about 10 s). Without root (it installs packages and

@@ -1,4 +1,5 @@
 // Registration of the Eulerian grid models (models/grid/) with their parameters.
+#include <algorithm>
 #include <cmath>
 
 #include "models/grid/fluid_2d.hpp"
@@ -96,6 +97,24 @@ void add_fluid(ModelRegistry& reg) {
 void register_grid_models(ModelRegistry& reg) {
   add_heat(reg);
   add_fluid(reg);
+  // Sizes from the parameters alone (ModelSize, checked before anything is built).
+  // heat_2d: n^2 unknowns, the 5-point Jacobian (5 n^2 nonzeros, 12 bytes each) kept by the
+  // model, plus a few state-sized vectors.
+  reg.find_mutable("heat_2d")->info.size = [](const Params& p) {
+    const double n = std::max(static_cast<double>(p.integer("n")), 0.0);
+    return ModelSize{n * n, 12.0 * 5.0 * n * n + 32.0 * n * n, 5.0 * n * n,
+                     "n=" + std::to_string(p.integer("n"))};
+  };
+  // fluid_2d: about 2 n^2 face velocities; the pressure Laplacian on n^2 cells and its sparse
+  // Cholesky factor (nested-dissection fill of a 2D grid, about n^2 (6 + 2 log2 n) entries of
+  // 12 bytes), work vectors; f has no analytic Jacobian.
+  reg.find_mutable("fluid_2d")->info.size = [](const Params& p) {
+    const double n = std::max(static_cast<double>(p.integer("n")), 1.0);
+    const double cells = n * n;
+    const double factor = cells * (6.0 + 2.0 * std::log2(n)) + 5.0 * cells;
+    return ModelSize{2.0 * cells + 2.0 * n, 12.0 * factor + 96.0 * cells, 0.0,
+                     "n=" + std::to_string(p.integer("n"))};
+  };
 }
 
 }  // namespace stiffbench

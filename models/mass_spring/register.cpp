@@ -1,5 +1,6 @@
 // Registration of the mass-spring models with their parameters (defaults and meaning for
 // `stiffbench describe`). Models and their physics: models/mass_spring/builders.hpp.
+#include <algorithm>
 #include <charconv>
 
 #include "models/mass_spring/builders.hpp"
@@ -31,6 +32,22 @@ unsigned long seed_param(const Params& p, const std::string& model) {
   const long seed = p.integer("seed");
   require_input(seed >= 0, model + ": parameter 'seed' must be >= 0");
   return static_cast<unsigned long>(seed);
+}
+
+// Sizes from the parameters alone (ModelSize): `points` point masses in `dim` dimensions with
+// about `springs_per_point` springs each. Per spring about 96 bytes (ends, rest length,
+// stiffness, damping, scratch); the force Jacobian has a dim x dim block per point and two per
+// spring, and the first-order form [0 I; K D] twice that.
+ModelSize lattice_size(double points, int dim, double springs_per_point, std::string driver) {
+  points = std::max(points, 0.0) + 2;  // chains also keep their two end points in the state
+  const double springs = points * springs_per_point;
+  const double block = static_cast<double>(dim * dim);
+  return {2.0 * dim * points, 96.0 * springs + 64.0 * points,
+          2.0 * block * (points + 2.0 * springs), std::move(driver)};
+}
+
+double count(const Params& p, const std::string& key) {
+  return std::max(static_cast<double>(p.integer(key)), 0.0);
 }
 
 }  // namespace
@@ -82,6 +99,9 @@ void register_mass_spring_models(ModelRegistry& reg) {
          o.dashpot = p.real("dashpot");
          return make_spring_chain(o);
        }});
+  reg.find_mutable("spring_chain")->info.size = [](const Params& p) {
+    return lattice_size(count(p, "n"), 1, 1, "n=" + std::to_string(p.integer("n")));
+  };
 
   const ClothOptions cloth;
   reg.add(
@@ -136,6 +156,12 @@ void register_mass_spring_models(ModelRegistry& reg) {
          o.parallel_threshold = p.integer("parallel_threshold");
          return make_cloth(o);
        }});
+  reg.find_mutable("cloth")->info.size = [](const Params& p) {
+    const double n = count(p, "n"), m = p.integer("m") == 0 ? n : count(p, "m");
+    return lattice_size(n * m, 3, 6,
+                        "n=" + std::to_string(p.integer("n")) +
+                            (p.integer("m") ? " m=" + std::to_string(p.integer("m")) : ""));
+  };
 
   const SoftCubeOptions cube;
   reg.add(
@@ -186,6 +212,10 @@ void register_mass_spring_models(ModelRegistry& reg) {
          o.parallel_threshold = p.integer("parallel_threshold");
          return make_soft_cube(o);
        }});
+  reg.find_mutable("soft_cube")->info.size = [](const Params& p) {
+    const double n = count(p, "n");
+    return lattice_size(n * n * n, 3, 13, "n=" + std::to_string(p.integer("n")));
+  };
 
   const PendulumChainOptions pend;
   reg.add(
@@ -212,6 +242,9 @@ void register_mass_spring_models(ModelRegistry& reg) {
          o.angle = p.real("angle");
          return make_pendulum_chain(o);
        }});
+  reg.find_mutable("pendulum_chain")->info.size = [](const Params& p) {
+    return lattice_size(count(p, "n"), 2, 1, "n=" + std::to_string(p.integer("n")));
+  };
 }
 
 }  // namespace stiffbench

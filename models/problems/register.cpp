@@ -125,6 +125,12 @@ void register_problem_models(ModelRegistry& reg) {
             false, false, "Verwer 1994 (SIAM J. Sci. Comput. 15); IVP test set 'pollu'"},
            {},
            [](const Params&) { return std::make_unique<Pollution>(); }});
+  // Fixed-size problems: at most 20 unknowns (POLLU), whatever their parameters.
+  for (const auto& name : reg.names()) {
+    auto* e = reg.find_mutable(name);
+    if (!e->info.size)
+      e->info.size = [](const Params&) { return ModelSize{20, 4096, 400, "fixed size"}; };
+  }
 }
 
 }  // namespace stiffbench

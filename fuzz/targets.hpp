@@ -1,0 +1,25 @@
+// The fuzzed entry points (issue 14): each takes arbitrary bytes, feeds them to one parser of
+// user input and returns normally when the parser either accepts the input or refuses it with
+// BadInput. Anything else (another exception, a crash, a sanitizer report, a broken invariant
+// checked here) is a defect. The libFuzzer mains (fuzz_*.cpp) call these; so does
+// tests/test_fuzz_regressions.cpp, on the seed corpus and on every input a fuzz run ever
+// found (fuzz/regressions/), in the normal g++ build.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+
+namespace stiffbench::fuzz {
+
+// `--param` lines ("key=value" per line) against declared parameters of every type.
+void params_one(std::string_view data);
+// A spec file (experiments/spec_file.*) with this text.
+void spec_file_one(std::string_view data);
+// The CSV readers of `plot` and `merge` / `run --resume` (experiments/csv.*).
+void csv_one(std::string_view data);
+
+// Throws std::logic_error: a broken invariant found by a target.
+[[noreturn]] void fail(const char* what);
+
+}  // namespace stiffbench::fuzz

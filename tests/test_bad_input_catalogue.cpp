@@ -1,0 +1,388 @@
+// The bad-input catalogue of issue 14: what a new user can get wrong, each case refused with
+// exit code 2, one message naming the bad value, and no file left behind.
+//
+// Two parts. (1) Every numeric parameter of every registered model and integrator, enumerated
+// from the registries' ParamSpecs (so a new method is covered without editing this file), is
+// given NaN, ±Inf, zero and -1 through the library: non-finite values must be refused as
+// BadInput naming the key; zero and -1 must either be refused the same way or give a run whose
+// numbers are honest (status ok means a finite state), never another exception. (2) The command
+// line, on the real binary: unknown names (with the closest names suggested), absurd sizes,
+// unwritable output paths, unknown flags, empty lists, t_end <= t0, malformed spec files.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/driver.hpp"
+#include "experiments/catalog.hpp"
+
+namespace fs = std::filesystem;
+using namespace stiffbench;
+
+namespace {
+
+// ---- (1) parameters from the registries --------------------------------------------------
+
+// What a bad value did: refused (BadInput naming the key), ran honestly, or broke a rule.
+struct ParamOutcome {
+  bool refused = false;
+  std::string failure;  // non-empty: the rule broken
+};
+
+bool all_finite(const Vec& y) { return y.allFinite(); }
+
+// Creates `model` with `integrator` and the user's parameters and, when that is accepted, runs
+// a few steps (or a short adaptive run).
+ParamOutcome try_params(const std::string& model, const std::string& integrator, const Params& user,
+                        const std::string& key) {
+  ParamOutcome o;
+  try {
+    Setup s = make_setup(model, {integrator}, user);
+    const OdeSystem& sys = *s.model;
+    Integrator& integ = *s.integrators.front();
+    const double t0 = sys.initial_time();
+    RunResult r;
+    if (integ.supports_fixed_step()) {
+      double h = 1e-3;
+      if (const auto sug = sys.suggested_step()) h = std::min(h, sug->h);
+      FixedStepOptions fo;
+      fo.h = h;
+      fo.t_end = t0 + 3 * h;
+      r = run_fixed_step(sys, integ, fo);
+    } else {
+      r = run_adaptive(sys, integ, {t0 + 1e-3, 0, {}});
+    }
+    if (r.stats.status == Status::ok && !all_finite(r.y))
+      o.failure = "status ok with a non-finite state";
+  } catch (const BadInput& e) {
+    o.refused = true;
+    if (std::string(e.what()).find(key) == std::string::npos)
+      o.failure = std::string("BadInput not naming '") + key + "': " + e.what();
+  } catch (const std::exception& e) {
+    o.failure = std::string("exception other than BadInput (exit 1): ") + e.what();
+  }
+  return o;
+}
+
+// A model (with the parameters it needs) the integrator accepts, small and quick: methods that
+// need holonomic constraints (rattle) or a grid fluid (stable_fluids) get one.
+struct TestModel {
+  std::string name;
+  Params params;
+};
+TestModel model_for(const std::string& integrator) {
+  const std::vector<TestModel> candidates = {
+      {"harmonic_oscillator", {}},
+      {"kepler", {}},
+      {"dahlquist", {}},
+      {"spring_chain", {}},
+      {"pendulum_chain", {{"constrained", "true"}, {"n", 3}}},
+      {"fluid_2d", {{"n", 8}}}};
+  for (const TestModel& m : candidates) {
+    try {
+      make_setup(m.name, {integrator}, m.params);
+      return m;
+    } catch (const BadInput&) {
+    }
+  }
+  return {};
+}
+
+struct Tally {
+  int cases = 0, refused = 0;
+  std::vector<std::string> failures;
+};
+
+// `base` holds the parameters the model needs; the probed key is added to (or overrides) them.
+Params with_key(Params base, const std::string& key, const std::string& value) {
+  base.set(key, value);
+  return base;
+}
+
+void probe(const std::string& model, const std::string& integrator, const ParamSpec& spec, Tally& t,
+           const Params& base = {}) {
+  if (spec.type != ParamType::real && spec.type != ParamType::integer) return;
+  const std::vector<std::string> non_finite = {"nan", "inf", "-inf", "1e999"};
+  for (const auto& v : non_finite) {
+    ++t.cases;
+    const ParamOutcome o = try_params(model, integrator, with_key(base, spec.key, v), spec.key);
+    t.refused += o.refused;
+    if (!o.refused)
+      t.failures.push_back(model + "/" + integrator + " " + spec.key + "=" + v + ": accepted");
+    else if (!o.failure.empty())
+      t.failures.push_back(model + "/" + integrator + " " + spec.key + "=" + v + ": " + o.failure);
+  }
+  for (const char* v : {"0", "-1"}) {
+    ++t.cases;
+    const ParamOutcome o = try_params(model, integrator, with_key(base, spec.key, v), spec.key);
+    t.refused += o.refused;
+    if (!o.failure.empty())
+      t.failures.push_back(model + "/" + integrator + " " + spec.key + "=" + v + ": " + o.failure);
+  }
+}
+
+TEST(BadInputCatalogue, EveryNumericModelParameter) {
+  Tally t;
+  for (const auto& e : model_registry().entries()) {
+    if (!e.built_in) continue;
+    for (const auto& spec : e.params) probe(e.info.name, "rk4", spec, t);
+  }
+  for (const auto& f : t.failures) ADD_FAILURE() << f;
+  std::printf("model parameters: %d cases, %d refused\n", t.cases, t.refused);
+  EXPECT_GT(t.cases, 100);  // the registries were enumerated
+}
+
+TEST(BadInputCatalogue, EveryNumericIntegratorParameter) {
+  Tally t;
+  for (const auto& e : integrator_registry().entries()) {
+    if (!e.built_in) continue;
+    const TestModel model = model_for(e.info.name);
+    ASSERT_FALSE(model.name.empty()) << e.info.name << ": no test model accepts it";
+    for (const auto& spec : e.params) probe(model.name, e.info.name, spec, t, model.params);
+  }
+  for (const auto& f : t.failures) ADD_FAILURE() << f;
+  std::printf("integrator parameters: %d cases, %d refused\n", t.cases, t.refused);
+  EXPECT_GT(t.cases, 100);
+}
+
+// Every built-in model estimates its size from its parameters, so `check_run_size` can refuse
+// a run before anything is allocated (a new model family must add one).
+TEST(BadInputCatalogue, EveryModelEstimatesItsSize) {
+  for (const auto& e : model_registry().entries()) {
+    if (!e.built_in) continue;
+    ASSERT_TRUE(static_cast<bool>(e.info.size)) << e.info.name << " has no size estimate";
+    // The estimate at the defaults is at least the real dimension (an underestimate would let a
+    // too-large run through).
+    const auto sys = model_registry().create(e.info.name, Params{});
+    const RunMemory m = estimate_run_memory(e.info.name, {"rk4"}, Params{});
+    EXPECT_GE(m.model.dimension, static_cast<double>(sys->dimension())) << e.info.name;
+    EXPECT_LE(m.model.dimension, 8.0 * static_cast<double>(sys->dimension()) + 64) << e.info.name;
+  }
+}
+
+TEST(BadInputCatalogue, ClosestNamesAreSuggested) {
+  EXPECT_EQ(closest_names("clth", model_registry().names()).front(), "cloth");
+  EXPECT_EQ(closest_names("Kepler", model_registry().names()).front(), "kepler");
+  EXPECT_TRUE(closest_names("zzzzzzzz", model_registry().names()).empty());
+  EXPECT_EQ(did_you_mean("rk", {"rk4", "rk45", "euler"}), "; did you mean 'rk4' or 'rk45'?");
+}
+
+TEST(BadInputCatalogue, MemorySizes) {
+  EXPECT_EQ(parse_memory_size("512M"), 512.0 * 1024 * 1024);
+  EXPECT_EQ(parse_memory_size("8GiB"), 8.0 * 1024 * 1024 * 1024);
+  EXPECT_EQ(parse_memory_size("1000"), 1000.0);
+  for (const char* bad : {"", "abc", "-1G", "0", "1Q", "nan", "inf"})
+    EXPECT_THROW(parse_memory_size(bad), BadInput) << bad;
+}
+
+// ---- (2) the command line --------------------------------------------------------------
+
+struct Outcome {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+// Runs the binary in `cwd` (relative output paths land there).
+Outcome run_in(const fs::path& cwd, const std::string& args) {
+  const fs::path err_file =
+      fs::temp_directory_path() / ("stiffbench_catalogue_err_" + std::to_string(::getpid()));
+  const std::string cmd = "cd " + quote(cwd.string()) + " && " + STIFFBENCH_BIN + " " + args +
+                          " 2>" + quote(err_file.string()) + " </dev/null";
+  Outcome o;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  if (!p) return o;
+  std::array<char, 4096> buf{};
+  std::size_t n = 0;
+  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) o.out.append(buf.data(), n);
+  const int status = ::pclose(p);
+  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream f(err_file);
+  o.err.assign(std::istreambuf_iterator<char>(f), {});
+  fs::remove(err_file);
+  return o;
+}
+
+// Every path under `dir`, for the "nothing left behind" check.
+std::set<std::string> tree(const fs::path& dir) {
+  std::set<std::string> s;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    s.insert(fs::relative(e.path(), dir).string());
+  return s;
+}
+
+struct CliCase {
+  const char* label;
+  std::string args;
+  std::vector<std::string> must_name;  // the message contains each
+};
+
+void PrintTo(const CliCase& c, std::ostream* os) { *os << c.args; }
+
+class CliCatalogue : public ::testing::TestWithParam<CliCase> {};
+
+// Spec files written into the case's folder before it runs (malformed on purpose).
+void write_specs(const fs::path& dir) {
+  auto put = [&](const char* name, const char* text) { std::ofstream(dir / name) << text; };
+  put("syntax.toml", "kind = \"convergence\"\nmodel = \"kepler\nt_end = 1\n");
+  put("unknown_key.toml",
+      "kind = \"convergence\"\nmodel = \"kepler\"\nintegrators = [\"rk4\"]\nt_end = 1.0\n"
+      "h = 0.1\nbogus_key = 3\n");
+  put("empty_list.toml",
+      "kind = \"convergence\"\nmodel = \"kepler\"\nintegrators = []\nt_end = 1.0\nh = 0.1\n");
+  put("wrong_type.toml",
+      "kind = \"convergence\"\nmodel = \"kepler\"\nintegrators = [\"rk4\"]\nt_end = \"long\"\n"
+      "h = 0.1\n");
+  put("bad_kind.toml", "kind = \"convergense\"\nmodel = \"kepler\"\n");
+  put("unknown_model.toml",
+      "kind = \"convergence\"\nmodel = \"keplr\"\nintegrators = [\"rk4\"]\nt_end = 1.0\n"
+      "h = 0.1\n");
+  put("t_end_zero.toml",
+      "kind = \"convergence\"\nmodel = \"kepler\"\nintegrators = [\"rk4\"]\nt_end = 0.0\n"
+      "h = 0.1\n");
+  put("empty.toml", "");
+  std::ofstream(dir / "a_file") << "x";
+}
+
+TEST_P(CliCatalogue, ExitsTwoNamesTheValueLeavesNothing) {
+  const CliCase& c = GetParam();
+  const fs::path dir = fs::temp_directory_path() /
+                       ("stiffbench_catalogue_" + std::to_string(::getpid()) + "_" + c.label);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  write_specs(dir);
+  const std::set<std::string> before = tree(dir);
+  const Outcome o = run_in(dir, c.args);
+  EXPECT_EQ(o.code, 2) << o.err;
+  for (const auto& s : c.must_name) EXPECT_NE(o.err.find(s), std::string::npos) << o.err;
+  // One message, one line (CLI11's own errors included).
+  EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
+  EXPECT_EQ(tree(dir), before) << "files left behind by: " << c.args;
+  fs::remove_all(dir);
+}
+
+const std::string kSolve = "solve --model harmonic_oscillator --integrator rk4 --h 0.1 --t-end 1";
+const std::string kConv =
+    "convergence --model harmonic_oscillator --integrators rk4 --t-end 1 --h 0.1 --out out";
+
+INSTANTIATE_TEST_SUITE_P(
+    Issue14, CliCatalogue,
+    ::testing::Values(
+        // Unknown names, with the closest known names suggested.
+        CliCase{"unknown_command", "solv", {"'solv'", "did you mean 'solve'"}},
+        CliCase{"unknown_model",
+                "solve --model clth --integrator rk4 --h 0.1 --t-end 1 --out x.csv",
+                {"'clth'", "did you mean 'cloth'"}},
+        CliCase{"unknown_integrator",
+                "solve --model kepler --integrator rk5 --h 0.1 --t-end 1 --out x.csv",
+                {"'rk5'", "did you mean", "rk4"}},
+        CliCase{"unknown_integrator_in_list",
+                "convergence --model kepler --integrators rk4,velocity_verlt --t-end 1 --h 0.1 "
+                "--out out",
+                {"velocity_verlt", "did you mean 'velocity_verlet'"}},
+        CliCase{"unknown_param",
+                kSolve + " --param gama=0.1 --out x.csv",
+                {"'gama'", "did you mean 'gamma'"}},
+        CliCase{"unknown_describe", "describe keplr", {"'keplr'", "did you mean 'kepler'"}},
+        CliCase{"unknown_model_in_conv",
+                "convergence --model van_der_poll --integrators rk4 --t-end 1 --h 0.1 --out out",
+                {"van_der_poll", "did you mean 'van_der_pol'"}},
+        // Non-finite, negative and zero flag values.
+        CliCase{"param_nan", kSolve + " --param k=nan --out x.csv", {"'k'", "nan"}},
+        CliCase{"param_inf", kSolve + " --param m=inf --out x.csv", {"'m'", "inf"}},
+        CliCase{"h_nan", "solve --model kepler --integrator rk4 --h nan --t-end 1", {"h"}},
+        CliCase{"h_negative", "solve --model kepler --integrator rk4 --h -0.1 --t-end 1", {"h"}},
+        CliCase{"levels_zero", kConv + " --levels 0", {"levels"}},
+        CliCase{"refine_one", kConv + " --refine 1", {"refine"}},
+        CliCase{"outputs_zero", kSolve + " --outputs 0", {"outputs"}},
+        // Absurd sizes: refused before anything is allocated.
+        CliCase{"cloth_1e9",
+                "solve --model cloth --param n=1000000000 --integrator rk4 --h 0.001 --t-end 0.01 "
+                "--out x.csv",
+                {"n=1000000000", "unknowns", "largest supported"}},
+        CliCase{"cloth_memory",
+                "solve --model cloth --param n=5000 --integrator rk4 --h 0.001 --t-end 0.01 "
+                "--out x.csv",
+                {"n=5000", "would need about", "GiB", "limit"}},
+        CliCase{"max_memory",
+                "solve --model cloth --param n=64 --integrator rk4 --h 0.001 --t-end 0.01 "
+                "--max-memory 1M --out x.csv",
+                {"n=64", "would need about", "limit 1 MiB", "--max-memory"}},
+        CliCase{"dense_refused",
+                "solve --model cloth --param n=300 --integrator radau5 --param "
+                "linear_solver=dense_lu --h 0.001 --t-end 0.01 --max-memory 2G --out x.csv",
+                {"radau5", "dense", "sparse or matrix-free"}},
+        CliCase{"soft_cube_huge",
+                "convergence --model soft_cube --param n=5000 --integrators rk4 --t-end 1 --h 0.1 "
+                "--out out",
+                {"n=5000", "unknowns"}},
+        CliCase{"max_memory_bad", kSolve + " --max-memory lots", {"--max-memory", "lots"}},
+        CliCase{"max_memory_negative", kSolve + " --max-memory -5G", {"--max-memory", "-5G"}},
+        // Output paths that cannot be created or written: refused before the run.
+        CliCase{"out_proc", kSolve + " --out /proc/nope/x.csv", {"/proc/nope/x.csv", "cannot"}},
+        CliCase{"out_under_file", kSolve + " --out a_file/x.csv", {"a_file", "is a file"}},
+        CliCase{"out_is_folder", kSolve + " --out .", {"--out", "folder"}},
+        CliCase{"conv_out_proc",
+                "convergence --model harmonic_oscillator --integrators rk4 --t-end 1 --h 0.1 "
+                "--out /proc/nope",
+                {"/proc/nope", "cannot"}},
+        CliCase{"conv_out_under_file",
+                "convergence --model harmonic_oscillator --integrators rk4 --t-end 1 --h 0.1 "
+                "--out a_file/sub",
+                {"a_file", "is a file"}},
+        CliCase{"wp_out_proc",
+                "work-precision --model harmonic_oscillator --integrators rk4 --t-end 1 "
+                "--out /proc/nope",
+                {"/proc/nope"}},
+        CliCase{"stability_out_proc",
+                "stability --model harmonic_oscillator --integrators rk4 --out /proc/nope",
+                {"/proc/nope"}},
+        CliCase{"report_out_proc", "report --quick --out /proc/nope", {"/proc/nope"}},
+        CliCase{"run_out_proc", "run t_end_zero.toml --out /proc/nope", {"t_end"}},
+        // A bad input discovered after the output folder was prepared leaves no folder.
+        CliCase{"conv_bad_after_out",
+                "convergence --model harmonic_oscillator --integrators rk4 --t-end 1 --h 0.1 "
+                "--levels 1 --out new/deeper",
+                {"levels"}},
+        // Unknown flags.
+        CliCase{"unknown_flag", kSolve + " --bogus 3", {"--bogus"}},
+        CliCase{"unknown_flag_conv", kConv + " --hh 0.1", {"--hh"}},
+        // Empty lists.
+        CliCase{"empty_integrators",
+                "convergence --model kepler --integrators '' --t-end 1 --h 0.1 --out out",
+                {"--integrators"}},
+        CliCase{"trailing_comma",
+                "convergence --model kepler --integrators rk4, --t-end 1 --h 0.1 --out out",
+                {"--integrators"}},
+        CliCase{"empty_times", kSolve + " --times ''", {"--times"}},
+        // t_end <= t0.
+        CliCase{"t_end_zero", "solve --model kepler --integrator rk4 --h 0.1 --t-end 0", {"t"}},
+        CliCase{
+            "t_end_negative", "solve --model kepler --integrator rk4 --h 0.1 --t-end -1", {"t"}},
+        CliCase{"conv_t_end_zero",
+                "convergence --model kepler --integrators rk4 --t-end 0 --h 0.1 --out out",
+                {"t"}},
+        // Malformed spec files: the file and the key named.
+        CliCase{"spec_syntax", "run syntax.toml --out out", {"syntax.toml"}},
+        CliCase{"spec_unknown_key", "run unknown_key.toml --out out", {"bogus_key"}},
+        CliCase{"spec_empty_list", "run empty_list.toml --out out", {"integrators"}},
+        CliCase{"spec_wrong_type", "run wrong_type.toml --out out", {"t_end"}},
+        CliCase{"spec_bad_kind", "run bad_kind.toml --out out", {"convergense"}},
+        CliCase{"spec_unknown_model", "run unknown_model.toml --out out", {"keplr"}},
+        CliCase{"spec_t_end_zero", "run t_end_zero.toml --out out", {"t_end"}},
+        CliCase{"spec_empty", "run empty.toml --out out", {"empty.toml"}},
+        CliCase{"spec_missing", "run nosuch.toml --out out", {"nosuch.toml"}}),
+    [](const ::testing::TestParamInfo<CliCase>& i) { return std::string(i.param.label); });
+
+}  // namespace

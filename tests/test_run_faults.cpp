@@ -1,0 +1,105 @@
+// Faults inside a run (issue 14): a model that throws or returns NaN mid-run, and an integrator
+// whose linear solver refuses its matrix, each end their own row with its own status and
+// message, while the other rows of the study complete; the command line exits with 3 when a row
+// ended with status error.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "core/driver.hpp"
+#include "experiments/catalog.hpp"
+#include "experiments/convergence.hpp"
+
+using namespace stiffbench;
+
+namespace {
+
+// y' = -y, y(0) = 1, exact e^{-t}. The fault fires on one chosen evaluation of the right-hand
+// side, counted over the process, so exactly one run of a study meets it.
+enum class Fault { none, throws, nan };
+std::atomic<long> g_evals{0};
+long g_fault_at = -1;
+Fault g_fault = Fault::none;
+
+class FaultyDecay final : public OdeSystem {
+ public:
+  std::string name() const override { return "faulty_decay"; }
+  Index dimension() const override { return 1; }
+  Vec initial_state() const override { return Vec::Ones(1); }
+  bool has_exact() const override { return true; }
+  void exact(double t, VecRef y) const override { y[0] = std::exp(-t); }
+  void eval_rhs(double, CVecRef y, VecRef f) const override {
+    f[0] = -y[0];
+    if (++g_evals != g_fault_at) return;
+    if (g_fault == Fault::throws) throw std::runtime_error("model failure injected by the test");
+    if (g_fault == Fault::nan) f[0] = std::numeric_limits<double>::quiet_NaN();
+  }
+};
+
+ConvergenceResult study(Fault fault, long fault_at) {
+  g_evals = 0;
+  g_fault = fault;
+  g_fault_at = fault_at;
+  ConvergenceSpec spec;
+  spec.integrators = {"rk4", "heun"};
+  spec.t_end = 1.0;
+  spec.h = 0.1;
+  spec.levels = 3;
+  spec.refine = 2;
+  spec.reference = "exact";
+  return run_convergence(
+      spec, [] { return std::make_unique<FaultyDecay>(); }, nullptr);
+}
+
+// rk4 at h = 0.1 makes 10 steps x 4 evaluations; evaluation 30 falls in its first run.
+TEST(RunFaults, ModelThrowingMidRunEndsOnlyItsRow) {
+  const long before = fault_count();
+  const ConvergenceResult r = study(Fault::throws, 30);
+  ASSERT_EQ(r.rows.size(), 6u);  // 2 integrators x 3 levels: the study went on
+  EXPECT_EQ(r.rows[0].stats.status, Status::error);
+  EXPECT_NE(r.rows[0].stats.message.find("model failure injected"), std::string::npos)
+      << r.rows[0].stats.message;
+  for (std::size_t i = 1; i < r.rows.size(); ++i) {
+    EXPECT_EQ(r.rows[i].stats.status, Status::ok) << i;
+    EXPECT_LT(r.rows[i].error, 1e-2) << i;  // real results, not placeholders
+  }
+  EXPECT_EQ(fault_count(), before + 1);
+}
+
+TEST(RunFaults, ModelReturningNanMidRunIsUnstable) {
+  const ConvergenceResult r = study(Fault::nan, 30);
+  ASSERT_EQ(r.rows.size(), 6u);
+  EXPECT_EQ(r.rows[0].stats.status, Status::unstable);
+  EXPECT_FALSE(r.rows[0].stats.message.empty());
+  for (std::size_t i = 1; i < r.rows.size(); ++i) EXPECT_EQ(r.rows[i].stats.status, Status::ok);
+}
+
+// LDLᵀ reads one triangle and refuses a non-symmetric iteration matrix (Dahlquist's with complex
+// λ, J = [[re, -im], [im, re]], is not symmetric): that row ends with solver_error, rk4's row
+// completes.
+TEST(RunFaults, LinearSolverRefusingItsMatrixEndsOnlyItsRow) {
+  ConvergenceSpec spec;
+  spec.model = "dahlquist";
+  spec.integrators = {"semi_implicit_euler", "rk4"};
+  spec.params = Params{{"linear_solver", "ldlt"}, {"lambda_im", 2.0}};
+  spec.t_end = 0.5;
+  spec.h = 0.01;
+  spec.levels = 2;
+  spec.refine = 2;
+  spec.reference = "exact";
+  const ConvergenceResult r = run_convergence(spec, nullptr);
+  ASSERT_EQ(r.rows.size(), 4u);
+  for (const auto& row : r.rows) {
+    if (row.integrator == "semi_implicit_euler") {
+      EXPECT_EQ(row.stats.status, Status::solver_error);
+      EXPECT_NE(row.stats.message.find("matrix"), std::string::npos) << row.stats.message;
+    } else {
+      EXPECT_EQ(row.stats.status, Status::ok);
+    }
+  }
+}
+
+}  // namespace
