@@ -187,8 +187,14 @@ bool plot_work_precision(const fs::path& csv, const std::string& title, const Pl
                          std::ostream& err) {
   fs::path stem = csv;
   stem.replace_extension();
-  return run_plot("work_precision.gp", stem, {{"csvfile", csv.string()}, {"ttl", title}},
-                  family_panels(csv_column_values(csv, "integrator")), opt, err);
+  // Work-precision compares methods across families (hand-written against library methods on
+  // one tolerance ladder), so a study of a few methods gets one panel on common axes; larger
+  // studies are split by family to stay readable.
+  const std::vector<std::string> methods = csv_column_values(csv, "integrator");
+  std::vector<PlotPanel> panels = family_panels(methods);
+  if (methods.size() <= 8) panels = {PlotPanel{"all methods", methods}};
+  return run_plot("work_precision.gp", stem, {{"csvfile", csv.string()}, {"ttl", title}}, panels,
+                  opt, err);
 }
 
 namespace {
