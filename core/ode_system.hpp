@@ -80,6 +80,14 @@ class OdeSystem {
   virtual double initial_time() const { return 0.0; }
   // The literature's end time of the problem, used when a command is given no --t-end.
   virtual std::optional<double> end_time() const { return std::nullopt; }
+  // A published solution at one time (IVP test set, Hairer–Wanner) for problems without an exact
+  // one; `solve` compares its final state with it when the run ends at that time.
+  struct PublishedSolution {
+    double t = 0.0;
+    Vec y;
+    std::string source;
+  };
+  virtual std::optional<PublishedSolution> published_solution() const { return std::nullopt; }
   virtual Vec initial_state() const = 0;
 
   // y' = f(t, y). Counted as one f evaluation.

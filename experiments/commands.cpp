@@ -407,6 +407,23 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
     out << "\nerror vs exact solution (max-norm): " << format_short(max_abs_diff(r.y, ye), 6)
         << "\n";
   }
+  if (const auto pub = sys.published_solution();
+      pub && r.stats.status == Status::ok && std::abs(r.t - pub->t) <= 1e-12 * std::abs(pub->t)) {
+    // mescd of the IVP test set with atol/rtol from the run's own parameters when it has them.
+    double ratio = 0.0;
+    if (opt.params.contains("atol") && opt.params.contains("rtol"))
+      ratio = opt.params.real("atol") / opt.params.real("rtol");
+    double worst_rel = 0.0, worst_mixed = 0.0;
+    for (Index i = 0; i < r.y.size(); ++i) {
+      const double e = std::abs(r.y[i] - pub->y[i]), a = std::abs(pub->y[i]);
+      worst_rel = std::max(worst_rel, a > 0 ? e / a : e);
+      worst_mixed = std::max(worst_mixed, e / (ratio + a));
+    }
+    out << "\npublished solution at t = " << format_full(pub->t) << " (" << pub->source << "):\n"
+        << "  max relative error " << format_short(worst_rel, 3) << ", mescd " << std::fixed
+        << std::setprecision(2) << -std::log10(std::max(worst_mixed, 1e-300)) << std::defaultfloat
+        << std::setprecision(6) << " (atol/rtol = " << format_short(ratio) << ")\n";
+  }
   if (sys.has_constraints()) {
     out << "\nconstraint residual max|C|: initial " << format_short(sys.constraint_residual(y0))
         << ", final " << format_short(sys.constraint_residual(r.y)) << "\n";

@@ -139,6 +139,25 @@ TEST(Cli, ListIntegratorsShowsAllThirteenWithFamilyAndOrder) {
     EXPECT_NE(o.out.find(row), std::string::npos) << row;
 }
 
+// solve compares with the published HIRES solution (IVP test set) when the run ends at its
+// time: radau5 and rodas4 at rtol 1e-10 reach it to about 12 digits, cvode_bdf to about 7
+// (tolerance proportionality; the same figures as the work-precision table).
+TEST(Cli, SolvePrintsMescdAgainstThePublishedSolution) {
+  for (const auto& [method, least] : std::vector<std::pair<std::string, double>>{
+           {"radau5", 10.0}, {"rodas4", 10.0}, {"cvode_bdf", 6.0}}) {
+    const Outcome o = run("solve --model hires --integrator " + method +
+                          " --param rtol=1e-10 --param atol=1e-12");
+    ASSERT_EQ(o.code, 0) << o.err;
+    const auto at = o.out.find("mescd ");
+    ASSERT_NE(at, std::string::npos) << o.out;
+    EXPECT_GE(std::stod(o.out.substr(at + 6)), least) << method << "\n" << o.out;
+  }
+  // Not at the published time: no comparison.
+  const Outcome early = run("solve --model hires --integrator radau5 --t-end 100");
+  ASSERT_EQ(early.code, 0);
+  EXPECT_EQ(early.out.find("published solution"), std::string::npos);
+}
+
 TEST(Cli, DescribeListsParametersWithDefaults) {
   const Outcome o = run("describe kepler");
   ASSERT_EQ(o.code, 0);

@@ -55,3 +55,16 @@ std::optional<double> Hires::stiffness(double t, CVecRef y) const {
 }
 
 }  // namespace stiffbench
+
+namespace stiffbench {
+
+std::optional<OdeSystem::PublishedSolution> Hires::published_solution() const {
+  // IVP test set "hires" (the values in hires.hpp).
+  return PublishedSolution{321.8122,
+                           Vec{{0.7371312573325668e-3, 0.1442485726316185e-3, 0.5888729740967575e-4,
+                                0.1175651343283149e-2, 0.2386356198831331e-2, 0.6238968252742796e-2,
+                                0.2849998395185769e-2, 0.2850001604814231e-2}},
+                           "IVP test set (Mazzia & Magherini), problem hires"};
+}
+
+}  // namespace stiffbench

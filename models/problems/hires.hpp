@@ -33,6 +33,7 @@ class Hires final : public OdeSystem {
   std::optional<double> end_time() const override { return literature_end_time(); }
 
   std::string name() const override { return "hires"; }
+  std::optional<PublishedSolution> published_solution() const override;
   Index dimension() const override { return 8; }
   Vec initial_state() const override;
   bool has_jacobian() const override { return true; }

@@ -35,3 +35,14 @@ std::optional<double> Orego::stiffness(double t, CVecRef y) const {
 }
 
 }  // namespace stiffbench
+
+namespace stiffbench {
+
+std::optional<OdeSystem::PublishedSolution> Orego::published_solution() const {
+  // Hairer & Wanner; IVP test set "orego" at t = 360 (the values in orego.hpp).
+  return PublishedSolution{
+      360.0, Vec{{0.1000814870318523e+01, 0.1228178521549917e+04, 0.1320554942846706e+03}},
+      "IVP test set (Mazzia & Magherini), problem orego"};
+}
+
+}  // namespace stiffbench

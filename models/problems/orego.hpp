@@ -29,6 +29,7 @@ class Orego final : public OdeSystem {
   Orego(double s, double w, double q);
 
   std::string name() const override { return "orego"; }
+  std::optional<PublishedSolution> published_solution() const override;
   Index dimension() const override { return 3; }
   Vec initial_state() const override { return Vec{{1.0, 2.0, 3.0}}; }
   bool has_jacobian() const override { return true; }

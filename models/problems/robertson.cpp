@@ -45,3 +45,15 @@ std::optional<double> Robertson::stiffness(double t, CVecRef y) const {
 }
 
 }  // namespace stiffbench
+
+namespace stiffbench {
+
+std::optional<OdeSystem::PublishedSolution> Robertson::published_solution() const {
+  if (k1_ != 0.04 || k2_ != 3e7 || k3_ != 1e4) return std::nullopt;
+  // IVP test set "rober" at t = 1e11 (the values in robertson.hpp).
+  return PublishedSolution{
+      1e11, Vec{{0.2083340149701255e-07, 0.8333360770334713e-13, 0.9999999791665050e+00}},
+      "IVP test set (Mazzia & Magherini), problem rober"};
+}
+
+}  // namespace stiffbench

@@ -34,6 +34,8 @@ class Robertson final : public OdeSystem {
   std::optional<double> end_time() const override { return literature_end_time(); }
 
   std::string name() const override { return "robertson"; }
+  // Only for the standard rate constants (0.04, 3e7, 1e4).
+  std::optional<PublishedSolution> published_solution() const override;
   Index dimension() const override { return 3; }
   Vec initial_state() const override { return Vec{{1.0, 0.0, 0.0}}; }
   bool has_jacobian() const override { return true; }
