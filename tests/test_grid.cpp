@@ -10,7 +10,6 @@
 #include <fstream>
 #include <iostream>
 #include <numbers>
-#include <regex>
 #include <sstream>
 
 #include "core/driver.hpp"
@@ -375,19 +374,31 @@ TEST(Fluid2d, FramesAreVtkImageData) {
   }
   const std::string vti = read_text(dir / "frame_0001.vti");
   EXPECT_NE(vti.find("<ImageData WholeExtent=\"0 6 0 6 0 0\""), std::string::npos) << vti;
-  const std::regex array(
-      "<DataArray type=\"Float64\" Name=\"(\\w+)\" NumberOfComponents=\"(\\d)\""
-      " format=\"ascii\">([^<]*)</DataArray>");
+  // Each <DataArray ... Name="N" NumberOfComponents="C" format="ascii">values</DataArray>
+  // (plain string search: std::regex trips GCC 12's -Wmaybe-uninitialized under the sanitizers).
+  const auto attribute = [](const std::string& tag, const std::string& key) {
+    const auto at = tag.find(key + "=\"");
+    if (at == std::string::npos) return std::string();
+    const auto from = at + key.size() + 2;
+    return tag.substr(from, tag.find('"', from) - from);
+  };
   std::map<std::string, std::size_t> counts;
-  for (std::sregex_iterator it(vti.begin(), vti.end(), array), end; it != end; ++it) {
-    std::istringstream values((*it)[3].str());
+  for (auto at = vti.find("<DataArray "); at != std::string::npos;
+       at = vti.find("<DataArray ", at + 1)) {
+    const auto tag_end = vti.find('>', at);
+    const auto close = vti.find("</DataArray>", tag_end);
+    ASSERT_NE(close, std::string::npos);
+    const std::string tag = vti.substr(at, tag_end - at);
+    EXPECT_EQ(attribute(tag, "type"), "Float64");
+    EXPECT_EQ(attribute(tag, "format"), "ascii");
+    std::istringstream values(vti.substr(tag_end + 1, close - tag_end - 1));
     std::size_t n = 0;
     double v;
     while (values >> v) {
       ASSERT_TRUE(std::isfinite(v));
       ++n;
     }
-    counts[(*it)[1].str()] = n / std::stoul((*it)[2].str());
+    counts[attribute(tag, "Name")] = n / std::stoul(attribute(tag, "NumberOfComponents"));
   }
   EXPECT_EQ(counts, (std::map<std::string, std::size_t>{
                         {"velocity", 36}, {"pressure", 36}, {"vorticity", 36}}));
