@@ -29,8 +29,8 @@ struct Requirements {
   // Holonomic constraints offered as equations (MechanicalSystem::holonomic_constraints()); the
   // method enforces them itself, so the driver does not project after its steps.
   bool constraints = false;
-  bool spring_network = false;        // the system's springs (OdeSystem::spring_network())
-  bool grid_fluid = false;            // the GridFluid operators (core/grid_fluid.hpp)
+  bool spring_network = false;  // the system's springs (OdeSystem::spring_network())
+  bool grid_fluid = false;      // the GridFluid operators (core/grid_fluid.hpp)
 };
 
 struct MethodInfo {

@@ -28,7 +28,7 @@ struct Invariant {
 
 class MechanicalSystem;
 class HolonomicConstraints;  // core/constraints.hpp
-struct SpringNetworkView;  // core/springs.hpp
+struct SpringNetworkView;    // core/springs.hpp
 class GridFluid;
 
 // A model's suggested fixed step (its CFL or diffusion limit) and the rule that gave it, e.g.
