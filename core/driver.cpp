@@ -46,6 +46,27 @@ void record_fault(RunResult& r, const std::exception& e, double t_goal) {
   ++g_faults;
 }
 
+// The row's wall-clock limit passed during the run: status timeout; counted like a fault, since
+// the row has no result.
+void record_timeout(RunResult& r, const std::string& what, double t_goal) {
+  r.stats.status = Status::timeout;
+  std::ostringstream msg;
+  msg << what << ", in the step from t = " << r.t << " towards " << t_goal;
+  r.stats.message = msg.str();
+  ++g_faults;
+}
+
+// After a library reference returned an error: an interruption or a passed wall-clock limit
+// caught at its C callback boundary is the real cause.
+void check_stop_after_failure(RunResult& r, double t_goal) {
+  if (const int sig = interrupt_requested()) throw Interrupted{sig};
+  if (RowClock::expired()) {
+    std::ostringstream what;
+    what << "wall-clock limit of " << RowClock::limit() << " s exceeded (--max-wall)";
+    record_timeout(r, what.str(), t_goal);
+  }
+}
+
 }  // namespace
 
 long fault_count() { return g_faults.load(); }
@@ -93,15 +114,20 @@ RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0
   };
 
   const EvalCounters before = sys.counters();
+  const RowClock clock;
   const auto start = std::chrono::steady_clock::now();
   integ.reset(sys, t0, r.y);
   if (observer) observer(r.t, r.y);
   for (long k = 0; k < n; ++k) {
     Status s = Status::ok;
     try {
+      poll_run_control();  // methods without f evaluations (xpbd) are stopped here
       s = integ.step(sys, r.t, r.y, r.h, r.stats);
     } catch (const BadInput&) {
       throw;  // a setting refused lazily is still bad input
+    } catch (const WallLimitExceeded& e) {
+      record_timeout(r, e.what(), r.t + r.h);
+      break;
     } catch (const std::exception& e) {
       record_fault(r, e, r.t + r.h);
       break;
@@ -166,21 +192,27 @@ RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOp
     if (stops.back() < opt.t_end) stops.push_back(opt.t_end);
   }
   const EvalCounters before = sys.counters();
+  const RowClock clock;
   const auto start = std::chrono::steady_clock::now();
   integ.reset(sys, t0, r.y);
   if (observer) observer(r.t, r.y);
   for (const double t_out : stops) {
     Status s = Status::ok;
     try {
+      poll_run_control();
       s = integ.advance_to(sys, t_out, r.y, r.stats);
     } catch (const BadInput&) {
       throw;
+    } catch (const WallLimitExceeded& e) {
+      record_timeout(r, e.what(), t_out);
+      break;
     } catch (const std::exception& e) {
       record_fault(r, e, t_out);
       break;
     }
     if (s != Status::ok) {
       r.stats.status = s;
+      check_stop_after_failure(r, t_out);
       break;
     }
     r.t = t_out;

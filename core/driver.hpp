@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/integrator.hpp"
+#include "core/run_control.hpp"
 
 namespace stiffbench {
 
@@ -65,10 +66,14 @@ RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOp
                        const Observer& observer = {});
 
 // Faults inside a run (issue 14): an exception other than BadInput thrown by the model or the
-// integrator during run_fixed_step* or run_adaptive ends that run with Status::error and the
-// exception's message (the state is the last one reached) instead of ending the study. NaN or
-// Inf in the state ends it with Status::unstable. This counts the runs that ended with error in
-// this process; the command line exits with kExitRowsFailed (3) when it is not zero.
+// integrator during run_fixed_step* or run_adaptive (library references included: their
+// callbacks pass it across the C library) ends that run with Status::error and the exception's
+// message (the state is the last one reached) instead of ending the study. NaN or Inf in the
+// state ends it with Status::unstable. A run past its row's wall-clock limit ends with
+// Status::timeout; an interruption (request_interrupt) propagates as Interrupted
+// (core/run_control.hpp: every run is inside a RowClock, and both are polled at each f
+// evaluation and each step). This counts the runs that ended with error or timeout in this
+// process; the command line exits with kExitRowsFailed (3) when it is not zero.
 long fault_count();
 
 }  // namespace stiffbench

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/run_control.hpp"
 #include "core/types.hpp"
 
 namespace stiffbench {
@@ -184,7 +185,12 @@ class OdeSystem {
   // its explicit part does not depend on y.
   virtual void eval_rhs_explicit_part(double, CVecRef, VecRef) const {}
   virtual void eval_rhs_implicit_part(double, CVecRef, VecRef) const {}
-  void count_f_eval() const { ++counters_.f_evals; }
+  // Every f evaluation passes here, so this is also where a run over its wall-clock limit or an
+  // interrupted one is stopped (core/run_control.hpp).
+  void count_f_eval() const {
+    ++counters_.f_evals;
+    poll_run_control();
+  }
 
  private:
   mutable EvalCounters counters_;

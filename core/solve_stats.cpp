@@ -17,6 +17,8 @@ std::string to_string(Status s) {
       return "solver_error";
     case Status::error:
       return "error";
+    case Status::timeout:
+      return "timeout";
   }
   return "?";
 }

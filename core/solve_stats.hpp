@@ -9,7 +9,8 @@ namespace stiffbench {
 
 // error: the model or the integrator threw during the run (a fault, not a numerical outcome);
 // the driver ends that run with this status and the exception's message (core/driver.hpp).
-enum class Status { ok, unstable, newton_failed, solver_error, error };
+// timeout: the row passed its wall-clock limit (--max-wall, core/run_control.hpp).
+enum class Status { ok, unstable, newton_failed, solver_error, error, timeout };
 
 std::string to_string(Status s);
 

@@ -1,12 +1,15 @@
 // The stiffbench command line (experiments/cli_main.hpp). Exit codes: 0 success, 2 bad input
-// (one message on stderr naming what is wrong), 1 anything else.
+// (one message on stderr naming what is wrong), 3 a row ended with status error or timeout,
+// 128 + signal when interrupted by SIGINT/SIGTERM, 1 anything else.
 #include "experiments/cli_main.hpp"
 
 #include <CLI/CLI.hpp>
+#include <csignal>
 #include <iostream>
 #include <limits>
 
 #include "core/driver.hpp"
+#include "core/run_control.hpp"
 #include "experiments/catalog.hpp"
 #include "experiments/cli.hpp"
 #include "experiments/commands.hpp"
@@ -47,6 +50,42 @@ void add_study_flags(CLI::App* cmd, ConvergenceSpec& spec, std::string& integrat
 
 PlotOptions g_plot;  // --svg of convergence, local-error and work-precision
 
+// The first SIGINT or SIGTERM asks the runs to stop at their next poll (core/run_control.hpp):
+// the current row is abandoned, the files already written stay complete (each is written under a
+// temporary name and renamed; `run` appends whole lines), and cli_main returns 128 + signal. The
+// action is reset to the default on delivery (SA_RESETHAND), so a second signal ends the process
+// at once. Installed for the duration of cli_main only; the previous handlers are restored.
+extern "C" void on_interrupt_signal(int sig) { request_interrupt(sig); }
+
+class InterruptHandlers {
+ public:
+  InterruptHandlers() {
+    clear_interrupt();
+    struct sigaction sa {};
+    sa.sa_handler = on_interrupt_signal;
+    sa.sa_flags = SA_RESETHAND;
+    sigemptyset(&sa.sa_mask);
+    for (int i = 0; i < 2; ++i) sigaction(kSignals[i], &sa, &old_[i]);
+  }
+  ~InterruptHandlers() {
+    for (int i = 0; i < 2; ++i) sigaction(kSignals[i], &old_[i], nullptr);
+    clear_interrupt();
+  }
+  InterruptHandlers(const InterruptHandlers&) = delete;
+  InterruptHandlers& operator=(const InterruptHandlers&) = delete;
+
+ private:
+  static constexpr int kSignals[2] = {SIGINT, SIGTERM};
+  struct sigaction old_[2];
+};
+
+int interrupted_exit(int sig) {
+  remove_created_output_dirs();  // only folders this run created and left empty
+  std::cerr << "stiffbench: interrupted by " << (sig == SIGTERM ? "SIGTERM" : "SIGINT")
+            << ": the run in progress was abandoned; files already written are complete\n";
+  return 128 + (sig > 0 ? sig : SIGINT);
+}
+
 }  // namespace
 
 int cli_main(int argc, char** argv) {
@@ -56,7 +95,8 @@ int cli_main(int argc, char** argv) {
   } forget;
   CLI::App app{
       "stiffbench: a testbed comparing time integrators on stiff ODEs from physically based "
-      "simulation.\nExit codes: 0 success, 2 bad input, 1 other errors."};
+      "simulation.\nExit codes: 0 success, 2 bad input, 3 a row ended with status error or timeout "
+      "(its table is written), 130/143 interrupted by SIGINT/SIGTERM, 1 other errors."};
   app.require_subcommand(1);
 
   std::string list_what;
@@ -204,6 +244,17 @@ int cli_main(int argc, char** argv) {
           "the memory available now)");
     }
   }
+  // --max-wall on every command that runs integrators (core/run_control.hpp; README "Faults
+  // and exit codes").
+  for (const char* name : {"solve", "convergence", "local-error", "work-precision", "stability",
+                           "energy", "run", "report"}) {
+    if (auto* sub = app.get_subcommand(name)) {
+      sub->add_option_function<double>(
+          "--max-wall", [](double s) { set_wall_limit(s); },
+          "wall-clock limit of each row in seconds (a run; a stability row's whole bisection): a "
+          "row over it ends with status timeout and the study goes on (default 0: none)");
+    }
+  }
   if (argc > 1 && argv[1][0] != '-') {
     bool known = false;
     std::vector<std::string> names;
@@ -217,6 +268,8 @@ int cli_main(int argc, char** argv) {
       return 2;
     }
   }
+  // SIGINT/SIGTERM: the runs stop at their next poll, and the exit code is 128 + signal.
+  const InterruptHandlers handlers;
   // Subcommands registered by add_*_command run inside parse() (their callbacks), so one try
   // covers parsing and running.
   try {
@@ -277,12 +330,17 @@ int cli_main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::cerr << "stiffbench: error: " << e.what() << "\n";
     return 1;
+  } catch (const Interrupted& i) {
+    return interrupted_exit(i.signal);
   }
+  // A signal that arrived after the last run (while a table or plot was written): the results
+  // are complete, but the exit code still says the command was interrupted.
+  if (const int sig = interrupt_requested()) return interrupted_exit(sig);
   // A run that ended with status error (the model or the integrator threw mid-run) is a failed
   // row: its table was written, and the exit code says so (README).
   if (const long faults = fault_count(); faults > 0) {
     std::cerr << "stiffbench: " << faults << " run" << (faults == 1 ? "" : "s")
-              << " ended with status error (see the status and message columns)\n";
+              << " ended with status error or timeout (see the status and message columns)\n";
     return kExitRowsFailed;
   }
   return 0;

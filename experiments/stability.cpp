@@ -145,6 +145,11 @@ struct Probe {
   std::optional<double> growth_per_period;  // when unstable with enough samples
 };
 
+// Ends a row whose probe timed out or failed (status and message of the row).
+struct RowEnded {
+  std::string status, message;
+};
+
 // Thrown by the observer to end a run whose energy crossed the threshold.
 struct EnergyGrowth {
   double t;
@@ -242,9 +247,15 @@ StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& sp
   require_input(energy || spec.criterion != "energy",
                 "--criterion energy: model " + spec.model +
                     " is not a mechanical system with an 'energy' invariant");
+  // A probe that timed out or threw says nothing about stability: the row ends there with
+  // status timeout or failed (treating it as unstable would bias h_max low silently).
   auto run = [&](double h, int mult) {
     ++row.probes;
-    return probe(sys, integ, t0, y0, h, horizon, period, mult, spec, energy);
+    Probe p = probe(sys, integ, t0, y0, h, horizon, period, mult, spec, energy);
+    if (p.status == Status::timeout || p.status == Status::error)
+      throw RowEnded{p.status == Status::timeout ? "timeout" : "failed",
+                     "at h = " + num(h) + ": " + p.message};
+    return p;
   };
   auto all_unstable = [&](const Probe& p, double h) {
     row.status = "unstable_for_all_h";
@@ -306,6 +317,9 @@ StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& sp
     row.status = "ok";
     row.h_measured = lo;
     row.horizon = std::max(horizon, static_cast<double>(spec.min_steps) * lo);
+  } catch (const RowEnded& e) {
+    row.status = e.status;
+    row.message = e.message;
   } catch (const BadInput&) {
     throw;
   } catch (const std::exception& e) {
@@ -454,6 +468,7 @@ StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress)
                       "), so the horizon cannot be set in periods of its fastest mode: give "
                       "--horizon T");
     for (auto& integ : s.integrators) {
+      const RowClock clock;  // --max-wall covers the row's whole bisection
       StabilityRow row = measure(*s.model, *integ, sp, y0, spec);
       if (sweep) {
         row.param = spec.sweep_param;

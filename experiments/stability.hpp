@@ -28,7 +28,10 @@
 //                       interval is stable there on a linear problem), or no step down to
 //                       h_floor is stable. h_max_measured is empty; the Markdown table gives the
 //                       growth per period at the last unstable probe instead.
-//   failed              the integrator cannot run at all (its message in the Markdown table).
+//   failed              the integrator cannot run at all, or a probe threw (its message in
+//                       the Markdown table);
+//   timeout             the row's bisection passed --max-wall (core/run_control.hpp); the
+//                       probes so far are not reported as a limit.
 //
 // Predicted: the spectrum of ∂f/∂y at the perturbed initial state — exact (Eigen's eigensolver
 // of the dense analytic Jacobian) when the model has one and dimension <= dense_limit, else the
@@ -90,12 +93,12 @@ struct StabilitySpec {
 void parse_sweep(const std::string& arg, std::string& name, std::vector<double>& values);
 
 struct StabilityRow {
-  std::string model, integrator, param;     // param empty without a sweep
-  double value = 0;                         // the swept value (unused without a sweep)
-  std::optional<double> h_measured;         // empty for unstable_for_all_h / failed
-  std::optional<double> h_predicted;        // empty without stability data or spectrum
-  bool predicted_unbounded = false;         // linear theory: stable for every h (A-stable)
-  std::string status;                       // ok | stable_up_to | unstable_for_all_h | failed
+  std::string model, integrator, param;  // param empty without a sweep
+  double value = 0;                      // the swept value (unused without a sweep)
+  std::optional<double> h_measured;      // empty for unstable_for_all_h / failed
+  std::optional<double> h_predicted;     // empty without stability data or spectrum
+  bool predicted_unbounded = false;      // linear theory: stable for every h (A-stable)
+  std::string status;  // ok | stable_up_to | unstable_for_all_h | failed | timeout
   std::optional<double> growth_per_period;  // unstable_for_all_h: at the last unstable probe
   double growth_h = 0;                      // the step of that probe
   int probes = 0;                           // runs made

@@ -8,9 +8,11 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <memory>
 #include <set>
 #include <sstream>
 
+#include "core/run_control.hpp"
 #include "core/types.hpp"
 #include "experiments/catalog.hpp"
 #include "experiments/convergence.hpp"
@@ -570,7 +572,8 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     out << "resume: " << (in_shard - static_cast<long>(todo.size())) << " of " << in_shard
         << " unit(s) already done\n";
 
-  std::FILE* f = std::fopen(csv.c_str(), "ab");
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(csv.c_str(), "ab"), &std::fclose);
+  std::FILE* f = file.get();
   if (!f) throw BadInput("--out: cannot append to " + csv.string());
   Progress progress(&err, "run", static_cast<long>(todo.size()));
   const std::size_t n_study = study.size();
@@ -602,6 +605,13 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
       unit_status = "error";
       message = e.what();
       rows.clear();
+    } catch (const Interrupted&) {
+      // The unit in progress is abandoned (none of its rows is written); the units before it
+      // are complete lines of the CSV, which --resume keeps.
+      err << "run: interrupted in unit " << u << "; " << done.size() << " of " << ex.units()
+          << " unit(s) are complete in " << csv.string()
+          << ": run the same command with --resume to finish\n";
+      throw;
     }
     if (rows.empty()) {
       std::vector<std::string> r(n_study);
@@ -629,7 +639,7 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
           << "): " << unit_status << ": " << message << "\n";
     progress.tick(join(integ) + (p.label.empty() ? "" : ", " + p.label));
   }
-  std::fclose(f);
+  file.reset();                  // closed before the sorted rewrite
   write_all(csv, header, done);  // sorted by unit
   if (opt.shard_count == 1 && static_cast<long>(done.size()) == ex.units())
     write_markdown(csv, header, done);

@@ -9,6 +9,8 @@
 //   core/integrator.hpp, core/solve_stats.hpp, core/driver.hpp
 //                                           the integrator face, counters, fixed-step and
 //                                           adaptive drivers
+//   core/run_control.hpp                    wall-clock limit per row (timeout status) and
+//                                           interrupt requests
 //   core/registry.hpp, core/catalog.hpp, experiments/catalog.hpp
 //                                           the registries, make_setup, register_model and
 //                                           register_integrator for a user's own entries
@@ -29,6 +31,7 @@
 #include "core/ode_system.hpp"
 #include "core/params.hpp"
 #include "core/registry.hpp"
+#include "core/run_control.hpp"
 #include "core/solve_stats.hpp"
 #include "core/types.hpp"
 #include "experiments/catalog.hpp"

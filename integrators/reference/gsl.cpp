@@ -4,7 +4,9 @@
 #include <gsl/gsl_odeiv2.h>
 
 #include <cmath>
+#include <exception>
 #include <iostream>
+#include <utility>
 
 namespace stiffbench {
 
@@ -78,8 +80,10 @@ class GslIntegrator final : public Integrator {
     }
     // The bare stepper: the driver's fixed-step function still applies the error control and
     // refuses steps whose estimate exceeds the tolerance.
+    pending_ = nullptr;
     const int status =
         gsl_odeiv2_step_apply(driver_->s, t_, h, y.data(), yerr_.data(), nullptr, nullptr, &gsys_);
+    rethrow_pending();
     if (status == GSL_SUCCESS) ++fixed_steps_;
     return finish(status, t_ + h, y, stats, true);
   }
@@ -87,41 +91,66 @@ class GslIntegrator final : public Integrator {
   Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) override {
     sync(sys, t_, y);
     double tt = t_;
+    pending_ = nullptr;
     const int status = gsl_odeiv2_driver_apply(driver_, &tt, t_out, y.data());
+    rethrow_pending();
     return finish(status, tt, y, stats, false);
   }
 
  private:
+  // Exceptions must not cross GSL's C frames: one thrown by the model (or a stop request,
+  // core/run_control.hpp, including Interrupted, which is not a std::exception) is kept, GSL is
+  // told the function failed (GSL_EBADFUNC ends its step at once), and rethrown() throws it when
+  // GSL returns, so the driver ends the run as for a hand-written method.
+  template <class F>
+  int guarded(F&& f) {
+    try {
+      return f();
+    } catch (...) {
+      if (!pending_) pending_ = std::current_exception();
+      return GSL_EBADFUNC;
+    }
+  }
+  void rethrow_pending() {
+    if (pending_) std::rethrow_exception(std::exchange(pending_, nullptr));
+  }
+
   static int func(double t, const double y[], double f[], void* p) {
     auto* self = static_cast<GslIntegrator*>(p);
-    Eigen::Map<const Vec> yv(y, self->n_);
-    Eigen::Map<Vec> fv(f, self->n_);
-    self->sys_->rhs(t, yv, fv);
-    return fv.allFinite() ? GSL_SUCCESS : GSL_EBADFUNC;
+    return self->guarded([&] {
+      Eigen::Map<const Vec> yv(y, self->n_);
+      Eigen::Map<Vec> fv(f, self->n_);
+      self->sys_->rhs(t, yv, fv);
+      return fv.allFinite() ? GSL_SUCCESS : GSL_EBADFUNC;
+    });
+  }
+
+  static int jac(double t, const double y[], double* dfdy, double dfdt[], void* p) {
+    auto* self = static_cast<GslIntegrator*>(p);
+    return self->guarded([&] { return self->jacobian(t, y, dfdy, dfdt); });
   }
 
   // dfdy is row-major: dfdy[i*n + j] = ∂f_i/∂y_j.
-  static int jac(double t, const double y[], double* dfdy, double dfdt[], void* p) {
-    auto* self = static_cast<GslIntegrator*>(p);
-    const Index n = self->n_;
+  int jacobian(double t, const double y[], double* dfdy, double dfdt[]) {
+    const Index n = n_;
     Eigen::Map<const Vec> yv(y, n);
     Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> jm(dfdy, n,
                                                                                           n);
-    if (self->sys_->has_jacobian()) {
-      self->sys_->jacobian(t, yv, self->jac_);
-      jm = Mat(self->jac_);
+    if (sys_->has_jacobian()) {
+      sys_->jacobian(t, yv, jac_);
+      jm = Mat(jac_);
     } else {
-      jm = finite_difference_jacobian(*self->sys_, t, yv);
-      ++self->fd_jacobians_;
+      jm = finite_difference_jacobian(*sys_, t, yv);
+      ++fd_jacobians_;
     }
     Eigen::Map<Vec> ft(dfdt, n);
-    if (self->sys_->autonomous()) {
+    if (sys_->autonomous()) {
       ft.setZero();
     } else {
       const double dt = 1.4901161193847656e-08 * std::max(1.0, std::abs(t));
-      self->sys_->rhs(t, yv, self->f0_);
-      self->sys_->rhs(t + dt, yv, self->f1_);
-      ft = (self->f1_ - self->f0_) / dt;
+      sys_->rhs(t, yv, f0_);
+      sys_->rhs(t + dt, yv, f1_);
+      ft = (f1_ - f0_) / dt;
     }
     return GSL_SUCCESS;
   }
@@ -173,6 +202,7 @@ class GslIntegrator final : public Integrator {
   SparseMat jac_;
   Vec f0_, f1_, tmp_, yerr_, y_last_;
   long fixed_steps_ = 0;
+  std::exception_ptr pending_;  // thrown in a callback, rethrown when GSL returns
   double t_ = 0, fixed_h_ = 0;
   long fd_jacobians_ = 0;
 };

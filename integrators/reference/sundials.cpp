@@ -18,10 +18,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <functional>
 #include <iostream>
 #include <memory>
+#include <type_traits>
+#include <utility>
 
+#include "core/run_control.hpp"
 #include "integrators/implicit/velocity_form.hpp"
 
 namespace stiffbench {
@@ -220,29 +224,30 @@ class SundialsIntegrator final : public Integrator {
   // --- callbacks (C ABI: exceptions must not cross it) -----------------------------------
   static int rhs_cb(sunrealtype t, N_Vector y, N_Vector yd, void* ud) {
     auto* self = static_cast<SundialsIntegrator*>(ud);
-    try {
+    return self->guarded([&] {
       Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), self->n_);
       Eigen::Map<Vec> dv(N_VGetArrayPointer(yd), self->n_);
       self->sys_->rhs(t, yv, dv);
       return dv.allFinite() ? 0 : 1;  // non-finite: recoverable, the library retries smaller
-    } catch (const std::exception& e) {
-      self->callback_error_ = e.what();
-      return -1;
-    }
+    });
   }
   static int rhs_explicit_cb(sunrealtype t, N_Vector y, N_Vector yd, void* ud) {
     auto* self = static_cast<SundialsIntegrator*>(ud);
-    Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), self->n_);
-    Eigen::Map<Vec> dv(N_VGetArrayPointer(yd), self->n_);
-    self->sys_->rhs_explicit_part(t, yv, dv);
-    return dv.allFinite() ? 0 : 1;
+    return self->guarded([&] {
+      Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), self->n_);
+      Eigen::Map<Vec> dv(N_VGetArrayPointer(yd), self->n_);
+      self->sys_->rhs_explicit_part(t, yv, dv);
+      return dv.allFinite() ? 0 : 1;
+    });
   }
   static int rhs_implicit_cb(sunrealtype t, N_Vector y, N_Vector yd, void* ud) {
     auto* self = static_cast<SundialsIntegrator*>(ud);
-    Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), self->n_);
-    Eigen::Map<Vec> dv(N_VGetArrayPointer(yd), self->n_);
-    self->sys_->rhs_implicit_part(t, yv, dv);
-    return dv.allFinite() ? 0 : 1;
+    return self->guarded([&] {
+      Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), self->n_);
+      Eigen::Map<Vec> dv(N_VGetArrayPointer(yd), self->n_);
+      self->sys_->rhs_implicit_part(t, yv, dv);
+      return dv.allFinite() ? 0 : 1;
+    });
   }
   // The fixed pattern jp_ = pattern(J) ∪ diagonal, computed once per reset(), and the maps
   // from the model's matrices into it. Structure only: the evaluations here are not counted.
@@ -315,14 +320,22 @@ class SundialsIntegrator final : public Integrator {
     }
   }
 
-  // Runs a Jacobian callback body: exceptions become an unrecoverable error for the library.
+  // Runs a callback body (returning an int for the library, or nothing: 0). Exceptions must not
+  // cross the C ABI: one thrown by the model (or a stop request, core/run_control.hpp, including
+  // Interrupted, which is not a std::exception) is kept, the library is told the error is
+  // unrecoverable, and evolve() rethrows it when the library returns, so the driver ends the run
+  // as it would for a hand-written method (status error, timeout, or the interruption).
   template <class F>
   int guarded(F&& f) {
     try {
-      f();
-      return 0;
-    } catch (const std::exception& e) {
-      callback_error_ = e.what();
+      if constexpr (std::is_void_v<decltype(f())>) {
+        f();
+        return 0;
+      } else {
+        return f();
+      }
+    } catch (...) {
+      if (!pending_) pending_ = std::current_exception();
       return -1;
     }
   }
@@ -384,25 +397,32 @@ class SundialsIntegrator final : public Integrator {
         ++self->force_jac_evals_;
       }
       *jcur = jok ? SUNFALSE : SUNTRUE;
-      if (!self->vel_->factor(gamma)) throw std::runtime_error(self->vel_->error());
+      if (!self->vel_->factor(gamma)) {  // the linear solver refused: a solver error
+        self->callback_error_ = self->vel_->error();
+        return -1;
+      }
       self->vel_->set_tolerance(kVelocityPrecTol);
+      return 0;
     });
   }
   static int psolve_cb(sunrealtype, N_Vector, N_Vector, N_Vector r, N_Vector z, sunrealtype,
                        sunrealtype, int, void* ud) {
     auto* self = static_cast<SundialsIntegrator*>(ud);
-    Eigen::Map<const Vec> rr(N_VGetArrayPointer(r), self->n_);
-    Eigen::Map<Vec> zz(N_VGetArrayPointer(z), self->n_);
-    zz.setZero();
-    return self->vel_->solve(rr, zz).ok ? 0 : 1;  // 1: recoverable (the library retries)
+    return self->guarded([&] {
+      Eigen::Map<const Vec> rr(N_VGetArrayPointer(r), self->n_);
+      Eigen::Map<Vec> zz(N_VGetArrayPointer(z), self->n_);
+      zz.setZero();
+      return self->vel_->solve(rr, zz).ok ? 0 : 1;  // 1: recoverable (the library retries)
+    });
   }
   static int velocity_jtimes_cb(N_Vector v, N_Vector jv, sunrealtype, N_Vector, N_Vector, void* ud,
                                 N_Vector) {
     auto* self = static_cast<SundialsIntegrator*>(ud);
-    Eigen::Map<const Vec> vv(N_VGetArrayPointer(v), self->n_);
-    Eigen::Map<Vec> out(N_VGetArrayPointer(jv), self->n_);
-    self->vel_->jacobian_times(vv, out);
-    return 0;
+    return self->guarded([&] {
+      Eigen::Map<const Vec> vv(N_VGetArrayPointer(v), self->n_);
+      Eigen::Map<Vec> out(N_VGetArrayPointer(jv), self->n_);
+      self->vel_->jacobian_times(vv, out);
+    });
   }
   static void err_cb(int code, const char* module, const char* function, char* msg, void* ud) {
     if (code > 0) return;  // warnings
@@ -559,12 +579,14 @@ class SundialsIntegrator final : public Integrator {
   Status evolve(double t_out, VecRef y, int mode, SolveStats& stats) {
     library_error_.clear();
     callback_error_.clear();
+    pending_ = nullptr;
     N_Vector yout = N_VMake_Serial(n_, y.data(), ctx_);  // the driver's storage: no copy
     sunrealtype tret = t_;
     const int flag = is_cvode() ? CVode(mem_, t_out, yout, &tret, mode)
                                 : ARKStepEvolve(mem_, t_out, yout, &tret, mode);
     N_VDestroy(yout);
     read_counters(stats);
+    if (pending_) std::rethrow_exception(std::exchange(pending_, nullptr));
     if (!check(flag, is_cvode() ? "CVode" : "ARKStepEvolve", stats)) return Status::solver_error;
     t_ = tret;
     y_last_ = y;
@@ -641,6 +663,7 @@ class SundialsIntegrator final : public Integrator {
   double t_ = 0, fixed_h_ = 0;
   bool fixed_mode_ = false;
   std::string library_error_, callback_error_;
+  std::exception_ptr pending_;  // thrown in a callback, rethrown when the library returns
 };
 
 std::vector<ParamSpec> common_specs(bool linear) {
