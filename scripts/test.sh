@@ -57,4 +57,21 @@ if [ "${STIFFBENCH_SKIP_SANITIZE:-0}" != "1" ]; then
     -DSTIFFBENCH_SANITIZE=ON -DSTIFFBENCH_BUILD_BENCH=OFF
   (cd "$root/build-sanitize" && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --output-on-failure -j "$jobs")
+  # The whole main job under the sanitizers (issue 14): every experiment kind, the library
+  # references and the plots of `report --quick`, with LeakSanitizer reporting any leak at exit
+  # (ASan's exit code 23 then fails this step; UBSan aborts on the first finding).
+  echo "== Leak check: report --quick under ASan + UBSan"
+  rm -rf "$root/build-sanitize/report-quick"
+  start=$(date +%s)
+  if ! ASAN_OPTIONS=detect_leaks=1:exitcode=23 UBSAN_OPTIONS=print_stacktrace=1 \
+      "$root/build-sanitize/experiments/stiffbench" report --quick \
+      --out "$root/build-sanitize/report-quick" 2>"$root/build-sanitize/report-quick.log"; then
+    tail -n 60 "$root/build-sanitize/report-quick.log" >&2
+    exit 1
+  fi
+  if grep -q "LeakSanitizer\|runtime error:" "$root/build-sanitize/report-quick.log"; then
+    grep -A 30 "LeakSanitizer\|runtime error:" "$root/build-sanitize/report-quick.log" >&2
+    exit 1
+  fi
+  echo "report --quick under ASan + UBSan: no leak, no error ($(( $(date +%s) - start )) s)"
 fi

@@ -28,7 +28,7 @@ Status SemiImplicitEuler::step(const OdeSystem& sys, double t, VecRef y, double 
   sys.rhs(t, y, f_);
   core_.update_jacobian(sys, t, y, f_, stats);
   if (!core_.prepare(h, stats)) {
-    stats.message = "singular matrix I - hJ at t = " + std::to_string(t);
+    stats.message = "I - hJ at t = " + std::to_string(t) + " refused: " + core_.error();
     return Status::solver_error;
   }
   // Non-autonomous f: the method applied to the autonomised system (t' = 1) adds h² f_t, so a
@@ -332,7 +332,7 @@ bool Rosenbrock::stages(const OdeSystem& sys, double t, CVecRef y, double h, boo
 Status Rosenbrock::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) {
   linearise(sys, t, y, stats);
   if (!core_.prepare(h * tab_.gamma, stats)) {
-    stats.message = "singular matrix I - hγJ at t = " + std::to_string(t);
+    stats.message = "I - hγJ at t = " + std::to_string(t) + " refused: " + core_.error();
     return Status::solver_error;
   }
   if (!stages(sys, t, y, h, false, stats)) return Status::solver_error;
