@@ -350,10 +350,11 @@ TEST(RunControlCli, SigtermDuringAStudyExits143WithoutPartialFiles) {
 TEST(RunControlCli, MaxWallWritesATimeoutRowAndExitsThree) {
   const fs::path d = fresh_dir("maxwall");
   const fs::path out = d / "out";
-  // h = 0.1 and 1e-4 take 10³ and 10⁶ steps (well inside 2 s); 1e-7 takes 10⁹ (minutes).
+  // h = 0.1 and 0.1/3000 take 100 and 3·10⁵ steps (milliseconds, far inside 2 s even under
+  // the sanitizers); 0.1/3000² takes 9·10⁸ (tens of seconds).
   Child c = spawn(
-      {"convergence", "--model", "harmonic_oscillator", "--integrators", "rk4", "--t-end", "100",
-       "--h", "0.1", "--levels", "3", "--refine", "1000", "--max-wall", "2", "--out", out.string()},
+      {"convergence", "--model", "harmonic_oscillator", "--integrators", "rk4", "--t-end", "10",
+       "--h", "0.1", "--levels", "3", "--refine", "3000", "--max-wall", "2", "--out", out.string()},
       d);
   ASSERT_GT(c.pid, 0);
   EXPECT_EQ(wait_exit(c.pid), 3) << slurp(c.err);
