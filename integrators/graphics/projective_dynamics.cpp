@@ -3,19 +3,9 @@
 #include <cmath>
 #include <sstream>
 
+#include "integrators/graphics/spring_requirements.hpp"
+
 namespace stiffbench {
-
-namespace {
-
-// By field name, so a field added to Requirements later cannot shift these.
-Requirements spring_network_requirements() {
-  Requirements r;
-  r.mechanical = true;
-  r.spring_network = true;
-  return r;
-}
-
-}  // namespace
 
 std::vector<ParamSpec> projective_dynamics_param_specs() {
   return {{"iterations", ParamType::integer, "10",
