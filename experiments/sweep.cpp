@@ -324,8 +324,7 @@ std::string csv_name(const std::string& kind) {
 }
 
 std::string md_name(const std::string& kind) {
-  std::string n = csv_name(kind);
-  return n.replace(n.size() - 4, 4, ".md");
+  return fs::path(csv_name(kind)).replace_extension(".md").string();
 }
 
 std::string hex16(std::uint64_t h) {
@@ -697,12 +696,8 @@ int merge_shards(const std::string& out_dir, const std::vector<std::string>& dir
   require_output_dir(dir);
   const std::string name = first.value("csv", "run.csv");
   // Output safety: an --out folder holding a run of a different spec is refused unless --force.
-  {
-    std::string md = name;
-    if (md.size() > 4) md.replace(md.size() - 4, 4, ".md");
-    check_existing_results(dir, "run.json", {name, md}, first.value("spec", nlohmann::json()),
-                           force_output(), &err);
-  }
+  check_existing_results(dir, "run.json", {name, fs::path(name).replace_extension(".md").string()},
+                         first.value("spec", nlohmann::json()), force_output(), &err);
   write_all(dir / name, header, units);
   const long total = first.value("units", 0L);
   std::vector<std::string> missing;

@@ -190,14 +190,20 @@ TEST(OutputSafety, SolveTrajectoryFileNeedsForce) {
   fs::remove_all(dir);
 }
 
-// run: a different spec is refused unless --force; units of the same spec need --resume (runs
-// the missing ones) or --force (starts over).
-TEST(OutputSafety, RunNeedsResumeOrForce) {
-  const fs::path dir = fresh_dir("run");
+// A fresh DIR with DIR/tiny.toml: a convergence sweep of 2 units (rk4, euler), 2 levels each.
+fs::path tiny_spec(const fs::path& dir) {
   fs::create_directories(dir);
   const fs::path spec = dir / "tiny.toml";
   std::ofstream(spec) << "kind = \"convergence\"\nmodel = \"harmonic_oscillator\"\n"
                          "integrators = [\"rk4\", \"euler\"]\nt_end = 1\nh = 0.1\nlevels = 2\n";
+  return spec;
+}
+
+// run: a different spec is refused unless --force; units of the same spec need --resume (runs
+// the missing ones) or --force (starts over).
+TEST(OutputSafety, RunNeedsResumeOrForce) {
+  const fs::path dir = fresh_dir("run");
+  const fs::path spec = tiny_spec(dir);
   const fs::path out = dir / "out";
   const std::string cmd = "run " + spec.string() + " --out " + out.string();
   ASSERT_EQ(run(cmd).code, 0);
@@ -242,10 +248,7 @@ TEST(OutputSafety, RunNeedsResumeOrForce) {
 // merge: an --out folder holding a merged run of a different spec is refused unless --force.
 TEST(OutputSafety, MergeRefusesAnotherSpecUnlessForce) {
   const fs::path dir = fresh_dir("merge");
-  fs::create_directories(dir);
-  const fs::path spec = dir / "tiny.toml";
-  std::ofstream(spec) << "kind = \"convergence\"\nmodel = \"harmonic_oscillator\"\n"
-                         "integrators = [\"rk4\", \"euler\"]\nt_end = 1\nh = 0.1\nlevels = 2\n";
+  const fs::path spec = tiny_spec(dir);
   const std::string base = "run " + spec.string();
   for (int i = 0; i < 2; ++i)
     ASSERT_EQ(run(base + " --shard " + std::to_string(i) + "/2 --out " +
