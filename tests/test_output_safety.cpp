@@ -20,6 +20,7 @@
 
 #include "core/types.hpp"
 #include "experiments/commands.hpp"
+#include "experiments/convergence.hpp"
 #include "experiments/output.hpp"
 
 namespace {
@@ -333,6 +334,29 @@ TEST(OutputSafetyLibrary, CheckExistingResults) {
     EXPECT_NE(m.find((dir / "a.json").string()), std::string::npos) << m;
     EXPECT_NE(m.find("model = \"kepler\" there, \"hires\" here"), std::string::npos) << m;
   }
+  fs::remove_all(dir);
+}
+
+// The library's study functions make the same check, with force_output() as --force.
+TEST(OutputSafetyLibrary, StudyFunctionsCheckTheFolder) {
+  const fs::path dir = fresh_dir("study");
+  ConvergenceSpec spec;
+  spec.model = "harmonic_oscillator";
+  spec.integrators = {"rk4"};
+  spec.t_end = 1;
+  spec.h = 0.1;
+  spec.levels = 2;
+  std::ostringstream err;
+  convergence_study(spec, dir.string(), false, nullptr, err);
+  const auto before = snapshot(dir);
+  ConvergenceSpec other = spec;
+  other.integrators = {"heun"};
+  EXPECT_THROW(convergence_study(other, dir.string(), false, nullptr, err), BadInput);
+  EXPECT_EQ(snapshot(dir), before);
+  set_force_output(true);
+  EXPECT_NO_THROW(convergence_study(other, dir.string(), false, nullptr, err));
+  set_force_output(false);
+  EXPECT_NE(err.str().find("(--force)"), std::string::npos) << err.str();
   fs::remove_all(dir);
 }
 
