@@ -4,6 +4,7 @@
 #include "experiments/catalog.hpp"
 #include "experiments/cli.hpp"
 #include "experiments/energy.hpp"
+#include "experiments/output.hpp"
 
 namespace stiffbench {
 
@@ -40,6 +41,8 @@ void add_energy_command(CLI::App& app) {
     spec.validate();
     const std::filesystem::path dir = st->flags.out_dir;
     require_output_dir(dir);
+    check_study_output(dir, "energy", spec.to_json(), force_output(), &std::cerr,
+                       {"energy_summary.csv"});
     const EnergyResult res = run_energy(spec, &std::cerr);
     const bool plotted = write_energy_outputs(dir, spec, res, st->flags.plot, std::cerr);
     std::cout << energy_markdown_table(res).to_markdown();

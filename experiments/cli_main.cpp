@@ -129,8 +129,9 @@ int cli_main(int argc, char** argv) {
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   solve->add_option("--out", solve_opt.out_csv,
-                    "trajectory CSV file (columns t,y0,y1,...); with --frames, the output "
-                    "directory");
+                    "trajectory CSV file (columns t,y0,y1,...; no spec is recorded beside it, "
+                    "so an existing file is refused unless --force); with --frames, the output "
+                    "directory (its solve.json records the spec)");
   solve->add_option("--frames", solve_opt.frames,
                     "write N+1 equally spaced frames into the --out directory: VTK particle "
                     "frames (frame_NNNN.vtu, frames.pvd) for particle models, trajectory.csv "
@@ -245,7 +246,10 @@ int cli_main(int argc, char** argv) {
     }
   }
   // --max-wall on every command that runs integrators (core/run_control.hpp; README "Faults
-  // and exit codes").
+  // and exit codes"); reset when cli_main returns.
+  const struct ForgetWallLimit {
+    ~ForgetWallLimit() { set_wall_limit(0); }
+  } forget_wall_limit;
   for (const char* name : {"solve", "convergence", "local-error", "work-precision", "stability",
                            "energy", "run", "report"}) {
     if (auto* sub = app.get_subcommand(name)) {
@@ -253,6 +257,20 @@ int cli_main(int argc, char** argv) {
           "--max-wall", [](double s) { set_wall_limit(s); },
           "wall-clock limit of each row in seconds (a run; a stability row's whole bisection): a "
           "row over it ends with status timeout and the study goes on (default 0: none)");
+    }
+  }
+  // --force on every command that writes results (README "Existing results"): replace results
+  // of a different spec in --out (check_existing_results); reset when cli_main returns.
+  const struct ForgetForce {
+    ForgetForce() { set_force_output(false); }
+    ~ForgetForce() { set_force_output(false); }
+  } forget_force;
+  for (const char* name : {"solve", "convergence", "local-error", "work-precision", "stability",
+                           "energy", "region", "run", "merge", "report"}) {
+    if (auto* sub = app.get_subcommand(name)) {
+      sub->add_flag_function(
+          "--force", [](std::int64_t) { set_force_output(true); },
+          "replace results of a different spec in --out (default: refuse them)");
     }
   }
   if (argc > 1 && argv[1][0] != '-') {
@@ -291,6 +309,7 @@ int cli_main(int argc, char** argv) {
       spec.cache_dir = dir;
       const std::string name = is_local ? "local_error" : "convergence";
       require_output_dir(dir);
+      check_study_output(dir, name, spec.to_json(), force_output(), &std::cerr);
       const ConvergenceResult res =
           is_local ? run_local_error(spec, &std::cerr) : run_convergence(spec, &std::cerr);
       write_convergence_outputs(dir, name, spec, res, is_local);
@@ -305,6 +324,7 @@ int cli_main(int argc, char** argv) {
       wp.integrators = split_list(wp_integrators, "--integrators");
       wp.params = Params::from_assignments(wp_params);
       require_output_dir(wp_out);
+      check_study_output(wp_out, "work_precision", wp.to_json(), force_output(), &std::cerr);
       const WorkPrecisionResult res = run_work_precision(wp, &std::cerr);
       write_work_precision_outputs(wp_out, wp, res);
       std::cout << work_precision_table(res).to_markdown();

@@ -3,6 +3,7 @@
 
 #include "experiments/catalog.hpp"
 #include "experiments/cli.hpp"
+#include "experiments/output.hpp"
 #include "experiments/region.hpp"
 
 namespace stiffbench {
@@ -40,6 +41,8 @@ void add_region_command(CLI::App& app) {
     spec.validate();
     const std::filesystem::path dir = st->flags.out_dir;
     require_output_dir(dir);
+    check_study_output(dir, "region", spec.to_json(), force_output(), &std::cerr,
+                       {"region_limits.csv"});
     const RegionResult res = run_region(spec);
     write_region_outputs(dir, spec, res);
     std::cout << region_limits_markdown_table(res).to_markdown();

@@ -29,7 +29,9 @@ void add_run_commands(CLI::App& app) {
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   run->add_option("--out", st->opt.out_dir, "output directory")->capture_default_str();
   run->add_flag("--resume", st->opt.resume,
-                "keep the complete units already in OUT/<kind>.csv and run the others");
+                "keep the complete units already in OUT/<kind>.csv and run the others (a "
+                "folder holding units of this spec is refused without --resume or --force; "
+                "--force starts over)");
   run->add_option("--shard", st->shard,
                   "I/N: run only the units whose index mod N is I (join with `stiffbench merge`)");
   run->add_flag("--check", st->opt.check_only,

@@ -3,6 +3,7 @@
 
 #include "experiments/catalog.hpp"
 #include "experiments/cli.hpp"
+#include "experiments/output.hpp"
 #include "experiments/stability.hpp"
 
 namespace stiffbench {
@@ -73,6 +74,7 @@ void add_stability_command(CLI::App& app) {
     spec.validate();
     const std::filesystem::path dir = st->flags.out_dir;
     require_output_dir(dir);
+    check_study_output(dir, "stability", spec.to_json(), force_output(), &std::cerr);
     const StabilityResult res = run_stability(spec, &std::cerr);
     write_stability_outputs(dir, spec, res);
     std::cout << stability_table(res).to_markdown();

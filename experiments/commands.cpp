@@ -172,6 +172,16 @@ void cmd_describe(const std::string& name, std::ostream& out) {
                  ")");
 }
 
+nlohmann::json solve_spec(const SolveOptions& opt) {
+  return {{"model", opt.model},
+          {"params", opt.params.values()},
+          {"integrator", opt.integrator},
+          {"h", opt.h},
+          {"t_end", opt.t_end},
+          {"frames", opt.frames},
+          {"frame_format", opt.frame_format}};
+}
+
 void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   require_input(!opt.model.empty(), "--model is required");
   require_input(!opt.integrator.empty(), "--integrator is required");
@@ -273,15 +283,33 @@ void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
   std::unique_ptr<FrameWriter> frame_writer;
   std::string traj_path = opt.out_csv;
   // The output is checked before the run: an unwritable path is bad input now, not after it.
-  if (frames)
+  // Output safety: a folder of frames holding solve.json of a different spec, or a trajectory
+  // file that exists (no spec is recorded beside it), is refused unless --force.
+  if (frames) {
     require_output_dir(opt.out_csv, "--out");
-  else if (!opt.out_csv.empty())
+    check_existing_results(opt.out_csv, "solve.json",
+                           {"observables.csv", "frames.pvd", "trajectory.csv", "frame_0000.csv"},
+                           solve_spec(opt), force_output(), &err);
+  } else if (!opt.out_csv.empty()) {
     require_output_file(opt.out_csv, "--out");
+    if (std::filesystem::exists(opt.out_csv)) {
+      const std::string what = "--out " + opt.out_csv +
+                               " exists (a trajectory file records no spec, so solve cannot tell "
+                               "whether it holds this run)";
+      if (!force_output())
+        throw BadInput(what + "; choose another --out or pass --force to replace it");
+      err << "note: " << what << ": replacing it (--force)\n";
+    }
+  }
   if (frames) {
     require_input(opt.frame_format == "vtu" || opt.frame_format == "vtk",
                   "--frame-format must be vtu or vtk (got '" + opt.frame_format + "')");
     frame_writer = std::make_unique<FrameWriter>(
         sys, opt.out_csv, opt.frame_format == "vtk" ? FrameFormat::vtk : FrameFormat::vtu);
+    nlohmann::json meta = run_metadata("solve", solve_spec(opt));
+    meta["t_end_used"] = t_end;
+    meta["h_used"] = adaptive ? nlohmann::json() : nlohmann::json(fo.h);
+    write_file_atomic(frame_writer->dir() / "solve.json", meta.dump(2) + "\n");
     traj_path = sys.has_particles() || sys.has_grid()
                     ? ""
                     : (frame_writer->dir() / "trajectory.csv").string();

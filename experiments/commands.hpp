@@ -34,6 +34,11 @@ struct SolveOptions {
   long log_outputs = 0;
   double log_first = std::numeric_limits<double>::quiet_NaN();  // --log-first (NaN: default)
 };
+// The spec `solve --frames N --out DIR` records in DIR/solve.json (model, params, integrator, h
+// and t_end as given (null: not given), frames, frame_format) and compares with
+// check_existing_results before it runs; `--out FILE.csv` records none, so an existing FILE is
+// refused unless force_output().
+nlohmann::json solve_spec(const SolveOptions& opt);
 void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err);
 
 // "t1,t2,..." of --times as numbers (BadInput naming --times for an empty or non-numeric item).
@@ -53,6 +58,10 @@ struct ReportOptions {
   bool quick = false;
   bool svg = false;
 };
+// The spec `report` records in DIR/report.json ({"suite": "quick" | "full"}) and compares with
+// check_existing_results before it runs (BadInput for a report of the other suite in DIR unless
+// force_output(); --svg is not part of it).
+nlohmann::json report_spec(const ReportOptions& opt);
 void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err);
 
 }  // namespace stiffbench

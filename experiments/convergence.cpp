@@ -571,10 +571,11 @@ void write_convergence_outputs(const std::string& dir, const std::string& name,
   const Table t = local ? local_error_table(res) : convergence_table(res);
   write_file_atomic(d / (name + ".csv"), t.to_csv());
   write_file_atomic(d / (name + ".md"), markdown_report(name, spec, res, local));
-  nlohmann::json spec_json = spec.to_json();
-  spec_json["h"] = res.h;
-  spec_json["h_source"] = res.h_source;
-  nlohmann::json meta = run_metadata(local ? "local-error" : "convergence", spec_json);
+  // "spec" is the spec as given (what check_study_output compares before a run); the step it
+  // resolved to is recorded beside it.
+  nlohmann::json meta = run_metadata(local ? "local-error" : "convergence", spec.to_json());
+  meta["h_used"] = res.h;
+  meta["h_source"] = res.h_source;
   meta["reference"] = res.reference_description;
   if (!res.reference_cache.empty()) {
     meta["reference_cache"] = res.reference_cache;
@@ -588,8 +589,9 @@ ConvergenceResult convergence_study(ConvergenceSpec spec, const std::string& dir
                                     std::ostream* progress, std::ostream& err,
                                     const PlotOptions& plot) {
   require_output_dir(dir);
-  if (spec.cache_dir.empty()) spec.cache_dir = dir;
   const std::string name = local ? "local_error" : "convergence";
+  check_study_output(dir, name, spec.to_json(), force_output(), &err);
+  if (spec.cache_dir.empty()) spec.cache_dir = dir;
   ConvergenceResult res = local ? run_local_error(spec, progress) : run_convergence(spec, progress);
   write_convergence_outputs(dir, name, spec, res, local);
   plot_convergence(std::filesystem::path(dir) / (name + ".csv"),

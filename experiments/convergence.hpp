@@ -112,13 +112,16 @@ std::optional<double> last_observed_order(const std::vector<ConvergenceRow>& row
 Table convergence_table(const ConvergenceResult& r);  // the convergence.csv contract
 Table local_error_table(const ConvergenceResult& r);  // the local_error.csv contract
 
-// Writes DIR/NAME.csv, DIR/NAME.md and DIR/NAME.json (NAME = convergence or local_error);
+// Writes DIR/NAME.csv, DIR/NAME.md and DIR/NAME.json (NAME = convergence or local_error; its
+// "spec" is spec.to_json(), the step used is h_used with h_source beside it);
 // `local` selects the local-error expectation (order + 1) in the Markdown summary.
 void write_convergence_outputs(const std::string& dir, const std::string& name,
                                const ConvergenceSpec& spec, const ConvergenceResult& r, bool local);
 
 // What `stiffbench convergence` / `local-error` do, for a program that links the library: checks
-// that DIR can be written, runs the study (progress lines to `progress` when non-null; the
+// that DIR can be written and holds no NAME.* of a different spec (check_study_output with
+// spec.to_json() and force_output(); the note to `err`), runs the study (progress lines to
+// `progress` when non-null; the
 // reference cache in DIR unless spec.cache_dir is set), writes DIR/NAME.{csv,md,json} and draws
 // DIR/NAME.png when gnuplot is installed (warnings to `err`).
 ConvergenceResult convergence_study(ConvergenceSpec spec, const std::string& dir, bool local,

@@ -341,12 +341,13 @@ bool write_energy_outputs(const fs::path& dir, const EnergySpec& spec, const Ene
   write_file_atomic(dir / "energy.csv", energy_table(r).to_csv());
   write_file_atomic(dir / "energy_summary.csv", energy_summary_table(r).to_csv());
   write_file_atomic(dir / "energy.md", markdown_report(spec, r));
-  nlohmann::json spec_json = spec.to_json();
-  spec_json["h"] = r.h;
-  spec_json["h_source"] = r.h_source;
-  spec_json["t_end"] = r.t_end;
-  spec_json["t_end_source"] = r.t_end_source;
-  nlohmann::json meta = run_metadata("energy", spec_json);
+  // "spec" is the spec as given (what check_study_output compares before a run); the step and
+  // end time it resolved to are recorded beside it.
+  nlohmann::json meta = run_metadata("energy", spec.to_json());
+  meta["h_used"] = r.h;
+  meta["h_source"] = r.h_source;
+  meta["t_end_used"] = r.t_end;
+  meta["t_end_source"] = r.t_end_source;
   meta["invariant"] = r.invariant;
   meta["initial_value"] = r.initial_value;
   meta["other_invariants"] = r.other_invariants;

@@ -128,7 +128,8 @@ Table energy_summary_table(const EnergyResult& r);  // the energy_summary.csv co
 // The summary with the other invariants' maxima and the wall time (energy.md, stdout).
 Table energy_markdown_table(const EnergyResult& r);
 
-// Writes DIR/energy.csv, DIR/energy_summary.csv, DIR/energy.md, DIR/energy.json, then draws
+// Writes DIR/energy.csv, DIR/energy_summary.csv, DIR/energy.md, DIR/energy.json ("spec":
+// spec.to_json(); the h and t_end used as h_used/t_end_used with their sources), then draws
 // DIR/energy.png (plot_energy). Returns whether the plot was drawn.
 bool write_energy_outputs(const std::filesystem::path& dir, const EnergySpec& spec,
                           const EnergyResult& r, const PlotOptions& opt, std::ostream& err);

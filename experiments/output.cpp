@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <chrono>
@@ -13,7 +14,10 @@
 #include <cstring>
 #include <ctime>
 #include <fstream>
+#include <ostream>
 #include <sstream>
+
+#include <unistd.h>
 
 #include "core/types.hpp"
 #include "experiments/build_info.hpp"
@@ -63,16 +67,27 @@ std::string Table::to_markdown() const {
 }
 
 void write_file_atomic(const std::filesystem::path& path, const std::string& content) {
-  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
-  const auto tmp = std::filesystem::path(path.string() + ".tmp");
-  {
+  namespace fs = std::filesystem;
+  if (path.has_parent_path()) fs::create_directories(path.parent_path());
+  // Hidden and per process: cannot collide with a user's file or another process's temporary.
+  const fs::path tmp = path.parent_path() / ("." + path.filename().string() + ".tmp." +
+                                             std::to_string(static_cast<long>(::getpid())));
+  try {
     std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) throw std::runtime_error("cannot write " + tmp.string());
+    if (!f)
+      throw std::runtime_error("cannot write " + path.string() + " (temporary " + tmp.string() +
+                               ": " + std::strerror(errno) + ")");
     f << content;
-    f.flush();
-    if (!f) throw std::runtime_error("error writing " + tmp.string());
+    f.close();
+    if (!f)
+      throw std::runtime_error("error writing " + path.string() + " (temporary " + tmp.string() +
+                               ")");
+    fs::rename(tmp, path);
+  } catch (...) {
+    std::error_code ignore;
+    fs::remove(tmp, ignore);
+    throw;
   }
-  std::filesystem::rename(tmp, path);
 }
 
 namespace {
@@ -150,6 +165,101 @@ void remove_created_output_dirs() {
   for (auto it = g_created_dirs.rbegin(); it != g_created_dirs.rend(); ++it)
     std::filesystem::remove(*it, ec);
   g_created_dirs.clear();
+}
+
+namespace {
+bool g_force_output = false;
+
+std::string shown(const nlohmann::json& v) { return v.dump(); }
+
+// First difference of two JSON values below `path` (empty when equal).
+std::string first_difference(const nlohmann::json& a, const nlohmann::json& b,
+                             const std::string& path) {
+  if (a == b) return "";
+  const std::string key = path.empty() ? "spec" : path;
+  if (a.is_object() && b.is_object()) {
+    std::vector<std::string> keys;  // sorted union (nlohmann objects iterate in key order)
+    for (const auto& [k, v] : a.items()) keys.push_back(k);
+    for (const auto& [k, v] : b.items())
+      if (!a.contains(k)) keys.push_back(k);
+    std::sort(keys.begin(), keys.end());
+    for (const auto& k : keys) {
+      const std::string sub = path.empty() ? k : path + "." + k;
+      if (!a.contains(k)) return sub + " = (absent) there, " + shown(b[k]) + " here";
+      if (!b.contains(k)) return sub + " = " + shown(a[k]) + " there, (absent) here";
+      if (auto d = first_difference(a[k], b[k], sub); !d.empty()) return d;
+    }
+    return "";
+  }
+  return key + " = " + shown(a) + " there, " + shown(b) + " here";
+}
+}  // namespace
+
+void set_force_output(bool force) { g_force_output = force; }
+bool force_output() { return g_force_output; }
+
+std::string spec_difference(const nlohmann::json& recorded, const nlohmann::json& requested) {
+  // Through text, as the record was written: NaN becomes null, integers and reals compare alike.
+  return first_difference(nlohmann::json::parse(recorded.dump()),
+                          nlohmann::json::parse(requested.dump()), "");
+}
+
+bool check_existing_results(const std::filesystem::path& dir, const std::string& record,
+                            const std::vector<std::string>& results, const nlohmann::json& spec,
+                            bool force, std::ostream* note, const std::string& flag) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path rec = dir / record;
+  const std::string advice = "; choose another " + flag + " or pass --force to replace them";
+  std::string problem;  // why the results cannot be replaced silently; empty: same spec
+  fs::path culprit = rec;
+  if (fs::exists(rec, ec)) {
+    std::ifstream in(rec, std::ios::binary);
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(in);
+    } catch (const std::exception&) {
+      j = nlohmann::json();
+      problem = "holds results we cannot identify: " + rec.string() + " is not valid JSON";
+    }
+    if (problem.empty() && (!j.is_object() || !j.contains("spec")))
+      problem = "holds results we cannot identify: " + rec.string() + " records no \"spec\"";
+    if (problem.empty()) {
+      const std::string d = spec_difference(j["spec"], spec);
+      if (!d.empty())
+        problem = "holds results of a different spec (" + rec.string() + ": " + d + ")";
+    }
+  } else {
+    bool any = false;
+    for (const auto& r : results)
+      if (fs::exists(dir / r, ec)) {
+        culprit = dir / r;
+        any = true;
+        break;
+      }
+    if (!any) return false;
+    problem = "holds results we cannot identify: " + culprit.string() + " exists but " +
+              rec.string() + " (the record of their spec) does not";
+  }
+  if (problem.empty()) {
+    if (note)
+      *note << "note: " << flag << " " << dir.string() << " holds results of the same spec ("
+            << rec.string() << "): recomputing and replacing them\n";
+    return true;
+  }
+  if (!force) throw BadInput(flag + " " + dir.string() + " " + problem + advice);
+  if (note)
+    *note << "note: " << flag << " " << dir.string() << " " << problem
+          << ": replacing them (--force)\n";
+  return true;
+}
+
+bool check_study_output(const std::filesystem::path& dir, const std::string& name,
+                        const nlohmann::json& spec, bool force, std::ostream* note,
+                        const std::vector<std::string>& extra) {
+  std::vector<std::string> results = {name + ".csv", name + ".md", name + ".png", name + ".svg"};
+  results.insert(results.end(), extra.begin(), extra.end());
+  return check_existing_results(dir, name + ".json", results, spec, force, note);
 }
 
 void set_command_line(int argc, char** argv) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,10 @@ std::string format_short(double x, int digits = 3);
 // Fixed-point form with `digits` decimals (observed orders).
 std::string format_fixed(double x, int digits = 3);
 
+// Writes `content` to PATH atomically: first to a temporary file `.NAME.tmp.PID` in PATH's
+// folder (hidden, and named by the process id, so it cannot collide with a user's file or with
+// another process writing the same table), then renamed over PATH. When writing the temporary
+// fails or throws, the temporary is removed before the error propagates: no `*.tmp*` is left.
 void write_file_atomic(const std::filesystem::path& path, const std::string& content);
 
 // Creates DIR and checks that a file can be written there, before an experiment runs; BadInput
@@ -36,6 +41,41 @@ void require_output_file(const std::filesystem::path& file, const std::string& f
 // Removes the folders require_output_dir created in this process that are still empty: called
 // when a command ends in bad input, so a refused run leaves no trace.
 void remove_created_output_dirs();
+
+// Output safety (README "Existing results: --force and --resume"): results are never replaced
+// silently. Every experiment records the spec of its results in a JSON file in its output folder
+// (`record`: NAME.json for the studies, run.json for `run` and `merge`, solve.json for `solve
+// --frames`, report.json for `report`), under the key "spec". Before anything runs, a command
+// calls check_existing_results with the spec its run would record (no wall times, dates, thread
+// counts or output paths: only what determines the results). Only the files of this experiment
+// count (`record` and `results`, names relative to DIR); other files in DIR are not looked at.
+//  - DIR holds none of them: nothing to do (returns false).
+//  - `record` holds the same spec (compared as JSON after a round trip through text, so NaN and
+//    null agree): the results are recomputed and replaced; a one-line note goes to `note`
+//    (when not null) and the function returns true.
+//  - `record` holds a different spec, is not valid JSON or has no "spec", or a result file exists
+//    without a record: BadInput naming the folder, the file and (for a different spec) the first
+//    differing key with both values, telling the user to choose another --out or pass --force;
+//    nothing is written or removed. With `force` the results are replaced instead (a note to
+//    `note`; returns true).
+// A program linking the library calls it before write_convergence_outputs & co. the same way
+// (the *_study functions do, with force_output()).
+bool check_existing_results(const std::filesystem::path& dir, const std::string& record,
+                            const std::vector<std::string>& results, const nlohmann::json& spec,
+                            bool force, std::ostream* note, const std::string& flag = "--out");
+// The usual case of a study writing DIR/NAME.{csv,md,json,png,svg} (and `extra` files, e.g.
+// energy_summary.csv): check_existing_results with NAME.json as the record.
+bool check_study_output(const std::filesystem::path& dir, const std::string& name,
+                        const nlohmann::json& spec, bool force, std::ostream* note,
+                        const std::vector<std::string>& extra = {});
+// The first difference between a recorded spec and a requested one, as
+// "KEY = A there, B here" (nested keys joined with '.'; "(absent)" for a missing key); empty when
+// they are equal after a round trip through JSON text.
+std::string spec_difference(const nlohmann::json& recorded, const nlohmann::json& requested);
+// --force of the command line: set by cli_main() for the duration of a command (false again
+// when it returns). A library program may set it before calling the *_study functions.
+void set_force_output(bool force);
+bool force_output();
 
 // Metadata common to every experiment: spec, versions, compiler, flags, git revision, thread
 // count, date, command line.

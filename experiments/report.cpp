@@ -245,9 +245,20 @@ void region_section(const ReportOptions& opt, std::ostringstream& md, std::ostre
 
 }  // namespace
 
+nlohmann::json report_spec(const ReportOptions& opt) {
+  return {{"suite", opt.quick ? "quick" : "full"}};
+}
+
 void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) {
   namespace fs = std::filesystem;
   require_output_dir(opt.out_dir);
+  // Output safety: DIR/report.json records the suite; a folder holding a report of the other
+  // suite is refused unless --force. Plot formats (--svg) are not part of it, as for the
+  // studies. Written before the suite runs, so an interrupted report is identified too.
+  const nlohmann::json spec = report_spec(opt);
+  check_existing_results(opt.out_dir, "report.json", {"REPORT.md"}, spec, force_output(), &err);
+  write_file_atomic(fs::path(opt.out_dir) / "report.json",
+                    run_metadata("report", spec).dump(2) + "\n");
   const auto suite = default_suite(opt.quick);
   const PlotOptions plot_opt{opt.svg};
   std::ostringstream md;

@@ -325,6 +325,10 @@ std::string csv_name(const std::string& kind) {
   return n + ".csv";
 }
 
+std::string md_name(const std::string& kind) {
+  return fs::path(csv_name(kind)).replace_extension(".md").string();
+}
+
 std::string hex16(std::uint64_t h) {
   char buf[17];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
@@ -520,14 +524,39 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   columns.push_back("unit_message");
   const std::string header = csv_line(columns);
 
+  // Output safety: a folder holding a run of a different spec (run.json) is refused unless
+  // --force; one holding units of this spec needs --resume (run the missing ones) or --force
+  // (start over).
+  require_input(!(opt.resume && force_output()),
+                "--resume and --force: choose one (--resume keeps the units in " + dir.string() +
+                    ", --force starts over)");
+  const std::string shard = std::to_string(opt.shard_index) + "/" + std::to_string(opt.shard_count);
+  if (check_existing_results(dir, "run.json", {csv_name(kind), md_name(kind)}, spec.to_json(),
+                             force_output(), force_output() ? &err : nullptr) &&
+      !opt.resume && !force_output()) {
+    const long present = static_cast<long>(read_run_csv(csv).units.size());
+    if (present > 0) {
+      long in_shard = 0;
+      for (long u = opt.shard_index; u < ex.units(); u += opt.shard_count) ++in_shard;
+      throw BadInput("--out " + dir.string() + " holds " + std::to_string(present) + " of " +
+                     std::to_string(in_shard) + " unit(s) of this spec (" + csv.string() +
+                     "); pass --resume to run the missing ones, --force to start over, or "
+                     "choose another --out");
+    }
+    err << "note: --out " << dir.string()
+        << " holds a run of this spec without complete units: starting it again\n";
+  }
+  if (force_output()) {
+    std::error_code ignore;
+    fs::remove(dir / md_name(kind), ignore);  // the table of the run being replaced
+  }
   std::map<long, UnitRows> done;
   if (opt.resume && fs::exists(csv)) {
     const nlohmann::json prev = read_json(dir / "run.json");
     if (prev.value("spec_hash", "") != hash)
       throw BadInput("--resume: " + dir.string() + " holds a run of a different spec (hash " +
                      prev.value("spec_hash", "?") + ", this spec " + hash + ")");
-    if (prev.value("shard", "") !=
-        std::to_string(opt.shard_index) + "/" + std::to_string(opt.shard_count))
+    if (prev.value("shard", "") != shard)
       throw BadInput("--resume: " + dir.string() + " holds shard " + prev.value("shard", "?"));
     CsvContent c = read_run_csv(csv);
     if (!c.header.empty() && c.header != header)
@@ -556,7 +585,7 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   for (const auto& p : ex.points) labels.push_back(p.label);
   run["point_labels"] = labels;  // point i: its sweep values (units i*k .. i*k+k-1)
   run["units"] = ex.units();
-  run["shard"] = std::to_string(opt.shard_index) + "/" + std::to_string(opt.shard_count);
+  run["shard"] = shard;
   run["sets"] = opt.sets;
   run["metadata"] = run_metadata("run", spec.to_json());
   write_file_atomic(dir / "run.json", run.dump(2) + "\n");
@@ -676,6 +705,9 @@ int merge_shards(const std::string& out_dir, const std::vector<std::string>& dir
   const fs::path dir = out_dir;
   require_output_dir(dir);
   const std::string name = first.value("csv", "run.csv");
+  // Output safety: an --out folder holding a run of a different spec is refused unless --force.
+  check_existing_results(dir, "run.json", {name, fs::path(name).replace_extension(".md").string()},
+                         first.value("spec", nlohmann::json()), force_output(), &err);
   write_all(dir / name, header, units);
   const long total = first.value("units", 0L);
   std::vector<std::string> missing;

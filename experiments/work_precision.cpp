@@ -220,6 +220,7 @@ WorkPrecisionResult work_precision_study(const WorkPrecisionSpec& spec, const st
                                          std::ostream* progress, std::ostream& err,
                                          const PlotOptions& plot) {
   require_output_dir(dir);
+  check_study_output(dir, "work_precision", spec.to_json(), force_output(), &err);
   WorkPrecisionResult res = run_work_precision(spec, progress);
   write_work_precision_outputs(dir, spec, res);
   plot_work_precision(std::filesystem::path(dir) / "work_precision.csv",

@@ -69,7 +69,9 @@ Table work_precision_table(const WorkPrecisionResult& r);
 void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpec& spec,
                                   const WorkPrecisionResult& r);
 
-// What `stiffbench work-precision` does, for a program that links the library: checks DIR, runs
+// What `stiffbench work-precision` does, for a program that links the library: checks DIR (it
+// can be written; it holds no work_precision.* of a different spec: check_study_output with
+// spec.to_json() and force_output()), runs
 // the study, writes DIR/work_precision.{csv,md,json} and draws DIR/work_precision.png when
 // gnuplot is installed.
 WorkPrecisionResult work_precision_study(const WorkPrecisionSpec& spec, const std::string& dir,

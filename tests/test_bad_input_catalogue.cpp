@@ -253,6 +253,21 @@ void write_specs(const fs::path& dir) {
       "h = 0.1\n");
   put("empty.toml", "");
   std::ofstream(dir / "a_file") << "x";
+  // Output folders holding results of another spec (every experiment's record in one folder:
+  // each command looks at its own files only) or a record that is not JSON.
+  put("ok.toml",
+      "kind = \"convergence\"\nmodel = \"kepler\"\nintegrators = [\"rk4\"]\nt_end = 1.0\n"
+      "h = 0.1\n");
+  fs::create_directories(dir / "held");
+  const std::string other = R"({"experiment": "other", "spec": {"model": "van_der_pol"}})";
+  for (const char* record :
+       {"convergence.json", "local_error.json", "work_precision.json", "stability.json",
+        "energy.json", "region.json", "solve.json", "run.json", "report.json"})
+    std::ofstream(dir / "held" / record) << other;
+  std::ofstream(dir / "held" / "traj.csv") << "t,y0\n0,1\n";
+  fs::create_directories(dir / "garbled");
+  std::ofstream(dir / "garbled" / "convergence.json") << "{\"spec\": ";
+  std::ofstream(dir / "garbled" / "convergence.csv") << "model\n";
 }
 
 TEST_P(CliCatalogue, ExitsTwoNamesTheValueLeavesNothing) {
@@ -350,6 +365,44 @@ INSTANTIATE_TEST_SUITE_P(
                 {"/proc/nope"}},
         CliCase{"report_out_proc", "report --quick --out /proc/nope", {"/proc/nope"}},
         CliCase{"run_out_proc", "run t_end_zero.toml --out /proc/nope", {"t_end"}},
+        // Existing output folders holding results of a different spec (or results that
+        // cannot be identified): refused before the run unless --force, nothing changed.
+        CliCase{
+            "out_holds_other_convergence",
+            "convergence --model harmonic_oscillator --integrators rk4 --t-end 1 --h 0.1 "
+            "--out held",
+            {"--out held holds results of a different spec", "held/convergence.json", "--force"}},
+        CliCase{"out_holds_other_local_error",
+                "local-error --model harmonic_oscillator --integrators rk4 --h 0.1 --out held",
+                {"held/local_error.json", "different spec", "--force"}},
+        CliCase{"out_holds_other_work_precision",
+                "work-precision --model harmonic_oscillator --integrators rk4 --t-end 1 "
+                "--out held",
+                {"held/work_precision.json", "different spec", "--force"}},
+        CliCase{"out_holds_other_stability",
+                "stability --model harmonic_oscillator --integrators rk4 --out held",
+                {"held/stability.json", "different spec", "--force"}},
+        CliCase{"out_holds_other_energy",
+                "energy --model harmonic_oscillator --integrators rk4 --h 0.1 --t-end 1 "
+                "--out held",
+                {"held/energy.json", "different spec", "--force"}},
+        CliCase{"out_holds_other_region",
+                "region --integrators rk4 --out held",
+                {"held/region.json", "different spec", "--force"}},
+        CliCase{"out_holds_other_frames",
+                kSolve + " --frames 2 --out held",
+                {"held/solve.json", "different spec", "--force"}},
+        CliCase{"out_file_exists", kSolve + " --out held/traj.csv", {"held/traj.csv", "--force"}},
+        CliCase{"out_holds_other_run",
+                "run ok.toml --out held",
+                {"held/run.json", "different spec", "--force"}},
+        CliCase{"out_holds_other_report",
+                "report --quick --out held",
+                {"held/report.json", "different spec", "--force"}},
+        CliCase{"out_holds_unidentified",
+                "convergence --model harmonic_oscillator --integrators rk4 --t-end 1 --h 0.1 "
+                "--out garbled",
+                {"garbled/convergence.json", "not valid JSON", "--force"}},
         // A bad input discovered after the output folder was prepared leaves no folder.
         CliCase{"conv_bad_after_out",
                 "convergence --model harmonic_oscillator --integrators rk4 --t-end 1 --h 0.1 "
