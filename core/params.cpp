@@ -22,6 +22,51 @@ std::string to_string(ParamType type) {
   return "?";
 }
 
+Bounds::Bounds(double lo, bool lo_open, double hi, bool hi_open)
+    : declared_(true), lo_(lo), hi_(hi), lo_open_(lo_open), hi_open_(hi_open) {}
+
+Bounds Bounds::any() {
+  const double inf = std::numeric_limits<double>::infinity();
+  return {-inf, false, inf, false};
+}
+Bounds Bounds::positive() { return above(0); }
+Bounds Bounds::non_negative() { return at_least(0); }
+Bounds Bounds::at_least(double lo) {
+  return {lo, false, std::numeric_limits<double>::infinity(), false};
+}
+Bounds Bounds::above(double lo) {
+  return {lo, true, std::numeric_limits<double>::infinity(), false};
+}
+Bounds Bounds::in(double lo, double hi) { return {lo, false, hi, false}; }
+Bounds Bounds::in_closed_open(double lo, double hi) { return {lo, false, hi, true}; }
+Bounds Bounds::in_open_closed(double lo, double hi) { return {lo, true, hi, false}; }
+
+bool Bounds::contains(double v) const {
+  return (lo_open_ ? v > lo_ : v >= lo_) && (hi_open_ ? v < hi_ : v <= hi_);
+}
+
+namespace {
+
+// Shortest text of a bound: integers without exponent (1000000, not 1e+06), others round-trip.
+std::string bound_text(double x) {
+  if (x == std::floor(x) && std::abs(x) < 1e15) return std::to_string(static_cast<long long>(x));
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, x);
+  return std::string(buf, r.ptr);
+}
+
+}  // namespace
+
+std::string Bounds::to_string() const {
+  if (!declared_) return "not declared";
+  const bool has_lo = std::isfinite(lo_), has_hi = std::isfinite(hi_);
+  if (!has_lo && !has_hi) return "any finite value";
+  if (!has_hi) return (lo_open_ ? "> " : ">= ") + bound_text(lo_);
+  if (!has_lo) return (hi_open_ ? "< " : "<= ") + bound_text(hi_);
+  return std::string("in ") + (lo_open_ ? "(" : "[") + bound_text(lo_) + ", " + bound_text(hi_) +
+         (hi_open_ ? ")" : "]");
+}
+
 std::string join(const std::vector<std::string>& items, const std::string& sep) {
   std::string out;
   for (std::size_t i = 0; i < items.size(); ++i) {
@@ -127,13 +172,20 @@ bool parse_boolean(const std::string& key, const std::string& s) {
   throw BadInput("parameter '" + key + "': '" + s + "' is not a boolean (true/false)");
 }
 
+// BadInput "parameter 'k' = -1 is out of range: must be > 0" unless `bounds` contain `v`.
+void check_bounds(const ParamSpec& spec, const std::string& value, double v) {
+  require_input(spec.bounds.contains(v), "parameter '" + spec.key + "' = " + value +
+                                             " is out of range: must be " +
+                                             spec.bounds.to_string());
+}
+
 void check_value(const ParamSpec& spec, const std::string& value) {
   switch (spec.type) {
     case ParamType::real:
-      parse_real(spec.key, value);
+      check_bounds(spec, value, parse_real(spec.key, value));
       break;
     case ParamType::integer:
-      parse_integer(spec.key, value);
+      check_bounds(spec, value, static_cast<double>(parse_integer(spec.key, value)));
       break;
     case ParamType::boolean:
       parse_boolean(spec.key, value);

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <initializer_list>
+#include <limits>
 #include <map>
 #include <set>
 #include <string>
@@ -19,12 +20,62 @@ namespace stiffbench {
 
 enum class ParamType { real, integer, boolean, text };
 
+// The valid range of a numeric parameter, checked by resolve_params before any model or
+// integrator is built, and shown by `describe`. A default-constructed Bounds is "not declared":
+// then only finiteness is checked (parameters of models registered from outside the library);
+// every built-in numeric parameter declares one (tests/test_bad_input_catalogue.cpp).
+class Bounds {
+ public:
+  Bounds() = default;
+  static Bounds any();                     // every finite value (gravity, an initial coordinate)
+  static Bounds positive();                // > 0
+  static Bounds non_negative();            // >= 0
+  static Bounds at_least(double lo);       // >= lo
+  static Bounds above(double lo);          // > lo
+  static Bounds in(double lo, double hi);  // [lo, hi]
+  static Bounds in_closed_open(double lo, double hi);  // [lo, hi)
+  static Bounds in_open_closed(double lo, double hi);  // (lo, hi]
+
+  bool declared() const { return declared_; }
+  bool contains(double v) const;
+  // "> 0", ">= 1", "in [0, 1)", "any finite value"; "not declared" when not.
+  std::string to_string() const;
+
+  // The ends (±infinity when unbounded) and whether each is excluded.
+  double lower() const { return lo_; }
+  double upper() const { return hi_; }
+  bool lower_open() const { return lo_open_; }
+  bool upper_open() const { return hi_open_; }
+
+ private:
+  Bounds(double lo, bool lo_open, double hi, bool hi_open);
+  bool declared_ = false;
+  double lo_ = -std::numeric_limits<double>::infinity();
+  double hi_ = std::numeric_limits<double>::infinity();
+  bool lo_open_ = false, hi_open_ = false;
+};
+
+// One declared parameter. Numeric ones give their range, text ones may list their choices:
+//   {"k", P::real, "1", "spring stiffness", B::positive()}
+//   {"phi", P::text, "sin", "phi(t)", {"sin", "cos", "exp"}}
 struct ParamSpec {
+  ParamSpec() = default;
+  ParamSpec(std::string k, ParamType t, std::string def, std::string h,
+            std::vector<std::string> c = {})
+      : key(std::move(k)),
+        type(t),
+        default_value(std::move(def)),
+        help(std::move(h)),
+        choices(std::move(c)) {}
+  ParamSpec(std::string k, ParamType t, std::string def, std::string h, Bounds b)
+      : key(std::move(k)), type(t), default_value(std::move(def)), help(std::move(h)), bounds(b) {}
+
   std::string key;
   ParamType type = ParamType::real;
   std::string default_value;  // as the user would type it
   std::string help;
   std::vector<std::string> choices = {};  // for text parameters: the allowed values (empty: any)
+  Bounds bounds = {};                     // for numeric parameters: the valid range
 };
 
 std::string to_string(ParamType type);
@@ -81,8 +132,9 @@ class Params {
 };
 
 // Defaults of `specs` overlaid with the user's values for the keys the specs declare. Each
-// user key that was taken is added to `consumed`. Values are type-checked here, so a bad value
-// is reported before any run starts.
+// user key that was taken is added to `consumed`. Values are type- and range-checked here
+// (BadInput naming the key, the value, the valid range and `owner`), so a bad value is reported
+// before anything is allocated or run.
 Params resolve_params(const std::vector<ParamSpec>& specs, const Params& user,
                       std::set<std::string>* consumed, const std::string& owner);
 

@@ -83,13 +83,16 @@ Setup make_setup(const std::string& model, const std::vector<std::string>& integ
   Setup s;
   // Look the model up first so an unknown name is reported as such, then check the sizes
   // before anything is allocated.
-  model_registry().at(model);
+  const auto& model_entry = model_registry().at(model);
   for (const auto& name : integrators) integrator_registry().at(name);
+  // Every value is type- and range-checked (resolve_params) before anything is sized or built.
+  resolve_params(model_entry.params, user, nullptr, "model '" + model + "'");
+  for (const auto& name : integrators)
+    resolve_params(integrator_registry().at(name).params, user, nullptr,
+                   "integrator '" + name + "'");
   check_run_size(model, integrators, user);
   std::set<std::string> consumed;
   std::string accepted = model_registry().accepted_keys(model);
-  // Look every name up before creating anything, so the first error is the unknown name.
-  for (const auto& name : integrators) integrator_registry().at(name);
   s.model = model_registry().create(model, user, &consumed);
   for (const auto& name : integrators) {
     s.integrators.push_back(integrator_registry().create(name, user, &consumed));

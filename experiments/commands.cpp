@@ -96,11 +96,14 @@ void print_params(const std::vector<ParamSpec>& params, std::ostream& out) {
     return;
   }
   out << "\nParameters (--param key=value):\n\n";
-  Table t{{"key", "type", "default", "meaning"}, {}};
+  // The range column: what resolve_params accepts for a numeric parameter.
+  Table t{{"key", "type", "default", "range", "meaning"}, {}};
   for (const auto& p : params) {
     std::string help = p.help;
     if (!p.choices.empty()) help += " (one of: " + join(p.choices, ", ") + ")";
-    t.rows.push_back({p.key, to_string(p.type), p.default_value, help});
+    const bool numeric = p.type == ParamType::real || p.type == ParamType::integer;
+    t.rows.push_back(
+        {p.key, to_string(p.type), p.default_value, numeric ? p.bounds.to_string() : "", help});
   }
   out << t.to_markdown();
 }

@@ -37,9 +37,9 @@ std::vector<std::string> lines_of(std::string_view data) {
 void params_one(std::string_view data) {
   // Declared parameters of every type, as a model or an integrator declares them.
   static const std::vector<ParamSpec> specs = {
-      {"n", ParamType::integer, "8", "size"},
-      {"k", ParamType::real, "1", "stiffness"},
-      {"rtol", ParamType::real, "1e-6", "tolerance"},
+      {"n", ParamType::integer, "8", "size", Bounds::in(1, 4096)},
+      {"k", ParamType::real, "1", "stiffness", Bounds::positive()},
+      {"rtol", ParamType::real, "1e-6", "tolerance"},  // no declared range: finite only
       {"constrained", ParamType::boolean, "false", "flag"},
       {"linear_solver", ParamType::text, "auto", "solver", {"auto", "dense_lu", "cg"}},
       {"name", ParamType::text, "x", "free text"}};
@@ -47,10 +47,13 @@ void params_one(std::string_view data) {
     const Params user = Params::from_assignments(lines_of(data));
     std::set<std::string> consumed;
     const Params p = resolve_params(specs, user, &consumed, "fuzz");
-    // Every value that passed the check reads back with its type; reals are finite.
+    // Every value that passed the check reads back with its type; reals are finite and
+    // inside their declared range.
     if (!std::isfinite(p.real("k")) || !std::isfinite(p.real("rtol")))
       fail("a non-finite real passed resolve_params");
-    (void)p.integer("n");
+    if (!(p.real("k") > 0)) fail("a value outside its declared range passed resolve_params");
+    const long n = p.integer("n");
+    if (n < 1 || n > 4096) fail("a value outside its declared range passed resolve_params");
     (void)p.boolean("constrained");
     (void)p.text("linear_solver");
     (void)p.text("name");

@@ -2,16 +2,20 @@
 // exit code 2, one message naming the bad value, and no file left behind.
 //
 // Two parts. (1) Every numeric parameter of every registered model and integrator, enumerated
-// from the registries' ParamSpecs (so a new method is covered without editing this file), is
-// given NaN, ±Inf, zero and -1 through the library: non-finite values must be refused as
-// BadInput naming the key; zero and -1 must either be refused the same way or give a run whose
-// numbers are honest (status ok means a finite state), never another exception. (2) The command
+// from the registries' ParamSpecs (so a new method is covered without editing this file),
+// declares its valid range (ParamSpec::bounds) and is given NaN, ±Inf, zero, -1 and a value just
+// outside each finite end of its range through the library: non-finite values and values
+// outside the range must be refused as BadInput naming the key; zero and -1 inside the range
+// must either be refused the same way or give a run whose numbers are honest (status ok means a
+// finite state), never another exception. (2) The command
 // line, on the real binary: unknown names (with the closest names suggested), absurd sizes,
 // unwritable output paths, unknown flags, empty lists, t_end <= t0, malformed spec files.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -95,7 +99,7 @@ TestModel model_for(const std::string& integrator) {
 }
 
 struct Tally {
-  int cases = 0, refused = 0;
+  int cases = 0, refused = 0, outside = 0;
   std::vector<std::string> failures;
 };
 
@@ -105,26 +109,92 @@ Params with_key(Params base, const std::string& key, const std::string& value) {
   return base;
 }
 
+bool numeric(const ParamSpec& spec) {
+  return spec.type == ParamType::real || spec.type == ParamType::integer;
+}
+
+// A value just outside each finite end of the spec's range: the end itself when it is open,
+// else one beyond it (integers) or a relative 1e-6 beyond it (reals).
+std::vector<std::string> just_outside(const ParamSpec& spec) {
+  std::vector<std::string> out;
+  const Bounds& b = spec.bounds;
+  auto text = [&](double x) {
+    if (spec.type == ParamType::integer) return std::to_string(static_cast<long>(x));
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.12g", x);
+    return std::string(buf);
+  };
+  auto beyond = [&](double end, bool open, double dir) {
+    if (open) return end;
+    return end +
+           dir * (spec.type == ParamType::integer ? 1.0 : 1e-6 * std::max(1.0, std::abs(end)));
+  };
+  if (std::isfinite(b.lower())) out.push_back(text(beyond(b.lower(), b.lower_open(), -1)));
+  if (std::isfinite(b.upper())) out.push_back(text(beyond(b.upper(), b.upper_open(), 1)));
+  for (const auto& v : out) EXPECT_FALSE(b.contains(std::stod(v))) << spec.key << "=" << v;
+  return out;
+}
+
 void probe(const std::string& model, const std::string& integrator, const ParamSpec& spec, Tally& t,
            const Params& base = {}) {
-  if (spec.type != ParamType::real && spec.type != ParamType::integer) return;
+  if (!numeric(spec)) return;
+  auto fail = [&](const std::string& v, const std::string& why) {
+    t.failures.push_back(model + "/" + integrator + " " + spec.key + "=" + v + ": " + why);
+  };
   const std::vector<std::string> non_finite = {"nan", "inf", "-inf", "1e999"};
   for (const auto& v : non_finite) {
     ++t.cases;
     const ParamOutcome o = try_params(model, integrator, with_key(base, spec.key, v), spec.key);
     t.refused += o.refused;
     if (!o.refused)
-      t.failures.push_back(model + "/" + integrator + " " + spec.key + "=" + v + ": accepted");
+      fail(v, "accepted");
     else if (!o.failure.empty())
-      t.failures.push_back(model + "/" + integrator + " " + spec.key + "=" + v + ": " + o.failure);
+      fail(v, o.failure);
   }
-  for (const char* v : {"0", "-1"}) {
+  std::vector<std::string> values = {"0", "-1"};
+  for (const auto& v : just_outside(spec))
+    if (std::find(values.begin(), values.end(), v) == values.end()) values.push_back(v);
+  for (const auto& v : values) {
     ++t.cases;
+    const bool outside = !spec.bounds.contains(std::stod(v));
+    t.outside += outside;
     const ParamOutcome o = try_params(model, integrator, with_key(base, spec.key, v), spec.key);
     t.refused += o.refused;
-    if (!o.failure.empty())
-      t.failures.push_back(model + "/" + integrator + " " + spec.key + "=" + v + ": " + o.failure);
+    if (outside && !o.refused)
+      fail(v, "outside the declared range " + spec.bounds.to_string() + " but accepted");
+    else if (!o.failure.empty())
+      fail(v, o.failure);
   }
+}
+
+// The registries' numeric parameters all declare their range (a new one must, and `describe`
+// shows it); the default lies inside it; text and boolean parameters declare none.
+template <class Registry>
+void check_declared_bounds(const Registry& reg, int* numeric_count) {
+  for (const auto& e : reg.entries()) {
+    if (!e.built_in) continue;
+    for (const auto& spec : e.params) {
+      const std::string where = reg.kind() + " " + e.info.name + " parameter " + spec.key;
+      if (!numeric(spec)) {
+        EXPECT_FALSE(spec.bounds.declared()) << where << ": bounds on a non-numeric parameter";
+        continue;
+      }
+      ++*numeric_count;
+      EXPECT_TRUE(spec.bounds.declared()) << where << ": no declared range (ParamSpec::bounds)";
+      EXPECT_TRUE(spec.bounds.contains(std::stod(spec.default_value)))
+          << where << ": default " << spec.default_value << " outside " << spec.bounds.to_string();
+    }
+  }
+}
+
+TEST(BadInputCatalogue, EveryNumericParameterDeclaresItsRange) {
+  int models = 0, integrators = 0;
+  check_declared_bounds(model_registry(), &models);
+  check_declared_bounds(integrator_registry(), &integrators);
+  std::printf("numeric parameters with a declared range: %d of models, %d of integrators\n", models,
+              integrators);
+  EXPECT_GT(models, 100);
+  EXPECT_GT(integrators, 100);
 }
 
 TEST(BadInputCatalogue, EveryNumericModelParameter) {
@@ -134,8 +204,11 @@ TEST(BadInputCatalogue, EveryNumericModelParameter) {
     for (const auto& spec : e.params) probe(e.info.name, "rk4", spec, t);
   }
   for (const auto& f : t.failures) ADD_FAILURE() << f;
-  std::printf("model parameters: %d cases, %d refused\n", t.cases, t.refused);
+  std::printf("model parameters: %d cases, %d outside the declared range, %d refused\n", t.cases,
+              t.outside, t.refused);
   EXPECT_GT(t.cases, 100);  // the registries were enumerated
+  EXPECT_GT(t.outside, 100);
+  EXPECT_GE(t.refused, t.outside);
 }
 
 TEST(BadInputCatalogue, EveryNumericIntegratorParameter) {
@@ -147,8 +220,11 @@ TEST(BadInputCatalogue, EveryNumericIntegratorParameter) {
     for (const auto& spec : e.params) probe(model.name, e.info.name, spec, t, model.params);
   }
   for (const auto& f : t.failures) ADD_FAILURE() << f;
-  std::printf("integrator parameters: %d cases, %d refused\n", t.cases, t.refused);
+  std::printf("integrator parameters: %d cases, %d outside the declared range, %d refused\n",
+              t.cases, t.outside, t.refused);
   EXPECT_GT(t.cases, 100);
+  EXPECT_GT(t.outside, 100);
+  EXPECT_GE(t.refused, t.outside);
 }
 
 // Every built-in model estimates its size from its parameters, so `check_run_size` can refuse

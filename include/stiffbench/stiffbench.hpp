@@ -4,7 +4,7 @@
 //
 // Stable (kept source-compatible within a minor version):
 //   core/types.hpp, core/params.hpp        Vec/Index, Params (typed: Params{{"rtol", 1e-8}}),
-//                                           ParamSpec, BadInput
+//                                           ParamSpec (with Bounds), BadInput
 //   core/ode_system.hpp                     OdeSystem (y' = f(t, y)) and MechanicalSystem
 //   core/integrator.hpp, core/solve_stats.hpp, core/driver.hpp
 //                                           the integrator face, counters, fixed-step and

@@ -7,14 +7,17 @@ namespace stiffbench {
 
 std::vector<ParamSpec> controller_param_specs() {
   using P = ParamType;
+  using B = Bounds;
   return {
-      {"rtol", P::real, "1e-6", "relative tolerance (adaptive mode)"},
-      {"atol", P::real, "1e-10", "absolute tolerance (adaptive mode)"},
-      {"max_steps", P::integer, "100000", "maximum trial steps per output interval"},
+      {"rtol", P::real, "1e-6", "relative tolerance (adaptive mode)", B::positive()},
+      {"atol", P::real, "1e-10", "absolute tolerance (adaptive mode)", B::non_negative()},
+      {"max_steps", P::integer, "100000", "maximum trial steps per output interval",
+       B::at_least(1)},
       {"h0", P::real, "0",
        "first step of an adaptive run; 0: the starting-step heuristic of Hairer-Norsett-Wanner "
-       "I, II.4"},
-      {"h_max", P::real, "0", "largest step of an adaptive run; 0: no limit"},
+       "I, II.4",
+       B::non_negative()},
+      {"h_max", P::real, "0", "largest step of an adaptive run; 0: no limit", B::non_negative()},
   };
 }
 

@@ -10,7 +10,8 @@ namespace stiffbench {
 std::vector<ParamSpec> projective_dynamics_param_specs() {
   return {{"iterations", ParamType::integer, "10",
            "local/global iterations per step (each: one projection of every spring, one "
-           "prefactored solve per coordinate)"}};
+           "prefactored solve per coordinate)",
+           Bounds::in(1, 1000000)}};
 }
 
 ProjectiveDynamicsOptions read_projective_dynamics_options(const Params& p) {

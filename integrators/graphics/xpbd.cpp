@@ -10,8 +10,10 @@ namespace stiffbench {
 std::vector<ParamSpec> xpbd_param_specs() {
   return {{"substeps", ParamType::integer, "1",
            "substeps per step h, each of size h/substeps with its own prediction and "
-           "multipliers (Macklin et al. 2019)"},
-          {"iterations", ParamType::integer, "10", "constraint sweeps per substep"},
+           "multipliers (Macklin et al. 2019)",
+           Bounds::in(1, 1000000)},
+          {"iterations", ParamType::integer, "10", "constraint sweeps per substep",
+           Bounds::in(1, 1000000)},
           {"variant",
            ParamType::text,
            "gauss_seidel",

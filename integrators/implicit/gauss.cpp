@@ -92,11 +92,14 @@ const GaussConstants& gauss_constants(int stages) {
 
 std::vector<ParamSpec> gauss_param_specs() {
   using P = ParamType;
+  using B = Bounds;
   return {
       {"newton_tol", P::real, "1e-15",
        "Newton stops when its predicted error is below newton_tol (1 + |y|) in the RMS norm, or "
-       "when the update stagnates below it (round-off); looser values perturb the symplectic map"},
-      {"newton_max_iter", P::integer, "20", "simplified Newton iterations per step"},
+       "when the update stagnates below it (round-off); looser values perturb the symplectic map",
+       B::positive()},
+      {"newton_max_iter", P::integer, "20", "simplified Newton iterations per step",
+       B::at_least(1)},
       {"jacobian",
        P::text,
        "auto",

@@ -22,6 +22,7 @@ double weighted_norm(CVecRef v, CVecRef z) {
 
 std::vector<ParamSpec> implicit_param_specs(bool with_newton) {
   using P = ParamType;
+  using B = Bounds;
   std::vector<ParamSpec> specs;
   if (with_newton) {
     specs.push_back({"newton",
@@ -32,8 +33,10 @@ std::vector<ParamSpec> implicit_param_specs(bool with_newton) {
                      {"full", "modified", "frozen"}});
     specs.push_back({"newton_tol", P::real, "1e-12",
                      "Newton tolerance on residual or update (weighted max-norm); each step may "
-                     "carry an error of this order"});
-    specs.push_back({"newton_max_iter", P::integer, "10", "Newton iterations per stage"});
+                     "carry an error of this order",
+                     B::positive()});
+    specs.push_back(
+        {"newton_max_iter", P::integer, "10", "Newton iterations per stage", B::at_least(1)});
   }
   specs.push_back({"jacobian",
                    P::text,
@@ -67,7 +70,8 @@ std::vector<ParamSpec> implicit_param_specs(bool with_newton) {
                                  "krylov_forcing=eisenstat_walker the floor of the forcing terms "
                                  "(at least 1e-7 when matrix-free)"
                                : "relative residual of Krylov solves (at least 1e-7 when "
-                                 "matrix-free)"});
+                                 "matrix-free)",
+                   B::positive()});
   if (with_newton)
     specs.push_back({"krylov_forcing",
                      P::text,
@@ -75,8 +79,9 @@ std::vector<ParamSpec> implicit_param_specs(bool with_newton) {
                      "Krylov tolerance per Newton iteration: eisenstat_walker (forcing terms "
                      "that tighten as Newton converges) or fixed (krylov_tol every time)",
                      {"eisenstat_walker", "fixed"}});
-  specs.push_back({"krylov_max_iter", P::integer, "1000", "Krylov iterations per solve"});
-  specs.push_back({"gmres_restart", P::integer, "50", "GMRES restart length"});
+  specs.push_back(
+      {"krylov_max_iter", P::integer, "1000", "Krylov iterations per solve", B::at_least(1)});
+  specs.push_back({"gmres_restart", P::integer, "50", "GMRES restart length", B::at_least(1)});
   return specs;
 }
 

@@ -147,11 +147,14 @@ template class ShiftedSolver<std::complex<double>>;
 
 std::vector<ParamSpec> radau5_param_specs() {
   using P = ParamType;
+  using B = Bounds;
   std::vector<ParamSpec> s = controller_param_specs();
   s.push_back({"newton_tol", P::real, "1e-12",
                "fixed-step mode: Newton stops when its predicted error is below newton_tol "
-               "(1 + |y|) in the RMS norm (adaptive mode uses RADAU5's rule from rtol)"});
-  s.push_back({"newton_max_iter", P::integer, "7", "Newton iterations per step (RADAU5: 7)"});
+               "(1 + |y|) in the RMS norm (adaptive mode uses RADAU5's rule from rtol)",
+               B::positive()});
+  s.push_back({"newton_max_iter", P::integer, "7", "Newton iterations per step (RADAU5: 7)",
+               B::at_least(1)});
   s.push_back({"jacobian",
                P::text,
                "auto",

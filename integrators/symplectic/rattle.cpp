@@ -15,13 +15,16 @@ double max_abs(CVecRef z) { return z.size() == 0 ? 0.0 : z.cwiseAbs().maxCoeff()
 
 std::vector<ParamSpec> rattle_param_specs() {
   using P = ParamType;
+  using B = Bounds;
   return {
       {"constraint_tol", P::real, "1e-14",
        "Newton on the multipliers stops when max|g(x)| <= constraint_tol max(1, |x|inf); the "
-       "velocity projection when max|G(x) v| <= constraint_tol max(1, |v|inf)"},
+       "velocity projection when max|G(x) v| <= constraint_tol max(1, |v|inf)",
+       B::positive()},
       {"newton_max_iter", P::integer, "20",
        "Newton iterations per step for the position constraint (typically 2-3 are needed); "
-       "without convergence the step fails (newton_failed)"},
+       "without convergence the step fails (newton_failed)",
+       B::in(1, 1000)},
   };
 }
 

@@ -11,6 +11,7 @@ namespace stiffbench {
 namespace {
 
 using P = ParamType;
+using B = Bounds;
 
 int grid_int(const Params& p, const std::string& key, const std::string& model, long lo, long hi) {
   const long v = p.integer(key);
@@ -27,16 +28,16 @@ void add_heat(ModelRegistry& reg) {
             false, true,
             "exact solution exp(lambda t) u0 of the semi-discrete system (lambda the stencil's "
             "eigenvalue of the mode)"},
-           {{"n", P::integer, "32", "grid points per direction (unknowns n^2)"},
-            {"nu", P::real, "1", "diffusivity nu (> 0)"},
+           {{"n", P::integer, "32", "grid points per direction (unknowns n^2)", B::in(3, 4096)},
+            {"nu", P::real, "1", "diffusivity nu", B::positive()},
             {"boundary",
              P::text,
              "periodic",
              "periodic (cell centres, dx = 1/n) or dirichlet (u = 0, interior nodes, dx = "
              "1/(n+1))",
              {"periodic", "dirichlet"}},
-            {"kx", P::integer, "1", "mode number along x"},
-            {"ky", P::integer, "1", "mode number along y"}},
+            {"kx", P::integer, "1", "mode number along x", B::in(1, 4096)},
+            {"ky", P::integer, "1", "mode number along y", B::in(1, 4096)}},
            [](const Params& p) {
              const int n = grid_int(p, "n", "heat_2d", 3, 4096);
              const auto b = p.text("boundary") == "dirichlet" ? Heat2d::Boundary::dirichlet
@@ -61,10 +62,11 @@ void add_fluid(ModelRegistry& reg) {
              "taylor_green (periodic unit box, u = sin 2pi x cos 2pi y) or cavity (walls, lid "
              "at y = 1, starting at rest)",
              {"taylor_green", "cavity"}},
-            {"n", P::integer, "32", "cells per direction (unknowns about 2 n^2)"},
-            {"re", P::real, "100", "Reynolds number U L / nu (U = 1 or the lid speed, L = 1)"},
-            {"lid", P::real, "1", "cavity lid speed U along x"},
-            {"gravity", P::real, "0", "body force along -y"},
+            {"n", P::integer, "32", "cells per direction (unknowns about 2 n^2)", B::in(4, 2048)},
+            {"re", P::real, "100", "Reynolds number U L / nu (U = 1 or the lid speed, L = 1)",
+             B::positive()},
+            {"lid", P::real, "1", "cavity lid speed U along x", B::positive()},
+            {"gravity", P::real, "0", "body force along -y", B::any()},
             {"solver",
              P::text,
              "cholesky",

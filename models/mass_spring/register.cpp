@@ -54,108 +54,122 @@ double count(const Params& p, const std::string& key) {
 
 void register_mass_spring_models(ModelRegistry& reg) {
   using P = ParamType;
+  using B = Bounds;
   const std::string threshold_help =
       "points from which the right-hand side runs in parallel with OpenMP (results do not "
       "depend on it)";
 
   const SpringChainOptions chain;
-  reg.add(
-      {{"spring_chain",
-        "1D chain of N masses between pinned ends (fixed-fixed or fixed-free), one normal "
-        "mode excited",
-        true, true,
-        "normal modes w_j = 2 sqrt(k/m) sin(j pi/(2(N+1))) (REFERENCES.md); exact solution "
-        "unless perturbation > 0"},
-       {{"n", P::integer, str(chain.n), "number of free masses N"},
-        {"k", P::real, str(chain.k), "spring stiffness"},
-        {"mass", P::real, str(chain.mass), "mass of each point"},
-        {"rest_length", P::real, str(chain.rest_length), "spring rest length (initial spacing)"},
-        {"ends",
-         P::text,
-         "fixed_fixed",
-         "boundary: both ends pinned or the right end free",
-         {"fixed_fixed", "fixed_free"}},
-        {"mode", P::integer, str(chain.mode), "normal mode displaced initially (1..n; 0: none)"},
-        {"amplitude", P::real, str(chain.amplitude),
-         "amplitude of the mode displacement (< rest_length/2)"},
-        {"seed", P::integer, str(static_cast<long>(chain.seed)), "seed of the random perturbation"},
-        {"perturbation", P::real, str(chain.perturbation),
-         "uniform random displacement in [-p, p] of every free mass (0: none; > 0 removes "
-         "the exact solution)"},
-        {"gamma", P::real, str(chain.point_damping), "point damping coefficient (force -gamma v)"},
-        {"dashpot", P::real, str(chain.dashpot), "dashpot coefficient of every spring"}},
-       [](const Params& p) {
-         SpringChainOptions o;
-         o.n = p.integer("n");
-         o.k = p.real("k");
-         o.mass = p.real("mass");
-         o.rest_length = p.real("rest_length");
-         o.fixed_free = p.text("ends") == "fixed_free";
-         o.mode = p.integer("mode");
-         o.amplitude = p.real("amplitude");
-         o.seed = seed_param(p, "spring_chain");
-         o.perturbation = p.real("perturbation");
-         o.point_damping = p.real("gamma");
-         o.dashpot = p.real("dashpot");
-         return make_spring_chain(o);
-       }});
+  reg.add({{"spring_chain",
+            "1D chain of N masses between pinned ends (fixed-fixed or fixed-free), one normal "
+            "mode excited",
+            true, true,
+            "normal modes w_j = 2 sqrt(k/m) sin(j pi/(2(N+1))) (REFERENCES.md); exact solution "
+            "unless perturbation > 0"},
+           {{"n", P::integer, str(chain.n), "number of free masses N", B::at_least(1)},
+            {"k", P::real, str(chain.k), "spring stiffness", B::positive()},
+            {"mass", P::real, str(chain.mass), "mass of each point", B::positive()},
+            {"rest_length", P::real, str(chain.rest_length), "spring rest length (initial spacing)",
+             B::positive()},
+            {"ends",
+             P::text,
+             "fixed_fixed",
+             "boundary: both ends pinned or the right end free",
+             {"fixed_fixed", "fixed_free"}},
+            {"mode", P::integer, str(chain.mode), "normal mode displaced initially (1..n; 0: none)",
+             B::non_negative()},
+            {"amplitude", P::real, str(chain.amplitude),
+             "amplitude of the mode displacement (< rest_length/2)", B::any()},
+            {"seed", P::integer, str(static_cast<long>(chain.seed)),
+             "seed of the random perturbation", B::non_negative()},
+            {"perturbation", P::real, str(chain.perturbation),
+             "uniform random displacement in [-p, p] of every free mass (0: none; > 0 removes "
+             "the exact solution)",
+             B::non_negative()},
+            {"gamma", P::real, str(chain.point_damping),
+             "point damping coefficient (force -gamma v)", B::non_negative()},
+            {"dashpot", P::real, str(chain.dashpot), "dashpot coefficient of every spring",
+             B::non_negative()}},
+           [](const Params& p) {
+             SpringChainOptions o;
+             o.n = p.integer("n");
+             o.k = p.real("k");
+             o.mass = p.real("mass");
+             o.rest_length = p.real("rest_length");
+             o.fixed_free = p.text("ends") == "fixed_free";
+             o.mode = p.integer("mode");
+             o.amplitude = p.real("amplitude");
+             o.seed = seed_param(p, "spring_chain");
+             o.perturbation = p.real("perturbation");
+             o.point_damping = p.real("gamma");
+             o.dashpot = p.real("dashpot");
+             return make_spring_chain(o);
+           }});
   reg.find_mutable("spring_chain")->info.size = [](const Params& p) {
     return lattice_size(count(p, "n"), 1, 1, "n=" + std::to_string(p.integer("n")));
   };
 
   const ClothOptions cloth;
-  reg.add(
-      {{"cloth",
-        "n x m cloth grid in 3D with structural, shear and bend springs, pinned corners or "
-        "top edge, under gravity",
-        true, false, "mass-spring cloth (Provot 1995; Baraff & Witkin 1998 Jacobians)"},
-       {{"n", P::integer, str(cloth.n), "points along x"},
-        {"m", P::integer, "0", "points along y (0: same as n)"},
-        {"spacing", P::real, str(cloth.spacing),
-         "grid spacing (initial length of structural springs)"},
-        {"mass", P::real, str(cloth.mass), "mass of each point"},
-        {"k_struct", P::real, str(cloth.k_struct), "stiffness of structural springs (grid edges)"},
-        {"k_shear", P::real, str(cloth.k_shear), "stiffness of shear springs (cell diagonals)"},
-        {"k_bend", P::real, str(cloth.k_bend), "stiffness of bend springs (two cells apart)"},
-        {"pin",
-         P::text,
-         "top_edge",
-         "pinned points: the two corners of the top edge, the whole top edge, or none",
-         {"corners", "top_edge", "none"}},
-        {"gravity", P::real, str(cloth.gravity), "gravitational acceleration (along -z)"},
-        {"prestretch", P::real, str(cloth.prestretch),
-         "initial length / rest length of every spring (> 1: stretched)"},
-        {"perturbation", P::real, str(cloth.perturbation),
-         "uniform random displacement in [-p, p] of every coordinate of every free point"},
-        {"seed", P::integer, str(static_cast<long>(cloth.seed)), "seed of the random perturbation"},
-        {"damping", P::real, str(cloth.point_damping),
-         "point damping coefficient (force -damping v)"},
-        {"dashpot", P::real, str(cloth.dashpot), "dashpot coefficient of every spring"},
-        {"compressed_dd", P::boolean, str(cloth.compressed_dd_only),
-         "Jacobian keeps only k d d^T for compressed springs (inexact, definite)"},
-        {"parallel_threshold", P::integer, str(cloth.parallel_threshold), threshold_help}},
-       [](const Params& p) {
-         ClothOptions o;
-         o.perturbation = p.real("perturbation");
-         o.seed = seed_param(p, "cloth");
-         o.n = p.integer("n");
-         o.m = p.integer("m") == 0 ? o.n : p.integer("m");
-         o.spacing = p.real("spacing");
-         o.mass = p.real("mass");
-         o.k_struct = p.real("k_struct");
-         o.k_shear = p.real("k_shear");
-         o.k_bend = p.real("k_bend");
-         o.pin = choice<ClothOptions::Pin>(
-             p, "pin", {"corners", "top_edge", "none"},
-             {ClothOptions::Pin::corners, ClothOptions::Pin::top_edge, ClothOptions::Pin::none});
-         o.gravity = p.real("gravity");
-         o.prestretch = p.real("prestretch");
-         o.point_damping = p.real("damping");
-         o.dashpot = p.real("dashpot");
-         o.compressed_dd_only = p.boolean("compressed_dd");
-         o.parallel_threshold = p.integer("parallel_threshold");
-         return make_cloth(o);
-       }});
+  reg.add({{"cloth",
+            "n x m cloth grid in 3D with structural, shear and bend springs, pinned corners or "
+            "top edge, under gravity",
+            true, false, "mass-spring cloth (Provot 1995; Baraff & Witkin 1998 Jacobians)"},
+           {{"n", P::integer, str(cloth.n), "points along x", B::at_least(2)},
+            {"m", P::integer, "0", "points along y (0: same as n)", B::non_negative()},
+            {"spacing", P::real, str(cloth.spacing),
+             "grid spacing (initial length of structural springs)", B::positive()},
+            {"mass", P::real, str(cloth.mass), "mass of each point", B::positive()},
+            {"k_struct", P::real, str(cloth.k_struct),
+             "stiffness of structural springs (grid edges)", B::non_negative()},
+            {"k_shear", P::real, str(cloth.k_shear), "stiffness of shear springs (cell diagonals)",
+             B::non_negative()},
+            {"k_bend", P::real, str(cloth.k_bend), "stiffness of bend springs (two cells apart)",
+             B::non_negative()},
+            {"pin",
+             P::text,
+             "top_edge",
+             "pinned points: the two corners of the top edge, the whole top edge, or none",
+             {"corners", "top_edge", "none"}},
+            {"gravity", P::real, str(cloth.gravity), "gravitational acceleration (along -z)",
+             B::non_negative()},
+            {"prestretch", P::real, str(cloth.prestretch),
+             "initial length / rest length of every spring (> 1: stretched)", B::positive()},
+            {"perturbation", P::real, str(cloth.perturbation),
+             "uniform random displacement in [-p, p] of every coordinate of every free point",
+             B::non_negative()},
+            {"seed", P::integer, str(static_cast<long>(cloth.seed)),
+             "seed of the random perturbation", B::non_negative()},
+            {"damping", P::real, str(cloth.point_damping),
+             "point damping coefficient (force -damping v)", B::non_negative()},
+            {"dashpot", P::real, str(cloth.dashpot), "dashpot coefficient of every spring",
+             B::non_negative()},
+            {"compressed_dd", P::boolean, str(cloth.compressed_dd_only),
+             "Jacobian keeps only k d d^T for compressed springs (inexact, definite)"},
+            {"parallel_threshold", P::integer, str(cloth.parallel_threshold), threshold_help,
+             B::at_least(1)}},
+           [](const Params& p) {
+             ClothOptions o;
+             o.perturbation = p.real("perturbation");
+             o.seed = seed_param(p, "cloth");
+             o.n = p.integer("n");
+             o.m = p.integer("m") == 0 ? o.n : p.integer("m");
+             o.spacing = p.real("spacing");
+             o.mass = p.real("mass");
+             o.k_struct = p.real("k_struct");
+             o.k_shear = p.real("k_shear");
+             o.k_bend = p.real("k_bend");
+             o.pin =
+                 choice<ClothOptions::Pin>(p, "pin", {"corners", "top_edge", "none"},
+                                           {ClothOptions::Pin::corners, ClothOptions::Pin::top_edge,
+                                            ClothOptions::Pin::none});
+             o.gravity = p.real("gravity");
+             o.prestretch = p.real("prestretch");
+             o.point_damping = p.real("damping");
+             o.dashpot = p.real("dashpot");
+             o.compressed_dd_only = p.boolean("compressed_dd");
+             o.parallel_threshold = p.integer("parallel_threshold");
+             return make_cloth(o);
+           }});
   reg.find_mutable("cloth")->info.size = [](const Params& p) {
     const double n = count(p, "n"), m = p.integer("m") == 0 ? n : count(p, "m");
     return lattice_size(n * m, 3, 6,
@@ -164,54 +178,59 @@ void register_mass_spring_models(ModelRegistry& reg) {
   };
 
   const SoftCubeOptions cube;
-  reg.add(
-      {{"soft_cube",
-        "n x n x n lattice with edge, face- and body-diagonal springs, dropped spinning "
-        "under gravity or compressed and released",
-        true, false, "mass-spring soft body; centre of mass falls freely (x_cm'' = g)"},
-       {{"n", P::integer, str(cube.n), "points per edge"},
-        {"spacing", P::real, str(cube.spacing), "lattice spacing"},
-        {"mass", P::real, str(cube.mass), "mass of each point"},
-        {"k_edge", P::real, str(cube.k_edge), "stiffness of edge springs"},
-        {"k_face", P::real, str(cube.k_face), "stiffness of face-diagonal springs"},
-        {"k_body", P::real, str(cube.k_body), "stiffness of body-diagonal springs"},
-        {"scenario",
-         P::text,
-         "drop",
-         "drop: undeformed and spinning; compress: scaled by factor, at rest",
-         {"drop", "compress"}},
-        {"height", P::real, str(cube.height), "initial height of the lowest point"},
-        {"spin", P::real, str(cube.spin), "drop: angular velocity about the axis (1,2,3)/sqrt(14)"},
-        {"factor", P::real, str(cube.factor),
-         "compress: initial scale of the lattice (< 1 compresses)"},
-        {"gravity", P::real, str(cube.gravity), "gravitational acceleration (along -z)"},
-        {"damping", P::real, str(cube.point_damping),
-         "point damping coefficient (force -damping v)"},
-        {"dashpot", P::real, str(cube.dashpot), "dashpot coefficient of every spring"},
-        {"compressed_dd", P::boolean, str(cube.compressed_dd_only),
-         "Jacobian keeps only k d d^T for compressed springs (inexact, definite)"},
-        {"parallel_threshold", P::integer, str(cube.parallel_threshold), threshold_help}},
-       [](const Params& p) {
-         SoftCubeOptions o;
-         o.n = p.integer("n");
-         o.spacing = p.real("spacing");
-         o.mass = p.real("mass");
-         o.k_edge = p.real("k_edge");
-         o.k_face = p.real("k_face");
-         o.k_body = p.real("k_body");
-         o.scenario = choice<SoftCubeOptions::Scenario>(
-             p, "scenario", {"drop", "compress"},
-             {SoftCubeOptions::Scenario::drop, SoftCubeOptions::Scenario::compress});
-         o.height = p.real("height");
-         o.spin = p.real("spin");
-         o.factor = p.real("factor");
-         o.gravity = p.real("gravity");
-         o.point_damping = p.real("damping");
-         o.dashpot = p.real("dashpot");
-         o.compressed_dd_only = p.boolean("compressed_dd");
-         o.parallel_threshold = p.integer("parallel_threshold");
-         return make_soft_cube(o);
-       }});
+  reg.add({{"soft_cube",
+            "n x n x n lattice with edge, face- and body-diagonal springs, dropped spinning "
+            "under gravity or compressed and released",
+            true, false, "mass-spring soft body; centre of mass falls freely (x_cm'' = g)"},
+           {{"n", P::integer, str(cube.n), "points per edge", B::at_least(2)},
+            {"spacing", P::real, str(cube.spacing), "lattice spacing", B::positive()},
+            {"mass", P::real, str(cube.mass), "mass of each point", B::positive()},
+            {"k_edge", P::real, str(cube.k_edge), "stiffness of edge springs", B::non_negative()},
+            {"k_face", P::real, str(cube.k_face), "stiffness of face-diagonal springs",
+             B::non_negative()},
+            {"k_body", P::real, str(cube.k_body), "stiffness of body-diagonal springs",
+             B::non_negative()},
+            {"scenario",
+             P::text,
+             "drop",
+             "drop: undeformed and spinning; compress: scaled by factor, at rest",
+             {"drop", "compress"}},
+            {"height", P::real, str(cube.height), "initial height of the lowest point", B::any()},
+            {"spin", P::real, str(cube.spin),
+             "drop: angular velocity about the axis (1,2,3)/sqrt(14)", B::any()},
+            {"factor", P::real, str(cube.factor),
+             "compress: initial scale of the lattice (< 1 compresses)", B::positive()},
+            {"gravity", P::real, str(cube.gravity), "gravitational acceleration (along -z)",
+             B::non_negative()},
+            {"damping", P::real, str(cube.point_damping),
+             "point damping coefficient (force -damping v)", B::non_negative()},
+            {"dashpot", P::real, str(cube.dashpot), "dashpot coefficient of every spring",
+             B::non_negative()},
+            {"compressed_dd", P::boolean, str(cube.compressed_dd_only),
+             "Jacobian keeps only k d d^T for compressed springs (inexact, definite)"},
+            {"parallel_threshold", P::integer, str(cube.parallel_threshold), threshold_help,
+             B::at_least(1)}},
+           [](const Params& p) {
+             SoftCubeOptions o;
+             o.n = p.integer("n");
+             o.spacing = p.real("spacing");
+             o.mass = p.real("mass");
+             o.k_edge = p.real("k_edge");
+             o.k_face = p.real("k_face");
+             o.k_body = p.real("k_body");
+             o.scenario = choice<SoftCubeOptions::Scenario>(
+                 p, "scenario", {"drop", "compress"},
+                 {SoftCubeOptions::Scenario::drop, SoftCubeOptions::Scenario::compress});
+             o.height = p.real("height");
+             o.spin = p.real("spin");
+             o.factor = p.real("factor");
+             o.gravity = p.real("gravity");
+             o.point_damping = p.real("damping");
+             o.dashpot = p.real("dashpot");
+             o.compressed_dd_only = p.boolean("compressed_dd");
+             o.parallel_threshold = p.integer("parallel_threshold");
+             return make_soft_cube(o);
+           }});
   reg.find_mutable("soft_cube")->info.size = [](const Params& p) {
     const double n = count(p, "n");
     return lattice_size(n * n * n, 3, 13, "n=" + std::to_string(p.integer("n")));
@@ -223,14 +242,16 @@ void register_mass_spring_models(ModelRegistry& reg) {
         "2D chain of n bobs hanging from a pin under gravity; stiff springs or exact "
         "distance constraints (projection)",
         true, false, "constrained version: SHAKE/RATTLE-style projection after every step"},
-       {{"n", P::integer, str(pend.n), "number of bobs"},
-        {"length", P::real, str(pend.length), "link length"},
-        {"mass", P::real, str(pend.mass), "mass of each bob"},
-        {"gravity", P::real, str(pend.gravity), "gravitational acceleration (along -y)"},
-        {"k", P::real, str(pend.k), "link spring stiffness (ignored when constrained)"},
+       {{"n", P::integer, str(pend.n), "number of bobs", B::at_least(1)},
+        {"length", P::real, str(pend.length), "link length", B::positive()},
+        {"mass", P::real, str(pend.mass), "mass of each bob", B::positive()},
+        {"gravity", P::real, str(pend.gravity), "gravitational acceleration (along -y)",
+         B::non_negative()},
+        {"k", P::real, str(pend.k), "link spring stiffness (ignored when constrained)",
+         B::positive()},
         {"constrained", P::boolean, str(pend.constrained), "links are exact distance constraints"},
         {"angle", P::real, str(pend.angle),
-         "initial angle of the straight chain from the vertical (rad)"}},
+         "initial angle of the straight chain from the vertical (rad)", B::any()}},
        [](const Params& p) {
          PendulumChainOptions o;
          o.n = p.integer("n");

@@ -15,12 +15,13 @@ namespace stiffbench {
 
 void register_problem_models(ModelRegistry& reg) {
   using P = ParamType;
+  using B = Bounds;
   reg.add({{"dahlquist", "y' = λy with complex λ as a 2-dimensional real system", false, true,
             "Dahlquist 1963; exact solution exp(λt) y0"},
-           {{"lambda_re", P::real, "-1", "real part of λ"},
-            {"lambda_im", P::real, "0", "imaginary part of λ"},
-            {"y0_re", P::real, "1", "real part of y(0)"},
-            {"y0_im", P::real, "0", "imaginary part of y(0)"}},
+           {{"lambda_re", P::real, "-1", "real part of λ", B::any()},
+            {"lambda_im", P::real, "0", "imaginary part of λ", B::any()},
+            {"y0_re", P::real, "1", "real part of y(0)", B::any()},
+            {"y0_im", P::real, "0", "imaginary part of y(0)", B::any()}},
            [](const Params& p) {
              return std::make_unique<Dahlquist>(
                  std::complex<double>(p.real("lambda_re"), p.real("lambda_im")),
@@ -28,40 +29,39 @@ void register_problem_models(ModelRegistry& reg) {
            }});
   reg.add({{"harmonic_oscillator", "m x'' + γ x' + k x = 0 (undamped by default)", true, true,
             "closed-form solution for under-, critically and overdamped cases"},
-           {{"m", P::real, "1", "mass"},
-            {"k", P::real, "1", "spring stiffness"},
-            {"gamma", P::real, "0", "viscous damping coefficient γ (>= 0)"},
-            {"x0", P::real, "1", "initial position"},
-            {"v0", P::real, "0", "initial velocity"}},
+           {{"m", P::real, "1", "mass", B::positive()},
+            {"k", P::real, "1", "spring stiffness", B::positive()},
+            {"gamma", P::real, "0", "viscous damping coefficient γ", B::non_negative()},
+            {"x0", P::real, "1", "initial position", B::any()},
+            {"v0", P::real, "0", "initial velocity", B::any()}},
            [](const Params& p) {
              return std::make_unique<HarmonicOscillator>(p.real("m"), p.real("k"), p.real("gamma"),
                                                          p.real("x0"), p.real("v0"));
            }});
   reg.add({{"kepler", "planar two-body orbit starting at pericentre (period 2π by default)", true,
             true, "exact solution through Kepler's equation (Goldstein §3.8)"},
-           {{"e", P::real, "0", "eccentricity, 0 <= e < 1"},
-            {"gm", P::real, "1", "gravitational parameter GM"},
-            {"a", P::real, "1", "semi-major axis"}},
+           {{"e", P::real, "0", "eccentricity", B::in_closed_open(0, 1)},
+            {"gm", P::real, "1", "gravitational parameter GM", B::positive()},
+            {"a", P::real, "1", "semi-major axis", B::positive()}},
            [](const Params& p) {
              return std::make_unique<Kepler>(p.real("e"), p.real("gm"), p.real("a"));
            }});
   reg.add({{"pendulum", "nonlinear pendulum θ'' = -(g/L) sin θ", true, false,
             "no closed form used; convergence needs --reference"},
-           {{"g", P::real, "1", "gravitational acceleration"},
-            {"length", P::real, "1", "pendulum length L (> 0)"},
-            {"theta0", P::real, "1", "initial angle (rad)"},
-            {"omega0", P::real, "0", "initial angular velocity (rad/s)"}},
+           {{"g", P::real, "1", "gravitational acceleration", B::positive()},
+            {"length", P::real, "1", "pendulum length L", B::positive()},
+            {"theta0", P::real, "1", "initial angle (rad)", B::any()},
+            {"omega0", P::real, "0", "initial angular velocity (rad/s)", B::any()}},
            [](const Params& p) {
-             require_input(p.real("length") > 0, "pendulum: parameter 'length' must be > 0");
-             require_input(p.real("g") > 0, "pendulum: parameter 'g' must be > 0");
              return std::make_unique<Pendulum>(p.real("g"), p.real("length"), p.real("theta0"),
                                                p.real("omega0"));
            }});
   reg.add({{"prothero_robinson", "y' = λ(y - φ(t)) + φ'(t): stiffness knob λ, exact y = φ", false,
             true, "Prothero & Robinson, Math. Comp. 28 (1974)"},
-           {{"lambda", P::real, "-1e6", "stiffness λ (the Jacobian)"},
+           {{"lambda", P::real, "-1e6", "stiffness λ (the Jacobian)", B::any()},
             {"phi", P::text, "sin", "φ(t)", {"sin", "cos", "exp"}},
-            {"y0_offset", P::real, "0", "y(0) - φ(0); the exact solution adds offset·e^{λt}"}},
+            {"y0_offset", P::real, "0", "y(0) - φ(0); the exact solution adds offset·e^{λt}",
+             B::any()}},
            [](const Params& p) {
              const std::string& name = p.text("phi");
              const auto phi = name == "sin"   ? ProtheroRobinson::Phi::sin
@@ -75,9 +75,9 @@ void register_problem_models(ModelRegistry& reg) {
   reg.add({{"robertson",
             "Robertson's chemical kinetics (3 species, stiff); literature end time t = 1e11", false,
             false, "Robertson 1966; Hairer & Wanner II §IV.10 (ROBER); IVP test set 'rober'"},
-           {{"k1", P::real, "0.04", "rate constant of A → B (>= 0)"},
-            {"k2", P::real, "3e7", "rate constant of 2B → B + C (>= 0)"},
-            {"k3", P::real, "1e4", "rate constant of B + C → A + C (>= 0)"}},
+           {{"k1", P::real, "0.04", "rate constant of A → B", B::non_negative()},
+            {"k2", P::real, "3e7", "rate constant of 2B → B + C", B::non_negative()},
+            {"k3", P::real, "1e4", "rate constant of B + C → A + C", B::non_negative()}},
            [](const Params& p) {
              return std::make_unique<Robertson>(p.real("k1"), p.real("k2"), p.real("k3"));
            }});
@@ -96,7 +96,8 @@ void register_problem_models(ModelRegistry& reg) {
          "scaled",
          "scaled (time x = t/μ, ε = 1/μ²) or mu (classical)",
          {"scaled", "mu"}},
-        {"mu", P::real, "1000", "μ > 0; the scaled form uses ε = 1/μ² (1000: ε = 1e-6)"}},
+        {"mu", P::real, "1000",
+         "damping parameter μ; the scaled form uses ε = 1/μ² (1000: ε = 1e-6)", B::positive()}},
        [](const Params& p) {
          const auto form =
              p.text("form") == "scaled" ? VanDerPol::Form::scaled : VanDerPol::Form::mu;
@@ -105,18 +106,18 @@ void register_problem_models(ModelRegistry& reg) {
   reg.add(
       {{"orego", "Oregonator (Belousov–Zhabotinskii reaction); literature end time t = 360", false,
         false, "Field & Noyes 1974; Hairer & Wanner II §IV.10 (OREGO); IVP test set 'orego'"},
-       {{"s", P::real, "77.27", "time-scale ratio s (> 0)"},
-        {"w", P::real, "0.161", "rate w (>= 0)"},
-        {"q", P::real, "8.375e-6", "rate q (>= 0)"}},
+       {{"s", P::real, "77.27", "time-scale ratio s", B::positive()},
+        {"w", P::real, "0.161", "rate w", B::non_negative()},
+        {"q", P::real, "8.375e-6", "rate q", B::non_negative()}},
        [](const Params& p) {
          return std::make_unique<Orego>(p.real("s"), p.real("w"), p.real("q"));
        }});
   reg.add({{"e5", "E5 chemical pyrolysis (4 species, badly scaled); literature end time t = 1e13",
             false, false, "Enright, Hull & Lindberg 1975; Hairer & Wanner II §IV.10 (E5)"},
-           {{"a", P::real, "7.89e-10", "rate constant A (>= 0)"},
-            {"b", P::real, "1.1e7", "rate constant B (>= 0)"},
-            {"c", P::real, "1.13e3", "rate constant C (>= 0)"},
-            {"m", P::real, "1e6", "factor M of the M·C y2 y3 rate (>= 0)"}},
+           {{"a", P::real, "7.89e-10", "rate constant A", B::non_negative()},
+            {"b", P::real, "1.1e7", "rate constant B", B::non_negative()},
+            {"c", P::real, "1.13e3", "rate constant C", B::non_negative()},
+            {"m", P::real, "1e6", "factor M of the M·C y2 y3 rate", B::non_negative()}},
            [](const Params& p) {
              return std::make_unique<E5>(p.real("a"), p.real("b"), p.real("c"), p.real("m"));
            }});

@@ -11,6 +11,7 @@ namespace stiffbench {
 namespace {
 
 using P = ParamType;
+using B = Bounds;
 
 struct SceneDefaults {
   std::string n, c0, gravity, eos = "linear", clamp = "true", viscosity = "artificial",
@@ -30,8 +31,8 @@ std::vector<ParamSpec> fluid_specs(const SceneDefaults& d, std::vector<ParamSpec
   std::vector<std::string> smooth_kernels;
   for (const auto& k : kernels)
     if (k != "viscosity") smooth_kernels.push_back(k);
-  s.push_back(
-      {"support", P::real, d.support, "kernel support radius h in particle spacings (h/dx)"});
+  s.push_back({"support", P::real, d.support, "kernel support radius h in particle spacings (h/dx)",
+               B::above(1)});
   s.push_back({"masses",
                P::text,
                d.masses,
@@ -39,15 +40,16 @@ std::vector<ParamSpec> fluid_specs(const SceneDefaults& d, std::vector<ParamSpec
                "(every particle starts at exactly rho0, or at the hydrostatic density in scenes "
                "at rest under gravity)",
                {"lattice", "equilibrium"}});
-  s.push_back({"rho0", P::real, "1000", "rest density (kg/m^3)"});
+  s.push_back({"rho0", P::real, "1000", "rest density (kg/m^3)", B::positive()});
   s.push_back({"c0", P::real, d.c0,
                "speed of sound (m/s); 0: 10 x sqrt(2 g H), the speed of a free fall from the "
-               "fluid height H"});
-  s.push_back(
-      {"k", P::real, "-1", "linear EOS constant k in p = k (rho - rho0) (m^2/s^2); < 0: c0^2"});
+               "fluid height H",
+               B::non_negative()});
+  s.push_back({"k", P::real, "-1",
+               "linear EOS constant k in p = k (rho - rho0) (m^2/s^2); < 0: c0^2", B::any()});
   s.push_back({"eos", P::text, d.eos, "equation of state", {"linear", "tait"}});
   s.push_back({"clamp", P::boolean, d.clamp, "clamp the pressure at 0 (no tension)"});
-  s.push_back({"tait_gamma", P::real, "7", "Tait exponent gamma"});
+  s.push_back({"tait_gamma", P::real, "7", "Tait exponent gamma", B::above(1)});
   s.push_back({"form",
                P::text,
                d.form,
@@ -64,16 +66,19 @@ std::vector<ParamSpec> fluid_specs(const SceneDefaults& d, std::vector<ParamSpec
                "viscosity: Mueller's Laplacian form (mu) or Monaghan's artificial viscosity "
                "(alpha)",
                {"none", "muller", "artificial"}});
-  s.push_back({"mu", P::real, "0", "dynamic viscosity of the Mueller form (Pa s)"});
-  s.push_back({"alpha", P::real, d.alpha, "Monaghan artificial viscosity alpha"});
-  s.push_back({"gravity", P::real, d.gravity, "gravitational acceleration along -y (m/s^2)"});
+  s.push_back(
+      {"mu", P::real, "0", "dynamic viscosity of the Mueller form (Pa s)", B::non_negative()});
+  s.push_back(
+      {"alpha", P::real, d.alpha, "Monaghan artificial viscosity alpha", B::non_negative()});
+  s.push_back(
+      {"gravity", P::real, d.gravity, "gravitational acceleration along -y (m/s^2)", B::any()});
   if (d.walls) {
     s.push_back({"boundary",
                  P::text,
                  "particles",
                  "walls: boundary particles (Akinci et al. 2012) or a smooth penalty force",
                  {"particles", "penalty"}});
-    s.push_back({"boundary_layers", P::integer, "3", "layers of boundary particles"});
+    s.push_back({"boundary_layers", P::integer, "3", "layers of boundary particles", B::in(1, 10)});
     s.push_back({"boundary_pressure",
                  P::text,
                  "akinci",
@@ -83,7 +88,8 @@ std::vector<ParamSpec> fluid_specs(const SceneDefaults& d, std::vector<ParamSpec
   }
   s.push_back({"parallel_threshold", P::integer, "512",
                "fluid particles from which the right-hand side runs with OpenMP (results do not "
-               "depend on it)"});
+               "depend on it)",
+               B::non_negative()});
   return s;
 }
 
@@ -166,10 +172,12 @@ void add_dam_break(ModelRegistry& reg, int dim) {
   const std::string name = dim == 2 ? "sph_dam_break_2d" : "sph_dam_break_3d";
   const SceneDefaults d{std::to_string(dim == 2 ? 32 : 12), "0", "9.81"};
   std::vector<ParamSpec> scene = {
-      {"a", P::real, "0.146", "column width a (m); the column is a x 2a, the tank 4a long"},
-      {"n", P::integer, d.n, "particles across the column width a"},
-      {"wall_height", P::real, "4", "height of the tank walls in units of a"}};
-  if (dim == 3) scene.push_back({"depth", P::real, "0", "tank depth (m); 0: a/2"});
+      {"a", P::real, "0.146", "column width a (m); the column is a x 2a, the tank 4a long",
+       B::positive()},
+      {"n", P::integer, d.n, "particles across the column width a", B::in(2, 2000)},
+      {"wall_height", P::real, "4", "height of the tank walls in units of a", B::at_least(2)}};
+  if (dim == 3)
+    scene.push_back({"depth", P::real, "0", "tank depth (m); 0: a/2", B::non_negative()});
   reg.add({{name,
             describe_dim(dim,
                          " SPH dam break: water column a x 2a released in a tank of length 4a; "
@@ -208,10 +216,12 @@ void add_tank(ModelRegistry& reg, int dim) {
   const std::string name = dim == 2 ? "sph_tank_2d" : "sph_tank_3d";
   const SceneDefaults d{std::to_string(dim == 2 ? 20 : 10), "0", "9.81"};
   std::vector<ParamSpec> scene = {
-      {"width", P::real, "0.2", "tank width (m), rounded to a multiple of the spacing"},
-      {"height", P::real, "0.1", "fluid height H (m)"},
-      {"n", P::integer, d.n, "particles across the fluid height"}};
-  if (dim == 3) scene.push_back({"depth", P::real, "0", "tank depth (m); 0: the width"});
+      {"width", P::real, "0.2", "tank width (m), rounded to a multiple of the spacing",
+       B::positive()},
+      {"height", P::real, "0.1", "fluid height H (m)", B::positive()},
+      {"n", P::integer, d.n, "particles across the fluid height", B::in(2, 2000)}};
+  if (dim == 3)
+    scene.push_back({"depth", P::real, "0", "tank depth (m); 0: the width", B::non_negative()});
   reg.add({{name,
             describe_dim(dim,
                          " SPH tank: fluid at rest under gravity; pressure probes at depths H/4, "
@@ -245,15 +255,15 @@ void add_drop(ModelRegistry& reg) {
   const SceneDefaults d{"20", "10",          "0",   "linear",      "false", "none",
                         "0",  "variational", false, "equilibrium", "2.5"};
   std::vector<ParamSpec> scene = {
-      {"radius", P::real, "0.1", "drop radius R (m)"},
-      {"n", P::integer, d.n, "particles across the diameter"},
+      {"radius", P::real, "0.1", "drop radius R (m)", B::positive()},
+      {"n", P::integer, d.n, "particles across the diameter", B::in(2, 4000)},
       {"velocity",
        P::text,
        "oscillation",
        "initial velocity about the centre: oscillation A(x, -y), rotation A(-y, x), none",
        {"oscillation", "rotation", "none"}},
-      {"rate", P::real, "1", "A (1/s)"},
-      {"drift", P::real, "0", "uniform initial velocity along x (m/s)"}};
+      {"rate", P::real, "1", "A (1/s)", B::any()},
+      {"drift", P::real, "0", "uniform initial velocity along x (m/s)", B::any()}};
   reg.add({{name,
             "2D SPH drop: no gravity, no walls, inviscid by default, oscillating or rotating "
             "(momentum, energy and convergence tests)",
