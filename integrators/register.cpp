@@ -1,6 +1,5 @@
 #include "integrators/register.hpp"
 
-#include <algorithm>
 #include <map>
 
 #include "integrators/adaptive/embedded_rk.hpp"
@@ -201,37 +200,9 @@ void register_splitting_integrators(IntegratorRegistry& reg) {
       {StableFluids().info(), {}, [](const Params&) { return std::make_unique<StableFluids>(); }});
 }
 
-namespace {
-
-// The ranges of the library references' parameters, declared here because their ParamSpecs are
-// built in integrators/reference/ (sundials.cpp, gsl.cpp). They agree with the checks there
-// and with the libraries: GSL takes rtol = 0 when atol > 0 (the pair is checked in gsl.cpp),
-// CVODE's maximum order is at most 5 for BDF and 12 for Adams (CVodeSetMaxOrd refuses an
-// increase: CV_ILL_INPUT).
-Bounds reference_bounds(const std::string& integrator, const std::string& key) {
-  using B = Bounds;
-  const bool gsl = integrator.rfind("gsl_", 0) == 0;
-  if (key == "rtol") return gsl ? B::non_negative() : B::positive();
-  if (key == "atol") return B::non_negative();
-  if (key == "h0") return B::positive();
-  if (key == "max_steps" || key == "lsetup_frequency") return B::at_least(1);
-  if (key == "max_order") return B::in(0, integrator == "cvode_bdf" ? 5 : 12);
-  return {};  // not declared: the catalogue test names it
-}
-
-}  // namespace
-
 void register_reference_integrators(IntegratorRegistry& reg) {
-  const std::vector<std::string> before = reg.names();
   register_sundials_integrators(reg);
   register_gsl_integrators(reg);
-  for (const std::string& name : reg.names()) {
-    if (std::find(before.begin(), before.end(), name) != before.end()) continue;
-    for (ParamSpec& spec : reg.find_mutable(name)->params)
-      if ((spec.type == ParamType::real || spec.type == ParamType::integer) &&
-          !spec.bounds.declared())
-        spec.bounds = reference_bounds(name, spec.key);
-  }
 }
 
 }  // namespace stiffbench

@@ -211,10 +211,12 @@ class GslIntegrator final : public Integrator {
 
 void register_gsl_integrators(IntegratorRegistry& reg) {
   using P = ParamType;
+  using B = Bounds;
+  // GSL takes rtol = 0 when atol > 0 (the pair is checked when the integrator is created).
   const std::vector<ParamSpec> specs = {
-      {"rtol", P::real, "1e-6", "relative tolerance (adaptive mode)"},
-      {"atol", P::real, "1e-10", "absolute tolerance (adaptive mode)"},
-      {"h0", P::real, "1e-6", "initial step of the adaptive driver"},
+      {"rtol", P::real, "1e-6", "relative tolerance (adaptive mode)", B::non_negative()},
+      {"atol", P::real, "1e-10", "absolute tolerance (adaptive mode)", B::non_negative()},
+      {"h0", P::real, "1e-6", "initial step of the adaptive driver", B::positive()},
   };
   for (const GslMethod& m : gsl_methods()) {
     const MethodInfo info{m.name, Family::reference, m.order, 0, {}, m.description};

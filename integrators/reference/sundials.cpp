@@ -668,11 +668,13 @@ class SundialsIntegrator final : public Integrator {
 
 std::vector<ParamSpec> common_specs(bool linear) {
   using P = ParamType;
+  using B = Bounds;
   std::vector<ParamSpec> s = {
       {"rtol", P::real, "1e-6",
-       "relative tolerance (adaptive mode; also scales Newton's tolerance)"},
-      {"atol", P::real, "1e-10", "absolute tolerance"},
-      {"max_steps", P::integer, "100000", "maximum internal steps per output interval"},
+       "relative tolerance (adaptive mode; also scales Newton's tolerance)", B::positive()},
+      {"atol", P::real, "1e-10", "absolute tolerance", B::non_negative()},
+      {"max_steps", P::integer, "100000", "maximum internal steps per output interval",
+       B::at_least(1)},
   };
   if (linear) {
     s.push_back({"linear_solver",
@@ -754,14 +756,18 @@ SundialsLinearSolverChoice sundials_auto_linear_solver(Index unknowns, bool anal
 
 void register_sundials_integrators(IntegratorRegistry& reg) {
   using P = ParamType;
-  auto cvode_specs = common_specs(true);
-  cvode_specs.push_back(
-      {"max_order", P::integer, "0", "maximum order (0: CVODE default, 5 for BDF, 12 for Adams)"});
-  for (const auto& [name, kind, desc] :
-       {std::tuple{"cvode_bdf", Kind::cvode_bdf,
+  using B = Bounds;
+  // CVodeSetMaxOrd refuses an order above the method's (CV_ILL_INPUT): at most 5 for BDF, 12 for
+  // Adams.
+  for (const auto& [name, kind, max_order, desc] :
+       {std::tuple{"cvode_bdf", Kind::cvode_bdf, 5,
                    "SUNDIALS CVODE, variable-order BDF (1-5) with Newton; adaptive"},
-        std::tuple{"cvode_adams", Kind::cvode_adams,
+        std::tuple{"cvode_adams", Kind::cvode_adams, 12,
                    "SUNDIALS CVODE, variable-order Adams-Moulton (1-12) with Newton; adaptive"}}) {
+    auto cvode_specs = common_specs(true);
+    cvode_specs.push_back({"max_order", P::integer, "0",
+                           "maximum order (0: CVODE default, 5 for BDF, 12 for Adams)",
+                           B::in(0, max_order)});
     const MethodInfo info{name, Family::reference, 0, 0, {}, desc};
     reg.add({info, cvode_specs, [info, kind = kind](const Params& p) {
                Settings s = read_common(p, true);
@@ -796,7 +802,8 @@ void register_sundials_integrators(IntegratorRegistry& reg) {
   // with a standalone ARKODE 5.4.1 program. A setup every step restores the accuracy.
   const ParamSpec lsetup{
       "lsetup_frequency", P::integer, "1",
-      "steps between linear-solver setups (ARKODE's own default is 20; see sundials.cpp)"};
+      "steps between linear-solver setups (ARKODE's own default is 20; see sundials.cpp)",
+      B::at_least(1)};
   auto dirk_specs = common_specs(true);
   dirk_specs.push_back(lsetup);
   dirk_specs.push_back(
