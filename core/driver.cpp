@@ -41,6 +41,7 @@ std::atomic<long> g_faults{0};
 void record_fault(RunResult& r, const std::exception& e, double t_goal) {
   r.stats.status = Status::error;
   std::ostringstream msg;
+  msg.precision(12);  // t and t + h apart even for tiny steps
   msg << "exception in the step from t = " << r.t << " towards " << t_goal << ": " << e.what();
   r.stats.message = msg.str();
   ++g_faults;
@@ -51,6 +52,7 @@ void record_fault(RunResult& r, const std::exception& e, double t_goal) {
 void record_timeout(RunResult& r, const std::string& what, double t_goal) {
   r.stats.status = Status::timeout;
   std::ostringstream msg;
+  msg.precision(12);
   msg << what << ", in the step from t = " << r.t << " towards " << t_goal;
   r.stats.message = msg.str();
   ++g_faults;

@@ -434,7 +434,7 @@ ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress
       opt.h = hs[k];
       const RunResult r = run_fixed_step_from(sys, *integ, t0, y0, opt);
       row.h = r.h;
-      row.steps = r.n_steps;
+      row.steps = r.stats.steps;  // the steps taken: N unless the run ended early
       row.stats = r.stats;
       row.error = r.stats.status == Status::ok ? max_abs_diff(r.y, ref_values[local ? k : 0])
                                                : std::numeric_limits<double>::quiet_NaN();
@@ -558,6 +558,10 @@ std::string markdown_report(const std::string& name, const ConvergenceSpec& spec
       if (col == "observed_order" && !row[c].empty()) row[c] = format_fixed(std::stod(row[c]));
     }
   os << detail.to_markdown();
+  std::vector<RunNote> notes;
+  for (const auto& r : res.rows)
+    notes.push_back({r.integrator + ", h = " + format_short(r.h), &r.stats});
+  os << failed_runs_markdown(notes);
   os << "\nFull-precision values: `" << name << ".csv`; metadata: `" << name << ".json`.\n";
   return os.str();
 }

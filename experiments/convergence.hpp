@@ -73,8 +73,8 @@ struct ConvergenceSpec {
 struct ConvergenceRow {
   std::string model, integrator;
   int order = 0;
-  double h = 0;  // actual step
-  long steps = 0;
+  double h = 0;    // actual step
+  long steps = 0;  // steps taken: N = round(T/h), fewer when the run ended early
   double error = 0;
   std::optional<double> observed_order;
   SolveStats stats;

@@ -262,6 +262,18 @@ bool check_study_output(const std::filesystem::path& dir, const std::string& nam
   return check_existing_results(dir, name + ".json", results, spec, force, note);
 }
 
+std::string failed_runs_markdown(const std::vector<RunNote>& runs) {
+  std::ostringstream os;
+  for (const RunNote& r : runs) {
+    if (r.stats->status == Status::ok) continue;
+    if (os.tellp() == 0) os << "\nRuns that did not end with status ok:\n\n";
+    os << "- " << r.what << ": " << to_string(r.stats->status);
+    if (!r.stats->message.empty()) os << ": " << r.stats->message;
+    os << "\n";
+  }
+  return os.str();
+}
+
 void set_command_line(int argc, char** argv) {
   g_command_line_set = true;
   g_command_line.clear();

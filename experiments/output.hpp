@@ -10,6 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/solve_stats.hpp"
+
 namespace stiffbench {
 
 struct Table {
@@ -76,6 +78,15 @@ std::string spec_difference(const nlohmann::json& recorded, const nlohmann::json
 // when it returns). A library program may set it before calling the *_study functions.
 void set_force_output(bool force);
 bool force_output();
+
+// The runs of a study that did not end with status ok, for its Markdown report: a heading and
+// one item per run, "- WHAT: STATUS: MESSAGE" (the CSV keeps only the status column, whose
+// names are a contract). Empty when every run ended ok.
+struct RunNote {
+  std::string what;  // e.g. "rk4, h = 1.1e-08"
+  const SolveStats* stats;
+};
+std::string failed_runs_markdown(const std::vector<RunNote>& runs);
 
 // Metadata common to every experiment: spec, versions, compiler, flags, git revision, thread
 // count, date, command line.

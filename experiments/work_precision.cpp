@@ -204,7 +204,9 @@ void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpe
     row[8] = format_short(std::stod(row[8]), 2);
     if (!row[10].empty()) row[10] = format_fixed(std::stod(row[10]), 2);
   }
-  md << short_t.to_markdown()
+  std::vector<RunNote> notes;
+  for (const auto& r : res.rows) notes.push_back({r.integrator + ", " + r.setting, &r.stats});
+  md << short_t.to_markdown() << failed_runs_markdown(notes)
      << "\nFull precision: `work_precision.csv`; metadata: `work_precision.json`.\n";
   write_file_atomic(d / "work_precision.md", md.str());
   nlohmann::json meta = run_metadata("work-precision", spec.to_json());
