@@ -25,6 +25,7 @@
 
 #include "core/driver.hpp"
 #include "experiments/catalog.hpp"
+#include "tests/cli_support.hpp"
 
 namespace fs = std::filesystem;
 using namespace stiffbench;
@@ -259,35 +260,10 @@ TEST(BadInputCatalogue, MemorySizes) {
 
 // ---- (2) the command line --------------------------------------------------------------
 
-struct Outcome {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
+using Outcome = stiffbench::testing_support::CliOutcome;
 // Runs the binary in `cwd` (relative output paths land there).
 Outcome run_in(const fs::path& cwd, const std::string& args) {
-  const fs::path err_file =
-      fs::temp_directory_path() / ("stiffbench_catalogue_err_" + std::to_string(::getpid()));
-  const std::string cmd = "cd " + quote(cwd.string()) + " && " + STIFFBENCH_BIN + " " + args +
-                          " 2>" + quote(err_file.string()) + " </dev/null";
-  Outcome o;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (!p) return o;
-  std::array<char, 4096> buf{};
-  std::size_t n = 0;
-  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) o.out.append(buf.data(), n);
-  const int status = ::pclose(p);
-  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream f(err_file);
-  o.err.assign(std::istreambuf_iterator<char>(f), {});
-  fs::remove(err_file);
-  return o;
+  return stiffbench::testing_support::run_cli(args, cwd);
 }
 
 // Every path under `dir`, for the "nothing left behind" check.

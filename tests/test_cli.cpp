@@ -13,30 +13,12 @@
 #include <sstream>
 #include <vector>
 
+#include "tests/cli_support.hpp"
+
 namespace {
 
-struct Outcome {
-  int code = -1;
-  std::string out, err;
-};
-
-Outcome run(const std::string& args) {
-  const auto dir = std::filesystem::temp_directory_path();
-  const auto err_file = dir / ("stiffbench_cli_err_" + std::to_string(::getpid()));
-  const std::string cmd = std::string(STIFFBENCH_BIN) + " " + args + " 2>" + err_file.string();
-  Outcome o;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (!p) return o;
-  std::array<char, 4096> buf{};
-  std::size_t n = 0;
-  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) o.out.append(buf.data(), n);
-  const int status = ::pclose(p);
-  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream f(err_file);
-  o.err.assign(std::istreambuf_iterator<char>(f), {});
-  std::filesystem::remove(err_file);
-  return o;
-}
+using Outcome = stiffbench::testing_support::CliOutcome;
+Outcome run(const std::string& args) { return stiffbench::testing_support::run_cli(args); }
 
 int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
 

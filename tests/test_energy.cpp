@@ -17,6 +17,7 @@
 
 #include "core/driver.hpp"
 #include "experiments/energy.hpp"
+#include "tests/cli_support.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {
@@ -301,28 +302,8 @@ TEST(EnergyOutputs, FilesFollowTheContract) {
   std::filesystem::remove_all(dir);
 }
 
-struct CliOutcome {
-  int code = -1;
-  std::string out, err;
-};
-
-CliOutcome run_cli(const std::string& args) {
-  const auto err_file = std::filesystem::temp_directory_path() /
-                        ("stiffbench_energy_err_" + std::to_string(::getpid()));
-  const std::string cmd = std::string(STIFFBENCH_BIN) + " " + args + " 2>" + err_file.string();
-  CliOutcome o;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (!p) return o;
-  std::array<char, 4096> buf{};
-  std::size_t n = 0;
-  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) o.out.append(buf.data(), n);
-  const int status = ::pclose(p);
-  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream f(err_file);
-  o.err.assign(std::istreambuf_iterator<char>(f), {});
-  std::filesystem::remove(err_file);
-  return o;
-}
+using stiffbench::testing_support::CliOutcome;
+using stiffbench::testing_support::run_cli;
 
 TEST(EnergyCli, WritesTablesAndRejectsModelsWithoutEnergy) {
   const auto dir = std::filesystem::temp_directory_path() /

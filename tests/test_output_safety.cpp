@@ -22,42 +22,16 @@
 #include "experiments/commands.hpp"
 #include "experiments/convergence.hpp"
 #include "experiments/output.hpp"
+#include "tests/cli_support.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace stiffbench;
 
-struct Outcome {
-  int code = -1;
-  std::string out, err;
-};
-
-Outcome run(const std::string& args) {
-  const fs::path err_file =
-      fs::temp_directory_path() / ("output_safety_err_" + std::to_string(::getpid()));
-  const std::string cmd = std::string(STIFFBENCH_BIN) + " " + args + " 2>" + err_file.string();
-  Outcome o;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (!p) return o;
-  char buf[4096];
-  while (std::size_t n = std::fread(buf, 1, sizeof buf, p)) o.out.append(buf, n);
-  const int status = ::pclose(p);
-  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream e(err_file);
-  std::stringstream ss;
-  ss << e.rdbuf();
-  o.err = ss.str();
-  fs::remove(err_file);
-  return o;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using Outcome = stiffbench::testing_support::CliOutcome;
+using stiffbench::testing_support::slurp;
+Outcome run(const std::string& args) { return stiffbench::testing_support::run_cli(args); }
 
 // Every file under `dir` with its bytes: "byte-identical, nothing added" is one comparison.
 std::map<std::string, std::string> snapshot(const fs::path& dir) {
@@ -68,10 +42,7 @@ std::map<std::string, std::string> snapshot(const fs::path& dir) {
 }
 
 fs::path fresh_dir(const std::string& name) {
-  const fs::path d =
-      fs::temp_directory_path() / ("stiffbench_safety_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  return d;
+  return stiffbench::testing_support::fresh_dir("safety", name);
 }
 
 long lines(const std::string& s) { return std::count(s.begin(), s.end(), '\n'); }

@@ -14,18 +14,14 @@
 #include "experiments/commands.hpp"
 #include "experiments/convergence.hpp"
 #include "test_support.hpp"
+#include "tests/cli_support.hpp"
 
 namespace stiffbench {
 namespace {
 
 namespace fs = std::filesystem;
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d =
-      fs::temp_directory_path() / ("sb_refcache_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  return d;
-}
+fs::path fresh_dir(const std::string& name) { return testing_support::fresh_dir("refcache", name); }
 
 std::vector<std::string> lines_of(const fs::path& p) {
   std::ifstream f(p);

@@ -30,6 +30,7 @@
 #include "experiments/convergence.hpp"
 #include "experiments/stability.hpp"
 #include "test_support.hpp"
+#include "tests/cli_support.hpp"
 
 extern char** environ;
 
@@ -238,10 +239,7 @@ int wait_exit(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : 1000 + WTERMSIG(status);
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(f), {}};
-}
+using stiffbench::testing_support::slurp;
 
 // Waits (up to two minutes) until `file` holds `needle` `times` times.
 bool wait_for(const fs::path& file, const std::string& needle, long times = 1) {
@@ -263,9 +261,7 @@ std::vector<fs::path> temporaries(const fs::path& dir) {
 }
 
 fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() /
-                     ("stiffbench_run_control_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
+  const fs::path d = stiffbench::testing_support::fresh_dir("run_control", name);
   fs::create_directories(d);
   return d;
 }

@@ -15,6 +15,8 @@
 #include <thread>
 #include <vector>
 
+#include "tests/cli_support.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -24,34 +26,9 @@ namespace fs = std::filesystem;
 const fs::path kSource = fs::absolute(fs::path(__FILE__)).parent_path().parent_path();
 const std::string kSweep = (kSource / "experiments/specs/sweep_spring_chain.toml").string();
 
-struct Outcome {
-  int code = -1;
-  std::string out, err;
-};
-
-Outcome run(const std::string& args) {
-  const fs::path err_file = fs::temp_directory_path() / ("sweep_err_" + std::to_string(::getpid()));
-  const std::string cmd = std::string(STIFFBENCH_BIN) + " " + args + " 2>" + err_file.string();
-  Outcome o;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  char buf[4096];
-  while (std::size_t n = std::fread(buf, 1, sizeof buf, p)) o.out.append(buf, n);
-  const int status = ::pclose(p);
-  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream e(err_file);
-  std::stringstream ss;
-  ss << e.rdbuf();
-  o.err = ss.str();
-  fs::remove(err_file);
-  return o;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using Outcome = stiffbench::testing_support::CliOutcome;
+using stiffbench::testing_support::slurp;
+Outcome run(const std::string& args) { return stiffbench::testing_support::run_cli(args); }
 
 // The CSV with the wall_s column removed (the only column that differs between runs).
 std::string without_wall_time(const std::string& csv) {
@@ -74,10 +51,7 @@ std::string without_wall_time(const std::string& csv) {
 long count_lines(const std::string& s) { return std::count(s.begin(), s.end(), '\n'); }
 
 fs::path fresh_dir(const std::string& name) {
-  const fs::path d =
-      fs::temp_directory_path() / ("stiffbench_sweep_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  return d;
+  return stiffbench::testing_support::fresh_dir("sweep", name);
 }
 
 // 4 chain lengths x 3 integrators = 12 units of 4 step levels each.
