@@ -58,17 +58,6 @@ void record_timeout(RunResult& r, const std::string& what, double t_goal) {
   ++g_faults;
 }
 
-// After a library reference returned an error: an interruption or a passed wall-clock limit
-// caught at its C callback boundary is the real cause.
-void check_stop_after_failure(RunResult& r, double t_goal) {
-  if (const int sig = interrupt_requested()) throw Interrupted{sig};
-  if (RowClock::expired()) {
-    std::ostringstream what;
-    what << "wall-clock limit of " << RowClock::limit() << " s exceeded (--max-wall)";
-    record_timeout(r, what.str(), t_goal);
-  }
-}
-
 }  // namespace
 
 long fault_count() { return g_faults.load(); }
@@ -214,7 +203,6 @@ RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOp
     }
     if (s != Status::ok) {
       r.stats.status = s;
-      check_stop_after_failure(r, t_out);
       break;
     }
     r.t = t_out;

@@ -82,8 +82,6 @@ bool RowClock::expired() {
   return t_row.depth > 0 && t_row.limit > 0 && elapsed(t_row.start, Clock::now()) > t_row.limit;
 }
 
-double RowClock::limit() { return t_row.depth > 0 ? t_row.limit : 0.0; }
-
 void detail::poll_slow() {
   if (const int s = g_signal.load(std::memory_order_relaxed)) throw Interrupted{s};
   RowState& r = t_row;

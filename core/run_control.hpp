@@ -61,8 +61,6 @@ class RowClock {
 
   // True when this thread's row has a limit and has passed it (checked now, not at a poll).
   static bool expired();
-  // The limit of this thread's row (0: none or no row open).
-  static double limit();
 
  private:
   bool outermost_ = false;

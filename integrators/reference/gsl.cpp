@@ -4,9 +4,10 @@
 #include <gsl/gsl_odeiv2.h>
 
 #include <cmath>
-#include <exception>
 #include <iostream>
 #include <utility>
+
+#include "integrators/reference/callback_guard.hpp"
 
 namespace stiffbench {
 
@@ -80,10 +81,10 @@ class GslIntegrator final : public Integrator {
     }
     // The bare stepper: the driver's fixed-step function still applies the error control and
     // refuses steps whose estimate exceeds the tolerance.
-    pending_ = nullptr;
+    guard_.clear();
     const int status =
         gsl_odeiv2_step_apply(driver_->s, t_, h, y.data(), yerr_.data(), nullptr, nullptr, &gsys_);
-    rethrow_pending();
+    guard_.rethrow();
     if (status == GSL_SUCCESS) ++fixed_steps_;
     return finish(status, t_ + h, y, stats, true);
   }
@@ -91,28 +92,17 @@ class GslIntegrator final : public Integrator {
   Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) override {
     sync(sys, t_, y);
     double tt = t_;
-    pending_ = nullptr;
+    guard_.clear();
     const int status = gsl_odeiv2_driver_apply(driver_, &tt, t_out, y.data());
-    rethrow_pending();
+    guard_.rethrow();
     return finish(status, tt, y, stats, false);
   }
 
  private:
-  // Exceptions must not cross GSL's C frames: one thrown by the model (or a stop request,
-  // core/run_control.hpp, including Interrupted, which is not a std::exception) is kept, GSL is
-  // told the function failed (GSL_EBADFUNC ends its step at once), and rethrown() throws it when
-  // GSL returns, so the driver ends the run as for a hand-written method.
+  // A callback body under guard_ (callback_guard.hpp); GSL_EBADFUNC ends GSL's step at once.
   template <class F>
   int guarded(F&& f) {
-    try {
-      return f();
-    } catch (...) {
-      if (!pending_) pending_ = std::current_exception();
-      return GSL_EBADFUNC;
-    }
-  }
-  void rethrow_pending() {
-    if (pending_) std::rethrow_exception(std::exchange(pending_, nullptr));
+    return guard_.run(std::forward<F>(f), GSL_EBADFUNC);
   }
 
   static int func(double t, const double y[], double f[], void* p) {
@@ -202,7 +192,7 @@ class GslIntegrator final : public Integrator {
   SparseMat jac_;
   Vec f0_, f1_, tmp_, yerr_, y_last_;
   long fixed_steps_ = 0;
-  std::exception_ptr pending_;  // thrown in a callback, rethrown when GSL returns
+  CallbackGuard guard_;  // what a callback threw, rethrown when GSL returns
   double t_ = 0, fixed_h_ = 0;
   long fd_jacobians_ = 0;
 };

@@ -18,15 +18,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <exception>
 #include <functional>
 #include <iostream>
 #include <memory>
-#include <type_traits>
 #include <utility>
 
 #include "core/run_control.hpp"
 #include "integrators/implicit/velocity_form.hpp"
+#include "integrators/reference/callback_guard.hpp"
 
 namespace stiffbench {
 
@@ -320,24 +319,10 @@ class SundialsIntegrator final : public Integrator {
     }
   }
 
-  // Runs a callback body (returning an int for the library, or nothing: 0). Exceptions must not
-  // cross the C ABI: one thrown by the model (or a stop request, core/run_control.hpp, including
-  // Interrupted, which is not a std::exception) is kept, the library is told the error is
-  // unrecoverable, and evolve() rethrows it when the library returns, so the driver ends the run
-  // as it would for a hand-written method (status error, timeout, or the interruption).
+  // A callback body under guard_ (callback_guard.hpp); -1: unrecoverable for the library.
   template <class F>
   int guarded(F&& f) {
-    try {
-      if constexpr (std::is_void_v<decltype(f())>) {
-        f();
-        return 0;
-      } else {
-        return f();
-      }
-    } catch (...) {
-      if (!pending_) pending_ = std::current_exception();
-      return -1;
-    }
+    return guard_.run(std::forward<F>(f), -1);
   }
 
   // Dense or band SUNMatrix from the sparse J (entries outside the band are not in the pattern).
@@ -579,14 +564,14 @@ class SundialsIntegrator final : public Integrator {
   Status evolve(double t_out, VecRef y, int mode, SolveStats& stats) {
     library_error_.clear();
     callback_error_.clear();
-    pending_ = nullptr;
+    guard_.clear();
     N_Vector yout = N_VMake_Serial(n_, y.data(), ctx_);  // the driver's storage: no copy
     sunrealtype tret = t_;
     const int flag = is_cvode() ? CVode(mem_, t_out, yout, &tret, mode)
                                 : ARKStepEvolve(mem_, t_out, yout, &tret, mode);
     N_VDestroy(yout);
     read_counters(stats);
-    if (pending_) std::rethrow_exception(std::exchange(pending_, nullptr));
+    guard_.rethrow();
     if (!check(flag, is_cvode() ? "CVode" : "ARKStepEvolve", stats)) return Status::solver_error;
     t_ = tret;
     y_last_ = y;
@@ -663,7 +648,7 @@ class SundialsIntegrator final : public Integrator {
   double t_ = 0, fixed_h_ = 0;
   bool fixed_mode_ = false;
   std::string library_error_, callback_error_;
-  std::exception_ptr pending_;  // thrown in a callback, rethrown when the library returns
+  CallbackGuard guard_;  // what a callback threw, rethrown when the library returns
 };
 
 std::vector<ParamSpec> common_specs(bool linear) {
