@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <set>
 #include <sstream>
 
@@ -43,10 +44,82 @@ IntegratorRegistry& mutable_integrator_registry() {
   return reg;
 }
 
+// The registries a study of objects sees (ScopedStudyObjects in experiments/study.hpp): copies
+// of the process-wide ones with the user's objects added, for this thread only.
+thread_local const ModelRegistry* t_models = nullptr;
+thread_local const IntegratorRegistry* t_integrators = nullptr;
+
 }  // namespace
 
-const ModelRegistry& model_registry() { return mutable_model_registry(); }
-const IntegratorRegistry& integrator_registry() { return mutable_integrator_registry(); }
+const ModelRegistry& model_registry() {
+  return t_models ? *t_models : mutable_model_registry();
+}
+const IntegratorRegistry& integrator_registry() {
+  return t_integrators ? *t_integrators : mutable_integrator_registry();
+}
+
+namespace {
+
+struct ObjectScope {
+  ModelRegistry models = mutable_model_registry();
+  IntegratorRegistry integrators = mutable_integrator_registry();
+};
+thread_local std::vector<std::unique_ptr<ObjectScope>> t_scopes;
+
+}  // namespace
+
+std::string push_object_scope(const SystemFactory& system, const std::string& system_name,
+                              const std::vector<IntegratorFactory>& integrators,
+                              std::vector<std::string>* integrator_names) {
+  auto scope = std::make_unique<ObjectScope>();
+  if (t_models) scope->models = *t_models;
+  if (t_integrators) scope->integrators = *t_integrators;
+  std::string name = system_name;
+  if (system) {
+    auto probe = system();
+    require_input(probe != nullptr, "study target: the system factory returned no system");
+    if (name.empty()) name = probe->name();
+    require_input(!scope->models.find(name),
+                  "study target: '" + name +
+                      "' is the name of a registered model; give the system another name");
+    ModelRegistry::Entry entry;
+    entry.info.name = name;
+    entry.info.description = "system object given to a study";
+    entry.info.mechanical = probe->as_mechanical() != nullptr;
+    entry.info.exact = probe->has_exact();
+    entry.info.source = "a user's system object";
+    entry.built_in = false;
+    entry.make = [system](const Params&) { return system(); };
+    scope->models.add(std::move(entry));
+  }
+  for (const auto& make : integrators) {
+    require_input(static_cast<bool>(make), "study target: empty integrator factory");
+    auto probe = make();
+    require_input(probe != nullptr, "study target: an integrator factory returned no integrator");
+    IntegratorRegistry::Entry entry;
+    entry.info = probe->info();
+    require_input(!entry.info.name.empty(), "study target: an integrator object has no name");
+    require_input(!scope->integrators.find(entry.info.name),
+                  "study target: integrator '" + entry.info.name +
+                      "' is already registered (or given twice); give your method another name");
+    entry.built_in = false;
+    entry.make = [make](const Params&) { return make(); };
+    if (integrator_names) integrator_names->push_back(entry.info.name);
+    scope->integrators.add(std::move(entry));
+  }
+  t_models = &scope->models;
+  t_integrators = &scope->integrators;
+  t_scopes.push_back(std::move(scope));
+  return name;
+}
+
+void pop_object_scope() {
+  if (t_scopes.empty()) return;
+  t_scopes.pop_back();
+  t_models = t_scopes.empty() ? nullptr : &t_scopes.back()->models;
+  t_integrators = t_scopes.empty() ? nullptr : &t_scopes.back()->integrators;
+}
+
 
 void register_model(ModelRegistry::Entry entry) {
   entry.built_in = false;

@@ -30,6 +30,18 @@ void register_integrator(IntegratorRegistry::Entry entry);
 // A user's system object for the studies that take one (run_convergence, run_local_error,
 // run_work_precision with a SystemFactory): makes a fresh copy for every run.
 using SystemFactory = std::function<std::unique_ptr<OdeSystem>()>;
+// A user's integrator object for the studies (StudyTarget::integrator_objects): a fresh one per
+// use.
+using IntegratorFactory = std::function<std::unique_ptr<Integrator>()>;
+
+// Makes a user's system (under `system_name`, empty: its name()) and integrators (under their
+// info().name) visible to model_registry() and integrator_registry() on this thread until the
+// matching pop_object_scope(); returns the system's name and appends the integrators' names.
+// Names already registered are BadInput. ScopedStudyObjects (experiments/study.hpp) pairs them.
+std::string push_object_scope(const SystemFactory& system, const std::string& system_name,
+                              const std::vector<IntegratorFactory>& integrators,
+                              std::vector<std::string>* integrator_names);
+void pop_object_scope();
 
 // Registers `factory` as a model without parameters named `name` (empty: the system's name()),
 // replacing a system registered earlier under that name by this function, and returns the name.

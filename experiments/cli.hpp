@@ -24,9 +24,8 @@ struct CommonFlags {
 // --out and --svg.
 void add_common_flags(CLI::App* cmd, CommonFlags& f, bool with_model, bool model_required);
 
-void add_stability_command(CLI::App& app);
-void add_region_command(CLI::App& app);
-void add_energy_command(CLI::App& app);
+// One subcommand per registered study (experiments/cli_study.cpp).
+void add_study_commands(CLI::App& app);
 void add_plot_command(CLI::App& app);
 void add_run_commands(CLI::App& app);  // run SPEC.toml and merge (experiments/cli_run.cpp)
 

@@ -14,41 +14,10 @@
 #include "experiments/cli.hpp"
 #include "experiments/commands.hpp"
 #include "experiments/sweep.hpp"
-#include "experiments/work_precision.hpp"
 
 namespace stiffbench {
 
 namespace {
-
-void add_study_flags(CLI::App* cmd, ConvergenceSpec& spec, std::string& integrators,
-                     std::vector<std::string>& params, std::string& out_dir) {
-  cmd->add_option("--model", spec.model, "model name (see `stiffbench list models`)")->required();
-  cmd->add_option("--integrators", integrators, "comma-separated integrator names")->required();
-  cmd->add_option("--param", params, "model/integrator parameter key=value (repeatable)")
-      ->expected(1)
-      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  cmd->add_option("--t-end", spec.t_end, "final time")->required();
-  cmd->add_option("--h", spec.h,
-                  "coarsest step size (default: the model's suggested step, where it has one)");
-  cmd->add_option("--levels", spec.levels, "number of step sizes (>= 2)")->capture_default_str();
-  cmd->add_option("--refine", spec.refine, "ratio between consecutive step sizes (> 1)")
-      ->capture_default_str();
-  cmd->add_option("--reference", spec.reference,
-                  "exact | METHOD: an adaptive integrator (cvode_bdf, cvode_adams, arkode_*, "
-                  "gsl_*) runs at --reference-rtol/--reference-atol and stops exactly at the "
-                  "reference times; a fixed-step one (e.g. rk4) runs at (finest h)/16. Default: "
-                  "exact where the model has one; a model without one needs --reference. A "
-                  "non-exact reference is cached in OUT/reference/<hash>.csv and reused by a "
-                  "run of the same build with the same model, parameters, reference and times")
-      ->capture_default_str();
-  cmd->add_option("--reference-rtol", spec.reference_rtol,
-                  "relative tolerance of an adaptive --reference (default 1e-12)");
-  cmd->add_option("--reference-atol", spec.reference_atol,
-                  "absolute tolerance of an adaptive --reference (default rtol/100)");
-  cmd->add_option("--out", out_dir, "output directory")->capture_default_str();
-}
-
-PlotOptions g_plot;  // --svg of convergence, local-error and work-precision
 
 // The first SIGINT or SIGTERM asks the runs to stop at their next poll (core/run_control.hpp):
 // the current row is abandoned, the files already written stay complete (each is written under a
@@ -155,89 +124,32 @@ int cli_main(int argc, char** argv) {
       ->check(CLI::IsMember({"vtu", "vtk"}))
       ->capture_default_str();
 
-  ConvergenceSpec conv;
-  conv.h = std::numeric_limits<double>::quiet_NaN();
-  std::string conv_integrators, conv_out = "results";
-  std::vector<std::string> conv_params;
-  auto* convergence = app.add_subcommand(
-      "convergence",
-      "global error at t_end against h = H/refine^k; writes convergence.{csv,md,json}");
-  add_study_flags(convergence, conv, conv_integrators, conv_params, conv_out);
-  convergence->add_flag("--svg", g_plot.svg, "also write the plot as SVG");
-
-  ConvergenceSpec local;
-  std::string local_integrators, local_out = "results";
-  std::vector<std::string> local_params;
-  auto* local_error = app.add_subcommand(
-      "local-error",
-      "error of one step from the initial state against h; writes local_error.{csv,md,json}");
-  local.t_end = 1.0;
-  local.h = std::numeric_limits<double>::quiet_NaN();
-  add_study_flags(local_error, local, local_integrators, local_params, local_out);
-  local_error->get_option("--t-end")->required(false)->description(
-      "unused by the local study's error; kept for symmetry");
-  local_error->add_flag("--svg", g_plot.svg, "also write the plot as SVG");
-
-  WorkPrecisionSpec wp;
-  std::string wp_integrators, wp_out = "results";
-  std::vector<std::string> wp_params;
-  auto* work_precision = app.add_subcommand(
-      "work-precision",
-      "error against work: fixed-step methods over an h ladder, references over a tolerance "
-      "ladder; writes work_precision.{csv,md,json}");
-  work_precision->add_option("--model", wp.model, "model name")->required();
-  work_precision->add_option("--integrators", wp_integrators, "comma-separated integrator names")
-      ->required();
-  work_precision
-      ->add_option("--param", wp_params, "model/integrator parameter key=value (repeatable)")
-      ->expected(1)
-      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  work_precision->add_option("--t-end", wp.t_end,
-                             "final time (default: the model's literature end time)");
-  work_precision->add_option("--h", wp.h,
-                             "coarsest step of fixed-step methods (default: the model's suggested "
-                             "step, else (t_end - t0)/16000)");
-  work_precision->add_option("--levels", wp.levels, "number of step sizes")->capture_default_str();
-  work_precision->add_option("--refine", wp.refine, "ratio between step sizes")
-      ->capture_default_str();
-  work_precision
-      ->add_option("--tol-levels", wp.tol_levels, "number of tolerances (factor 10 apart)")
-      ->capture_default_str();
-  work_precision->add_option("--rtol-max", wp.rtol_max, "loosest relative tolerance")
-      ->capture_default_str();
-  work_precision->add_option("--atol-factor", wp.atol_factor, "atol = atol_factor * rtol")
-      ->capture_default_str();
-  work_precision->add_option("--repeats", wp.repeats, "runs per setting; wall time is the minimum")
-      ->capture_default_str();
-  work_precision
-      ->add_option("--reference", wp.reference,
-                   "exact | METHOD; default: exact where available, else cvode_bdf")
-      ->capture_default_str();
-  work_precision
-      ->add_option("--reference-rtol", wp.reference_rtol, "rtol of an adaptive reference run")
-      ->capture_default_str();
-  work_precision
-      ->add_option("--reference-atol", wp.reference_atol, "atol of an adaptive reference run")
-      ->capture_default_str();
-  work_precision->add_option("--out", wp_out, "output directory")->capture_default_str();
-  work_precision->add_flag("--svg", g_plot.svg, "also write the plot as SVG");
-
   ReportOptions report_opt;
-  auto* report = app.add_subcommand("report", "run the default suite and write DIR/REPORT.md");
+  auto* report = app.add_subcommand(
+      "report",
+      "run a suite of spec files (default: the built-in suite, experiments/specs/report/) and "
+      "write DIR/REPORT.md with one section per spec");
+  report->add_option("suite", report_opt.suite,
+                     "a folder of spec files (run in name order) or spec files, one section each "
+                     "(default: the built-in suite)");
   report->add_option("--out", report_opt.out_dir, "output directory")->capture_default_str();
-  report->add_flag("--quick", report_opt.quick, "fewer step sizes (a smoke run)");
+  report->add_flag("--quick", report_opt.quick,
+                   "apply each spec's [quick] overrides (fewer step sizes: a smoke run)");
   report->add_flag("--svg", report_opt.svg, "also write each plot as SVG");
 
-  add_stability_command(app);
-  add_region_command(app);
-  add_energy_command(app);
+  add_study_commands(app);
   add_plot_command(app);
   add_run_commands(app);
 
-  // --max-memory on every command that builds models (checked by make_setup before anything is
-  // allocated; README "Sizes and memory").
-  for (const char* name : {"solve", "convergence", "local-error", "work-precision", "stability",
-                           "energy", "run", "report"}) {
+  // --max-memory, --max-wall and --force on the commands that build models, run integrators and
+  // write results (README "Sizes and memory", "Faults and exit codes", "Existing results").
+  std::vector<std::string> builds_models = {"solve", "run", "report"}, writes = {"solve", "run",
+                                                                            "merge", "report"};
+  for (const auto& k : study_kinds()) {
+    if (k.takes_model) builds_models.push_back(k.name);
+    writes.push_back(k.name);
+  }
+  for (const auto& name : builds_models) {
     if (auto* sub = app.get_subcommand(name)) {
       sub->add_option_function<std::string>(
           "--max-memory", [](const std::string& v) { set_memory_limit(parse_memory_size(v)); },
@@ -245,13 +157,11 @@ int cli_main(int argc, char** argv) {
           "the memory available now)");
     }
   }
-  // --max-wall on every command that runs integrators (core/run_control.hpp; README "Faults
-  // and exit codes"); reset when cli_main returns.
+  // --max-wall (core/run_control.hpp): reset when cli_main returns.
   const struct ForgetWallLimit {
     ~ForgetWallLimit() { set_wall_limit(0); }
   } forget_wall_limit;
-  for (const char* name : {"solve", "convergence", "local-error", "work-precision", "stability",
-                           "energy", "run", "report"}) {
+  for (const auto& name : builds_models) {
     if (auto* sub = app.get_subcommand(name)) {
       sub->add_option_function<double>(
           "--max-wall", [](double s) { set_wall_limit(s); },
@@ -259,14 +169,13 @@ int cli_main(int argc, char** argv) {
           "row over it ends with status timeout and the study goes on (default 0: none)");
     }
   }
-  // --force on every command that writes results (README "Existing results"): replace results
-  // of a different spec in --out (check_existing_results); reset when cli_main returns.
+  // --force: replace results of a different spec in --out (check_existing_results); reset when
+  // cli_main returns.
   const struct ForgetForce {
     ForgetForce() { set_force_output(false); }
     ~ForgetForce() { set_force_output(false); }
   } forget_force;
-  for (const char* name : {"solve", "convergence", "local-error", "work-precision", "stability",
-                           "energy", "region", "run", "merge", "report"}) {
+  for (const auto& name : writes) {
     if (auto* sub = app.get_subcommand(name)) {
       sub->add_flag_function(
           "--force", [](std::int64_t) { set_force_output(true); },
@@ -298,40 +207,6 @@ int cli_main(int argc, char** argv) {
       solve_opt.params = Params::from_assignments(solve_params);
       if (solve->count("--times")) solve_opt.times = parse_times(solve_times);
       cmd_solve(solve_opt, std::cout, std::cerr);
-    }
-    if (*convergence || *local_error) {
-      const bool is_local = local_error->parsed();
-      ConvergenceSpec& spec = is_local ? local : conv;
-      spec.integrators =
-          split_list(is_local ? local_integrators : conv_integrators, "--integrators");
-      spec.params = Params::from_assignments(is_local ? local_params : conv_params);
-      const std::string& dir = is_local ? local_out : conv_out;
-      spec.cache_dir = dir;
-      const std::string name = is_local ? "local_error" : "convergence";
-      require_output_dir(dir);
-      check_study_output(dir, name, spec.to_json(), force_output(), &std::cerr);
-      const ConvergenceResult res =
-          is_local ? run_local_error(spec, &std::cerr) : run_convergence(spec, &std::cerr);
-      write_convergence_outputs(dir, name, spec, res, is_local);
-      std::cout << (is_local ? local_error_table(res) : convergence_table(res)).to_markdown();
-      std::cout << "\nwrote " << dir << "/" << name << ".{csv,md,json}\n";
-      const std::filesystem::path csv = std::filesystem::path(dir) / (name + ".csv");
-      if (plot_convergence(csv, (is_local ? "Local error: " : "Global error: ") + spec.model,
-                           is_local, g_plot, std::cerr))
-        std::cout << "plot: " << dir << "/" << name << ".png\n";
-    }
-    if (*work_precision) {
-      wp.integrators = split_list(wp_integrators, "--integrators");
-      wp.params = Params::from_assignments(wp_params);
-      require_output_dir(wp_out);
-      check_study_output(wp_out, "work_precision", wp.to_json(), force_output(), &std::cerr);
-      const WorkPrecisionResult res = run_work_precision(wp, &std::cerr);
-      write_work_precision_outputs(wp_out, wp, res);
-      std::cout << work_precision_table(res).to_markdown();
-      std::cout << "\nwrote " << wp_out << "/work_precision.{csv,md,json}\n";
-      if (plot_work_precision(std::filesystem::path(wp_out) / "work_precision.csv",
-                              "Work-precision: " + wp.model, g_plot, std::cerr))
-        std::cout << "plot: " << wp_out << "/work_precision.png\n";
     }
     if (*report) cmd_report(report_opt, std::cout, std::cerr);
   } catch (const CLI::CallForHelp& e) {

@@ -1,4 +1,5 @@
 #include "experiments/commands.hpp"
+#include "experiments/study.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -83,6 +84,12 @@ Table experiments_table() {
   t.rows.push_back({"report", "DIR/REPORT.md and one folder per study",
                     "the default suite: convergence, local error, energy drift, stability "
                     "limits and regions, work-precision"});
+  // Studies registered from outside the library (register_study).
+  for (const auto& k : study_kinds()) {
+    bool listed = false;
+    for (const auto& row : t.rows) listed = listed || row[0] == k.name;
+    if (!listed) t.rows.push_back({k.name, k.stem + ".{csv,md,json,png}", k.summary});
+  }
   return t;
 }
 
@@ -155,6 +162,11 @@ void cmd_describe(const std::string& name, std::ostream& out) {
         << "\nevaluations per step: " << count_or_variable(i.stages)
         << "\nrequires: " << describe_requirements(i.requires_) << "\n";
     print_params(e->params, out);
+    return;
+  }
+  if (const StudyKind* k = find_study(name)) {
+    describe_study(*k, out);
+    out << "\nflags: stiffbench " << name << " --help\n";
     return;
   }
   std::vector<std::string> experiments;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "experiments/convergence.hpp"
+#include "experiments/spec_file.hpp"
 
 namespace stiffbench {
 
@@ -57,10 +58,26 @@ struct ReportOptions {
   std::string out_dir = "results";
   bool quick = false;
   bool svg = false;
+  // Spec files and folders of spec files (each folder's *.toml in name order), one section per
+  // spec; empty: the built-in suite (experiments/specs/report/, compiled in).
+  std::vector<std::string> suite;
 };
-// The spec `report` records in DIR/report.json ({"suite": "quick" | "full"}) and compares with
-// check_existing_results before it runs (BadInput for a report of the other suite in DIR unless
-// force_output(); --svg is not part of it).
+
+// One section of a report: its spec file (title, note; [quick] applied for --quick) and its
+// folder name (the file's stem without a leading "NN_").
+struct ReportSection {
+  std::string name;
+  SpecFile spec;
+};
+// The spec files of a suite (see ReportOptions::suite).
+std::vector<std::string> report_suite_files(const std::vector<std::string>& suite);
+// Loads and checks every section (names, parameters, options) before anything runs.
+std::vector<ReportSection> load_report_suite(const std::vector<std::string>& suite, bool quick);
+
+// The spec `report` records in DIR/report.json ({"suite": "quick" | "full"}, plus the canonical
+// form of each spec file of a user suite) and compares with check_existing_results before it
+// runs (BadInput for a report of another suite in DIR unless force_output(); --svg is not part of
+// it).
 nlohmann::json report_spec(const ReportOptions& opt);
 void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err);
 

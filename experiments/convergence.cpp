@@ -17,10 +17,14 @@
 
 namespace stiffbench {
 
-void ConvergenceSpec::validate() const {
-  require_input(std::isfinite(t_end) && t_end > 0,
-                "--t-end must be > 0 (got " + format_full(t_end) + ")");
-  require_input(std::isnan(h) || (std::isfinite(h) && h > 0),
+std::vector<double> StepStudySpec::step_ladder(double h0) const {
+  std::vector<double> hs;
+  for (int k = 0; k < levels; ++k) hs.push_back(h0 / std::pow(refine, k));
+  return hs;
+}
+
+void StepStudySpec::validate_step_study() const {
+  require_input(std::isnan(h) || (std::isfinite(h) && h >= 0),
                 "--h must be > 0 (got " + format_full(h) + ")");
   require_input(levels >= 2, "--levels must be >= 2 (got " + std::to_string(levels) + ")");
   require_input(std::isfinite(refine) && refine > 1,
@@ -34,7 +38,7 @@ void ConvergenceSpec::validate() const {
                   "--reference-atol must be > 0 (got " + format_full(*reference_atol) + ")");
 }
 
-nlohmann::json ConvergenceSpec::to_json() const {
+nlohmann::json StepStudySpec::step_study_json() const {
   return {{"model", model},
           {"params", params.values()},
           {"integrators", integrators},
@@ -46,6 +50,40 @@ nlohmann::json ConvergenceSpec::to_json() const {
           {"reference_rtol", reference_rtol ? nlohmann::json(*reference_rtol) : nlohmann::json()},
           {"reference_atol", reference_atol ? nlohmann::json(*reference_atol) : nlohmann::json()}};
 }
+
+std::vector<ParamSpec> step_study_options(const StepStudyDefaults& d) {
+  using P = ParamType;
+  return {
+      {"t_end", P::real, "", d.t_end_help, Bounds::positive()},
+      {"h", P::real, "", d.h_help, Bounds::positive()},
+      {"levels", P::integer, d.levels, "number of step sizes", Bounds::at_least(2)},
+      {"refine", P::real, "2", "ratio between consecutive step sizes", Bounds::above(1)},
+      {"reference", P::text, "auto", d.reference_help},
+      {"reference_rtol", P::real, d.reference_rtol,
+       "relative tolerance of an adaptive reference run", Bounds::positive()},
+      {"reference_atol", P::real, d.reference_atol,
+       "absolute tolerance of an adaptive reference run", Bounds::positive()},
+  };
+}
+
+void read_step_study_options(const Params& o, StepStudySpec& spec) {
+  if (o.contains("t_end")) spec.t_end = o.real("t_end");
+  spec.h = optional_real(o, "h");
+  spec.levels = static_cast<int>(o.integer("levels"));
+  spec.refine = o.real("refine");
+  spec.reference = o.text("reference");
+  if (o.contains("reference_rtol")) spec.reference_rtol = o.real("reference_rtol");
+  if (o.contains("reference_atol")) spec.reference_atol = o.real("reference_atol");
+}
+
+void ConvergenceSpec::validate() const {
+  require_input(std::isfinite(t_end) && t_end > 0,
+                "--t-end must be > 0 (got " + format_full(t_end) + ")");
+  require_input(std::isnan(h) || h > 0, "--h must be > 0 (got " + format_full(h) + ")");
+  validate_step_study();
+}
+
+nlohmann::json ConvergenceSpec::to_json() const { return step_study_json(); }
 
 namespace {
 
@@ -376,17 +414,12 @@ ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress
   Setup setup = make_setup(given.model, given.integrators, setup_params(given));
   const OdeSystem& sys = *setup.model;
   ConvergenceSpec spec = given;
-  std::string h_source = "--h";
-  if (std::isnan(spec.h)) {
-    const auto suggested = sys.suggested_step();
-    require_input(suggested.has_value(),
-                  "--h is required: model '" + spec.model + "' offers no suggested step");
-    spec.h = suggested->h;
-    h_source = "suggested step: " + suggested->rule;
-    if (progress)
-      *progress << "no --h given: starting from the model's suggested step h = "
-                << format_full(spec.h) << " (" << suggested->rule << ")\n";
-  }
+  const Resolved h0 = resolve_step(sys, spec.h, spec.model);
+  spec.h = h0.value;
+  const std::string h_source = h0.source;
+  if (progress && h0.source != "--h")
+    *progress << "no --h given: starting from the model's suggested step h = "
+              << format_full(spec.h) << " (" << h0.source.substr(16) << ")\n";
   const double t0 = sys.initial_time();
   require_input(spec.t_end > t0, "--t-end must be > the model's initial time");
   for (const auto& integ : setup.integrators)
@@ -397,8 +430,7 @@ ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress
 
   // Actual step sizes are fixed by the driver's N = round(T/h) rule (global study); the local
   // study uses h_k exactly.
-  std::vector<double> hs;
-  for (int k = 0; k < spec.levels; ++k) hs.push_back(spec.h / std::pow(spec.refine, k));
+  const std::vector<double> hs = spec.step_ladder(spec.h);
   for (double h : hs) fixed_step_count(t0, spec.t_end, h, FixedStepOptions{}.max_steps);
 
   const ReferencePlan plan = plan_reference(spec, sys, hs.back());
@@ -589,30 +621,187 @@ void write_convergence_outputs(const std::string& dir, const std::string& name,
   write_file_atomic(d / (name + ".json"), meta.dump(2) + "\n");
 }
 
+Vec reference_at_end(const StepStudySpec& spec, const OdeSystem& sys, double t_end, double h_fine,
+                     std::string* description) {
+  Vec y(sys.dimension());
+  const bool exact = spec.reference == "exact" || (spec.reference == "auto" && sys.has_exact());
+  if (exact) {
+    require_input(sys.has_exact(),
+                  "--reference exact: model '" + sys.name() + "' has no exact solution");
+    sys.exact(t_end, y);
+    *description = "exact";
+    return y;
+  }
+  const std::string method = spec.reference == "auto" ? "cvode_bdf" : spec.reference;
+  Params p = spec.params;
+  const auto& entry = integrator_registry().at(method);
+  if (declares(entry.params, "rtol")) {
+    p.set("rtol", format_full(spec.reference_rtol.value_or(1e-14)));
+    p.set("atol", format_full(spec.reference_atol.value_or(1e-16)));
+  }
+  auto integ = integrator_registry().create(method, p);
+  RunResult r;
+  if (integ->supports_adaptive()) {
+    r = run_adaptive(sys, *integ, {t_end, 0});
+    *description =
+        method + " adaptive, rtol = " + p.values().at("rtol") + ", atol = " + p.values().at("atol");
+  } else {
+    FixedStepOptions opt;
+    opt.t_end = t_end;
+    opt.h = h_fine / 16;
+    r = run_fixed_step(sys, *integ, opt);
+    *description = method + " with h = (finest h)/16 = " + format_full(opt.h);
+  }
+  if (r.stats.status != Status::ok)
+    throw std::runtime_error("reference run of '" + method + "' failed: " + r.stats.message);
+  return r.y;
+}
+
+namespace {
+
+// convergence and local-error in the study registry.
+class ConvergenceJob : public StudyJob {
+ public:
+  ConvergenceJob(ConvergenceSpec spec, bool local) : spec_(std::move(spec)), local_(local) {
+    spec_.validate();
+  }
+  nlohmann::json spec_json() const override { return spec_.to_json(); }
+  std::vector<std::string> helper_integrators() const override { return {spec_.reference}; }
+  void run(std::ostream* progress) override {
+    result_ = local_ ? run_local_error(spec_, progress) : run_convergence(spec_, progress);
+  }
+  Table unit_table() const override {
+    return local_ ? local_error_table(result_) : convergence_table(result_);
+  }
+  bool write(const std::filesystem::path& dir, const std::string& title, const PlotOptions& plot,
+             std::ostream& err) const override {
+    write_convergence_outputs(dir.string(), name(), spec_, result_, local_);
+    return plot_convergence(dir / (name() + ".csv"), title, local_, plot, err);
+  }
+  void print_summary(std::ostream& out) const override { out << unit_table().to_markdown(); }
+  std::string report_markdown(const std::string& note) const override {
+    std::ostringstream md;
+    md << note << " Reference: " << result_.reference_description << ".\n\n";
+    Table summary{{"integrator", local_ ? "expected slope" : "order", "last observed order",
+                   "status of finest run"},
+                  {}};
+    for (const auto& integ : spec_.integrators) {
+      const auto last = last_observed_order(result_.rows, integ);
+      std::string status;
+      int order = 0;
+      for (const auto& r : result_.rows)
+        if (r.integrator == integ) {
+          status = to_string(r.stats.status);
+          order = r.order + (local_ ? 1 : 0);
+        }
+      summary.rows.push_back(
+          {integ, std::to_string(order), last ? format_fixed(*last) : "-", status});
+    }
+    md << summary.to_markdown() << "\n";
+    return md.str();
+  }
+  std::string default_title() const override {
+    return (local_ ? "Local error: " : "Global error: ") + spec_.model;
+  }
+  const ConvergenceResult& result() const { return result_; }
+
+ private:
+  std::string name() const { return local_ ? "local_error" : "convergence"; }
+  ConvergenceSpec spec_;
+  bool local_;
+  ConvergenceResult result_;
+};
+
+StudyKind step_size_kind(bool local) {
+  StudyKind k;
+  k.name = local ? "local-error" : "convergence";
+  k.stem = local ? "local_error" : "convergence";
+  k.summary = local ? "error of one step from the initial state against h; writes "
+                      "local_error.{csv,md,json}"
+                    : "global error at t_end against h = H/refine^k; writes "
+                      "convergence.{csv,md,json}";
+  StepStudyDefaults d;
+  d.t_end_required = !local;
+  d.t_end_help = local ? "unused by the local study's error; kept for symmetry" : "final time";
+  d.h_help = "coarsest step size (default: the model's suggested step, where it has one)";
+  d.reference_help =
+      "exact | METHOD: an adaptive integrator (cvode_bdf, cvode_adams, arkode_*, gsl_*) runs at "
+      "--reference-rtol/--reference-atol and stops exactly at the reference times; a fixed-step "
+      "one (e.g. rk4) runs at (finest h)/16. Default: exact where the model has one; a model "
+      "without one needs --reference. A non-exact reference is cached in OUT/reference/<hash>.csv "
+      "and reused by a run of the same build with the same model, parameters, reference and "
+      "times";
+  k.options = step_study_options(d);
+  for (auto& o : k.options) {
+    if (o.key == "reference_rtol") o.help += " (default 1e-12)";
+    if (o.key == "reference_atol") o.help += " (default rtol/100)";
+  }
+  if (!local) k.required = {"t_end"};
+  k.unit_columns = (local ? local_error_table(ConvergenceResult{})
+                          : convergence_table(ConvergenceResult{}))
+                       .columns;
+  k.make = [local](const StudyTarget& t, const Params& o, const StudyContext& ctx) {
+    ConvergenceSpec spec;
+    spec.model = t.model;
+    spec.params = t.params;
+    spec.integrators = t.integrators;
+    read_step_study_options(o, spec);
+    spec.cache_dir = ctx.cache_dir;
+    return std::make_unique<ConvergenceJob>(std::move(spec), local);
+  };
+  return k;
+}
+
+}  // namespace
+
+StudyKind convergence_study_kind() { return step_size_kind(false); }
+StudyKind local_error_study_kind() { return step_size_kind(true); }
+
+const ConvergenceResult& convergence_result(const StudyJob& job) {
+  return dynamic_cast<const ConvergenceJob&>(job).result();
+}
+
 ConvergenceResult convergence_study(ConvergenceSpec spec, const std::string& dir, bool local,
                                     std::ostream* progress, std::ostream& err,
                                     const PlotOptions& plot) {
-  require_output_dir(dir);
-  const std::string name = local ? "local_error" : "convergence";
-  check_study_output(dir, name, spec.to_json(), force_output(), &err);
-  if (spec.cache_dir.empty()) spec.cache_dir = dir;
-  ConvergenceResult res = local ? run_local_error(spec, progress) : run_convergence(spec, progress);
-  write_convergence_outputs(dir, name, spec, res, local);
-  plot_convergence(std::filesystem::path(dir) / (name + ".csv"),
-                   (local ? "Local error: " : "Global error: ") + spec.model, local, plot, err);
-  return res;
+  StudyContext ctx;
+  ctx.force = force_output();
+  ctx.plot = plot;
+  ctx.progress = progress;
+  ctx.err = &err;
+  return convergence_study(std::move(spec), StudyObjects{}, dir, local, ctx);
+}
+
+ConvergenceResult convergence_study(ConvergenceSpec spec, const StudyObjects& objects,
+                                    const std::filesystem::path& dir, bool local,
+                                    const StudyContext& ctx) {
+  const ScopedStudyObjects scope(objects, spec.model, spec.integrators);
+  if (spec.cache_dir.empty()) spec.cache_dir = ctx.cache_dir.empty() ? dir.string() : ctx.cache_dir;
+  ConvergenceJob job(std::move(spec), local);
+  run_study_job(study_kind(local ? "local-error" : "convergence"), job, dir, ctx);
+  return job.result();
+}
+
+ConvergenceResult run_convergence(ConvergenceSpec spec, const StudyObjects& objects,
+                                  std::ostream* progress) {
+  const ScopedStudyObjects scope(objects, spec.model, spec.integrators);
+  return run_convergence(static_cast<const ConvergenceSpec&>(spec), progress);
+}
+
+ConvergenceResult run_local_error(ConvergenceSpec spec, const StudyObjects& objects,
+                                  std::ostream* progress) {
+  const ScopedStudyObjects scope(objects, spec.model, spec.integrators);
+  return run_local_error(static_cast<const ConvergenceSpec&>(spec), progress);
 }
 
 ConvergenceResult run_convergence(ConvergenceSpec spec, const SystemFactory& system,
                                   std::ostream* progress) {
-  spec.model = register_system(system, spec.model);
-  return run_convergence(static_cast<const ConvergenceSpec&>(spec), progress);
+  return run_convergence(std::move(spec), StudyObjects{system, {}}, progress);
 }
 
 ConvergenceResult run_local_error(ConvergenceSpec spec, const SystemFactory& system,
                                   std::ostream* progress) {
-  spec.model = register_system(system, spec.model);
-  return run_local_error(static_cast<const ConvergenceSpec&>(spec), progress);
+  return run_local_error(std::move(spec), StudyObjects{system, {}}, progress);
 }
 
 }  // namespace stiffbench

@@ -44,10 +44,14 @@
 #include "experiments/catalog.hpp"
 #include "experiments/output.hpp"
 #include "experiments/plotting.hpp"
+#include "experiments/study.hpp"
 
 namespace stiffbench {
 
-struct ConvergenceSpec {
+// What the step-size studies (convergence, local-error, work-precision) share: the system, the
+// ladder of steps h_k = h / refine^k and the reference the errors are measured against. Its
+// options are declared once (step_study_options) and read once (read_step_study_options).
+struct StepStudySpec {
   std::string model;
   Params params;
   std::vector<std::string> integrators;
@@ -58,8 +62,28 @@ struct ConvergenceSpec {
   double refine = 2.0;
   std::string reference = "auto";  // auto | exact | METHOD
   // Tolerances of an adaptive reference (--reference-rtol, --reference-atol); unset: the
-  // defaults below. Set with an exact or fixed-step reference: BadInput naming the flag.
+  // study's defaults. Set with an exact or fixed-step reference: BadInput naming the flag.
   std::optional<double> reference_rtol, reference_atol;
+
+  // h_k = h0 / refine^k for k < levels.
+  std::vector<double> step_ladder(double h0) const;
+  // BadInput naming the flag for a bad ladder or tolerance.
+  void validate_step_study() const;
+  // The keys above as JSON (the recorded spec of the three studies).
+  nlohmann::json step_study_json() const;
+};
+
+// The options of StepStudySpec for the study registry: `t_end_required` (convergence) and the
+// defaults of the ladder and of the reference tolerances differ between the studies.
+struct StepStudyDefaults {
+  bool t_end_required = false;
+  std::string t_end_help, h_help;
+  std::string levels = "5", reference_rtol, reference_atol, reference_help;
+};
+std::vector<ParamSpec> step_study_options(const StepStudyDefaults& d);
+void read_step_study_options(const Params& options, StepStudySpec& spec);
+
+struct ConvergenceSpec : StepStudySpec {
   static constexpr double kDefaultReferenceRtol = 1e-12;
   static constexpr double kReferenceAtolDivisor = 100;  // default atol = rtol / 100
   // Folder holding the reference cache (DIR/reference/); empty: no cache. Not part of the spec's
@@ -69,6 +93,12 @@ struct ConvergenceSpec {
   void validate() const;  // BadInput naming the bad flag
   nlohmann::json to_json() const;
 };
+
+// The reference state at t_end for work-precision: the exact solution (`auto` where the model
+// has one), else `reference` (default cvode_bdf) adaptively at the spec's tolerances, or a
+// fixed-step reference at h_fine/16; `description` says which.
+Vec reference_at_end(const StepStudySpec& spec, const OdeSystem& sys, double t_end, double h_fine,
+                     std::string* description);
 
 struct ConvergenceRow {
   std::string model, integrator;
@@ -93,9 +123,13 @@ struct ConvergenceResult {
 // Progress lines go to `progress` when non-null.
 ConvergenceResult run_convergence(const ConvergenceSpec& spec, std::ostream* progress);
 ConvergenceResult run_local_error(const ConvergenceSpec& spec, std::ostream* progress);
-// The same on a user's system object: `system` makes a fresh copy per run; spec.model is the
-// name it is registered under (register_system; empty: the system's name()), spec.params then
-// holds integrator parameters only.
+// The same on a user's objects (nothing is registered by name): `objects.system` makes a fresh
+// copy per run (its results carry spec.model, empty: the system's name(); spec.params then holds
+// integrator parameters only); `objects.integrators` run after spec.integrators.
+ConvergenceResult run_convergence(ConvergenceSpec spec, const StudyObjects& objects,
+                                  std::ostream* progress);
+ConvergenceResult run_local_error(ConvergenceSpec spec, const StudyObjects& objects,
+                                  std::ostream* progress);
 ConvergenceResult run_convergence(ConvergenceSpec spec, const SystemFactory& system,
                                   std::ostream* progress);
 ConvergenceResult run_local_error(ConvergenceSpec spec, const SystemFactory& system,
@@ -118,6 +152,9 @@ Table local_error_table(const ConvergenceResult& r);  // the local_error.csv con
 void write_convergence_outputs(const std::string& dir, const std::string& name,
                                const ConvergenceSpec& spec, const ConvergenceResult& r, bool local);
 
+// The jobs of the study registry hold these results (experiments/study.hpp).
+const ConvergenceResult& convergence_result(const StudyJob& job);
+
 // What `stiffbench convergence` / `local-error` do, for a program that links the library: checks
 // that DIR can be written and holds no NAME.* of a different spec (check_study_output with
 // spec.to_json() and force_output(); the note to `err`), runs the study (progress lines to
@@ -127,5 +164,10 @@ void write_convergence_outputs(const std::string& dir, const std::string& name,
 ConvergenceResult convergence_study(ConvergenceSpec spec, const std::string& dir, bool local,
                                     std::ostream* progress, std::ostream& err,
                                     const PlotOptions& plot = {});
+// The one call on a user's objects: check DIR, run, write, plot, print (ctx.out) — the pipeline
+// of experiments/study.hpp with ctx's settings (force, plot format, streams).
+ConvergenceResult convergence_study(ConvergenceSpec spec, const StudyObjects& objects,
+                                    const std::filesystem::path& dir, bool local,
+                                    const StudyContext& ctx = {});
 
 }  // namespace stiffbench

@@ -8,6 +8,7 @@
 
 #include "experiments/catalog.hpp"
 #include "experiments/progress.hpp"
+#include "experiments/study.hpp"
 
 namespace stiffbench {
 
@@ -154,9 +155,9 @@ EnergyRun measure_energy_drift(const OdeSystem& sys, Integrator& integ,
   run.drift_rate = slope.slope();
   if (reached_tenth || r.stats.status == Status::ok) {
     if (max_tenth > 0)
-      run.growth = max_all / max_tenth;
+      run.growth_ratio = max_all / max_tenth;
     else
-      run.growth = max_all > 0 ? std::numeric_limits<double>::infinity() : 1.0;
+      run.growth_ratio = max_all > 0 ? std::numeric_limits<double>::infinity() : 1.0;
   }
   for (std::size_t i = 0; i < others.size(); ++i)
     run.other_max_rel_error.emplace_back(others[i]->name, others_max[i]);
@@ -189,27 +190,15 @@ EnergyResult run_energy(const EnergySpec& given, std::ostream* progress) {
                   "integrator '" + integ->info().name +
                       "' is adaptive only: the energy-drift study runs fixed steps (--h)");
 
-  res.h = given.h;
-  res.h_source = "--h";
-  if (std::isnan(res.h)) {
-    const auto suggested = sys.suggested_step();
-    require_input(suggested.has_value(),
-                  "--h is required: model '" + given.model + "' offers no suggested step");
-    res.h = suggested->h;
-    res.h_source = "suggested step: " + suggested->rule;
-    if (progress)
-      *progress << "no --h given: the model's suggested step h = " << format_full(res.h) << " ("
-                << suggested->rule << ")\n";
-  }
-  res.t_end = given.t_end;
-  res.t_end_source = "--t-end";
-  if (std::isnan(res.t_end)) {
-    const auto literature = sys.end_time();
-    require_input(literature.has_value(),
-                  "--t-end is required: model '" + given.model + "' has no literature end time");
-    res.t_end = *literature;
-    res.t_end_source = "the model's literature end time";
-  }
+  const Resolved h = resolve_step(sys, given.h, given.model);
+  res.h = h.value;
+  res.h_source = h.source;
+  if (progress && h.source != "--h")
+    *progress << "no --h given: the model's suggested step h = " << format_full(res.h) << " ("
+              << h.source.substr(16) << ")\n";
+  const Resolved t_end = resolve_end_time(sys, given.t_end, given.model);
+  res.t_end = t_end.value;
+  res.t_end_source = t_end.source;
   // Checks h and t_end (and the step budget) before the first run.
   fixed_step_count(sys.initial_time(), res.t_end, res.h, FixedStepOptions{}.max_steps);
 
@@ -260,7 +249,7 @@ Table energy_summary_table(const EnergyResult& r) {
   for (const auto& run : r.runs)
     t.rows.push_back({r.model, run.integrator, format_full(run.h), format_full(run.t_end),
                       format_full(run.max_rel_error), format_full(run.final_rel_error),
-                      format_full(run.drift_rate), optional_full(run.growth),
+                      format_full(run.drift_rate), optional_full(run.growth_ratio),
                       to_string(run.stats.status)});
   return t;
 }
@@ -282,7 +271,7 @@ Table energy_markdown_table(const EnergyResult& r) {
                                     format_short(run.max_rel_error, 2),
                                     format_short(run.final_rel_error, 2),
                                     format_short(run.drift_rate, 2),
-                                    run.growth ? format_short(*run.growth, 2) : "-",
+                                    run.growth_ratio ? format_short(*run.growth_ratio, 2) : "-",
                                     to_string(run.stats.status)};
     for (const auto& [name, value] : run.other_max_rel_error) row.push_back(format_short(value, 2));
     row.push_back(format_short(run.stats.wall_s, 2));
@@ -337,7 +326,7 @@ std::string markdown_report(const EnergySpec& spec, const EnergyResult& r) {
 }  // namespace
 
 bool write_energy_outputs(const fs::path& dir, const EnergySpec& spec, const EnergyResult& r,
-                          const PlotOptions& opt, std::ostream& err) {
+                          const PlotOptions& opt, std::ostream& err, const std::string& title) {
   write_file_atomic(dir / "energy.csv", energy_table(r).to_csv());
   write_file_atomic(dir / "energy_summary.csv", energy_summary_table(r).to_csv());
   write_file_atomic(dir / "energy.md", markdown_report(spec, r));
@@ -374,7 +363,8 @@ bool write_energy_outputs(const fs::path& dir, const EnergySpec& spec, const Ene
   }
   meta["runs"] = std::move(runs);
   write_file_atomic(dir / "energy.json", meta.dump(2) + "\n");
-  return plot_energy(dir / "energy.csv", "Energy drift: " + r.model, opt, err);
+  return plot_energy(dir / "energy.csv", title.empty() ? "Energy drift: " + r.model : title, opt,
+                     err);
 }
 
 bool plot_energy(const fs::path& csv, const std::string& title, const PlotOptions& opt,
@@ -398,6 +388,94 @@ bool plot_energy(const fs::path& csv, const std::string& title, const PlotOption
                    {"ttl", title},
                    {"ylab", "relative " + invariant + " error (max since previous sample)"}},
                   family_panels(csv_column_values(csv, "integrator")), opt, err);
+}
+
+namespace {
+
+class EnergyJob : public StudyJob {
+ public:
+  explicit EnergyJob(EnergySpec spec) : spec_(std::move(spec)) { spec_.validate(); }
+  nlohmann::json spec_json() const override { return spec_.to_json(); }
+  void run(std::ostream* progress) override { result_ = run_energy(spec_, progress); }
+  Table unit_table() const override { return energy_summary_table(result_); }
+  bool write(const std::filesystem::path& dir, const std::string& title, const PlotOptions& plot,
+             std::ostream& err) const override {
+    return write_energy_outputs(dir, spec_, result_, plot, err, title);
+  }
+  void print_summary(std::ostream& out) const override {
+    out << energy_markdown_table(result_).to_markdown();
+    for (const auto& run : result_.runs)
+      if (run.stats.status != Status::ok) out << run.integrator << ": " << run.stats.message << "\n";
+  }
+  std::string report_markdown(const std::string& note) const override {
+    return note + "\n\n" + energy_markdown_table(result_).to_markdown() + "\n";
+  }
+  std::string default_title() const override {
+    return "Energy drift: " + spec_.model;
+  }
+  const EnergyResult& result() const { return result_; }
+
+ private:
+  EnergySpec spec_;
+  EnergyResult result_;
+};
+
+}  // namespace
+
+StudyKind energy_study_kind() {
+  using P = ParamType;
+  StudyKind k;
+  k.name = "energy";
+  k.stem = "energy";
+  k.summary =
+      "energy drift of long fixed-step runs: the relative error of an invariant after every step, "
+      "sampled with the maximum between samples, its maximum, final value, drift rate and growth "
+      "ratio; writes energy.{csv,md,json,png} and energy_summary.csv";
+  k.options = {
+      {"h", P::real, "",
+       "step size (the run takes N = round(T/h) steps of T/N; default: the model's suggested "
+       "step, where it has one)",
+       Bounds::positive()},
+      {"t_end", P::real, "",
+       "final time (default: the model's literature end time, where it has one)",
+       Bounds::positive()},
+      {"samples", P::integer, "1000",
+       "rows per integrator in energy.csv (every ceil(N/samples) steps, each with the maximum "
+       "error since the previous row)",
+       Bounds::at_least(1)},
+      {"invariant", P::text, "energy",
+       "which invariant of the model is measured (see `stiffbench describe MODEL`)"}};
+  k.extra_files = {"energy_summary.csv"};
+  k.unit_columns = energy_summary_table(EnergyResult{}).columns;
+  k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
+    EnergySpec s;
+    s.model = t.model;
+    s.params = t.params;
+    s.integrators = t.integrators;
+    s.h = optional_real(o, "h");
+    s.t_end = optional_real(o, "t_end");
+    s.samples = o.integer("samples");
+    s.invariant = o.text("invariant");
+    return std::make_unique<EnergyJob>(std::move(s));
+  };
+  return k;
+}
+
+const EnergyResult& energy_result(const StudyJob& job) {
+  return dynamic_cast<const EnergyJob&>(job).result();
+}
+
+EnergyResult run_energy(EnergySpec spec, const StudyObjects& objects, std::ostream* progress) {
+  const ScopedStudyObjects scope(objects, spec.model, spec.integrators);
+  return run_energy(static_cast<const EnergySpec&>(spec), progress);
+}
+
+EnergyResult energy_study(EnergySpec spec, const StudyObjects& objects,
+                          const std::filesystem::path& dir, const StudyContext& ctx) {
+  const ScopedStudyObjects scope(objects, spec.model, spec.integrators);
+  EnergyJob job(std::move(spec));
+  run_study_job(study_kind("energy"), job, dir, ctx);
+  return job.result();
 }
 
 }  // namespace stiffbench

@@ -42,6 +42,7 @@
 #include "core/params.hpp"
 #include "experiments/output.hpp"
 #include "experiments/plotting.hpp"
+#include "experiments/study.hpp"
 
 namespace stiffbench {
 
@@ -81,7 +82,7 @@ struct EnergyRun {
   double max_rel_error = 0;
   double final_rel_error = 0;
   double drift_rate = 0;         // per unit time
-  std::optional<double> growth;  // see the header comment
+  std::optional<double> growth_ratio;  // column `growth`: see the header comment
   // Other invariants: name and maximum error over the run (relative, or absolute when
   // invariant_error_is_absolute(I0)).
   std::vector<std::pair<std::string, double>> other_max_rel_error;
@@ -89,7 +90,7 @@ struct EnergyRun {
   std::vector<EnergySample> samples;
 };
 
-// The object-level call (STYLE.md §13): any system and integrator.
+// The object-level call: any system and integrator object, nothing looked up by name.
 struct EnergyRunOptions {
   double h = 0.01;
   double t_end = 1.0;
@@ -122,6 +123,13 @@ struct EnergyResult {
 // incompatible pairs are BadInput before anything runs) and measures each integrator in turn.
 // Progress lines go to `progress` when non-null.
 EnergyResult run_energy(const EnergySpec& spec, std::ostream* progress);
+// The same on a user's objects (see run_convergence with StudyObjects).
+EnergyResult run_energy(EnergySpec spec, const StudyObjects& objects, std::ostream* progress);
+// The one call: check DIR, run, write DIR/energy.{csv,md,json} and energy_summary.csv, plot,
+// print (ctx.out).
+EnergyResult energy_study(EnergySpec spec, const StudyObjects& objects,
+                          const std::filesystem::path& dir, const StudyContext& ctx = {});
+const EnergyResult& energy_result(const StudyJob& job);
 
 Table energy_table(const EnergyResult& r);          // the energy.csv contract (sampled rows)
 Table energy_summary_table(const EnergyResult& r);  // the energy_summary.csv contract
@@ -132,7 +140,8 @@ Table energy_markdown_table(const EnergyResult& r);
 // spec.to_json(); the h and t_end used as h_used/t_end_used with their sources), then draws
 // DIR/energy.png (plot_energy). Returns whether the plot was drawn.
 bool write_energy_outputs(const std::filesystem::path& dir, const EnergySpec& spec,
-                          const EnergyResult& r, const PlotOptions& opt, std::ostream& err);
+                          const EnergyResult& r, const PlotOptions& opt, std::ostream& err,
+                          const std::string& title = "");
 
 // The energy-drift plot from an energy.csv (DIR/energy.csv → DIR/energy.png): the relative
 // error (max since the previous sample) against t, log y, one panel per integrator family.

@@ -387,4 +387,77 @@ bool plot_region(const std::filesystem::path& csv, const std::string& title, con
   return run_plot("region.gp", stem, vars, panels, opt, err);
 }
 
+namespace {
+
+class RegionJob : public StudyJob {
+ public:
+  explicit RegionJob(RegionSpec spec) : spec_(std::move(spec)) { spec_.validate(); }
+  nlohmann::json spec_json() const override { return spec_.to_json(); }
+  void run(std::ostream*) override { result_ = run_region(spec_); }
+  Table unit_table() const override { return region_limits_table(result_); }
+  bool write(const std::filesystem::path& dir, const std::string& title, const PlotOptions& plot,
+             std::ostream& err) const override {
+    write_region_outputs(dir, spec_, result_);
+    return plot_region(dir / "region.csv", title, plot, err);
+  }
+  void print_summary(std::ostream& out) const override {
+    out << region_limits_markdown_table(result_).to_markdown();
+  }
+  std::string report_markdown(const std::string& note) const override {
+    return note + "\n\n" + region_limits_markdown_table(result_).to_markdown() + "\n";
+  }
+  std::string default_title() const override {
+    return "Stability regions: boundary |R(z)| = 1";
+  }
+  const RegionResult& result() const { return result_; }
+
+ private:
+  RegionSpec spec_;
+  RegionResult result_;
+};
+
+}  // namespace
+
+StudyKind region_study_kind() {
+  StudyKind k;
+  k.name = "region";
+  k.stem = "region";
+  k.summary =
+      "linear stability regions from the coefficients: the boundary |R(z)| = 1 of each "
+      "integrator in the complex plane z = h*lambda, and its real-axis, imaginary-axis and "
+      "oscillator limits; writes region.{csv,md,json,png} and region_limits.csv";
+  k.takes_model = false;
+  k.takes_params = false;
+  k.integrators_required = false;
+  k.unit_per_integrator = false;
+  k.options = {{"box", ParamType::text, "",
+                "the part of the complex plane drawn: re_min,re_max,im_min,im_max (default: "
+                "fitted to the chosen methods' boundaries)"},
+               {"resolution", ParamType::integer, "400", "grid cells per side of the box",
+                Bounds::in(10, 4000)}};
+  k.extra_files = {"region_limits.csv"};
+  k.unit_columns = region_limits_table(RegionResult{}).columns;
+  k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
+    RegionSpec s;
+    s.integrators = t.integrators;
+    if (o.contains("box")) s.box = parse_region_box(o.text("box"));
+    s.resolution = static_cast<int>(o.integer("resolution"));
+    return std::make_unique<RegionJob>(std::move(s));
+  };
+  return k;
+}
+
+const RegionResult& region_result(const StudyJob& job) {
+  return dynamic_cast<const RegionJob&>(job).result();
+}
+
+RegionResult region_study(RegionSpec spec, const std::vector<IntegratorFactory>& integrators,
+                          const std::filesystem::path& dir, const StudyContext& ctx) {
+  std::string no_model;
+  const ScopedStudyObjects scope(StudyObjects{nullptr, integrators}, no_model, spec.integrators);
+  RegionJob job(std::move(spec));
+  run_study_job(study_kind("region"), job, dir, ctx);
+  return job.result();
+}
+
 }  // namespace stiffbench

@@ -33,6 +33,7 @@
 #include "core/linear_stability.hpp"
 #include "experiments/output.hpp"
 #include "experiments/plotting.hpp"
+#include "experiments/study.hpp"
 
 namespace stiffbench {
 
@@ -83,6 +84,12 @@ struct RegionResult {
 RegionBox parse_region_box(const std::string& arg);
 
 RegionResult run_region(const RegionSpec& spec);
+// The one call: check DIR, compute, write DIR/region.{csv,md,json} and region_limits.csv, plot,
+// print (ctx.out); `integrators` are a user's own methods (with linear_stability()), added after
+// spec.integrators.
+RegionResult region_study(RegionSpec spec, const std::vector<IntegratorFactory>& integrators,
+                          const std::filesystem::path& dir, const StudyContext& ctx = {});
+const RegionResult& region_result(const StudyJob& job);
 
 // The box enclosing the bounded boundaries and finite axis limits of `methods` (see above).
 RegionBox fitted_region_box(const std::vector<LinearStability>& methods);

@@ -10,6 +10,7 @@
 #include "core/params.hpp"
 #include "core/types.hpp"
 #include "experiments/output.hpp"
+#include "experiments/study.hpp"
 
 namespace stiffbench {
 
@@ -17,35 +18,27 @@ namespace {
 
 using Type = SpecScalar::Type;
 
-// The keys of each kind (besides kind, integrators and [params]) and their types; the names
-// and meanings are those of the command's flags.
-const std::map<std::string, std::map<std::string, Type>>& kind_keys() {
-  static const std::map<std::string, std::map<std::string, Type>> keys = [] {
-    const std::map<std::string, Type> study = {
-        {"model", Type::text},          {"t_end", Type::real},         {"h", Type::real},
-        {"levels", Type::integer},      {"refine", Type::real},        {"reference", Type::text},
-        {"reference_rtol", Type::real}, {"reference_atol", Type::real}};
-    std::map<std::string, Type> wp = study;
-    wp["tol_levels"] = Type::integer;
-    wp["rtol_max"] = Type::real;
-    wp["atol_factor"] = Type::real;
-    wp["repeats"] = Type::integer;
-    const std::map<std::string, Type> stability = {
-        {"model", Type::text},        {"sweep", Type::text},        {"rel_tol", Type::real},
-        {"periods", Type::real},      {"min_steps", Type::integer}, {"horizon", Type::real},
-        {"growth", Type::real},       {"criterion", Type::text},    {"norm_growth", Type::real},
-        {"perturbation", Type::real}, {"seed", Type::integer},      {"h_cap_factor", Type::real},
-        {"max_steps", Type::integer}, {"ray", Type::text},          {"dense_limit", Type::integer}};
-    const std::map<std::string, Type> energy = {{"model", Type::text},
-                                                {"h", Type::real},
-                                                {"t_end", Type::real},
-                                                {"samples", Type::integer},
-                                                {"invariant", Type::text}};
-    const std::map<std::string, Type> region = {{"box", Type::text}, {"resolution", Type::integer}};
-    return std::map<std::string, std::map<std::string, Type>>{
-        {"convergence", study},   {"local-error", study}, {"work-precision", wp},
-        {"stability", stability}, {"energy", energy},     {"region", region}};
-  }();
+Type spec_type(ParamType t) {
+  switch (t) {
+    case ParamType::real:
+      return Type::real;
+    case ParamType::integer:
+      return Type::integer;
+    case ParamType::boolean:
+      return Type::boolean;
+    case ParamType::text:
+      return Type::text;
+  }
+  return Type::text;
+}
+
+// The keys of a kind (besides kind, integrators, [params] and the report's title, note and
+// [quick]): its study's options (experiments/study.hpp), and `model` where it takes one.
+std::map<std::string, Type> kind_keys(const std::string& kind) {
+  const StudyKind& k = study_kind(kind);
+  std::map<std::string, Type> keys;
+  if (k.takes_model) keys["model"] = Type::text;
+  for (const auto& o : k.options) keys[o.key] = spec_type(o.type);
   return keys;
 }
 
@@ -107,10 +100,10 @@ SpecEntry entry_of(const toml::node& n, const std::string& path, const std::stri
 
 // Checks the value types of a top-level key against the kind's table.
 void check_setting(const std::string& kind, const SpecEntry& e) {
-  const auto& keys = kind_keys().at(kind);
+  const auto keys = kind_keys(kind);
   const auto it = keys.find(e.key);
   if (it == keys.end()) {
-    std::vector<std::string> known = {"kind", "integrators", "params"};
+    std::vector<std::string> known = {"kind", "integrators", "params", "title", "note", "quick"};
     for (const auto& [k, t] : keys) known.push_back(k);
     spec_error(e, "unknown key for a " + kind + " spec" + did_you_mean(e.key, known) +
                       "; known: " + join(known));
@@ -147,14 +140,7 @@ nlohmann::json SpecScalar::to_json() const {
   return text;
 }
 
-const std::vector<std::string>& spec_kinds() {
-  static const std::vector<std::string> kinds = [] {
-    std::vector<std::string> k;
-    for (const auto& [name, keys] : kind_keys()) k.push_back(name);
-    return k;
-  }();
-  return kinds;
-}
+std::vector<std::string> spec_kinds() { return study_names(); }
 
 void spec_error(const SpecEntry& e, const std::string& message) {
   throw BadInput(e.where + ": key '" + e.path + "': " + message);
@@ -226,15 +212,19 @@ void require_ascii_outside_strings(const std::string& text, const std::string& w
 }  // namespace
 
 SpecFile load_spec_file(const std::string& file, const std::vector<std::string>& sets) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw BadInput(file + ": cannot read the spec file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return parse_spec_text(buffer.str(), file, sets);
+}
+
+SpecFile parse_spec_text(const std::string& source, const std::string& file,
+                         const std::vector<std::string>& sets) {
   toml::table root;
   try {
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw BadInput(file + ": cannot read the spec file");
-    std::stringstream buffer;
-    buffer << in.rdbuf();
-    const std::string text = buffer.str();
-    require_ascii_outside_strings(text, file);
-    root = toml::parse(text, file);
+    require_ascii_outside_strings(source, file);
+    root = toml::parse(source, file);
   } catch (const toml::parse_error& err) {
     const auto& b = err.source().begin;
     throw BadInput(file + ":" + std::to_string(b.line) + ":" + std::to_string(b.column) + ": " +
@@ -246,7 +236,7 @@ SpecFile load_spec_file(const std::string& file, const std::vector<std::string>&
   if (!kind || !kind->is_string())
     throw BadInput(file + ": key 'kind' missing or not a string; one of " + join(spec_kinds()));
   spec.kind = kind->as_string()->get();
-  if (!kind_keys().count(spec.kind))
+  if (!find_study(spec.kind))
     throw BadInput(where_of(file, *kind) + ": key 'kind': unknown kind '" + spec.kind + "'" +
                    did_you_mean(spec.kind, spec_kinds()) + "; known: " + join(spec_kinds()));
 
@@ -256,6 +246,34 @@ SpecFile load_spec_file(const std::string& file, const std::vector<std::string>&
     const std::string key(k.str());
     const std::string where = where_of(file, node);
     if (key == "kind") continue;
+    if (key == "title" || key == "note") {
+      const auto* str = node.as_string();
+      if (!str) throw BadInput(where + ": key '" + key + "': expected a string");
+      (key == "title" ? spec.title : spec.note) = str->get();
+      continue;
+    }
+    if (key == "quick") {
+      const auto* table = node.as_table();
+      if (!table) throw BadInput(where + ": key 'quick': expected a table ([quick])");
+      for (const auto& [qk, qnode] : *table) {
+        const std::string qkey(qk.str());
+        SpecEntry e = entry_of(qnode, "quick." + qkey, qkey, where_of(file, qnode));
+        if (qkey == "title" || qkey == "note") {
+          if (e.is_list || e.values.front().type != Type::text)
+            spec_error(e, "expected a string");
+        } else if (qkey == "skip") {
+          if (e.is_list || e.values.front().type != Type::boolean)
+            spec_error(e, "expected true or false");
+        } else if (qkey == "integrators") {
+          for (const auto& v : e.values)
+            if (v.type != Type::text) spec_error(e, "expected integrator names (strings)");
+        } else {
+          check_setting(spec.kind, e);
+        }
+        spec.quick.push_back(std::move(e));
+      }
+      continue;
+    }
     if (key == "params") {
       const auto* table = node.as_table();
       if (!table) throw BadInput(where + ": key 'params': expected a table ([params])");
@@ -266,7 +284,8 @@ SpecFile load_spec_file(const std::string& file, const std::vector<std::string>&
       continue;
     }
     if (node.is_table())
-      throw BadInput(where + ": key '" + key + "': unknown table (only [params] is a table)");
+      throw BadInput(where + ": key '" + key +
+                     "': unknown table (only [params] and [quick] are tables)");
     SpecEntry e = entry_of(node, key, key, where);
     if (key == "integrators")
       integrators = std::move(e);
@@ -322,10 +341,10 @@ SpecFile load_spec_file(const std::string& file, const std::vector<std::string>&
         spec.integrators.push_back(v.text);
       }
     }
-  } else if (spec.kind != "region") {
+  } else if (study_kind(spec.kind).integrators_required) {
     throw BadInput(file + ": key 'integrators' missing (a list of integrator names)");
   }
-  if (spec.kind != "region") {
+  if (study_kind(spec.kind).takes_model) {
     const bool has_model = std::any_of(settings.begin(), settings.end(),
                                        [](const auto& e) { return e.key == "model"; });
     if (!has_model) throw BadInput(file + ": key 'model' missing");
@@ -336,6 +355,30 @@ SpecFile load_spec_file(const std::string& file, const std::vector<std::string>&
   spec.settings = std::move(settings);
   spec.params = std::move(params);
   return spec;
+}
+
+void apply_quick(SpecFile& spec) {
+  for (const auto& q : spec.quick) {
+    if (q.key == "title" || q.key == "note") {
+      (q.key == "title" ? spec.title : spec.note) = q.values.front().text;
+      continue;
+    }
+    if (q.key == "skip") {
+      spec.skip = q.values.front().text == "true";
+      continue;
+    }
+    if (q.key == "integrators") {
+      spec.integrators.clear();
+      for (const auto& v : q.values) spec.integrators.push_back(v.text);
+      continue;
+    }
+    SpecEntry e = q;
+    e.path = q.key;
+    put(spec.settings, std::move(e));
+  }
+  std::sort(spec.settings.begin(), spec.settings.end(),
+            [](const SpecEntry& a, const SpecEntry& b) { return a.key < b.key; });
+  spec.quick.clear();
 }
 
 }  // namespace stiffbench

@@ -37,16 +37,30 @@ struct SpecFile {
   std::string integrators_where;
   std::vector<SpecEntry> settings;  // top-level keys (model, t_end, ...), sorted by key
   std::vector<SpecEntry> params;    // [params], sorted by key
+  // For the report (a suite of spec files, one per section): the section's title and the
+  // sentence that explains it, and [quick]: the settings `report --quick` overrides (title and
+  // note too). None of them is part of the canonical form.
+  // [quick] may also replace `integrators` and set `skip = true` (no section in a quick report).
+  std::string title, note;
+  std::vector<SpecEntry> quick;
+  bool skip = false;  // set by apply_quick
   nlohmann::json to_json() const;   // canonical form (hashed for shards, stored in run.json)
 };
 
-// The experiment kinds `run` accepts.
-const std::vector<std::string>& spec_kinds();
+// The experiment kinds `run` accepts: the registered studies (experiments/study.hpp).
+std::vector<std::string> spec_kinds();
 
 // Reads and checks FILE, applies --set KEY=VALUE overrides (VALUE in TOML syntax, e.g. 0.5,
 // [8,16], "rk4"; a bare word is a string). Checks keys and value types for the kind; the
 // names of models, integrators and parameters are checked when the sweep is expanded.
 SpecFile load_spec_file(const std::string& file, const std::vector<std::string>& sets);
+
+// Replaces the settings (and title, note) by the spec's [quick] values.
+void apply_quick(SpecFile& spec);
+
+// The same for the text of a spec file; `file` names it in messages.
+SpecFile parse_spec_text(const std::string& text, const std::string& file,
+                         const std::vector<std::string>& sets);
 
 // BadInput with "WHERE: key 'KEY': MESSAGE".
 [[noreturn]] void spec_error(const SpecEntry& e, const std::string& message);

@@ -170,7 +170,7 @@ Probe probe(const OdeSystem& sys, Integrator& integ, double t0, const Vec& y0, d
   opt.max_steps = spec.max_steps;
   opt.outputs = steps;  // the observer sees every step
   const double e0 = energy ? energy(t0, y0) : 0.0;
-  const double e_max = e0 + (spec.growth - 1.0) * std::abs(e0);
+  const double e_max = e0 + (spec.energy_growth - 1.0) * std::abs(e0);
   // The max-norm deviation from the start at (up to) 2000 equally spaced steps, for the growth
   // rate of an unstable run.
   const long every = std::max<long>(1, steps / 2000);
@@ -187,7 +187,7 @@ Probe probe(const OdeSystem& sys, Integrator& integ, double t0, const Vec& y0, d
   } catch (const EnergyGrowth& g) {
     energy_stop = true;
     p.status = Status::unstable;
-    p.message = "energy exceeded " + num(spec.growth) + " x |E0| at t = " + num(g.t);
+    p.message = "energy exceeded " + num(spec.energy_growth) + " x |E0| at t = " + num(g.t);
   }
   if (!energy_stop) {
     p.status = r.stats.status;
@@ -339,7 +339,7 @@ void StabilitySpec::validate() const {
   require_input(rel_tol > 0 && rel_tol < 0.5, "--rel-tol must be in (0, 0.5), got " + num(rel_tol));
   require_input(periods > 0 && std::isfinite(periods), "--periods must be > 0");
   require_input(min_steps >= 1, "--min-steps must be >= 1");
-  require_input(growth > 1 && std::isfinite(growth), "--growth must be a finite factor > 1");
+  require_input(energy_growth > 1 && std::isfinite(energy_growth), "--growth must be a finite factor > 1");
   require_input(norm_growth > 1 && std::isfinite(norm_growth),
                 "--norm-growth must be a finite factor > 1");
   require_input(perturbation >= 0 && perturbation < 1, "--perturbation must be in [0, 1)");
@@ -367,7 +367,7 @@ nlohmann::json StabilitySpec::to_json() const {
   j["rel_tol"] = rel_tol;
   j["periods"] = periods;
   j["min_steps"] = min_steps;
-  j["growth"] = growth;
+  j["growth"] = energy_growth;
   j["norm_growth"] = norm_growth;
   j["perturbation"] = {{"epsilon", perturbation},
                        {"seed", seed},
@@ -549,7 +549,7 @@ std::string markdown_report(const StabilitySpec& spec, const StabilityResult& r)
              ? std::string()
              : " (and, for mechanical systems with an energy invariant, its energy never "
                "exceeds E0 + " +
-                   num(spec.growth - 1) + " x |E0|)")
+                   num(spec.energy_growth - 1) + " x |E0|)")
      << ", checked at every step over "
      << (spec.horizon ? "a horizon of " + num(*spec.horizon)
                       : num(spec.periods) + " periods of the fastest mode")
@@ -649,6 +649,162 @@ bool plot_stability(const std::filesystem::path& csv, const std::string& title,
                    {"sweep", sweep ? "1" : "0"},
                    {"xlab", sweep ? params.front() : ""}},
                   family_panels(csv_column_values(csv, "integrator")), opt, err);
+}
+
+namespace {
+
+class StabilityJob : public StudyJob {
+ public:
+  explicit StabilityJob(StabilitySpec spec) : spec_(std::move(spec)) { spec_.validate(); }
+  nlohmann::json spec_json() const override { return spec_.to_json(); }
+  void run(std::ostream* progress) override { result_ = run_stability(spec_, progress); }
+  Table unit_table() const override { return stability_table(result_); }
+  bool write(const std::filesystem::path& dir, const std::string& title, const PlotOptions& plot,
+             std::ostream& err) const override {
+    write_stability_outputs(dir, spec_, result_);
+    return plot_stability(dir / "stability.csv", title, plot, err);
+  }
+  void print_summary(std::ostream& out) const override {
+    out << stability_table(result_).to_markdown();
+    for (const auto& f : result_.fits)
+      if (f.measured_slope)
+        out << "slope of log h_max vs log " << spec_.sweep_param << ", " << f.integrator << ": "
+            << format_fixed(*f.measured_slope, 3)
+            << (f.predicted_slope ? " (predicted " + format_fixed(*f.predicted_slope, 3) + ")"
+                                  : std::string())
+            << "\n";
+  }
+  std::string report_markdown(const std::string& note) const override;
+  std::string default_title() const override { return "Stability limit: " + spec_.model; }
+  const StabilityResult& result() const { return result_; }
+
+ private:
+  StabilitySpec spec_;
+  StabilityResult result_;
+};
+
+std::string StabilityJob::report_markdown(const std::string& note) const {
+  std::ostringstream md;
+  md << note << " Spectrum: " << result_.spectrum_source << ".\n\n";
+  Table summary{{"integrator", "statuses", "h_max/predicted (range)", "slope of log h_max",
+                 "predicted slope"},
+                {}};
+  for (const auto& name : spec_.integrators) {
+    std::string statuses;
+    double rmin = 1e300, rmax = -1e300;
+    for (const auto& r : result_.rows) {
+      if (r.integrator != name) continue;
+      if (statuses.find(r.status) == std::string::npos)
+        statuses += (statuses.empty() ? "" : ", ") + r.status;
+      if (r.status == "ok" && r.h_measured && r.h_predicted && *r.h_predicted > 0) {
+        rmin = std::min(rmin, *r.h_measured / *r.h_predicted);
+        rmax = std::max(rmax, *r.h_measured / *r.h_predicted);
+      }
+    }
+    std::string slope = "-", pslope = "-";
+    for (const auto& f : result_.fits)
+      if (f.integrator == name) {
+        if (f.measured_slope) slope = format_fixed(*f.measured_slope, 3);
+        if (f.predicted_slope) pslope = format_fixed(*f.predicted_slope, 3);
+      }
+    summary.rows.push_back(
+        {name, statuses, rmin <= rmax ? format_fixed(rmin, 4) + " - " + format_fixed(rmax, 4) : "-",
+         slope, pslope});
+  }
+  md << summary.to_markdown() << "\n";
+  return md.str();
+}
+
+}  // namespace
+
+StudyKind stability_study_kind() {
+  using P = ParamType;
+  StudyKind k;
+  k.name = "stability";
+  k.stem = "stability";
+  k.summary =
+      "largest stable fixed step h_max per integrator (bisection) against the linear-theory "
+      "prediction from the system's spectrum; writes stability.{csv,md,json,png}";
+  k.options = {
+      {"sweep", P::text, "",
+       "repeat over a model parameter: NAME=v1,v2,... or NAME=lo:hi:n (n log-spaced values) and "
+       "fit the log-log slope of h_max against it"},
+      {"rel_tol", P::real, "0.001", "relative bisection tolerance on h_max", Bounds::in(0, 0.5)},
+      {"periods", P::real, "500", "horizon of each run in periods 2*pi/omega of the fastest mode",
+       Bounds::positive()},
+      {"min_steps", P::integer, "200", "each run takes at least this many steps",
+       Bounds::at_least(1)},
+      {"horizon", P::real, "",
+       "horizon of each run as a time (instead of --periods; needed when the model gives no "
+       "spectrum)",
+       Bounds::positive()},
+      {"growth", P::real, "2",
+       "mechanical systems: a run is unstable when its energy exceeds E0 + (growth - 1)|E0| at "
+       "any step",
+       Bounds::above(1)},
+      {"criterion", P::text, "auto",
+       "auto (energy for mechanical systems with an energy invariant, else the norm), energy, or "
+       "norm (for models whose energy has an arbitrary zero, e.g. gravity)",
+       {"auto", "energy", "norm"}},
+      {"norm_growth", P::real, "10",
+       "a run is unstable when its max-norm exceeds this factor times max(1, |y0|)",
+       Bounds::above(1)},
+      {"perturbation", P::real, "0.001",
+       "relative random perturbation of the initial state that excites every mode",
+       Bounds::in_closed_open(0, 1)},
+      {"seed", P::integer, "1", "seed of the perturbation", Bounds::non_negative()},
+      {"h_cap_factor", P::real, "1000",
+       "largest step tried, in units of 2/omega (A-stable methods are reported stable_up_to it)",
+       Bounds::above(1)},
+      {"max_steps", P::integer, "20000000", "step budget of one run", Bounds::at_least(10)},
+      {"ray", P::text, "auto",
+       "where the stiffness() estimate is placed when the spectrum is not computed: auto "
+       "(imaginary axis for mechanical systems, real axis otherwise), imag, real",
+       {"auto", "imag", "real"}},
+      {"dense_limit", P::integer, "600",
+       "compute the exact spectrum (dense eigensolver) up to this dimension",
+       Bounds::non_negative()}};
+  k.unit_columns = stability_table(StabilityResult{}).columns;
+  k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
+    StabilitySpec s;
+    s.model = t.model;
+    s.params = t.params;
+    s.integrators = t.integrators;
+    if (o.contains("sweep")) parse_sweep(o.text("sweep"), s.sweep_param, s.sweep_values);
+    s.rel_tol = o.real("rel_tol");
+    s.periods = o.real("periods");
+    s.min_steps = o.integer("min_steps");
+    if (o.contains("horizon")) s.horizon = o.real("horizon");
+    s.energy_growth = o.real("growth");
+    s.criterion = o.text("criterion");
+    s.norm_growth = o.real("norm_growth");
+    s.perturbation = o.real("perturbation");
+    s.seed = static_cast<unsigned long>(o.integer("seed"));
+    s.h_cap_factor = o.real("h_cap_factor");
+    s.max_steps = o.integer("max_steps");
+    s.ray = o.text("ray");
+    s.dense_limit = static_cast<Index>(o.integer("dense_limit"));
+    return std::make_unique<StabilityJob>(std::move(s));
+  };
+  return k;
+}
+
+const StabilityResult& stability_result(const StudyJob& job) {
+  return dynamic_cast<const StabilityJob&>(job).result();
+}
+
+StabilityResult run_stability(StabilitySpec spec, const StudyObjects& objects,
+                              std::ostream* progress) {
+  const ScopedStudyObjects scope(objects, spec.model, spec.integrators);
+  return run_stability(static_cast<const StabilitySpec&>(spec), progress);
+}
+
+StabilityResult stability_study(StabilitySpec spec, const StudyObjects& objects,
+                                const std::filesystem::path& dir, const StudyContext& ctx) {
+  const ScopedStudyObjects scope(objects, spec.model, spec.integrators);
+  StabilityJob job(std::move(spec));
+  run_study_job(study_kind("stability"), job, dir, ctx);
+  return job.result();
 }
 
 }  // namespace stiffbench

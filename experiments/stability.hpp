@@ -58,6 +58,7 @@
 #include "core/params.hpp"
 #include "experiments/output.hpp"
 #include "experiments/plotting.hpp"
+#include "experiments/study.hpp"
 
 namespace stiffbench {
 
@@ -70,7 +71,7 @@ struct StabilitySpec {
   double rel_tol = 1e-3;             // bisection tolerance on h
   double periods = 500;              // horizon in periods of the fastest mode
   long min_steps = 200;              // and at least this many steps
-  double growth = 2;                 // energy factor (mechanical systems with an energy invariant)
+  double energy_growth = 2;  // option `growth`: energy factor (mechanical systems with energy)
   double norm_growth = 10;           // blow-up factor on the max-norm (every system)
   double perturbation = 1e-3;        // ε
   unsigned long seed = 1;
@@ -118,6 +119,13 @@ struct StabilityResult {
 };
 
 StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress);
+// The same on a user's objects (see run_convergence with StudyObjects).
+StabilityResult run_stability(StabilitySpec spec, const StudyObjects& objects,
+                              std::ostream* progress);
+// The one call: check DIR, run, write DIR/stability.{csv,md,json}, plot, print (ctx.out).
+StabilityResult stability_study(StabilitySpec spec, const StudyObjects& objects,
+                                const std::filesystem::path& dir, const StudyContext& ctx = {});
+const StabilityResult& stability_result(const StudyJob& job);
 
 // Least-squares slope of log y against log x (at least two points, else empty).
 std::optional<double> loglog_slope(const std::vector<double>& x, const std::vector<double>& y);

@@ -15,15 +15,11 @@
 #include "core/run_control.hpp"
 #include "core/types.hpp"
 #include "experiments/catalog.hpp"
-#include "experiments/convergence.hpp"
 #include "experiments/csv.hpp"
-#include "experiments/energy.hpp"
 #include "experiments/output.hpp"
 #include "experiments/progress.hpp"
-#include "experiments/region.hpp"
 #include "experiments/spec_file.hpp"
-#include "experiments/stability.hpp"
-#include "experiments/work_precision.hpp"
+#include "experiments/study.hpp"
 
 namespace stiffbench {
 
@@ -83,150 +79,21 @@ Expansion expand(const SpecFile& spec) {
     }
     ex.points.push_back(std::move(pt));
   }
-  ex.units_per_point = spec.kind == "region"
+  ex.units_per_point = !study_kind(spec.kind).unit_per_integrator
                            ? 1
                            : static_cast<long>(std::max<std::size_t>(1, spec.integrators.size()));
   return ex;
 }
 
-// ---- building the experiment specs of one point ----------------------------------------------
+// ---- the study of one point ------------------------------------------------------------------
 
 const SpecScalar* get(const Point& p, const std::string& key) {
   const auto it = p.settings.find(key);
   return it == p.settings.end() ? nullptr : &it->second;
 }
-double real_or(const Point& p, const std::string& key, double dflt) {
-  const SpecScalar* v = get(p, key);
-  return v ? std::stod(v->text) : dflt;
-}
-long int_or(const Point& p, const std::string& key, long dflt) {
-  const SpecScalar* v = get(p, key);
-  return v ? std::stol(v->text) : dflt;
-}
 std::string text_or(const Point& p, const std::string& key, const std::string& dflt) {
   const SpecScalar* v = get(p, key);
   return v ? v->text : dflt;
-}
-std::optional<double> real_opt(const Point& p, const std::string& key) {
-  const SpecScalar* v = get(p, key);
-  return v ? std::optional<double>(std::stod(v->text)) : std::nullopt;
-}
-
-ConvergenceSpec convergence_spec(const SpecFile& s, const Point& p) {
-  ConvergenceSpec c;
-  c.model = text_or(p, "model", "");
-  c.params = p.params;
-  c.integrators = s.integrators;
-  if (s.kind == "convergence" && !get(p, "t_end"))
-    throw BadInput(s.file + ": key 't_end' missing (required for convergence)");
-  c.t_end = real_or(p, "t_end", 1.0);
-  c.h = real_or(p, "h", std::numeric_limits<double>::quiet_NaN());
-  c.levels = static_cast<int>(int_or(p, "levels", c.levels));
-  c.refine = real_or(p, "refine", c.refine);
-  c.reference = text_or(p, "reference", c.reference);
-  c.reference_rtol = real_opt(p, "reference_rtol");
-  c.reference_atol = real_opt(p, "reference_atol");
-  return c;
-}
-
-WorkPrecisionSpec work_precision_spec(const SpecFile& s, const Point& p) {
-  WorkPrecisionSpec w;
-  w.model = text_or(p, "model", "");
-  w.params = p.params;
-  w.integrators = s.integrators;
-  w.t_end = real_or(p, "t_end", w.t_end);
-  w.h = real_or(p, "h", w.h);
-  w.levels = static_cast<int>(int_or(p, "levels", w.levels));
-  w.refine = real_or(p, "refine", w.refine);
-  w.tol_levels = static_cast<int>(int_or(p, "tol_levels", w.tol_levels));
-  w.rtol_max = real_or(p, "rtol_max", w.rtol_max);
-  w.atol_factor = real_or(p, "atol_factor", w.atol_factor);
-  w.repeats = static_cast<int>(int_or(p, "repeats", w.repeats));
-  w.reference = text_or(p, "reference", w.reference);
-  w.reference_rtol = real_or(p, "reference_rtol", w.reference_rtol);
-  w.reference_atol = real_or(p, "reference_atol", w.reference_atol);
-  return w;
-}
-
-StabilitySpec stability_spec(const SpecFile& s, const Point& p) {
-  StabilitySpec st;
-  st.model = text_or(p, "model", "");
-  st.params = p.params;
-  st.integrators = s.integrators;
-  if (const SpecScalar* sw = get(p, "sweep"))
-    parse_sweep(sw->text, st.sweep_param, st.sweep_values);
-  st.rel_tol = real_or(p, "rel_tol", st.rel_tol);
-  st.periods = real_or(p, "periods", st.periods);
-  st.min_steps = int_or(p, "min_steps", st.min_steps);
-  st.horizon = real_opt(p, "horizon");
-  st.growth = real_or(p, "growth", st.growth);
-  st.criterion = text_or(p, "criterion", st.criterion);
-  st.norm_growth = real_or(p, "norm_growth", st.norm_growth);
-  st.perturbation = real_or(p, "perturbation", st.perturbation);
-  st.seed = static_cast<unsigned long>(int_or(p, "seed", static_cast<long>(st.seed)));
-  st.h_cap_factor = real_or(p, "h_cap_factor", st.h_cap_factor);
-  st.max_steps = int_or(p, "max_steps", st.max_steps);
-  st.ray = text_or(p, "ray", st.ray);
-  st.dense_limit = static_cast<Index>(int_or(p, "dense_limit", static_cast<long>(st.dense_limit)));
-  return st;
-}
-
-EnergySpec energy_spec(const SpecFile& s, const Point& p) {
-  EnergySpec e;
-  e.model = text_or(p, "model", "");
-  e.params = p.params;
-  e.integrators = s.integrators;
-  e.h = real_or(p, "h", e.h);
-  e.t_end = real_or(p, "t_end", e.t_end);
-  e.samples = int_or(p, "samples", e.samples);
-  e.invariant = text_or(p, "invariant", e.invariant);
-  return e;
-}
-
-RegionSpec region_spec(const SpecFile& s, const Point& p) {
-  RegionSpec r;
-  r.integrators = s.integrators;
-  if (const SpecScalar* b = get(p, "box")) r.box = parse_region_box(b->text);
-  r.resolution = static_cast<int>(int_or(p, "resolution", r.resolution));
-  return r;
-}
-
-// The study's own columns (from an empty result).
-std::vector<std::string> study_columns(const std::string& kind) {
-  if (kind == "convergence") return convergence_table(ConvergenceResult{}).columns;
-  if (kind == "local-error") return local_error_table(ConvergenceResult{}).columns;
-  if (kind == "work-precision") return work_precision_table(WorkPrecisionResult{}).columns;
-  if (kind == "stability") return stability_table(StabilityResult{}).columns;
-  if (kind == "energy") return energy_summary_table(EnergyResult{}).columns;
-  return region_limits_table(RegionResult{}).columns;
-}
-
-// Runs one unit (integrators: the unit's; all of them for region) and returns its table.
-Table run_unit(const SpecFile& s, const Point& p, const std::vector<std::string>& integrators,
-               const std::string& out_dir) {
-  if (s.kind == "convergence" || s.kind == "local-error") {
-    ConvergenceSpec c = convergence_spec(s, p);
-    c.integrators = integrators;
-    c.cache_dir = out_dir;
-    return s.kind == "convergence" ? convergence_table(run_convergence(c, nullptr))
-                                   : local_error_table(run_local_error(c, nullptr));
-  }
-  if (s.kind == "work-precision") {
-    WorkPrecisionSpec w = work_precision_spec(s, p);
-    w.integrators = integrators;
-    return work_precision_table(run_work_precision(w, nullptr));
-  }
-  if (s.kind == "stability") {
-    StabilitySpec st = stability_spec(s, p);
-    st.integrators = integrators;
-    return stability_table(run_stability(st, nullptr));
-  }
-  if (s.kind == "energy") {
-    EnergySpec e = energy_spec(s, p);
-    e.integrators = integrators;
-    return energy_summary_table(run_energy(e, nullptr));
-  }
-  return region_limits_table(run_region(region_spec(s, p)));
 }
 
 const SpecEntry* find_entry(const std::vector<SpecEntry>& list, const std::string& key) {
@@ -235,21 +102,57 @@ const SpecEntry* find_entry(const std::vector<SpecEntry>& list, const std::strin
   return nullptr;
 }
 
+// A point's study options: its settings but the model, as the command line would give them.
+Params point_options(const Point& p) {
+  Params o;
+  for (const auto& [key, value] : p.settings)
+    if (key != "model") o.set(key, value.text);
+  return o;
+}
+
+// The job of one point for `integrators` (BadInput naming the file, line and key of a bad
+// option).
+std::unique_ptr<StudyJob> point_job(const SpecFile& s, const Point& p,
+                                    const std::vector<std::string>& integrators,
+                                    const std::string& cache_dir) {
+  const StudyKind& kind = study_kind(s.kind);
+  StudyTarget target;
+  target.model = text_or(p, "model", "");
+  target.params = p.params;
+  target.integrators = integrators;
+  StudyContext ctx;
+  ctx.cache_dir = cache_dir;
+  ctx.use_output_cache = false;
+  auto how = [&](const std::string& key) {
+    const SpecEntry* e = find_entry(s.settings, key);
+    return e ? e->where + ": key '" + e->path + "'" : s.file + ": key '" + key + "'";
+  };
+  return make_study(kind, target, point_options(p), ctx, how);
+}
+
+// Runs one unit (integrators: the unit's; all of them for a study of one unit per point).
+Table run_unit(const SpecFile& s, const Point& p, const std::vector<std::string>& integrators,
+               const std::string& out_dir) {
+  auto job = point_job(s, p, integrators, out_dir);
+  job->run(nullptr);
+  return job->unit_table();
+}
+
 // Checks names and parameters of one point with the registries (no model is created) and the
-// experiment spec's own validation; BadInput naming the file, line and key.
+// study's own validation; BadInput naming the file, line and key.
 void validate_point(const SpecFile& s, const Point& p) {
   const std::string at = p.label.empty() ? "" : " (sweep point " + p.label + ")";
+  const StudyKind& kind = study_kind(s.kind);
   try {
-    std::vector<const ModelRegistry::Entry*> none;
     const ModelRegistry::Entry* model = nullptr;
-    if (s.kind != "region") {
+    if (kind.takes_model) {
       const std::string name = text_or(p, "model", "");
       model = model_registry().find(name);
       if (!model)
         spec_error(*find_entry(s.settings, "model"),
                    "unknown model '" + name + "'; known: " + join(model_registry().names()));
     } else if (!p.params.empty()) {
-      spec_error(s.params.front(), "a region spec takes no parameters");
+      spec_error(s.params.front(), "a " + s.kind + " spec takes no parameters");
     }
     std::vector<const IntegratorRegistry::Entry*> integ;
     for (const auto& name : s.integrators) {
@@ -259,8 +162,9 @@ void validate_point(const SpecFile& s, const Point& p) {
                        "'; known: " + join(integrator_registry().names()));
       integ.push_back(e);
     }
-    const std::string reference = text_or(p, "reference", "auto");
-    if (const auto* e = integrator_registry().find(reference)) integ.push_back(e);
+    const auto job = point_job(s, p, s.integrators, "");
+    for (const auto& helper : job->helper_integrators())
+      if (const auto* e = integrator_registry().find(helper)) integ.push_back(e);
     for (const auto& [key, value] : p.params.values()) {
       const SpecEntry& entry = *find_entry(s.params, key);
       Params one;
@@ -281,11 +185,6 @@ void validate_point(const SpecFile& s, const Point& p) {
         spec_error(entry, "unknown parameter; " + accepted);
       }
     }
-    if (s.kind == "convergence" || s.kind == "local-error") convergence_spec(s, p).validate();
-    if (s.kind == "stability") stability_spec(s, p).validate();
-    if (s.kind == "energy") energy_spec(s, p).validate();
-    if (s.kind == "region") region_spec(s, p).validate();
-    if (s.kind == "work-precision") work_precision_spec(s, p);
   } catch (const BadInput& e) {
     const std::string msg = e.what();
     if (msg.rfind(s.file, 0) == 0 || msg.rfind("--set", 0) == 0) throw BadInput(msg + at);
@@ -464,6 +363,16 @@ void write_slurm(const RunOptions& opt, const SpecFile& spec, const Expansion& e
 
 }  // namespace
 
+std::unique_ptr<StudyJob> make_spec_job(const SpecFile& spec, const std::string& cache_dir) {
+  const Expansion ex = expand(spec);
+  if (ex.points.size() != 1)
+    throw BadInput(spec.file + ": key '" + ex.dims.front()->path +
+                   "': a report section is one study, not a sweep (run sweeps with `stiffbench "
+                   "run`)");
+  validate_point(spec, ex.points.front());
+  return point_job(spec, ex.points.front(), spec.integrators, cache_dir);
+}
+
 void parse_shard(const std::string& arg, int& index, int& count) {
   const auto slash = arg.find('/');
   try {
@@ -486,13 +395,14 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   if (opt.slurm_tasks < 0) throw BadInput("--slurm: expected a number of tasks >= 1");
 
   const std::string kind = spec.kind;
+  const bool unit_per_integrator = study_kind(kind).unit_per_integrator;
   const long per_point = ex.units_per_point;
   auto unit_integrators = [&](long u) {
-    if (kind == "region") return spec.integrators;
+    if (!unit_per_integrator) return spec.integrators;
     return std::vector<std::string>{spec.integrators[static_cast<std::size_t>(u % per_point)]};
   };
   out << spec.file << ": " << kind << ", " << ex.points.size() << " point(s) x "
-      << (kind == "region" ? std::string("1 unit (all integrators)")
+      << (!unit_per_integrator ? std::string("1 unit (all integrators)")
                            : std::to_string(per_point) + " integrator(s)")
       << " = " << ex.units() << " unit(s)\n";
   if (opt.check_only) {
@@ -512,7 +422,7 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   const std::string hash = spec_hash(spec);
 
   // Columns: unit, unit_rows, tags, study columns, unit_status, unit_message.
-  const std::vector<std::string> study = study_columns(kind);
+  const std::vector<std::string> study = study_kind(kind).unit_columns;
   std::vector<std::string> columns = {"unit", "unit_rows"};
   for (const auto* d : ex.dims) {
     const bool clash = std::find(study.begin(), study.end(), d->path) != study.end() ||

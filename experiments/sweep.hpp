@@ -18,10 +18,19 @@
 #pragma once
 
 #include <iosfwd>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace stiffbench {
+
+class StudyJob;
+struct SpecFile;
+
+// The study of a spec without sweep dimensions (a report section), checked like a point of
+// `run` (names, parameters, options; BadInput naming the file, line and key); a spec with a
+// list-valued key is BadInput. The reference cache goes to `cache_dir` (empty: none).
+std::unique_ptr<StudyJob> make_spec_job(const SpecFile& spec, const std::string& cache_dir);
 
 // Exit code of `run` and `merge` when a unit failed or (merge) units are missing.
 inline constexpr int kExitRowsFailed = 3;

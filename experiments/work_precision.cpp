@@ -11,63 +11,24 @@
 
 namespace stiffbench {
 
+WorkPrecisionSpec::WorkPrecisionSpec() {
+  t_end = 0;
+  h = 0;
+  levels = 4;
+  reference_rtol = 1e-14;
+  reference_atol = 1e-16;
+}
+
 nlohmann::json WorkPrecisionSpec::to_json() const {
-  return {{"model", model},
-          {"params", params.values()},
-          {"integrators", integrators},
-          {"t_end", t_end},
-          {"h", h},
-          {"levels", levels},
-          {"refine", refine},
-          {"tol_levels", tol_levels},
-          {"rtol_max", rtol_max},
-          {"atol_factor", atol_factor},
-          {"repeats", repeats},
-          {"reference", reference},
-          {"reference_rtol", reference_rtol},
-          {"reference_atol", reference_atol}};
+  nlohmann::json j = step_study_json();
+  j["tol_levels"] = tol_levels;
+  j["rtol_max"] = rtol_max;
+  j["atol_factor"] = atol_factor;
+  j["repeats"] = repeats;
+  return j;
 }
 
 namespace {
-
-// The reference state at t_end, with a description for the metadata.
-Vec reference_state(const WorkPrecisionSpec& spec, const OdeSystem& sys, double t_end,
-                    double h_fine, std::string* description) {
-  Vec y(sys.dimension());
-  const bool exact = spec.reference == "exact" || (spec.reference == "auto" && sys.has_exact());
-  if (exact) {
-    require_input(sys.has_exact(),
-                  "--reference exact: model '" + sys.name() + "' has no exact solution");
-    sys.exact(t_end, y);
-    *description = "exact";
-    return y;
-  }
-  const std::string method = spec.reference == "auto" ? "cvode_bdf" : spec.reference;
-  Params p = spec.params;
-  const auto& entry = integrator_registry().at(method);
-  bool has_rtol = false;
-  for (const auto& ps : entry.params) has_rtol = has_rtol || ps.key == "rtol";
-  if (has_rtol) {
-    p.set("rtol", format_full(spec.reference_rtol));
-    p.set("atol", format_full(spec.reference_atol));
-  }
-  auto integ = integrator_registry().create(method, p);
-  RunResult r;
-  if (integ->supports_adaptive()) {
-    r = run_adaptive(sys, *integ, {t_end, 0});
-    *description =
-        method + " adaptive, rtol = " + p.values().at("rtol") + ", atol = " + p.values().at("atol");
-  } else {
-    FixedStepOptions opt;
-    opt.t_end = t_end;
-    opt.h = h_fine / 16;
-    r = run_fixed_step(sys, *integ, opt);
-    *description = method + " with h = (finest h)/16 = " + format_full(opt.h);
-  }
-  if (r.stats.status != Status::ok)
-    throw std::runtime_error("reference run of '" + method + "' failed: " + r.stats.message);
-  return r.y;
-}
 
 double mescd(CVecRef y, CVecRef ref, double ratio) {
   double m = 0;
@@ -80,40 +41,27 @@ double mescd(CVecRef y, CVecRef ref, double ratio) {
 
 WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream* progress) {
   WorkPrecisionSpec spec = s;
-  require_input(!spec.integrators.empty(), "--integrators: no integrator given");
-  require_input(spec.levels >= 2,
-                "--levels must be >= 2 (got " + std::to_string(spec.levels) + ")");
+  spec.validate_step_study();
   require_input(spec.tol_levels >= 2,
                 "--tol-levels must be >= 2 (got " + std::to_string(spec.tol_levels) + ")");
-  require_input(spec.refine > 1, "--refine must be > 1");
   require_input(spec.repeats >= 1, "--repeats must be >= 1");
   require_input(spec.rtol_max > 0 && spec.rtol_max < 1, "--rtol-max must be in (0, 1)");
   require_input(spec.atol_factor >= 0, "--atol-factor must be >= 0");
   Setup setup = make_setup(spec.model, spec.integrators, spec.params);
   const OdeSystem& sys = *setup.model;
   const double t0 = sys.initial_time();
-  if (spec.t_end == 0) {
-    const auto literature = sys.end_time();
-    require_input(literature.has_value(),
-                  "--t-end is required: model '" + spec.model + "' has no default end time");
-    spec.t_end = *literature;
-  }
+  spec.t_end = resolve_end_time(sys, spec.t_end == 0 ? std::nan("") : spec.t_end, spec.model).value;
   require_input(spec.t_end > t0, "--t-end must be > the model's initial time");
-  std::string h_source = "--h";
-  if (spec.h == 0) {
-    // The model's suggested step (its CFL limit) where it has one, else a fine default.
-    if (const auto suggested = sys.suggested_step()) {
-      spec.h = suggested->h;
-      h_source = "suggested step: " + suggested->rule;
-    } else {
-      spec.h = (spec.t_end - t0) / 16000;
-      h_source = "(t_end - t0)/16000";
-    }
-    if (progress) *progress << "coarsest h = " << format_full(spec.h) << " (" << h_source << ")\n";
-  }
+  const Resolved h0 = resolve_step(sys, spec.h == 0 ? std::nan("") : spec.h, spec.model, [&] {
+    return Resolved{(spec.t_end - t0) / 16000, "(t_end - t0)/16000"};
+  });
+  if (progress && h0.source != "--h")
+    *progress << "coarsest h = " << format_full(h0.value) << " (" << h0.source << ")\n";
+  spec.h = h0.value;
+  const std::string h_source = h0.source;
   require_input(spec.h > 0, "--h must be > 0");
-  std::vector<double> hs, tols;
-  for (int k = 0; k < spec.levels; ++k) hs.push_back(spec.h / std::pow(spec.refine, k));
+  std::vector<double> tols;
+  const std::vector<double> hs = spec.step_ladder(spec.h);
   for (int k = 0; k < spec.tol_levels; ++k) tols.push_back(spec.rtol_max / std::pow(10.0, k));
   for (double h : hs) fixed_step_count(t0, spec.t_end, h, FixedStepOptions{}.max_steps);
 
@@ -121,7 +69,7 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
   res.t_end = spec.t_end;
   res.h = spec.h;
   res.h_source = h_source;
-  const Vec ref = reference_state(spec, sys, spec.t_end, hs.back(), &res.reference_description);
+  const Vec ref = reference_at_end(spec, sys, spec.t_end, hs.back(), &res.reference_description);
   if (progress) *progress << "reference: " << res.reference_description << "\n";
 
   std::size_t total = 0, done = 0;
@@ -218,22 +166,138 @@ void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpe
   write_file_atomic(d / "work_precision.json", meta.dump(2) + "\n");
 }
 
+namespace {
+
+class WorkPrecisionJob : public StudyJob {
+ public:
+  explicit WorkPrecisionJob(WorkPrecisionSpec spec) : spec_(std::move(spec)) {
+    spec_.validate_step_study();
+  }
+  nlohmann::json spec_json() const override { return spec_.to_json(); }
+  std::vector<std::string> helper_integrators() const override { return {spec_.reference}; }
+  void run(std::ostream* progress) override { result_ = run_work_precision(spec_, progress); }
+  Table unit_table() const override { return work_precision_table(result_); }
+  bool write(const std::filesystem::path& dir, const std::string& title, const PlotOptions& plot,
+             std::ostream& err) const override {
+    write_work_precision_outputs(dir.string(), spec_, result_);
+    return plot_work_precision(dir / "work_precision.csv", title, plot, err);
+  }
+  void print_summary(std::ostream& out) const override { out << unit_table().to_markdown(); }
+  std::string report_markdown(const std::string& note) const override;
+  std::string default_title() const override { return "Work-precision: " + spec_.model; }
+  const WorkPrecisionResult& result() const { return result_; }
+
+ private:
+  WorkPrecisionSpec spec_;
+  WorkPrecisionResult result_;
+};
+
+std::string WorkPrecisionJob::report_markdown(const std::string& note) const {
+  std::ostringstream md;
+  md << note << " Reference: " << result_.reference_description
+     << ". Fixed-step methods over h, references over rtol (atol = "
+     << format_full(spec_.atol_factor) << "·rtol).\n\n";
+  Table summary{{"integrator", "settings", "best error", "f_evals at best", "status"}, {}};
+  for (const auto& name : spec_.integrators) {
+    int n = 0;
+    double best = std::numeric_limits<double>::infinity();
+    long fe = 0;
+    std::string status = "ok";
+    for (const auto& r : result_.rows) {
+      if (r.integrator != name) continue;
+      ++n;
+      if (r.stats.status != Status::ok)
+        status = to_string(r.stats.status);
+      else if (r.error < best) {
+        best = r.error;
+        fe = r.stats.f_evals;
+      }
+    }
+    summary.rows.push_back({name, std::to_string(n),
+                            std::isfinite(best) ? format_short(best) : "-", std::to_string(fe),
+                            status});
+  }
+  md << summary.to_markdown() << "\n";
+  return md.str();
+}
+
+}  // namespace
+
+StudyKind work_precision_study_kind() {
+  using P = ParamType;
+  StudyKind k;
+  k.name = "work-precision";
+  k.stem = "work_precision";
+  k.summary =
+      "error against work: fixed-step methods over an h ladder, references over a tolerance "
+      "ladder; writes work_precision.{csv,md,json}";
+  StepStudyDefaults d;
+  d.t_end_help = "final time (default: the model's literature end time)";
+  d.h_help = "coarsest step of fixed-step methods (default: the model's suggested step, else "
+             "(t_end - t0)/16000)";
+  d.levels = "4";
+  d.reference_rtol = "1e-14";
+  d.reference_atol = "1e-16";
+  d.reference_help = "exact | METHOD; default: exact where available, else cvode_bdf";
+  k.options = step_study_options(d);
+  const std::vector<ParamSpec> own = {
+      {"tol_levels", P::integer, "6", "number of tolerances (factor 10 apart)",
+       Bounds::at_least(2)},
+      {"rtol_max", P::real, "1e-05", "loosest relative tolerance (< 1)", Bounds::positive()},
+      {"atol_factor", P::real, "0.001", "atol = atol_factor * rtol", Bounds::non_negative()},
+      {"repeats", P::integer, "3", "runs per setting; wall time is the minimum",
+       Bounds::at_least(1)}};
+  k.options.insert(k.options.end(), own.begin(), own.end());
+  k.unit_columns = work_precision_table(WorkPrecisionResult{}).columns;
+  k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
+    WorkPrecisionSpec spec;
+    spec.model = t.model;
+    spec.params = t.params;
+    spec.integrators = t.integrators;
+    read_step_study_options(o, spec);
+    if (std::isnan(spec.h)) spec.h = 0;
+    spec.tol_levels = static_cast<int>(o.integer("tol_levels"));
+    spec.rtol_max = o.real("rtol_max");
+    spec.atol_factor = o.real("atol_factor");
+    spec.repeats = static_cast<int>(o.integer("repeats"));
+    return std::make_unique<WorkPrecisionJob>(std::move(spec));
+  };
+  return k;
+}
+
+const WorkPrecisionResult& work_precision_result(const StudyJob& job) {
+  return dynamic_cast<const WorkPrecisionJob&>(job).result();
+}
+
 WorkPrecisionResult work_precision_study(const WorkPrecisionSpec& spec, const std::string& dir,
                                          std::ostream* progress, std::ostream& err,
                                          const PlotOptions& plot) {
-  require_output_dir(dir);
-  check_study_output(dir, "work_precision", spec.to_json(), force_output(), &err);
-  WorkPrecisionResult res = run_work_precision(spec, progress);
-  write_work_precision_outputs(dir, spec, res);
-  plot_work_precision(std::filesystem::path(dir) / "work_precision.csv",
-                      "Work-precision: " + spec.model, plot, err);
-  return res;
+  StudyContext ctx;
+  ctx.force = force_output();
+  ctx.plot = plot;
+  ctx.progress = progress;
+  ctx.err = &err;
+  return work_precision_study(spec, StudyObjects{}, dir, ctx);
+}
+
+WorkPrecisionResult work_precision_study(WorkPrecisionSpec spec, const StudyObjects& objects,
+                                         const std::filesystem::path& dir,
+                                         const StudyContext& ctx) {
+  const ScopedStudyObjects scope(objects, spec.model, spec.integrators);
+  WorkPrecisionJob job(std::move(spec));
+  run_study_job(study_kind("work-precision"), job, dir, ctx);
+  return job.result();
+}
+
+WorkPrecisionResult run_work_precision(WorkPrecisionSpec spec, const StudyObjects& objects,
+                                       std::ostream* progress) {
+  const ScopedStudyObjects scope(objects, spec.model, spec.integrators);
+  return run_work_precision(static_cast<const WorkPrecisionSpec&>(spec), progress);
 }
 
 WorkPrecisionResult run_work_precision(WorkPrecisionSpec spec, const SystemFactory& system,
                                        std::ostream* progress) {
-  spec.model = register_system(system, spec.model);
-  return run_work_precision(static_cast<const WorkPrecisionSpec&>(spec), progress);
+  return run_work_precision(std::move(spec), StudyObjects{system, {}}, progress);
 }
 
 }  // namespace stiffbench

@@ -17,22 +17,20 @@
 #include "core/params.hpp"
 #include "core/solve_stats.hpp"
 #include "experiments/catalog.hpp"
+#include "experiments/convergence.hpp"
 #include "experiments/output.hpp"
 #include "experiments/plotting.hpp"
 
 namespace stiffbench {
 
-struct WorkPrecisionSpec {
-  std::string model;
-  Params params;
-  std::vector<std::string> integrators;
-  double t_end = 0;  // 0: the model's literature end time
-  // Coarsest step; 0: (t_end - t0)/16000. Fixed steps on stiff problems are pre-asymptotic
-  // for a long way (bdf2 on HIRES: the final-time error crosses zero near h = 0.04, so a ladder
-  // through it is not monotone), so the default starts fine; choose --h for your problem.
-  double h = 0;
-  int levels = 4;
-  double refine = 2.0;
+// The step ladder and reference are StepStudySpec's (experiments/convergence.hpp) with other
+// defaults: t_end = 0 (the model's literature end time); h = 0, the coarsest step: the model's
+// suggested step, else (t_end - t0)/16000. Fixed steps on stiff problems are pre-asymptotic
+// for a long way (bdf2 on HIRES: the final-time error crosses zero near h = 0.04, so a ladder
+// through it is not monotone), so the default starts fine; choose --h for your problem.
+// 4 levels; the reference (default cvode_bdf) at rtol 1e-14, atol 1e-16.
+struct WorkPrecisionSpec : StepStudySpec {
+  WorkPrecisionSpec();
   // rtol from 1e-5 to 1e-10 by default. Looser tolerances are pre-asymptotic for some codes:
   // on HIRES arkode_dirk at rtol 1e-4 took more f evaluations (26503) than at 1e-5 (21962) for
   // a larger error (6.1e-8 vs 4.9e-8), and gsl_bsimp's error rose from 1e-3 to 1e-4.
@@ -40,9 +38,6 @@ struct WorkPrecisionSpec {
   double rtol_max = 1e-5;
   double atol_factor = 1e-3;
   int repeats = 3;
-  std::string reference = "auto";  // auto | exact | METHOD
-  double reference_rtol = 1e-14;   // tolerances of an adaptive reference run
-  double reference_atol = 1e-16;
 
   nlohmann::json to_json() const;
 };
@@ -62,7 +57,9 @@ struct WorkPrecisionResult {
 };
 
 WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& spec, std::ostream* progress);
-// The same on a user's system object (see run_convergence with a SystemFactory).
+// The same on a user's objects (see run_convergence with StudyObjects).
+WorkPrecisionResult run_work_precision(WorkPrecisionSpec spec, const StudyObjects& objects,
+                                       std::ostream* progress);
 WorkPrecisionResult run_work_precision(WorkPrecisionSpec spec, const SystemFactory& system,
                                        std::ostream* progress);
 Table work_precision_table(const WorkPrecisionResult& r);
@@ -77,5 +74,10 @@ void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpe
 WorkPrecisionResult work_precision_study(const WorkPrecisionSpec& spec, const std::string& dir,
                                          std::ostream* progress, std::ostream& err,
                                          const PlotOptions& plot = {});
+// The one call on a user's objects (the pipeline of experiments/study.hpp).
+WorkPrecisionResult work_precision_study(WorkPrecisionSpec spec, const StudyObjects& objects,
+                                         const std::filesystem::path& dir,
+                                         const StudyContext& ctx = {});
+const WorkPrecisionResult& work_precision_result(const StudyJob& job);
 
 }  // namespace stiffbench

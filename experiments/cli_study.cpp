@@ -1,0 +1,64 @@
+// One subcommand per registered study (experiments/study.hpp): its flags come from the study's
+// option declarations (`t_end` is `--t-end`), and its callback runs the study pipeline.
+#include <iostream>
+#include <map>
+#include <memory>
+
+#include "experiments/catalog.hpp"
+#include "experiments/cli.hpp"
+#include "experiments/output.hpp"
+#include "experiments/study.hpp"
+
+namespace stiffbench {
+
+namespace {
+
+void add_study_command(CLI::App& app, const StudyKind& kind) {
+  struct State {
+    CommonFlags flags;
+    std::map<std::string, std::string> values;  // option key -> text as given
+  };
+  auto st = std::make_shared<State>();
+  auto* cmd = app.add_subcommand(kind.name, kind.summary);
+  add_common_flags(cmd, st->flags, kind.takes_model, kind.takes_model);
+  if (kind.integrators_required) cmd->get_option("--integrators")->required();
+  else
+    cmd->get_option("--integrators")
+        ->description(
+            "comma-separated integrator names (default: every integrator the study applies to)");
+  std::vector<std::pair<std::string, CLI::Option*>> given;
+  for (const auto& o : kind.options) {
+    std::string help = o.help;
+    if (!o.choices.empty()) help += " (one of: " + join(o.choices, ", ") + ")";
+    auto* opt = cmd->add_option(option_flag(o.key), st->values[o.key], help);
+    if (!o.default_value.empty()) opt->default_str(o.default_value);
+    for (const auto& r : kind.required)
+      if (r == o.key) opt->required();
+    given.emplace_back(o.key, opt);
+  }
+  cmd->callback([st, given, name = kind.name]() {
+    Params options;
+    for (const auto& [key, opt] : given)
+      if (opt->count() > 0) options.set(key, st->values.at(key));
+    StudyTarget target;
+    target.model = st->flags.model;
+    target.params = Params::from_assignments(st->flags.params);
+    if (!st->flags.integrators.empty())
+      target.integrators = split_list(st->flags.integrators, "--integrators");
+    StudyContext ctx;
+    ctx.force = force_output();
+    ctx.plot = st->flags.plot;
+    ctx.progress = &std::cerr;
+    ctx.out = &std::cout;
+    ctx.err = &std::cerr;
+    run_study(name, std::move(target), options, st->flags.out_dir, ctx);
+  });
+}
+
+}  // namespace
+
+void add_study_commands(CLI::App& app) {
+  for (const auto& kind : study_kinds()) add_study_command(app, kind);
+}
+
+}  // namespace stiffbench
