@@ -51,17 +51,32 @@ nlohmann::json StepStudySpec::step_study_json() const {
           {"reference_atol", reference_atol ? nlohmann::json(*reference_atol) : nlohmann::json()}};
 }
 
+std::vector<std::string> StepStudySpec::reference_integrators() const { return {reference}; }
+
+void StepStudySpec::apply_defaults(const StepStudyDefaults& d) {
+  levels = std::stoi(d.ladder_levels);
+  if (!d.ref_rtol.empty()) reference_rtol = std::stod(d.ref_rtol);
+  if (!d.ref_atol.empty()) reference_atol = std::stod(d.ref_atol);
+}
+
+void add_step_study_metadata(nlohmann::json& meta, double h_used, const std::string& h_source,
+                             const std::string& reference) {
+  meta["h_used"] = h_used;
+  meta["h_source"] = h_source;
+  meta["reference"] = reference;
+}
+
 std::vector<ParamSpec> step_study_options(const StepStudyDefaults& d) {
   using P = ParamType;
   return {
       {"t_end", P::real, "", d.t_end_help, Bounds::positive()},
       {"h", P::real, "", d.h_help, Bounds::positive()},
-      {"levels", P::integer, d.levels, "number of step sizes", Bounds::at_least(2)},
+      {"levels", P::integer, d.ladder_levels, "number of step sizes", Bounds::at_least(2)},
       {"refine", P::real, "2", "ratio between consecutive step sizes", Bounds::above(1)},
-      {"reference", P::text, "auto", d.reference_help},
-      {"reference_rtol", P::real, d.reference_rtol,
+      {"reference", P::text, "auto", d.ref_help},
+      {"reference_rtol", P::real, d.ref_rtol,
        "relative tolerance of an adaptive reference run", Bounds::positive()},
-      {"reference_atol", P::real, d.reference_atol,
+      {"reference_atol", P::real, d.ref_atol,
        "absolute tolerance of an adaptive reference run", Bounds::positive()},
   };
 }
@@ -610,9 +625,7 @@ void write_convergence_outputs(const std::string& dir, const std::string& name,
   // "spec" is the spec as given (what check_study_output compares before a run); the step it
   // resolved to is recorded beside it.
   nlohmann::json meta = run_metadata(local ? "local-error" : "convergence", spec.to_json());
-  meta["h_used"] = res.h;
-  meta["h_source"] = res.h_source;
-  meta["reference"] = res.reference_description;
+  add_step_study_metadata(meta, res.h, res.h_source, res.reference_description);
   if (!res.reference_cache.empty()) {
     meta["reference_cache"] = res.reference_cache;
     meta["reference_from_cache"] = res.reference_from_cache;
@@ -666,7 +679,9 @@ class ConvergenceJob : public StudyJob {
     spec_.validate();
   }
   nlohmann::json spec_json() const override { return spec_.to_json(); }
-  std::vector<std::string> helper_integrators() const override { return {spec_.reference}; }
+  std::vector<std::string> helper_integrators() const override {
+    return spec_.reference_integrators();
+  }
   void run(std::ostream* progress) override {
     result_ = local_ ? run_local_error(spec_, progress) : run_convergence(spec_, progress);
   }
@@ -724,7 +739,7 @@ StudyKind step_size_kind(bool local) {
   d.t_end_required = !local;
   d.t_end_help = local ? "unused by the local study's error; kept for symmetry" : "final time";
   d.h_help = "coarsest step size (default: the model's suggested step, where it has one)";
-  d.reference_help =
+  d.ref_help =
       "exact | METHOD: an adaptive integrator (cvode_bdf, cvode_adams, arkode_*, gsl_*) runs at "
       "--reference-rtol/--reference-atol and stops exactly at the reference times; a fixed-step "
       "one (e.g. rk4) runs at (finest h)/16. Default: exact where the model has one; a model "

@@ -51,6 +51,7 @@ namespace stiffbench {
 // What the step-size studies (convergence, local-error, work-precision) share: the system, the
 // ladder of steps h_k = h / refine^k and the reference the errors are measured against. Its
 // options are declared once (step_study_options) and read once (read_step_study_options).
+struct StepStudyDefaults;
 struct StepStudySpec {
   std::string model;
   Params params;
@@ -71,6 +72,10 @@ struct StepStudySpec {
   void validate_step_study() const;
   // The keys above as JSON (the recorded spec of the three studies).
   nlohmann::json step_study_json() const;
+  // The reference method (an integrator whose parameters the study consumes, when it is one).
+  std::vector<std::string> reference_integrators() const;
+  // The ladder length and reference tolerances of a study's declared defaults.
+  void apply_defaults(const StepStudyDefaults& d);
 };
 
 // The options of StepStudySpec for the study registry: `t_end_required` (convergence) and the
@@ -78,10 +83,14 @@ struct StepStudySpec {
 struct StepStudyDefaults {
   bool t_end_required = false;
   std::string t_end_help, h_help;
-  std::string levels = "5", reference_rtol, reference_atol, reference_help;
+  std::string ladder_levels = "5", ref_rtol, ref_atol, ref_help;
 };
 std::vector<ParamSpec> step_study_options(const StepStudyDefaults& d);
 void read_step_study_options(const Params& options, StepStudySpec& spec);
+// The metadata of the three studies' NAME.json: the step used and where it came from, the
+// reference's description.
+void add_step_study_metadata(nlohmann::json& meta, double h_used, const std::string& h_source,
+                             const std::string& reference);
 
 struct ConvergenceSpec : StepStudySpec {
   static constexpr double kDefaultReferenceRtol = 1e-12;

@@ -36,7 +36,7 @@ std::vector<PlotPanel> family_panels(const std::vector<std::string>& integrators
       {"implicit", "implicit"},
       {"graphics", "graphics (spring solvers)"},
       {"splitting", "splitting schemes"},
-      {"reference", "library references"},
+      {to_string(Family::reference), "library references"},
       {"other", "other"}};
   std::vector<PlotPanel> panels;
   for (const auto& [family, title] : order) {

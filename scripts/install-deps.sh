@@ -10,6 +10,7 @@ packages=(
   googletest libgtest-dev libgmock-dev libbenchmark-dev
   gnuplot-nox clang-format
   clang libclang-rt-14-dev
+  python3
 )
 
 missing=()

@@ -68,13 +68,13 @@ TEST(EnergyKepler, SymplecticMethodsBoundedRk4DriftsEulerFails) {
   for (const char* name : {"velocity_verlet", "symplectic_euler"}) {
     const EnergyRun& run = run_of(r, name);
     EXPECT_EQ(run.stats.status, Status::ok) << name;
-    ASSERT_TRUE(run.growth) << name;
-    EXPECT_LT(*run.growth, 1.1) << name;
-    EXPECT_GE(*run.growth, 1.0) << name;
+    ASSERT_TRUE(run.growth_ratio) << name;
+    EXPECT_LT(*run.growth_ratio, 1.1) << name;
+    EXPECT_GE(*run.growth_ratio, 1.0) << name;
   }
   const EnergyRun& rk4 = run_of(r, "rk4");
-  ASSERT_TRUE(rk4.growth);
-  EXPECT_GT(*rk4.growth, 5.0);
+  ASSERT_TRUE(rk4.growth_ratio);
+  EXPECT_GT(*rk4.growth_ratio, 5.0);
   // Linear drift: final ≈ max, and the slope times the span gives the final error.
   EXPECT_NEAR(rk4.final_rel_error / rk4.max_rel_error, 1.0, 0.05);
   EXPECT_NEAR(rk4.drift_rate * t_end / rk4.final_rel_error, 1.0, 0.15);
@@ -101,8 +101,8 @@ TEST(EnergyOscillator, ExplicitEulerMatchesClosedForm) {
   auto e = [&](long k) { return std::pow(1 + h * h, static_cast<double>(k)) - 1; };
   EXPECT_NEAR(run.final_rel_error, e(n), 1e-12 * e(n) * n);
   EXPECT_DOUBLE_EQ(run.max_rel_error, run.final_rel_error);
-  ASSERT_TRUE(run.growth);
-  EXPECT_NEAR(*run.growth, e(n) / e(n / 10), 1e-9 * *run.growth);
+  ASSERT_TRUE(run.growth_ratio);
+  EXPECT_NEAR(*run.growth_ratio, e(n) / e(n / 10), 1e-9 * *run.growth_ratio);
   double st = 0, se = 0, stt = 0, ste = 0;
   for (long k = 0; k <= n; ++k) {
     const double t = static_cast<double>(k) * h;
@@ -132,9 +132,9 @@ TEST(EnergyOscillator, SymplecticEulerBandMatchesModifiedEnergy) {
   ASSERT_EQ(run.stats.status, Status::ok);
   const double band = h / (2 - h);
   EXPECT_NEAR(run.max_rel_error, band, 1e-4 * band);
-  ASSERT_TRUE(run.growth);
-  EXPECT_GE(*run.growth, 1.0);
-  EXPECT_LT(*run.growth, 1.001);
+  ASSERT_TRUE(run.growth_ratio);
+  EXPECT_GE(*run.growth_ratio, 1.0);
+  EXPECT_LT(*run.growth_ratio, 1.001);
   // No secular drift: the slope over 100 periods is a small fraction of band / t_end.
   EXPECT_LT(std::abs(run.drift_rate) * 100 * 2 * std::numbers::pi, 0.05 * band);
 }

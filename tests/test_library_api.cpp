@@ -171,7 +171,8 @@ TEST(LibraryApi, CliRunsRecordTheirCommandLine) {
 TEST(LibraryApi, DescribeKnowsExperimentsAndVariableOrders) {
   std::string out;
   ASSERT_EQ(run_cli({"describe", "convergence"}, &out), 0);
-  EXPECT_NE(out.find("experiment convergence"), std::string::npos) << out;
+  EXPECT_NE(out.find("study convergence"), std::string::npos) << out;
+  EXPECT_NE(out.find("| reference_rtol | --reference-rtol | real |"), std::string::npos) << out;
   ASSERT_EQ(run_cli({"describe", "cvode_bdf"}, &out), 0);
   EXPECT_NE(out.find("order: variable"), std::string::npos) << out;
   EXPECT_NE(out.find("evaluations per step: variable"), std::string::npos) << out;
