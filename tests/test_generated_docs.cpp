@@ -16,6 +16,7 @@
 #include <sstream>
 #include <string>
 
+#include "core/types.hpp"
 #include "experiments/catalog_markdown.hpp"
 
 namespace {
