@@ -1,5 +1,5 @@
 // The fixed-step driver: owns the time loop, calls an observer at output times, detects
-// blow-up. Steppers take one step; the driver decides where steps go (STYLE.md §4).
+// blow-up. Steppers take one step; the driver decides where steps go (docs/design.md).
 //
 // A run over [t0, t_end] with requested step h takes N = max(1, round((t_end - t0)/h)) steps of
 // exactly (t_end - t0)/N, so every run ends exactly at t_end and error-vs-h tables report the

@@ -1,7 +1,7 @@
 # Dam break: surge front against time in the dimensionless form Z = front/a against
 # T = t sqrt(2 g/a), from the observables.csv of `stiffbench solve --frames` on sph_dam_break_2d
 # or _3d (its columns T and Z, found by name), with the Koshizuka & Oka (1996) experiment
-# (../shared/REFERENCES.md) overlaid.
+# (docs/reference-values.md) overlaid.
 #
 #   gnuplot -e "csvfile='DIR/observables.csv'; outfile='front.png'; \
 #               ttl='sph_dam_break_2d, symplectic_euler'" plots/dam_break_front.gp

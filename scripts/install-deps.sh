@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Installs the Debian packages stiffbench needs (../shared/TOOLCHAIN.md). Idempotent: apt is
+# Installs the Debian packages stiffbench needs (docs/README.md, Set-up). Idempotent: apt is
 # skipped when every package is already installed. Run as root on Debian 12.
 set -euo pipefail
 

@@ -421,7 +421,7 @@ TEST(Cli, CvodeOnSphRunsMatrixFree) {
 }
 
 // Issue #9, "done when" 2 (regions): the region command writes region.csv in the contract with
-// the limits table on stdout (rk4's imaginary-axis limit 2√2 = 2.8284, REFERENCES.md); an
+// the limits table on stdout (rk4's imaginary-axis limit 2√2 = 2.8284, docs/reference-values.md); an
 // integrator without stability data is bad input naming it.
 TEST(Cli, RegionWritesContractFiles) {
   const auto dir = std::filesystem::temp_directory_path() /
@@ -493,7 +493,7 @@ TEST(Cli, AdaptiveReferenceCacheAndOutputTimes) {
 }  // namespace
 
 // Issue #9, stability limits: the Done-when command writes the stability.csv contract with
-// ratios near 1 (symplectic Euler: 2/ω_max, REFERENCES.md) and Euler marked
+// ratios near 1 (symplectic Euler: 2/ω_max, docs/reference-values.md) and Euler marked
 // unstable_for_all_h; a malformed --sweep and an unwritable --out are bad input before any run.
 TEST(Cli, StabilityWritesContractFiles) {
   const auto dir = std::filesystem::temp_directory_path() /

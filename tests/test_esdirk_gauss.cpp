@@ -336,7 +336,7 @@ double mescd(CVecRef y, CVecRef ref, double ratio) {
 }
 
 // HIRES at t = 321.8122 against the IVP test set's reference solution (as radau5 in
-// test_adaptive.cpp; ../shared/REFERENCES.md): trbdf2 at rtol 1e-10 matches it to mescd ≥ 6
+// test_adaptive.cpp; docs/reference-values.md): trbdf2 at rtol 1e-10 matches it to mescd ≥ 6
 // (measured 6.46, 11386 steps), esdirk43 at rtol 1e-9 to mescd ≥ 7 (measured 7.31, 551 steps).
 TEST(Esdirk, HiresMatchesPublishedReference) {
   auto sys = model("hires");

@@ -110,7 +110,7 @@ TEST(GraphicsSolvers, ProjectiveDynamicsConvergesToTheBackwardEulerStepOnCloth) 
 }
 
 // Orders on the spring chain's exact normal-mode solution (fixed-fixed, N = 10, k = m = 1, mode
-// 1; REFERENCES.md), global error at t = 10, h = 0.1 / 2^k: both methods are first order
+// 1; docs/reference-values.md), global error at t = 10, h = 0.1 / 2^k: both methods are first order
 // (projective dynamics converges to backward Euler; XPBD's substep is an implicit position
 // update). In 1D the projection d = L sign(x_j - x_i) does not change while springs keep their
 // orientation, so projective dynamics is backward Euler after one iteration here.

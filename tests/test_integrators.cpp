@@ -87,7 +87,7 @@ TEST(SymplecticStructure, DampedOscillatorOneStepMatrix) {
 }
 
 // Every symplectic method preserves area on the undamped oscillator (det M = 1), and
-// velocity Verlet has trace 2 - h²k (REFERENCES.md: stable iff hω < 2).
+// velocity Verlet has trace 2 - h²k (docs/reference-values.md: stable iff hω < 2).
 TEST(SymplecticStructure, AreaPreservingOnUndampedOscillator) {
   for (const auto& name : {"symplectic_euler", "symplectic_euler_x", "velocity_verlet"}) {
     EXPECT_NEAR(amplification_matrix(name, 4.0, 0.0, 0.3).determinant(), 1.0, 1e-14) << name;

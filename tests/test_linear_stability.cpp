@@ -27,7 +27,7 @@ LinearStability stability_of(const std::string& name) {
 // Closed forms: rk4 |R(iy)|² = 1 − y⁶/72 + y⁸/576 → y = 2√2; kutta3 |R(iy)|² = 1 − y⁴/12 +
 // y⁶/36 → y = √3; heun R(−x) = 1 − x + x²/2 = 1 → x = 2; euler R(−x) = −1 → x = 2. The real
 // limits of rk4 and kutta3 are where |R(−x)| = 1 (rk4: R = +1, kutta3: R = −1), quoted in
-// REFERENCES.md as 2.7853 and 2.5127; refined here by bisection on the polynomial on [2, 3].
+// docs/reference-values.md as 2.7853 and 2.5127; refined here by bisection on the polynomial on [2, 3].
 double real_limit_of_polynomial(const std::vector<double>& taylor) {
   auto g = [&](double x) {
     double r = 0.0;
@@ -178,7 +178,7 @@ TEST(LinearStability, StepMapOfEveryOneStepMethodMatchesItsStabilityData) {
 
 TEST(LinearStability, PredictedStepOnTheFixedChainSpectrum) {
   // Fixed–fixed chain, k = m = 1, N = 10: ω_j = 2 sin(jπ/22), eigenvalues ±iω_j
-  // (REFERENCES.md, ω_max = 1.979643). Verlet-type methods: h = 2/ω_max; rk4: 2√2/ω_max.
+  // (docs/reference-values.md, ω_max = 1.979643). Verlet-type methods: h = 2/ω_max; rk4: 2√2/ω_max.
   std::vector<std::complex<double>> eig;
   for (int j = 1; j <= 10; ++j) {
     const double w = 2.0 * std::sin(j * std::numbers::pi / 22.0);

@@ -1,7 +1,7 @@
 // Mass-spring networks (models/mass_spring), checked against theory and independent
 // computations: analytic K = ∂a/∂x and D = ∂a/∂v against central finite differences of the
 // acceleration; conservation laws under integrators that preserve them; the chain's normal-mode
-// frequencies and exact solution (REFERENCES.md); Lanczos against Eigen's dense eigensolvers;
+// frequencies and exact solution (docs/reference-values.md); Lanczos against Eigen's dense eigensolvers;
 // bitwise thread-count independence; pinned points; the constraint projection; and the
 // stiff-spring pendulum chain converging to the constrained one as k → ∞.
 #include <gtest/gtest.h>
@@ -319,7 +319,7 @@ TEST(MassSpringConservation, DampedEnergyRateIsDissipatedPower) {
 // ---------------------------------------------------------------------------------------------
 // The chain: normal modes and stiffness.
 
-// REFERENCES.md: ω_max = 2√(k/m) sin(Nπ/(2(N+1))) = 1.979643 (fixed–fixed) and
+// docs/reference-values.md: ω_max = 2√(k/m) sin(Nπ/(2(N+1))) = 1.979643 (fixed–fixed) and
 // 2√(k/m) sin((2N-1)π/(2(2N+1))) = 1.977662 (fixed–free) for k = m = 1, N = 10. The top two
 // frequencies differ by 0.03 (fixed–fixed), which is what makes plain power iteration slow.
 TEST(MassSpringStiffness, ChainOmegaMaxFromLanczos) {

@@ -1,5 +1,5 @@
 // The stability-region experiment (experiments/region.hpp): limits against the published values
-// of REFERENCES.md and their closed forms, region.csv points checked against R(z) recomputed
+// of docs/reference-values.md and their closed forms, region.csv points checked against R(z) recomputed
 // independently from each tableau (ButcherTableau::stability), the polyline contract of the
 // CSV, the fitted box, and the refusals.
 #include <gtest/gtest.h>
@@ -40,7 +40,7 @@ RegionSpec four_methods() {
   return spec;
 }
 
-// REFERENCES.md, "Linear stability": rk4 real −2.7853, imaginary 2√2 = 2.8284; kutta3 real
+// docs/reference-values.md, "Linear stability": rk4 real −2.7853, imaginary 2√2 = 2.8284; kutta3 real
 // −2.5127, imaginary √3 = 1.7321; heun real −2 (R(−2) = 1 − 2 + 2 = 1) and unstable on the
 // whole imaginary axis (|R(iy)|² = 1 + y⁴/4); sdirk3 is A-stable (Alexander 1977).
 TEST(RegionExperiment, LimitsMatchPublishedValues) {
@@ -150,7 +150,7 @@ TEST(RegionExperiment, CsvPointsLieOnTheBoundaryInOrder) {
   EXPECT_EQ(breaks["heun"], 0);
   EXPECT_EQ(breaks["kutta3"], 0);
   EXPECT_EQ(breaks["sdirk3"], 1);
-  // The leftmost boundary points are the real-axis limits (REFERENCES.md).
+  // The leftmost boundary points are the real-axis limits (docs/reference-values.md).
   EXPECT_NEAR(min_re["rk4"], -2.7853, 1e-3);
   EXPECT_NEAR(min_re["kutta3"], -2.5127, 1e-3);
   EXPECT_NEAR(min_re["heun"], -2.0, 1e-3);
@@ -199,7 +199,7 @@ TEST(RegionExperiment, FittedBoxHoldsEveryBoundedBoundary) {
 }
 
 // Methods of mechanical systems only have no region in the z-plane: no rows in region.csv, and
-// the oscillator limit hω < 2 of REFERENCES.md (trace of the step matrix 2 − h²ω²).
+// the oscillator limit hω < 2 of docs/reference-values.md (trace of the step matrix 2 − h²ω²).
 TEST(RegionExperiment, MechanicalOnlyMethodsHaveOnlyTheOscillatorLimit) {
   RegionSpec spec;
   spec.integrators = {"velocity_verlet", "euler"};

@@ -1,5 +1,5 @@
 // SPH smoothing kernels and the hashed-grid neighbour search, checked against theory and
-// independent computations (../shared/REFERENCES.md, section SPH):
+// independent computations (docs/reference-values.md, section SPH):
 //  - every kernel integrates to 1 over its support (Gauss-Legendre radial quadrature, nodes
 //    computed here from the Legendre recurrence),
 //  - kernels and gradients vanish exactly at and beyond the support radius,
@@ -108,7 +108,7 @@ TEST(SphKernel, GaussLegendreRuleIsExactForPolynomials) {
 }
 
 TEST(SphKernel, EveryKernelIntegratesToOne) {
-  // Theory: ∫ W dV = 1 over the support (REFERENCES.md, SPH).
+  // Theory: ∫ W dV = 1 over the support (docs/reference-values.md, SPH).
   const GaussRule g = gauss_legendre(8);
   double worst = 0.0;
   std::string worst_label;
@@ -199,7 +199,7 @@ double central_diff2(const F& f, double r, double d) {
 
 TEST(SphKernel, GradientMatchesFiniteDifference) {
   // Independent computation: dW/dr = finite difference of W (a wrong analytic gradient is the
-  // bug REFERENCES.md warns about). Sample points avoid r = 0 and [h - 1e-3h, h); the step is
+  // bug docs/reference-values.md warns about). Sample points avoid r = 0 and [h - 1e-3h, h); the step is
   // 1e-3·min(r, h - r) so the stencil stays inside one smooth piece except at the cubic
   // spline's q = 1/2, where it is C2 and the difference still converges.
   const int n = 400;
@@ -282,7 +282,7 @@ TEST(SphKernel, ViscosityLaplacian3DIsLaplacianOfTheKernel) {
 }
 
 TEST(SphKernel, ViscosityLaplacian2DIsTheConvention) {
-  // REFERENCES.md: in 2D, 40/(π h⁵)(h - r) is a convention, not the Laplacian of the 2D
+  // docs/reference-values.md: in 2D, 40/(π h⁵)(h - r) is a convention, not the Laplacian of the 2D
   // kernel (that one, W'' + W'/r, is singular at 0). Assert what the convention guarantees:
   // positive on (0, h) (dissipative), zero at and beyond h, and the documented formula.
   for (double h : kSupports) {
@@ -308,7 +308,7 @@ TEST(SphKernel, ViscosityLaplacian2DIsTheConvention) {
 }
 
 TEST(SphKernel, ClosedFormsAtTheOrigin) {
-  // Theory: the closed forms of REFERENCES.md, SPH.
+  // Theory: the closed forms of docs/reference-values.md, SPH.
   for (double h : kSupports) {
     const double h2 = h * h, h3 = h2 * h;
     const auto near = [](double got, double want) {

@@ -1,7 +1,7 @@
 // The step-size controller shared by every hand-written adaptive method (embedded explicit
 // pairs, radau5): error norm, PI control, first-step heuristic and the loop that advances to an
 // output time. The stepper computes a trial step and its error estimate; the controller maps
-// (h, error) to accept/reject and the next h; advance_adaptive() owns the loop (STYLE.md §4).
+// (h, error) to accept/reject and the next h; advance_adaptive() owns the loop (docs/design.md).
 //
 // Error norm (Hairer–Nørsett–Wanner I §II.4, eq. (4.11); SUNDIALS' WRMS norm):
 //   err = sqrt( (1/n) Σ_i (e_i / sc_i)² ),   sc_i = atol + rtol · max(|y_n,i|, |y_n+1,i|),

@@ -1,7 +1,7 @@
 // Dimension dispatch shared by the particle and network models: calls
 // f(std::integral_constant<int, D>{}) for the runtime dimension dim ∈ [Lo, Hi] (dimensions
 // outside the range were rejected by the model's constructor; Hi is taken for them). One
-// branch per whole-vector call, static code inside the per-point loops (STYLE.md §6).
+// branch per whole-vector call, static code inside the per-point loops (docs/design.md).
 #pragma once
 
 #include <type_traits>

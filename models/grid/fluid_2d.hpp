@@ -29,7 +29,7 @@
 // Scenes:
 //   taylor_green — periodic, u = sin 2πx cos 2πy, v = -cos 2πx sin 2πy (divergence-free on the
 //     MAC grid exactly: the differences of the sines give the same cos·cos factor), ν = 1/Re.
-//     The PDE's kinetic energy decays as E(t) = E(0) e^{-16π²νt} (REFERENCES.md; the field is
+//     The PDE's kinetic energy decays as E(t) = E(0) e^{-16π²νt} (Taylor & Green 1937: the field is
 //     the |k|² = 8π² eigenmode and the advection term is a pure gradient).
 //   cavity — lid-driven cavity, walls, lid speed 1 at y = 1, ν = 1/Re, starting at rest
 //     (Ghia, Ghia & Shin 1982 for the steady centreline profiles).

@@ -54,8 +54,8 @@ void add_fluid(ModelRegistry& reg) {
             "(pressure projection); scenes taylor_green (periodic) and cavity (lid-driven); "
             "observables kinetic_energy, max_divergence",
             false, false,
-            "Taylor-Green: kinetic energy decays as exp(-16 pi^2 t/Re) (REFERENCES.md); cavity: "
-            "Ghia, Ghia & Shin 1982 centreline profiles"},
+            "Taylor-Green: kinetic energy decays as exp(-16 pi^2 t/Re) (Taylor & Green 1937); "
+            "cavity: Ghia, Ghia & Shin 1982 centreline profiles"},
            {{"scene",
              P::text,
              "taylor_green",

@@ -4,7 +4,7 @@
 // spring_chain — N free masses on a line (1D, longitudinal motion) joined by N+1 springs to a
 //   pinned point at each end (fixed–fixed) or N springs with only the left end pinned
 //   (fixed–free); equal k, m, rest length L; point i at x = iL (the pins at 0 and (N+1)L).
-//   Normal modes (REFERENCES.md): fixed–fixed φ_j(i) = sin(jπi/(N+1)),
+//   Normal modes (docs/reference-values.md): fixed–fixed φ_j(i) = sin(jπi/(N+1)),
 //   ω_j = 2√(k/m) sin(jπ/(2(N+1))); fixed–free φ_j(i) = sin((2j-1)πi/(2N+1)),
 //   ω_j = 2√(k/m) sin((2j-1)π/(2(2N+1))). Initial state: mode j displaced by amplitude A
 //   (x_i = iL + A φ_j(i), v = 0) plus, when perturbation > 0, a seeded uniform random
@@ -69,7 +69,7 @@ struct SpringChainOptions {
 };
 std::unique_ptr<MassSpringNetwork> make_spring_chain(const SpringChainOptions& o);
 
-// Angular frequency of normal mode j (1..n) of the chain (REFERENCES.md).
+// Angular frequency of normal mode j (1..n) of the chain (docs/reference-values.md).
 double spring_chain_frequency(const SpringChainOptions& o, long j);
 
 struct ClothOptions {

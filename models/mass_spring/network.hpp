@@ -3,7 +3,8 @@
 // point (dofs = dim × points). The builders (models/mass_spring/builders.hpp) make chains,
 // cloth, soft cubes and pendulum chains from it.
 //
-// Forces on point i (REFERENCES.md, Mass-spring), d = (x_j - x_i)/l, l = |x_j - x_i|:
+// Forces on point i (Baraff & Witkin 1998; docs/reference-values.md),
+// d = (x_j - x_i)/l, l = |x_j - x_i|:
 //   spring (i, j):    f_i = k (l - L) d
 //   dashpot (i, j):   f_i = c ((v_j - v_i)·d) d
 //   point damping:    f_i = -γ v_i
@@ -49,7 +50,7 @@
 // Stiffness: ω_max, the largest |eigenvalue|^½ of M⁻¹ ∂f_s/∂x over free dofs (springs only;
 // pinned dofs excluded), i.e. the spectral radius of the first-order Jacobian [[0, I], [K, 0]]
 // of the undamped network. Two estimates:
-//   omega_max_bound: REFERENCES.md's cheap bound ω² <= max_i (2/m_i) Σ_e k_e max(1, |1 - L/l|)
+//   omega_max_bound: the cheap bound ω² <= max_i (2/m_i) Σ_e k_e max(1, |1 - L/l|)
 //     over free points (block Gershgorin on M⁻¹ ∂f/∂x);
 //   omega_max_estimate: Lanczos with full reorthogonalisation on the symmetric matrix
 //     S = M^{-1/2} (-∂f_s/∂x) M^{-1/2} restricted to free dofs, from a fixed pseudo-random start

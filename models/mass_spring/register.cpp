@@ -64,7 +64,7 @@ void register_mass_spring_models(ModelRegistry& reg) {
             "1D chain of N masses between pinned ends (fixed-fixed or fixed-free), one normal "
             "mode excited",
             true, true,
-            "normal modes w_j = 2 sqrt(k/m) sin(j pi/(2(N+1))) (REFERENCES.md); exact solution "
+            "normal modes w_j = 2 sqrt(k/m) sin(j pi/(2(N+1))) (docs/reference-values.md); exact "
             "unless perturbation > 0"},
            {{"n", P::integer, str(chain.n), "number of free masses N", B::at_least(1)},
             {"k", P::real, str(chain.k), "spring stiffness", B::positive()},

@@ -1,6 +1,6 @@
 // SPH smoothing kernels in 2D and 3D, header-only (they run inside the per-pair loops).
 //
-// Notation as in ../shared/REFERENCES.md (SPH): h is the SUPPORT RADIUS (every kernel is zero for
+// Notation as in docs/reference-values.md (SPH): h is the SUPPORT RADIUS (every kernel is zero for
 // r >= h), q = r/h. Each kernel W(r) is radially symmetric; dw(r) = dW/dr, so
 // ∇W(x_i - x_j) = dw(r) (x_i - x_j)/r. Normalisations (∫ W dV = 1 over the support):
 //
@@ -121,7 +121,7 @@ class Kernel {
   }
 
   // The same with the kernel type fixed at compile time (T must equal type()): the per-pair
-  // loops dispatch once per pass and call these (STYLE.md: static code in per-pair loops).
+  // loops dispatch once per pass and call these (static code in per-pair loops, docs/design.md).
   template <KernelType T>
   double w_as(double r) const {
     if (r >= h_) return 0.0;

@@ -184,7 +184,7 @@ void add_dam_break(ModelRegistry& reg, int dim) {
                          "observables front, height_left"),
             true, false,
             "Koshizuka & Oka 1996 (surge front Z = front/a vs T = t sqrt(2g/a), "
-            "REFERENCES.md); Martin & Moyce 1952"},
+            "Nucl. Sci. Eng. 123); Martin & Moyce 1952"},
            fluid_specs(d, scene),
            [dim, name](const Params& p) {
              DamBreakOptions o;
@@ -226,7 +226,7 @@ void add_tank(ModelRegistry& reg, int dim) {
             describe_dim(dim,
                          " SPH tank: fluid at rest under gravity; pressure probes at depths H/4, "
                          "H/2, 3H/4"),
-            true, false, "hydrostatic pressure p = rho0 g (H - y) (REFERENCES.md)"},
+            true, false, "hydrostatic pressure p = rho0 g (H - y) (docs/reference-values.md)"},
            fluid_specs(d, scene),
            [dim, name](const Params& p) {
              TankOptions o;

@@ -1,6 +1,6 @@
 // SphFluid: a weakly compressible SPH fluid (2D or 3D) as a MechanicalSystem y = [x; v] over the
 // fluid particles, so every integrator of the testbed runs on it unchanged. Formulas from
-// ../shared/REFERENCES.md (SPH); h is the kernel SUPPORT radius throughout, Δx the initial
+// docs/reference-values.md (SPH); h is the kernel SUPPORT radius throughout, Δx the initial
 // particle spacing.
 //
 // Density by summation, self term included, fluid and boundary particles (Akinci et al. 2012):
