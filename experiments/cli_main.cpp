@@ -13,6 +13,7 @@
 #include "experiments/catalog.hpp"
 #include "experiments/cli.hpp"
 #include "experiments/commands.hpp"
+#include "experiments/study.hpp"
 #include "experiments/sweep.hpp"
 
 namespace stiffbench {
@@ -48,6 +49,36 @@ class InterruptHandlers {
   struct sigaction old_[2];
 };
 
+// --max-memory, --max-wall and --force on the commands that build models, run integrators and
+// write results (docs/common.md: sizes and memory, faults, existing results).
+void add_run_limits(CLI::App& app) {
+  std::vector<std::string> builds_models = {"solve", "run", "report"};
+  std::vector<std::string> writes = {"solve", "run", "merge", "report"};
+  for (const auto& k : study_kinds()) {
+    if (k.takes_model) builds_models.push_back(k.name);
+    writes.push_back(k.name);
+  }
+  for (const auto& name : builds_models) {
+    if (auto* sub = app.get_subcommand(name)) {
+      sub->add_option_function<std::string>(
+          "--max-memory", [](const std::string& v) { set_memory_limit(parse_memory_size(v)); },
+          "refuse a run whose estimated memory exceeds this (bytes, or with K/M/G/T; default: "
+          "the memory available now)");
+      sub->add_option_function<double>(
+          "--max-wall", [](double s) { set_wall_limit(s); },
+          "wall-clock limit of each row in seconds (a run; a stability row's whole bisection): a "
+          "row over it ends with status timeout and the study goes on (default 0: none)");
+    }
+  }
+  for (const auto& name : writes) {
+    if (auto* sub = app.get_subcommand(name)) {
+      sub->add_flag_function(
+          "--force", [](std::int64_t) { set_force_output(true); },
+          "replace results of a different spec in --out (default: refuse them)");
+    }
+  }
+}
+
 int interrupted_exit(int sig) {
   remove_created_output_dirs();  // only folders this run created and left empty
   std::cerr << "stiffbench: interrupted by " << (sig == SIGTERM ? "SIGTERM" : "SIGINT")
@@ -68,120 +99,22 @@ int cli_main(int argc, char** argv) {
       "(its table is written), 130/143 interrupted by SIGINT/SIGTERM, 1 other errors."};
   app.require_subcommand(1);
 
-  std::string list_what;
-  auto* list = app.add_subcommand("list", "list models, integrators or experiments");
-  list->add_option("what", list_what, "models | integrators | experiments (default: all)")
-      ->check(CLI::IsMember({"models", "integrators", "experiments"}));
-
-  std::string describe_name;
-  auto* describe = app.add_subcommand(
-      "describe", "parameters, defaults and properties of a model, integrator or experiment");
-  describe->add_option("name", describe_name, "model, integrator or experiment name")->required();
-
-  SolveOptions solve_opt;
-  std::vector<std::string> solve_params;
-  auto* solve =
-      app.add_subcommand("solve",
-                         "one run (fixed step with --h, else the model's suggested step or "
-                         "adaptive): final state, invariants, observables, statistics; --frames "
-                         "writes particle frames");
-  solve->add_option("--model", solve_opt.model, "model name")->required();
-  solve->add_option("--integrator", solve_opt.integrator, "integrator name")->required();
-  solve->add_option("--h", solve_opt.h,
-                    "step size (the run takes N = round(T/h) steps of T/N); omit for the adaptive "
-                    "mode of a reference integrator or the model's suggested step");
-  solve->add_option("--t-end", solve_opt.t_end,
-                    "final time (default: the model's literature end time)");
-  solve->add_option("--outputs", solve_opt.outputs, "number of output intervals in the trajectory")
-      ->capture_default_str();
-  solve->add_option("--param", solve_params, "model/integrator parameter key=value (repeatable)")
-      ->expected(1)
-      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  solve->add_option("--out", solve_opt.out_csv,
-                    "trajectory CSV file (columns t,y0,y1,...; no spec is recorded beside it, "
-                    "so an existing file is refused unless --force); with --frames, the output "
-                    "directory (its solve.json records the spec)");
-  solve->add_option("--frames", solve_opt.frames,
-                    "write N+1 equally spaced frames into the --out directory: VTK particle "
-                    "frames (frame_NNNN.vtu, frames.pvd) for particle models, trajectory.csv "
-                    "otherwise, and observables.csv");
-  std::string solve_times;
-  solve->add_option("--times", solve_times,
-                    "output times t1,t2,... (increasing, in (t0, t_end]; without --t-end the run "
-                    "ends at the last) instead of --outputs: adaptive integrators stop exactly at "
-                    "each (no interpolation); fixed-step runs report the nearest step and print "
-                    "and write its actual t. --out gets one row per time");
-  solve->add_option("--log-outputs", solve_opt.log_outputs,
-                    "N output times log-spaced in t - t0 from --log-first to t_end: t_k = t0 + "
-                    "(t1 - t0)*((t_end - t0)/(t1 - t0))^((k-1)/(N-1)); default t1 = t0 + "
-                    "(t_end - t0)*10^-(N-1), one per decade; same stops as --times");
-  solve->add_option("--log-first", solve_opt.log_first,
-                    "first time of --log-outputs (default: N-1 decades before t_end)");
-  solve
-      ->add_option("--frame-format", solve_opt.frame_format,
-                   "particle frame files: vtu (VTK XML + frames.pvd) or vtk (legacy); a CSV "
-                   "copy of each frame is always written for gnuplot")
-      ->check(CLI::IsMember({"vtu", "vtk"}))
-      ->capture_default_str();
-
-  ReportOptions report_opt;
-  auto* report = app.add_subcommand(
-      "report",
-      "run a suite of spec files (default: the built-in suite, experiments/specs/report/) and "
-      "write DIR/REPORT.md with one section per spec");
-  report->add_option("suite", report_opt.suite,
-                     "a folder of spec files (run in name order) or spec files, one section each "
-                     "(default: the built-in suite)");
-  report->add_option("--out", report_opt.out_dir, "output directory")->capture_default_str();
-  report->add_flag("--quick", report_opt.quick,
-                   "apply each spec's [quick] overrides (fewer step sizes: a smoke run)");
-  report->add_flag("--svg", report_opt.svg, "also write each plot as SVG");
-
+  add_list_commands(app);
+  add_solve_command(app);
+  add_report_command(app);
   add_study_commands(app);
   add_plot_command(app);
   add_run_commands(app);
 
-  // --max-memory, --max-wall and --force on the commands that build models, run integrators and
-  // write results (README "Sizes and memory", "Faults and exit codes", "Existing results").
-  std::vector<std::string> builds_models = {"solve", "run", "report"}, writes = {"solve", "run",
-                                                                            "merge", "report"};
-  for (const auto& k : study_kinds()) {
-    if (k.takes_model) builds_models.push_back(k.name);
-    writes.push_back(k.name);
-  }
-  for (const auto& name : builds_models) {
-    if (auto* sub = app.get_subcommand(name)) {
-      sub->add_option_function<std::string>(
-          "--max-memory", [](const std::string& v) { set_memory_limit(parse_memory_size(v)); },
-          "refuse a run whose estimated memory exceeds this (bytes, or with K/M/G/T; default: "
-          "the memory available now)");
+  add_run_limits(app);
+  // --max-wall and --force are reset when cli_main returns.
+  const struct ForgetSettings {
+    ForgetSettings() { set_force_output(false); }
+    ~ForgetSettings() {
+      set_wall_limit(0);
+      set_force_output(false);
     }
-  }
-  // --max-wall (core/run_control.hpp): reset when cli_main returns.
-  const struct ForgetWallLimit {
-    ~ForgetWallLimit() { set_wall_limit(0); }
-  } forget_wall_limit;
-  for (const auto& name : builds_models) {
-    if (auto* sub = app.get_subcommand(name)) {
-      sub->add_option_function<double>(
-          "--max-wall", [](double s) { set_wall_limit(s); },
-          "wall-clock limit of each row in seconds (a run; a stability row's whole bisection): a "
-          "row over it ends with status timeout and the study goes on (default 0: none)");
-    }
-  }
-  // --force: replace results of a different spec in --out (check_existing_results); reset when
-  // cli_main returns.
-  const struct ForgetForce {
-    ForgetForce() { set_force_output(false); }
-    ~ForgetForce() { set_force_output(false); }
-  } forget_force;
-  for (const auto& name : writes) {
-    if (auto* sub = app.get_subcommand(name)) {
-      sub->add_flag_function(
-          "--force", [](std::int64_t) { set_force_output(true); },
-          "replace results of a different spec in --out (default: refuse them)");
-    }
-  }
+  } forget_settings;
   if (argc > 1 && argv[1][0] != '-') {
     bool known = false;
     std::vector<std::string> names;
@@ -201,14 +134,6 @@ int cli_main(int argc, char** argv) {
   // covers parsing and running.
   try {
     app.parse(argc, argv);
-    if (*list) cmd_list(list_what, std::cout);
-    if (*describe) cmd_describe(describe_name, std::cout);
-    if (*solve) {
-      solve_opt.params = Params::from_assignments(solve_params);
-      if (solve->count("--times")) solve_opt.times = parse_times(solve_times);
-      cmd_solve(solve_opt, std::cout, std::cerr);
-    }
-    if (*report) cmd_report(report_opt, std::cout, std::cerr);
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
