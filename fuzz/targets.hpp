@@ -2,8 +2,8 @@
 // user input and returns normally when the parser either accepts the input or refuses it with
 // BadInput. Anything else (another exception, a crash, a sanitizer report, a broken invariant
 // checked here) is a defect. The libFuzzer mains (fuzz_*.cpp) call these; so does
-// tests/test_fuzz_regressions.cpp, on the seed corpus and on every input a fuzz run ever
-// found (fuzz/regressions/), in the normal g++ build.
+// tests/experiments/test_fuzz_regressions.cpp, on the seed corpus and on every input a fuzz
+// run ever found (fuzz/regressions/), in the normal g++ build.
 #pragma once
 
 #include <cstddef>

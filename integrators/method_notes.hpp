@@ -6,7 +6,7 @@
 #include <map>
 #include <string>
 
-#include "core/catalog.hpp"
+#include "core/registry_types.hpp"
 
 namespace stiffbench {
 

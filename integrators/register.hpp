@@ -1,7 +1,7 @@
 // Registration of the hand-written integrators, in the order `list integrators` shows them.
 #pragma once
 
-#include "core/catalog.hpp"
+#include "core/registry_types.hpp"
 
 namespace stiffbench {
 

@@ -1,7 +1,7 @@
 // Registration of every model with its parameters (defaults and meaning for `describe`).
 #pragma once
 
-#include "core/catalog.hpp"
+#include "core/registry_types.hpp"
 
 namespace stiffbench {
 

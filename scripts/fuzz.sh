@@ -3,7 +3,8 @@
 # sources they need: core/params.cpp, the spec-file parser, the CSV readers, the number
 # formats) and runs each for FUZZ_SECONDS (default 30) on a copy of its seed corpus
 # fuzz/corpus/TARGET. A crash leaves its input in BUILD/fuzz/crash-TARGET-*; copy it to
-# fuzz/regressions/TARGET/ (tests/test_fuzz_regressions.cpp replays every file there) and fix.
+# fuzz/regressions/TARGET/ (tests/experiments/test_fuzz_regressions.cpp replays every file
+# there) and fix.
 # Usage: scripts/fuzz.sh [BUILD_DIR]   (default build-fuzz)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"

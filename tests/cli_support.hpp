@@ -1,6 +1,6 @@
-// Helpers of the tests that run the real stiffbench binary (STIFFBENCH_BIN, defined for the test
-// target): run it with captured output and exit code, read a file whole, and name a fresh
-// per-process scratch folder.
+// Helpers of the tests that run the real stiffbench binary (tests/cli/; STIFFBENCH_BIN is defined
+// for every test executable): run it with captured output and exit code, read a file whole, and
+// name a fresh per-process scratch folder (the last two are used outside tests/cli/ as well).
 #pragma once
 
 #include <sys/wait.h>

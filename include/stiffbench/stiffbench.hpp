@@ -11,7 +11,7 @@
 //                                           adaptive drivers
 //   core/run_control.hpp                    wall-clock limit per row (timeout status) and
 //                                           interrupt requests
-//   core/registry.hpp, core/catalog.hpp, experiments/catalog.hpp
+//   core/registry.hpp, core/registry_types.hpp, experiments/catalog.hpp
 //                                           the registries, make_setup, register_model and
 //                                           register_integrator for a user's own entries
 //   experiments/convergence.hpp, local error (same header), experiments/work_precision.hpp,
@@ -25,12 +25,12 @@
 // public but may change between versions.
 #pragma once
 
-#include "core/catalog.hpp"
 #include "core/driver.hpp"
 #include "core/integrator.hpp"
 #include "core/ode_system.hpp"
 #include "core/params.hpp"
 #include "core/registry.hpp"
+#include "core/registry_types.hpp"
 #include "core/run_control.hpp"
 #include "core/solve_stats.hpp"
 #include "core/types.hpp"

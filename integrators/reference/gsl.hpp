@@ -16,7 +16,7 @@
 // steps come from the evolve object's count and failed_steps.
 #pragma once
 
-#include "core/catalog.hpp"
+#include "core/registry_types.hpp"
 
 namespace stiffbench {
 

@@ -39,7 +39,7 @@
 
 #include <string>
 
-#include "core/catalog.hpp"
+#include "core/registry_types.hpp"
 
 namespace stiffbench {
 

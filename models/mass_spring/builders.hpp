@@ -48,7 +48,7 @@
 //   links of length L, initially a straight line at angle θ from the downward vertical, at rest.
 //   Links are stiff springs (stiffness k) or, with constrained=true, exact distance constraints
 //   |x_i - x_{i+1}| = L enforced by projection (network.hpp), in which case k is ignored.
-//   As k → ∞ the spring chain converges to the constrained motion (tests/test_mass_spring.cpp).
+//   As k → ∞ the spring chain converges to the constrained motion (tests/models/test_mass_spring).
 #pragma once
 
 #include <memory>

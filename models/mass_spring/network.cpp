@@ -2,30 +2,15 @@
 
 #include "models/detail/with_dim.hpp"
 
-#include <Eigen/Eigenvalues>
-#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <limits>
-#include <random>
 #include <type_traits>
+#include <utility>
 
 namespace stiffbench {
 
 namespace {
-
-constexpr double kEps = std::numeric_limits<double>::epsilon();
-
-// Position-projection stop: |C| <= 1e-13 L, or the round-off floor of computing l from
-// coordinates of size |x|.
-constexpr double kConstraintRelTol = 1e-13;
-constexpr int kMaxProjectionSweeps = 1000;  // Gauss–Seidel fallback
-constexpr int kMaxNewtonIterations = 20;
-
-// Lanczos: stop when both extreme Ritz values have residual <= kLanczosTol · max|θ|.
-constexpr double kLanczosTol = 1e-10;
-constexpr Index kLanczosMaxIter = 300;
 
 // Runs body(p) for p in [0, n), over OpenMP threads when `parallel`. Each p is independent, so
 // the result does not depend on the thread count.
@@ -38,10 +23,6 @@ void for_points(Index n, bool parallel, const Body& body) {
     for (Index p = 0; p < n; ++p) body(p);
   }
 }
-
-// Gradient sign of constraint c = (i, j) with respect to point p: ∂C/∂x_p = sign · n,
-// n = (x_j - x_i)/l (-1 at i, +1 at j).
-double end_sign(const DistanceConstraint& c, Index p) { return p == c.i ? -1.0 : 1.0; }
 
 std::string item(const char* what, std::size_t index) {
   return std::string(what) + " " + std::to_string(index);
@@ -56,7 +37,6 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
       dim_(dim),
       points_(std::move(points)),
       springs_(std::move(springs)),
-      constraints_(std::move(constraints)),
       opt_(options) {
   const std::string who = name_ + ": ";
   // Per-item checks build their message only when they fail (a 512² cloth has 1.5 M springs).
@@ -99,37 +79,15 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
     check(std::isfinite(s.damping) && s.damping >= 0,
           [&] { return who + item("spring", e) + ": dashpot coefficient < 0"; });
   }
-  for (std::size_t c = 0; c < constraints_.size(); ++c) {
-    const DistanceConstraint& dc = constraints_[c];
+  for (std::size_t c = 0; c < constraints.size(); ++c) {
+    const DistanceConstraint& dc = constraints[c];
     check(dc.i >= 0 && dc.i < np && dc.j >= 0 && dc.j < np && dc.i != dc.j,
           [&] { return who + item("constraint", c) + ": bad end points"; });
     check(std::isfinite(dc.length) && dc.length > 0,
           [&] { return who + item("constraint", c) + ": length <= 0"; });
   }
 
-  // Constraint couplings: constraints c != d sharing a point p couple in G M⁻¹ Gᵀ.
-  active_.resize(constraints_.size());
-  std::vector<std::vector<Index>> touching(points_.size());
-  for (std::size_t c = 0; c < constraints_.size(); ++c) {
-    const DistanceConstraint& dc = constraints_[c];
-    active_[c] = !(points_[static_cast<std::size_t>(dc.i)].pinned &&
-                   points_[static_cast<std::size_t>(dc.j)].pinned);
-    if (!active_[c]) continue;
-    active_list_.push_back(static_cast<Index>(c));
-    touching[static_cast<std::size_t>(dc.i)].push_back(static_cast<Index>(c));
-    touching[static_cast<std::size_t>(dc.j)].push_back(static_cast<Index>(c));
-  }
-  for (std::size_t p = 0; p < touching.size(); ++p) {
-    if (points_[p].pinned) continue;  // w_p = 0: no coupling
-    for (Index c : touching[p])
-      for (Index e : touching[p]) {
-        if (c == e) continue;
-        const double sign =
-            end_sign(constraints_[static_cast<std::size_t>(c)], static_cast<Index>(p)) *
-            end_sign(constraints_[static_cast<std::size_t>(e)], static_cast<Index>(p));
-        constraint_couplings_.push_back({c, e, static_cast<Index>(p), sign});
-      }
-  }
+  distance_constraints_ = DistanceConstraints(dim_, points_, std::move(constraints));
 
   velocity_dependent_ = opt_.point_damping != 0.0;
   for (const Spring& s : springs_) has_dashpots_ = has_dashpots_ || s.damping != 0.0;
@@ -138,7 +96,7 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
   const Index n = dofs();
   y0_.resize(2 * n);
   dof_mass_.resize(n);
-  inv_mass_.resize(points_.size());
+  inv_mass_.resize(points_.size());  // the Jacobian blocks' weights
   for (Index p = 0; p < np; ++p) {
     const MassPoint& pt = points_[static_cast<std::size_t>(p)];
     inv_mass_[static_cast<std::size_t>(p)] = pt.pinned ? 0.0 : 1.0 / pt.mass;
@@ -220,21 +178,9 @@ void MassSpringNetwork::ensure_structure() const {
 void MassSpringNetwork::build_structure() const {
   const Index np = num_points();
   const Index n = dofs();
-  // CSR adjacency, each point's springs in the order of the spring list.
-  start_.assign(static_cast<std::size_t>(np) + 1, 0);
-  for (const Spring& s : springs_) {
-    ++start_[static_cast<std::size_t>(s.i) + 1];
-    ++start_[static_cast<std::size_t>(s.j) + 1];
-  }
-  for (std::size_t p = 0; p < static_cast<std::size_t>(np); ++p) start_[p + 1] += start_[p];
-  neighbours_.resize(static_cast<std::size_t>(start_.back()));
-  std::vector<Index> fill(start_.begin(), start_.end() - 1);
-  for (const Spring& s : springs_) {
-    neighbours_[static_cast<std::size_t>(fill[static_cast<std::size_t>(s.i)]++)] = {
-        s.j, s.k, s.rest, s.damping};
-    neighbours_[static_cast<std::size_t>(fill[static_cast<std::size_t>(s.j)]++)] = {
-        s.i, s.k, s.rest, s.damping};
-  }
+  adjacency_ = SpringAdjacency::build(np, springs_);
+  const std::vector<Index>& start = adjacency_.start;
+  const std::vector<SpringNeighbour>& neighbours = adjacency_.neighbours;
 
   // The fixed pattern of K and D: every point's diagonal block and one block per ordered pair
   // of spring ends (pinned rows included, as explicit zeros).
@@ -243,14 +189,14 @@ void MassSpringNetwork::build_structure() const {
   const Index d = dim_;
   {
     std::vector<int> outer(static_cast<std::size_t>(n) + 1, 0), inner;
-    inner.reserve(static_cast<std::size_t>(d * d * (np + static_cast<Index>(neighbours_.size()))));
+    inner.reserve(static_cast<std::size_t>(d * d * (np + static_cast<Index>(neighbours.size()))));
     std::vector<Index> rows;
     for (Index q = 0; q < np; ++q) {
       rows.clear();
       rows.push_back(q);
-      for (Index e = start_[static_cast<std::size_t>(q)];
-           e < start_[static_cast<std::size_t>(q) + 1]; ++e)
-        rows.push_back(neighbours_[static_cast<std::size_t>(e)].other);
+      for (Index e = start[static_cast<std::size_t>(q)]; e < start[static_cast<std::size_t>(q) + 1];
+           ++e)
+        rows.push_back(neighbours[static_cast<std::size_t>(e)].other);
       std::sort(rows.begin(), rows.end());
       rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
       for (Index b = 0; b < d; ++b) {
@@ -287,13 +233,13 @@ void MassSpringNetwork::build_structure() const {
         out[at + static_cast<std::size_t>(a * d + b)] = base + a + b * len;
   };
   diag_pos_.resize(static_cast<std::size_t>(np * d * d));
-  adj_pos_.resize(neighbours_.size() * static_cast<std::size_t>(d * d));
+  adj_pos_.resize(neighbours.size() * static_cast<std::size_t>(d * d));
   adj_pos_t_.resize(adj_pos_.size());
   for (Index p = 0; p < np; ++p) {
     block(p, p, diag_pos_, static_cast<std::size_t>(p * d * d));
-    for (Index e = start_[static_cast<std::size_t>(p)]; e < start_[static_cast<std::size_t>(p) + 1];
+    for (Index e = start[static_cast<std::size_t>(p)]; e < start[static_cast<std::size_t>(p) + 1];
          ++e) {
-      const Index q = neighbours_[static_cast<std::size_t>(e)].other;
+      const Index q = neighbours[static_cast<std::size_t>(e)].other;
       block(p, q, adj_pos_, static_cast<std::size_t>(e * d * d));
       // The transposed block (rows of q, columns of p), element [a][b] at (q a, p b).
       block(q, p, adj_pos_t_, static_cast<std::size_t>(e * d * d));
@@ -390,8 +336,8 @@ void MassSpringNetwork::blocks_impl(const double* x, const double* v, double* k_
                                     double* d_values) const {
   const double gamma = opt_.point_damping;
   const bool dd_only = opt_.compressed_dd_only;
-  const Index* start = start_.data();
-  const Neighbour* nb = neighbours_.data();
+  const Index* start = adjacency_.start.data();
+  const SpringNeighbour* nb = adjacency_.neighbours.data();
   const MassPoint* pts = points_.data();
   const Index* dpos = diag_pos_.data();
   const Index* apos = adj_pos_.data();
@@ -409,7 +355,7 @@ void MassSpringNetwork::blocks_impl(const double* x, const double* v, double* k_
         for (int q = 0; q < D * D; ++q) k_values[tpos[e * D * D + q]] = 0.0;
       double kd[D][D] = {};
       for (Index e = start[p]; e < start[p + 1]; ++e) {
-        const Neighbour& s = nb[e];
+        const SpringNeighbour& s = nb[e];
         const double* xq = x + D * s.other;
         double dir[D], l2 = 0.0;
         for (int c = 0; c < D; ++c) {
@@ -456,7 +402,7 @@ void MassSpringNetwork::blocks_impl(const double* x, const double* v, double* k_
     const double* vp = v + D * p;
     double kd[D][D] = {}, dd[D][D] = {};  // diagonal blocks, accumulated
     for (Index e = start[p]; e < start[p + 1]; ++e) {
-      const Neighbour& s = nb[e];
+      const SpringNeighbour& s = nb[e];
       const double* xq = x + D * s.other;
       double dir[D], l2 = 0.0;
       for (int c = 0; c < D; ++c) {
@@ -649,386 +595,35 @@ void MassSpringNetwork::exact(double t, VecRef y) const {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Stiffness.
+// Constraints (models/mass_spring/distance_constraints.hpp).
+
+void MassSpringNetwork::project(double, VecRef y) const { distance_constraints_.project(y); }
+
+double MassSpringNetwork::constraint_residual(CVecRef y) const {
+  return distance_constraints_.residual(y);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Stiffness (models/mass_spring/stiffness_spectrum.hpp).
 
 double MassSpringNetwork::omega_max_bound(CVecRef x) const {
   ensure_structure();
-  double w2 = 0.0;
-  for (Index p = 0; p < num_points(); ++p) {
-    const MassPoint& pt = points_[static_cast<std::size_t>(p)];
-    if (pt.pinned) continue;
-    double sum = 0.0;
-    for (Index e = start_[static_cast<std::size_t>(p)]; e < start_[static_cast<std::size_t>(p) + 1];
-         ++e) {
-      const Neighbour& s = neighbours_[static_cast<std::size_t>(e)];
-      double l2 = 0.0;
-      for (int c = 0; c < dim_; ++c) {
-        const double r = x[dim_ * s.other + c] - x[dim_ * p + c];
-        l2 += r * r;
-      }
-      sum += s.k * std::max(1.0, std::abs(1.0 - s.rest / std::sqrt(l2)));
-    }
-    w2 = std::max(w2, 2.0 * sum / pt.mass);
-  }
-  return std::sqrt(w2);
-}
-
-// out = H z with H = -∂f_s/∂x (springs only, exact J_s): (H z)_p = Σ_e J_s,e (z_p - z_q).
-template <int D>
-void MassSpringNetwork::stiffness_matvec(const double* x, const double* z, double* out) const {
-  for (Index p = 0; p < num_points(); ++p) {
-    double acc[D] = {};
-    const double* xp = x + D * p;
-    const double* zp = z + D * p;
-    for (Index e = start_[static_cast<std::size_t>(p)]; e < start_[static_cast<std::size_t>(p) + 1];
-         ++e) {
-      const Neighbour& s = neighbours_[static_cast<std::size_t>(e)];
-      const double* xq = x + D * s.other;
-      const double* zq = z + D * s.other;
-      double dir[D], dz[D], l2 = 0.0, ddz = 0.0;
-      for (int c = 0; c < D; ++c) {
-        dir[c] = xq[c] - xp[c];
-        l2 += dir[c] * dir[c];
-      }
-      const double l = std::sqrt(l2);
-      for (int c = 0; c < D; ++c) {
-        dir[c] /= l;
-        dz[c] = zp[c] - zq[c];
-        ddz += dir[c] * dz[c];
-      }
-      const double across = s.k * (1.0 - s.rest / l);
-      const double along = s.k - across;
-      for (int c = 0; c < D; ++c) acc[c] += along * dir[c] * ddz + across * dz[c];
-    }
-    for (int c = 0; c < D; ++c) out[D * p + c] = acc[c];
-  }
+  return StiffnessSpectrum(dim_, points_, adjacency_).omega_max_bound(x);
 }
 
 std::pair<double, double> MassSpringNetwork::stiffness_eigen_range(CVecRef x) const {
   ensure_structure();
-  std::vector<Index> free_dofs;
-  for (Index p = 0; p < num_points(); ++p)
-    if (!points_[static_cast<std::size_t>(p)].pinned)
-      for (int c = 0; c < dim_; ++c) free_dofs.push_back(dim_ * p + c);
-  const Index nf = static_cast<Index>(free_dofs.size());
-  if (nf == 0 || springs_.empty()) return {0.0, 0.0};
-
-  // S u = M^{-1/2} H M^{-1/2} u on free dofs (pinned entries of z are zero).
-  Vec z = Vec::Zero(dofs()), hz(dofs()), inv_sqrt_m(nf);
-  for (Index i = 0; i < nf; ++i) inv_sqrt_m[i] = 1.0 / std::sqrt(dof_mass_[free_dofs[i]]);
-  auto apply = [&](const Vec& u, Vec& out) {
-    for (Index i = 0; i < nf; ++i) z[free_dofs[i]] = inv_sqrt_m[i] * u[i];
-    detail::with_dim<1, 3>(dim_, [&](auto dim) {
-      stiffness_matvec<decltype(dim)::value>(x.data(), z.data(), hz.data());
-    });
-    for (Index i = 0; i < nf; ++i) out[i] = inv_sqrt_m[i] * hz[free_dofs[i]];
-  };
-
-  // Lanczos with full reorthogonalisation (classical Gram–Schmidt, twice).
-  const Index max_iter = std::min(nf, kLanczosMaxIter);
-  Mat q(nf, max_iter);
-  Vec alpha(max_iter), beta(max_iter), w(nf);
-  std::mt19937_64 rng(20240521);
-  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
-  for (Index i = 0; i < nf; ++i) q(i, 0) = uniform(rng);
-  q.col(0).normalize();
-  double lo = 0.0, hi = 0.0;
-  Eigen::SelfAdjointEigenSolver<Mat> tri;
-  for (Index j = 0; j < max_iter; ++j) {
-    apply(q.col(j), w);
-    alpha[j] = q.col(j).dot(w);
-    for (int pass = 0; pass < 2; ++pass) {
-      const Vec coeff = q.leftCols(j + 1).transpose() * w;
-      w.noalias() -= q.leftCols(j + 1) * coeff;
-    }
-    beta[j] = w.norm();
-    const double tiny = 1e-14 * std::max({std::abs(alpha[j]), beta[j], 1e-300});
-    // The tridiagonal eigenproblem costs O(j²) or more: solve it every step while the basis is
-    // small, then every fifth step.
-    if (j >= 50 && j % 5 != 4 && j + 1 < max_iter && beta[j] > tiny) {
-      q.col(j + 1) = w / beta[j];
-      continue;
-    }
-    tri.computeFromTridiagonal(alpha.head(j + 1), beta.head(j), Eigen::ComputeEigenvectors);
-    const Vec& theta = tri.eigenvalues();
-    lo = theta[0];
-    hi = theta[j];
-    const double scale = std::max(std::abs(lo), std::abs(hi));
-    // Residual ‖S y - θ y‖ of the Ritz pair = β_j |last component of the eigenvector of T|.
-    const double res_lo = beta[j] * std::abs(tri.eigenvectors()(j, 0));
-    const double res_hi = beta[j] * std::abs(tri.eigenvectors()(j, j));
-    const bool invariant_subspace = beta[j] <= 1e-14 * std::max(scale, 1e-300);
-    if (invariant_subspace || j + 1 == max_iter || std::max(res_lo, res_hi) <= kLanczosTol * scale)
-      break;
-    q.col(j + 1) = w / beta[j];
-  }
-  return {lo, hi};
+  return StiffnessSpectrum(dim_, points_, adjacency_).eigen_range(x);
 }
 
 double MassSpringNetwork::omega_max_estimate(CVecRef x) const {
-  const auto [lo, hi] = stiffness_eigen_range(x);
-  return std::sqrt(std::max(std::abs(lo), std::abs(hi)));
+  ensure_structure();
+  return StiffnessSpectrum(dim_, points_, adjacency_).omega_max_estimate(x);
 }
 
 std::optional<double> MassSpringNetwork::stiffness(double, CVecRef y) const {
   if (has_constraints()) return std::nullopt;
   return omega_max_estimate(y.head(dofs()));
-}
-
-// ---------------------------------------------------------------------------------------------
-// Constraints.
-
-bool MassSpringNetwork::constraint_geometry(const double* x, std::vector<double>& normals,
-                                            std::vector<double>& violation, bool& satisfied) const {
-  const int d = dim_;
-  satisfied = true;
-  for (std::size_t c = 0; c < constraints_.size(); ++c) {
-    const DistanceConstraint& dc = constraints_[c];
-    const double* xi = x + d * dc.i;
-    const double* xj = x + d * dc.j;
-    double l2 = 0.0, scale = 0.0;
-    for (int k = 0; k < d; ++k) {
-      const double r = xj[k] - xi[k];
-      normals[c * 3 + static_cast<std::size_t>(k)] = r;
-      l2 += r * r;
-      scale = std::max({scale, std::abs(xi[k]), std::abs(xj[k])});
-    }
-    const double l = std::sqrt(l2);
-    if (!(l > 0) || !std::isfinite(l)) return false;
-    for (int k = 0; k < d; ++k) normals[c * 3 + static_cast<std::size_t>(k)] /= l;
-    violation[c] = l - dc.length;
-    if (active_[c] && std::abs(violation[c]) > kConstraintRelTol * dc.length + 8 * kEps * scale)
-      satisfied = false;
-  }
-  return true;
-}
-
-// A = G M⁻¹ Gᵀ at the given normals: A_cc = w_i + w_j; constraints c, d sharing point p couple
-// through s_cp s_dp w_p (n_c·n_d). Inactive constraints (both ends pinned) get a unit row.
-bool MassSpringNetwork::factor_constraint_matrix(const std::vector<double>& normals,
-                                                 ConstraintSolver& solver) const {
-  const Index nc = static_cast<Index>(constraints_.size());
-  std::vector<Eigen::Triplet<double>> trips;
-  trips.reserve(constraints_.size() + constraint_couplings_.size());
-  for (Index c = 0; c < nc; ++c) {
-    const DistanceConstraint& dc = constraints_[static_cast<std::size_t>(c)];
-    const double w =
-        inv_mass_[static_cast<std::size_t>(dc.i)] + inv_mass_[static_cast<std::size_t>(dc.j)];
-    trips.emplace_back(c, c, active_[static_cast<std::size_t>(c)] ? w : 1.0);
-  }
-  for (const Coupling& cp : constraint_couplings_) {
-    double dot = 0.0;
-    for (int k = 0; k < dim_; ++k)
-      dot += normals[static_cast<std::size_t>(cp.c) * 3 + static_cast<std::size_t>(k)] *
-             normals[static_cast<std::size_t>(cp.d) * 3 + static_cast<std::size_t>(k)];
-    trips.emplace_back(cp.c, cp.d, cp.sign * inv_mass_[static_cast<std::size_t>(cp.p)] * dot);
-  }
-  SparseMat a(nc, nc);
-  a.setFromTriplets(trips.begin(), trips.end());
-  solver.compute(a);
-  if (solver.info() != Eigen::Success) return false;
-  // A singular A (redundant constraints) can factor with a zero pivot: refuse it.
-  const Vec diag = solver.vectorD();
-  return diag.size() == nc && diag.minCoeff() > 1e-12 * diag.cwiseAbs().maxCoeff();
-}
-
-// x += -M⁻¹ Gᵀ λ (positions) or v += -M⁻¹ Gᵀ μ (velocities), constraint by constraint.
-void MassSpringNetwork::apply_constraint_impulses(const std::vector<double>& normals,
-                                                  const Vec& lambda, double* z) const {
-  const int d = dim_;
-  for (std::size_t c = 0; c < constraints_.size(); ++c) {
-    if (!active_[c]) continue;
-    const DistanceConstraint& dc = constraints_[c];
-    const double wi = inv_mass_[static_cast<std::size_t>(dc.i)];
-    const double wj = inv_mass_[static_cast<std::size_t>(dc.j)];
-    const double l = lambda[static_cast<Index>(c)];
-    for (int k = 0; k < d; ++k) {
-      const double nk = normals[c * 3 + static_cast<std::size_t>(k)];
-      z[d * dc.i + k] += wi * l * nk;  // -w_i (∂C/∂x_i) λ with ∂C/∂x_i = -n
-      z[d * dc.j + k] -= wj * l * nk;
-    }
-  }
-}
-
-void MassSpringNetwork::project(double, VecRef y) const {
-  if (constraints_.empty()) return;
-  const Index n = dofs();
-  const std::size_t nc = constraints_.size();
-  double* x = y.data();
-  double* v = y.data() + n;
-  std::vector<double> normals(3 * nc), violation(nc);
-  ConstraintSolver solver;
-
-  // 1. Positions: x ← x - M⁻¹ G(x)ᵀ λ with G(x) M⁻¹ G(x)ᵀ λ = C(x), repeated (Newton).
-  bool satisfied = false, direct = true;
-  for (int iter = 0; iter < kMaxNewtonIterations; ++iter) {
-    if (!constraint_geometry(x, normals, violation, satisfied)) return;  // l = 0: give up
-    if (satisfied) break;
-    if (!factor_constraint_matrix(normals, solver)) {
-      direct = false;
-      break;
-    }
-    Vec c(static_cast<Index>(nc));
-    for (std::size_t k = 0; k < nc; ++k) c[static_cast<Index>(k)] = active_[k] ? violation[k] : 0;
-    const Vec lambda = solver.solve(c);
-    if (!lambda.allFinite()) {
-      direct = false;
-      break;
-    }
-    apply_constraint_impulses(normals, lambda, x);
-  }
-  if (!direct) project_positions_gauss_seidel(x);
-
-  // 2. Velocities: v ← v - M⁻¹ Gᵀ μ with G M⁻¹ Gᵀ μ = G v at the projected positions.
-  double vscale = 0.0;
-  for (Index k = 0; k < n; ++k) vscale = std::max(vscale, std::abs(v[k]));
-  if (vscale == 0.0) return;
-  if (!constraint_geometry(x, normals, violation, satisfied)) return;
-  direct = direct && factor_constraint_matrix(normals, solver);
-  for (int pass = 0; direct && pass < 3; ++pass) {
-    Vec gv(static_cast<Index>(nc));
-    double worst = 0.0;
-    for (std::size_t c = 0; c < nc; ++c) {
-      const DistanceConstraint& dc = constraints_[c];
-      double s = 0.0;
-      for (int k = 0; k < dim_; ++k)
-        s += (v[dim_ * dc.j + k] - v[dim_ * dc.i + k]) *
-             normals[c * 3 + static_cast<std::size_t>(k)];
-      gv[static_cast<Index>(c)] = active_[c] ? s : 0.0;
-      worst = std::max(worst, std::abs(gv[static_cast<Index>(c)]));
-    }
-    if (worst <= kConstraintRelTol * vscale) return;
-    const Vec mu = solver.solve(gv);
-    if (!mu.allFinite()) break;
-    apply_constraint_impulses(normals, mu, v);
-  }
-  if (!direct) project_velocities_gauss_seidel(x, v, vscale);
-}
-
-void MassSpringNetwork::project_positions_gauss_seidel(double* x) const {
-  const int d = dim_;
-  for (int sweep = 0; sweep < kMaxProjectionSweeps; ++sweep) {
-    bool converged = true;
-    for (const DistanceConstraint& c : constraints_) {
-      const double wi = inv_mass_[static_cast<std::size_t>(c.i)];
-      const double wj = inv_mass_[static_cast<std::size_t>(c.j)];
-      if (wi + wj == 0.0) continue;
-      double* xi = x + d * c.i;
-      double* xj = x + d * c.j;
-      double r[3], l2 = 0.0, scale = 0.0;
-      for (int k = 0; k < d; ++k) {
-        r[k] = xj[k] - xi[k];
-        l2 += r[k] * r[k];
-        scale = std::max({scale, std::abs(xi[k]), std::abs(xj[k])});
-      }
-      const double l = std::sqrt(l2);
-      const double violation = l - c.length;
-      if (std::abs(violation) > kConstraintRelTol * c.length + 8 * kEps * scale) converged = false;
-      // Moving both ends along n by Δ = C/(w_i + w_j), mass-weighted, makes this one exact.
-      const double delta = violation / (wi + wj);
-      for (int k = 0; k < d; ++k) {
-        const double nk = r[k] / l;
-        xi[k] += wi * delta * nk;
-        xj[k] -= wj * delta * nk;
-      }
-    }
-    if (converged) break;
-  }
-}
-
-void MassSpringNetwork::project_velocities_gauss_seidel(const double* x, double* v,
-                                                        double vscale) const {
-  const int d = dim_;
-  for (int sweep = 0; sweep < kMaxProjectionSweeps; ++sweep) {
-    bool converged = true;
-    for (const DistanceConstraint& c : constraints_) {
-      const double wi = inv_mass_[static_cast<std::size_t>(c.i)];
-      const double wj = inv_mass_[static_cast<std::size_t>(c.j)];
-      if (wi + wj == 0.0) continue;
-      const double* xi = x + d * c.i;
-      const double* xj = x + d * c.j;
-      double* vi = v + d * c.i;
-      double* vj = v + d * c.j;
-      double r[3], l2 = 0.0;
-      for (int k = 0; k < d; ++k) {
-        r[k] = xj[k] - xi[k];
-        l2 += r[k] * r[k];
-      }
-      const double l = std::sqrt(l2);
-      double s = 0.0;
-      for (int k = 0; k < d; ++k) s += (vj[k] - vi[k]) * r[k] / l;
-      if (std::abs(s) > kConstraintRelTol * vscale) converged = false;
-      const double delta = s / (wi + wj);
-      for (int k = 0; k < d; ++k) {
-        const double nk = r[k] / l;
-        vi[k] += wi * delta * nk;
-        vj[k] -= wj * delta * nk;
-      }
-    }
-    if (converged) break;
-  }
-}
-
-// g_r = l - L for active constraint r = (i, j), l = |x_j - x_i|.
-void MassSpringNetwork::constraint_values(CVecRef x, VecRef g) const {
-  for (std::size_t r = 0; r < active_list_.size(); ++r) {
-    const DistanceConstraint& dc = constraints_[static_cast<std::size_t>(active_list_[r])];
-    double l2 = 0.0;
-    for (int k = 0; k < dim_; ++k) {
-      const double d = x[dim_ * dc.j + k] - x[dim_ * dc.i + k];
-      l2 += d * d;
-    }
-    g[static_cast<Index>(r)] = std::sqrt(l2) - dc.length;
-  }
-}
-
-// Row r of G: ∂l/∂x_i = -n, ∂l/∂x_j = +n with n = (x_j - x_i)/l (NaN at l = 0, where the
-// direction is undefined; the caller's solve then fails). The pattern (2·dim entries per row) is
-// built once; later calls with that pattern write the values in place.
-void MassSpringNetwork::constraint_jacobian(CVecRef x, SparseMat& jac) const {
-  const Index m = constraint_count();
-  const Index per_row = 2 * dim_;
-  if (jac.rows() != m || jac.cols() != dofs() || jac.nonZeros() != m * per_row ||
-      !jac.isCompressed()) {
-    std::vector<Eigen::Triplet<double>> trips;
-    trips.reserve(static_cast<std::size_t>(m * per_row));
-    for (Index r = 0; r < m; ++r) {
-      const DistanceConstraint& dc = constraints_[static_cast<std::size_t>(active_list_[r])];
-      for (int k = 0; k < dim_; ++k) {
-        trips.emplace_back(r, dim_ * dc.i + k, 0.0);
-        trips.emplace_back(r, dim_ * dc.j + k, 0.0);
-      }
-    }
-    jac.resize(m, dofs());
-    jac.setFromTriplets(trips.begin(), trips.end());
-    jac.makeCompressed();
-  }
-  for (Index r = 0; r < m; ++r) {
-    const DistanceConstraint& dc = constraints_[static_cast<std::size_t>(active_list_[r])];
-    double d[3] = {0.0, 0.0, 0.0}, l2 = 0.0;
-    for (int k = 0; k < dim_; ++k) {
-      d[k] = x[dim_ * dc.j + k] - x[dim_ * dc.i + k];
-      l2 += d[k] * d[k];
-    }
-    const double l = std::sqrt(l2);
-    for (int k = 0; k < dim_; ++k) {
-      jac.coeffRef(r, dim_ * dc.i + k) = -d[k] / l;
-      jac.coeffRef(r, dim_ * dc.j + k) = d[k] / l;
-    }
-  }
-}
-
-double MassSpringNetwork::constraint_residual(CVecRef y) const {
-  double worst = 0.0;
-  for (const DistanceConstraint& c : constraints_) {
-    double l2 = 0.0;
-    for (int k = 0; k < dim_; ++k) {
-      const double r = y[dim_ * c.j + k] - y[dim_ * c.i + k];
-      l2 += r * r;
-    }
-    worst = std::max(worst, std::abs(std::sqrt(l2) - c.length));
-  }
-  return worst;
 }
 
 }  // namespace stiffbench

@@ -48,19 +48,10 @@
 // linear_momentum() and angular_momentum() compute them for any configuration.
 //
 // Stiffness: ω_max, the largest |eigenvalue|^½ of M⁻¹ ∂f_s/∂x over free dofs (springs only;
-// pinned dofs excluded), i.e. the spectral radius of the first-order Jacobian [[0, I], [K, 0]]
-// of the undamped network. Two estimates:
-//   omega_max_bound: the cheap bound ω² <= max_i (2/m_i) Σ_e k_e max(1, |1 - L/l|)
-//     over free points (block Gershgorin on M⁻¹ ∂f/∂x);
-//   omega_max_estimate: Lanczos with full reorthogonalisation on the symmetric matrix
-//     S = M^{-1/2} (-∂f_s/∂x) M^{-1/2} restricted to free dofs, from a fixed pseudo-random start
-//     vector, until both extreme Ritz values have residual <= 1e-10 |θ|max (then |λ - θ| is
-//     below that) or after 300 steps (Ritz values always lie inside the spectrum, so a capped
-//     run underestimates); exact when the Krylov space fills up (the 10-mass chain: 10 steps).
-//     Cost: 0.03 s for the 16 × 16 cloth, 0.9 s for 64 × 64. stiffness() returns this. It
-//     ignores dashpots and point damping (with them the first-order spectral radius differs:
-//     for uniform γ/m and an underdamped mode it is still ω). Networks with constraints return
-//     no estimate: the ODE the integrators see there is free flight plus projection.
+// pinned dofs excluded), computed by StiffnessSpectrum (models/mass_spring/stiffness_spectrum.hpp:
+// the Gershgorin bound omega_max_bound and the Lanczos estimate omega_max_estimate, which
+// stiffness() returns). Networks with constraints return no estimate: the ODE the integrators
+// see there is free flight plus projection.
 //
 // Right-hand side: no heap allocation per call, every spring evaluated once (f_i += c r,
 // f_j -= c r, exactly opposite) from a packed list (two 32-bit indices, k and L: 24 bytes).
@@ -72,36 +63,22 @@
 // bitwise identical for 1 and 2 threads (tested). K and D are filled per point (network.cpp).
 //
 // Constraints: distance constraints C = |x_i - x_j| - L (e.g. the constrained pendulum chain),
-// enforced by project() after each step (the driver calls it; see core/ode_system.hpp). With
-// G = ∂C/∂x (row c: -n_c at i, +n_c at j, n_c = (x_j - x_i)/l), M the masses and pinned points
-// of infinite mass (weight w = 1/m = 0):
-//   1. positions, SHAKE-style in matrix form (M-SHAKE): x ← x - M⁻¹ G(x)ᵀ λ with
-//      G(x) M⁻¹ G(x)ᵀ λ = C(x), repeated (a Newton iteration, quadratic) until every
-//      |C| <= 1e-13 L (relative; or the round-off floor 8ε max|x| of computing l), at most 20
-//      times. A single constraint's update is the mass-weighted move along n that makes it
-//      exact; the coupled solve makes them all exact at once. (SHAKE proper moves along the
-//      previous step's bond directions; the hook sees only the current state, so the directions
-//      are the current ones.)
-//   2. velocities, RATTLE-style: the mass-weighted orthogonal projection onto the tangent space
-//      G v = 0, v ← v - M⁻¹ Gᵀ μ with G M⁻¹ Gᵀ μ = G v (removes the relative velocity along
-//      every constraint), refined up to 3 times until max|(v_j - v_i)·n| <= 1e-13 max|v|.
-// G M⁻¹ Gᵀ is sparse SPD for independent constraints (tridiagonal for a chain) and is factored
-// with a sparse LDLᵀ. When it is singular (redundant constraints) the projection falls back to
-// Gauss–Seidel over the constraints (each one made exact in turn, positions then relative normal
-// velocities, same tolerances, at most 1000 sweeps), which converges slowly for long chains.
+// held by DistanceConstraints (models/mass_spring/distance_constraints.hpp) and enforced by
+// project() after each step (the driver calls it; see core/ode_system.hpp): positions by an
+// M-SHAKE Newton iteration, then velocities by the mass-weighted projection onto G v = 0, with a
+// Gauss–Seidel fallback for redundant constraints.
 // The constraint forces are not in a(x): integrators advance free flight under the other forces
 // and the projection puts the state back on the manifold. This keeps the acceleration
 // velocity-independent (Verlet methods apply) and the constraint residual at round-off, but a
 // projection that sees only the end-of-step state cannot recover RATTLE's velocity update (the
 // tangential part of the previous step's constraint impulse is lost, O(h²) per step), so the
 // projected schemes are first-order accurate and slowly dissipate energy (measured in
-// tests/test_mass_spring.cpp).
+// tests/models/test_mass_spring.cpp).
 // constraint_residual() is max |C| (absolute).
 // The same constraints are offered as equations (core/constraints.hpp) to methods that enforce
-// them themselves (rattle): holonomic_constraints() is this network when it has constraints,
-// with g = C over the active constraints only (m = those not joining two pinned points, in list
-// order) and G = ∂C/∂x (row c: -n_c at point i's dofs, +n_c at j's, pinned ends included: their
-// inverse mass is 0). The driver does not call project() after such a method's steps.
+// them themselves (rattle): holonomic_constraints() is the DistanceConstraints object when the
+// network has constraints, with g = C over the active constraints only (those not joining two
+// pinned points, in list order). The driver does not call project() after such a method's steps.
 //
 // Spring view (core/springs.hpp): spring_network() lists the springs (i, j, L, k, c), masses,
 // pins, gravity and point damping for the graphics solvers (XPBD, projective dynamics), which
@@ -114,37 +91,17 @@
 #include <functional>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
-
-#include <Eigen/SparseCholesky>
 
 #include "core/constraints.hpp"
 #include "core/ode_system.hpp"
 #include "core/springs.hpp"
+#include "models/mass_spring/distance_constraints.hpp"
+#include "models/mass_spring/elements.hpp"
+#include "models/mass_spring/stiffness_spectrum.hpp"
 
 namespace stiffbench {
-
-enum class SpringKind { structural, shear, bend };
-
-struct MassPoint {
-  double mass = 1.0;
-  std::array<double, 3> x{};  // position; components beyond the network's dim must be 0
-  std::array<double, 3> v{};  // velocity; set to 0 for pinned points
-  bool pinned = false;
-};
-
-struct Spring {
-  Index i = 0, j = 0;
-  double k = 0.0;        // stiffness (>= 0)
-  double rest = 0.0;     // rest length L (>= 0)
-  double damping = 0.0;  // dashpot coefficient c (>= 0)
-  SpringKind kind = SpringKind::structural;
-};
-
-struct DistanceConstraint {
-  Index i = 0, j = 0;
-  double length = 0.0;  // L > 0
-};
 
 struct NetworkOptions {
   std::array<double, 3> gravity{};  // g (components beyond dim must be 0)
@@ -153,7 +110,7 @@ struct NetworkOptions {
   Index parallel_threshold = 2048;  // points; below this the right-hand side runs serially
 };
 
-class MassSpringNetwork final : public MechanicalSystem, public HolonomicConstraints {
+class MassSpringNetwork final : public MechanicalSystem {
  public:
   // Checks the data (BadInput naming the model and the offending item) and precomputes the
   // packed springs of the right-hand side (the adjacency lists and the Jacobian pattern are built
@@ -184,17 +141,15 @@ class MassSpringNetwork final : public MechanicalSystem, public HolonomicConstra
 
   const SpringNetworkView* spring_network() const override;
 
-  bool has_constraints() const override { return !constraints_.empty(); }
+  bool has_constraints() const override { return !distance_constraints_.empty(); }
   void project(double t, VecRef y) const override;
   double constraint_residual(CVecRef y) const override;
 
   // The constraints as equations (see the header comment); nullptr without constraints.
   const HolonomicConstraints* holonomic_constraints() const override {
-    return constraints_.empty() ? nullptr : this;
+    return distance_constraints_.empty() ? nullptr : &distance_constraints_;
   }
-  Index constraint_count() const override { return static_cast<Index>(active_list_.size()); }
-  void constraint_values(CVecRef x, VecRef g) const override;
-  void constraint_jacobian(CVecRef x, SparseMat& jac) const override;
+  const DistanceConstraints& distance_constraints() const { return distance_constraints_; }
 
   // An exact solution supplied by a builder (the linear chain's normal modes).
   void set_exact(std::function<void(double, VecRef)> exact) { exact_ = std::move(exact); }
@@ -206,7 +161,9 @@ class MassSpringNetwork final : public MechanicalSystem, public HolonomicConstra
   Index num_points() const { return static_cast<Index>(points_.size()); }
   const std::vector<MassPoint>& points() const { return points_; }
   const std::vector<Spring>& springs() const { return springs_; }
-  const std::vector<DistanceConstraint>& constraints() const { return constraints_; }
+  const std::vector<DistanceConstraint>& constraints() const {
+    return distance_constraints_.list();
+  }
   const NetworkOptions& options() const { return opt_; }
 
   // Observables at state y = [x; v].
@@ -214,7 +171,7 @@ class MassSpringNetwork final : public MechanicalSystem, public HolonomicConstra
   Vec linear_momentum(CVecRef y) const;   // dim components
   Vec angular_momentum(CVecRef y) const;  // 3 components in 3D, 1 in 2D, none in 1D
 
-  // ω_max at positions x (see the header comment).
+  // ω_max at positions x (StiffnessSpectrum, models/mass_spring/stiffness_spectrum.hpp).
   double omega_max_bound(CVecRef x) const;
   double omega_max_estimate(CVecRef x) const;
   // Smallest and largest eigenvalue of S = M^{-1/2}(-∂f_s/∂x)M^{-1/2} on free dofs (Lanczos).
@@ -227,49 +184,24 @@ class MassSpringNetwork final : public MechanicalSystem, public HolonomicConstra
   void eval_acceleration(double t, CVecRef x, CVecRef v, VecRef a) const override;
 
  private:
-  // One spring seen from one of its ends.
-  struct Neighbour {
-    Index other;
-    double k, rest, damping;
-  };
-
   template <int D>
   void acceleration_impl(const double* x, const double* v, double* a) const;
   template <int D>
   void blocks_impl(const double* x, const double* v, double* k_values, double* d_values) const;
-  template <int D>
-  void stiffness_matvec(const double* x, const double* z, double* out) const;
   void fill_blocks(CVecRef x, CVecRef v, SparseMat* k, SparseMat* d) const;
   void ensure_structure() const;  // builds the members marked "on first use" once
   void build_structure() const;
-
-  // Projection (see the header comment).
-  struct Coupling {
-    Index c, d, p;  // constraints c != d share the free point p
-    double sign;    // product of their gradient signs at p
-  };
-  using ConstraintSolver = Eigen::SimplicialLDLT<SparseMat>;
-  bool constraint_geometry(const double* x, std::vector<double>& normals,
-                           std::vector<double>& violation, bool& satisfied) const;
-  bool factor_constraint_matrix(const std::vector<double>& normals, ConstraintSolver& solver) const;
-  void apply_constraint_impulses(const std::vector<double>& normals, const Vec& lambda,
-                                 double* z) const;
-  void project_positions_gauss_seidel(double* x) const;
-  void project_velocities_gauss_seidel(const double* x, double* v, double vscale) const;
 
   std::string name_;
   int dim_;
   std::vector<MassPoint> points_;
   std::vector<Spring> springs_;
-  std::vector<DistanceConstraint> constraints_;
   NetworkOptions opt_;
   bool velocity_dependent_ = false;
   bool has_dashpots_ = false;
   Vec y0_, dof_mass_;
-  std::vector<double> inv_mass_;    // per point, 0 for pinned points (projection weights)
-  std::vector<bool> active_;        // per constraint: not both ends pinned
-  std::vector<Index> active_list_;  // the active constraints' indices (rows of g and G)
-  std::vector<Coupling> constraint_couplings_;
+  std::vector<double> inv_mass_;  // per point, 0 for pinned points
+  DistanceConstraints distance_constraints_;
 
   // Right-hand side springs (see the header comment): partition q's interior springs are
   // packed_[part_start_[q] .. part_start_[q+1]), the springs between partitions follow.
@@ -283,10 +215,9 @@ class MassSpringNetwork final : public MechanicalSystem, public HolonomicConstra
   std::vector<Index> part_start_;
 
   // Built on first use (ensure_structure; an explicit run never needs them):
-  // CSR adjacency: springs of point p are neighbours_[start_[p] .. start_[p+1]).
+  // The springs per point (Jacobian blocks, stiffness spectrum).
   mutable std::once_flag structure_once_;
-  mutable std::vector<Index> start_;
-  mutable std::vector<Neighbour> neighbours_;
+  mutable SpringAdjacency adjacency_;
 
   // Fixed pattern of K and D, and for each point's diagonal block and each adjacency entry the
   // position in valuePtr() of every block entry (row-major within the block). On first use.

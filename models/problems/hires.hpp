@@ -13,8 +13,8 @@
 // Reference solution at t = 321.8122 (IVP test set "hires"): y = (0.7371312573325668e-3,
 // 0.1442485726316185e-3, 0.5888729740967575e-4, 0.1175651343283149e-2, 0.2386356198831331e-2,
 // 0.6238968252742796e-2, 0.2849998395185769e-2, 0.2850001604814231e-2); CVODE BDF (rtol 1e-13)
-// on this class reproduces it to 3e-11 relative, tests/test_stiff_problems.cpp with sdirk3 to
-// 3e-8.
+// on this class reproduces it to 3e-11 relative, tests/models/test_stiff_problems.cpp with
+// sdirk3 to 3e-8.
 // Invariant "y7+y8" (= 0.0057): y7' + y8' = 0 identically. It is the only linear one: asking
 // wᵀf ≡ 0 monomial by monomial, the constant 0.0007 gives w1 = 0, then the y1, y2, y3, y4 and y5
 // terms give w2 = w4 = w3 = w6 = w5 = 0, and the y7 terms give w7 = w8.

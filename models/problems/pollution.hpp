@@ -24,7 +24,7 @@
 // y(0): y2 = 0.2, y4 = 0.04, y7 = 0.1, y8 = 0.3, y9 = 0.01, y17 = 0.007, all others 0.
 // Literature time span [0, 60] (the registry's t_end).
 // Reference solution at t = 60 (IVP test set "pollu"; 16 digits there, listed in
-// tests/test_stiff_problems.cpp), e.g. y1 = 0.5646255480022769e-01, y16 = 0.4352846369330103e-17;
+// tests/models/test_stiff_problems.cpp), y1 = 0.5646255480022769e-01, y16 = 0.4352846369330103e-17;
 // CVODE BDF (rtol 1e-13) on this class reproduces all 20 components to 1.1e-12 relative, the test
 // with sdirk3 to 3e-8.
 // Invariants (atom balances of the lumped mechanism; the left null space of the rate-weighted

@@ -9,7 +9,7 @@
 // run J has an eigenvalue near -k3 = -1e4 (trace -k1 - k3 y3 - 2 k2 y2 with y3 → 1).
 // Reference solution at t = 1e11 (IVP test set "rober"): y = (0.2083340149701255e-07,
 // 0.8333360770334713e-13, 0.9999999791665050e+00). CVODE BDF (rtol 1e-13, atol 1e-20) on this
-// class reproduces it to 3e-11 relative; tests/test_stiff_problems.cpp reaches it to 1e-8 with
+// class reproduces it to 3e-11 relative; tests/models/test_stiff_problems reaches it to 1e-8 with
 // sdirk3 and checks the late-time asymptotics y2/y1 → k1/k3, y1 t → (1 + k1/k3) k3²/(k1² k2).
 // Invariant "mass" = y1 + y2 + y3 (= 1): the three right-hand sides sum to zero, so every
 // Runge–Kutta and linear multistep method keeps it to round-off.

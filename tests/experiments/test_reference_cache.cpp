@@ -13,7 +13,7 @@
 #include "core/driver.hpp"
 #include "experiments/commands.hpp"
 #include "experiments/convergence.hpp"
-#include "test_support.hpp"
+#include "tests/test_support.hpp"
 #include "tests/cli_support.hpp"
 
 namespace stiffbench {

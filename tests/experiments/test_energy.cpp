@@ -1,6 +1,6 @@
 // The energy-drift experiment (experiments/energy.hpp): closed forms on the harmonic
 // oscillator, the Kepler numbers of issue 9, the sampler's max-since-last rows, failures and
-// bad input, the output files and the command line.
+// bad input, the output files (the command line: tests/cli/test_energy_cli.cpp).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -17,7 +17,6 @@
 
 #include "core/driver.hpp"
 #include "experiments/energy.hpp"
-#include "tests/cli_support.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {
@@ -299,31 +298,6 @@ TEST(EnergyOutputs, FilesFollowTheContract) {
   const auto meta = nlohmann::json::parse(js);
   EXPECT_EQ(meta.at("invariant"), "energy");
   EXPECT_DOUBLE_EQ(meta.at("initial_value").get<double>(), -0.5);  // -GM/(2a)
-  std::filesystem::remove_all(dir);
-}
-
-using stiffbench::testing_support::CliOutcome;
-using stiffbench::testing_support::run_cli;
-
-TEST(EnergyCli, WritesTablesAndRejectsModelsWithoutEnergy) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("stiffbench_energy_cli_" + std::to_string(::getpid()));
-  const CliOutcome ok = run_cli(
-      "energy --model kepler --param e=0.5 --integrators rk4,velocity_verlet --h 0.05 "
-      "--t-end 31.4 --samples 20 --out " +
-      dir.string());
-  EXPECT_EQ(ok.code, 0) << ok.err;
-  EXPECT_NE(ok.out.find("velocity_verlet"), std::string::npos) << ok.out;
-  EXPECT_TRUE(std::filesystem::exists(dir / "energy.csv"));
-  EXPECT_TRUE(std::filesystem::exists(dir / "energy_summary.csv"));
-  EXPECT_TRUE(std::filesystem::exists(dir / "energy.json"));
-  std::filesystem::remove_all(dir);
-
-  const CliOutcome bad =
-      run_cli("energy --model robertson --integrators rk4 --h 0.1 --t-end 1 --out " + dir.string());
-  EXPECT_EQ(bad.code, 2);
-  EXPECT_NE(bad.err.find("robertson"), std::string::npos) << bad.err;
-  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
   std::filesystem::remove_all(dir);
 }
 

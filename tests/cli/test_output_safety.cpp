@@ -1,9 +1,8 @@
-// Output safety (issue 14, README "Existing results: --force and --resume"): a second run of
-// every command into a folder holding results of a different spec exits 2 naming the folder and
-// --force and leaves every file as it was; the same spec is recomputed and replaced; --force
-// replaces; `run` needs --resume or --force for units of its own spec. Runs the real binary
-// like test_cli.cpp, plus the library-level check (experiments/output.hpp) and
-// write_file_atomic's temporaries.
+// Output safety (README "Existing results: --force and --resume"): a second run of every command
+// into a folder holding results of a different spec exits 2 naming the folder and --force and
+// leaves every file as it was; the same spec is recomputed and replaced; --force replaces; `run`
+// needs --resume or --force for units of its own spec. Runs the real binary like test_cli.cpp;
+// the library-level check is in tests/experiments/test_output_safety_library.cpp.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -91,7 +90,7 @@ TEST_P(OutputSafety, DifferentSpecRefusedSameSpecReplacedForceReplaces) {
 const std::string kHo = "--model harmonic_oscillator ";
 
 INSTANTIATE_TEST_SUITE_P(
-    Issue14, OutputSafety,
+    EveryCommand, OutputSafety,
     ::testing::Values(
         SafetyCase{"convergence",
                    "convergence " + kHo + "--integrators rk4 --t-end 1 --h 0.1 --levels 2",
@@ -245,134 +244,6 @@ TEST(OutputSafety, MergeRefusesAnotherSpecUnlessForce) {
   const Outcome forced = run("merge --force --out " + merged + " " + (dir / "t2").string());
   EXPECT_EQ(forced.code, 0) << forced.err;
   EXPECT_NE(slurp(dir / "merged" / "run.json").find("\"t_end\": 2"), std::string::npos);
-  fs::remove_all(dir);
-}
-
-// ---- library level --------------------------------------------------------------------------
-
-TEST(OutputSafetyLibrary, SpecDifferenceNamesTheFirstKey) {
-  const nlohmann::json a = {{"model", "hires"}, {"params", {{"n", "8"}}}, {"h", 0.1}};
-  nlohmann::json b = a;
-  EXPECT_EQ(spec_difference(a, b), "");
-  b["params"]["n"] = "16";
-  EXPECT_EQ(spec_difference(a, b), "params.n = \"8\" there, \"16\" here");
-  b = a;
-  b.erase("h");
-  EXPECT_EQ(spec_difference(a, b), "h = 0.1 there, (absent) here");
-  // NaN (a flag not given) is recorded as null: the same spec.
-  nlohmann::json nan = a, null = a;
-  nan["h"] = std::numeric_limits<double>::quiet_NaN();
-  null["h"] = nullptr;
-  EXPECT_EQ(spec_difference(null, nan), "");
-}
-
-TEST(OutputSafetyLibrary, CheckExistingResults) {
-  const fs::path dir = fresh_dir("lib");
-  fs::create_directories(dir);
-  const nlohmann::json spec = {{"model", "kepler"}};
-  std::ostringstream note;
-  // Nothing there, or only other experiments' files.
-  std::ofstream(dir / "other.csv") << "x\n";
-  EXPECT_FALSE(check_existing_results(dir, "a.json", {"a.csv"}, spec, false, &note));
-  // A result without its record cannot be identified.
-  std::ofstream(dir / "a.csv") << "x\n";
-  EXPECT_THROW(check_existing_results(dir, "a.json", {"a.csv"}, spec, false, &note), BadInput);
-  EXPECT_TRUE(check_existing_results(dir, "a.json", {"a.csv"}, spec, true, &note));
-  // A record that is not JSON, or has no spec.
-  std::ofstream(dir / "a.json") << "{not json";
-  try {
-    check_existing_results(dir, "a.json", {"a.csv"}, spec, false, &note);
-    ADD_FAILURE() << "not refused";
-  } catch (const BadInput& e) {
-    EXPECT_NE(std::string(e.what()).find("not valid JSON"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("--force"), std::string::npos) << e.what();
-  }
-  std::ofstream(dir / "a.json", std::ios::trunc) << "{\"date\": \"today\"}";
-  EXPECT_THROW(check_existing_results(dir, "a.json", {}, spec, false, &note), BadInput);
-  // The same spec (whatever else the record holds) is replaced, with a note.
-  std::ofstream(dir / "a.json", std::ios::trunc)
-      << nlohmann::json{{"spec", spec}, {"date", "today"}, {"threads", 2}}.dump();
-  note.str("");
-  EXPECT_TRUE(check_existing_results(dir, "a.json", {"a.csv"}, spec, false, &note));
-  EXPECT_NE(note.str().find("same spec"), std::string::npos) << note.str();
-  // A different one is refused, naming the folder, the file and the key.
-  try {
-    check_existing_results(dir, "a.json", {"a.csv"}, {{"model", "hires"}}, false, &note);
-    ADD_FAILURE() << "not refused";
-  } catch (const BadInput& e) {
-    const std::string m = e.what();
-    EXPECT_NE(m.find("--out " + dir.string()), std::string::npos) << m;
-    EXPECT_NE(m.find((dir / "a.json").string()), std::string::npos) << m;
-    EXPECT_NE(m.find("model = \"kepler\" there, \"hires\" here"), std::string::npos) << m;
-  }
-  fs::remove_all(dir);
-}
-
-// The library's study functions make the same check, with force_output() as --force.
-TEST(OutputSafetyLibrary, StudyFunctionsCheckTheFolder) {
-  const fs::path dir = fresh_dir("study");
-  ConvergenceSpec spec;
-  spec.model = "harmonic_oscillator";
-  spec.integrators = {"rk4"};
-  spec.t_end = 1;
-  spec.h = 0.1;
-  spec.levels = 2;
-  std::ostringstream err;
-  convergence_study(spec, dir.string(), false, nullptr, err);
-  const auto before = snapshot(dir);
-  ConvergenceSpec other = spec;
-  other.integrators = {"heun"};
-  EXPECT_THROW(convergence_study(other, dir.string(), false, nullptr, err), BadInput);
-  EXPECT_EQ(snapshot(dir), before);
-  set_force_output(true);
-  EXPECT_NO_THROW(convergence_study(other, dir.string(), false, nullptr, err));
-  set_force_output(false);
-  EXPECT_NE(err.str().find("(--force)"), std::string::npos) << err.str();
-  fs::remove_all(dir);
-}
-
-// report records {"suite": quick|full} in DIR/report.json and refuses the other suite before
-// anything runs (a full report would take minutes); the same suite passes the check.
-TEST(OutputSafetyLibrary, ReportRefusesTheOtherSuite) {
-  const fs::path dir = fresh_dir("report");
-  fs::create_directories(dir);
-  ReportOptions full;
-  full.out_dir = dir.string();
-  ReportOptions quick = full;
-  quick.quick = true;
-  std::ofstream(dir / "report.json") << run_metadata("report", report_spec(quick)).dump(2);
-  std::ofstream(dir / "REPORT.md") << "# stiffbench report\n";
-  const auto before = snapshot(dir);
-  std::ostringstream out, err;
-  try {
-    cmd_report(full, out, err);
-    ADD_FAILURE() << "not refused";
-  } catch (const BadInput& e) {
-    const std::string m = e.what();
-    EXPECT_NE(m.find("suite = \"quick\" there, \"full\" here"), std::string::npos) << m;
-    EXPECT_NE(m.find("--force"), std::string::npos) << m;
-  }
-  EXPECT_EQ(snapshot(dir), before);
-  EXPECT_TRUE(check_existing_results(dir, "report.json", {"REPORT.md"}, report_spec(quick), false,
-                                     nullptr));
-  fs::remove_all(dir);
-}
-
-// write_file_atomic: the temporary is hidden and per process (a user's NAME.tmp is not touched)
-// and removed when the write fails (here: the rename onto a folder that is not empty).
-TEST(OutputSafetyLibrary, WriteFileAtomicLeavesNoTemporary) {
-  const fs::path dir = fresh_dir("atomic");
-  fs::create_directories(dir / "busy");
-  std::ofstream(dir / "busy" / "x") << "x";
-  std::ofstream(dir / "table.csv.tmp") << "the user's";
-  write_file_atomic(dir / "table.csv", "a,b\n");
-  EXPECT_EQ(slurp(dir / "table.csv"), "a,b\n");
-  EXPECT_EQ(slurp(dir / "table.csv.tmp"), "the user's");
-  EXPECT_THROW(write_file_atomic(dir / "busy", "text"), std::exception);
-  std::vector<std::string> names;
-  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
-  std::sort(names.begin(), names.end());
-  EXPECT_EQ(names, (std::vector<std::string>{"busy", "table.csv", "table.csv.tmp"}));
   fs::remove_all(dir);
 }
 

@@ -17,7 +17,8 @@
 #include "experiments/study.hpp"
 #include "experiments/sweep.hpp"
 #include "experiments/work_precision.hpp"
-#include "test_support.hpp"
+#include "experiments/build_info.hpp"
+#include "tests/test_support.hpp"
 
 namespace fs = std::filesystem;
 using namespace stiffbench;

@@ -17,6 +17,7 @@
 #include <string>
 
 #include "core/types.hpp"
+#include "experiments/build_info.hpp"
 #include "experiments/catalog_markdown.hpp"
 
 namespace {

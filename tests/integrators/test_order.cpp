@@ -18,7 +18,7 @@ namespace {
 std::vector<std::string> all_integrators() {
   std::vector<std::string> out;
   for (const auto& e : integrator_registry().entries())
-    // stable_fluids runs only on fluid_2d (tests/test_grid.cpp).
+    // stable_fluids runs only on fluid_2d (tests/models/test_grid.cpp).
     if (e.info.family != Family::reference && !e.info.requires_.constraints &&
         !e.info.requires_.spring_network && !e.info.requires_.grid_fluid)
       out.push_back(e.info.name);

@@ -22,8 +22,9 @@ namespace {
 namespace fs = std::filesystem;
 
 // Absolute: with a compiler launcher that rewrites paths (ccache base_dir) __FILE__ is relative
-// to the build folder, while the runner writes absolute spec paths into its job scripts.
-const fs::path kSource = fs::absolute(fs::path(__FILE__)).parent_path().parent_path();
+// to the build folder, while the runner writes absolute spec paths into its job scripts. This
+// file is tests/cli/test_sweep.cpp: three levels below the repository root.
+const fs::path kSource = fs::absolute(fs::path(__FILE__)).parent_path().parent_path().parent_path();
 const std::string kSweep = (kSource / "experiments/specs/sweep_spring_chain.toml").string();
 
 using Outcome = stiffbench::testing_support::CliOutcome;

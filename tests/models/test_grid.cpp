@@ -18,7 +18,7 @@
 #include "experiments/stability.hpp"
 #include "models/grid/fluid_2d.hpp"
 #include "models/grid/heat_2d.hpp"
-#include "test_support.hpp"
+#include "tests/test_support.hpp"
 
 namespace stiffbench {
 namespace {

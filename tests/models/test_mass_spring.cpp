@@ -711,26 +711,13 @@ TEST(MassSpringConstraints, StiffSpringChainConvergesToConstrained) {
 // ---------------------------------------------------------------------------------------------
 // Registration.
 
-TEST(MassSpringRegistry, ModelsAndDescribe) {
+TEST(MassSpringRegistry, EveryModelIsMechanicalWithDefaultsThatReachTheBuilders) {
   for (const char* name : {"spring_chain", "cloth", "soft_cube", "pendulum_chain"}) {
     const auto* entry = model_registry().find(name);
     ASSERT_NE(entry, nullptr) << name;
     EXPECT_TRUE(entry->info.mechanical);
     for (const ParamSpec& p : entry->params) EXPECT_FALSE(p.default_value.empty()) << p.key;
   }
-  // `stiffbench describe cloth` lists every parameter with its default (the real binary).
-  FILE* pipe = ::popen((std::string(STIFFBENCH_BIN) + " describe cloth").c_str(), "r");
-  ASSERT_NE(pipe, nullptr);
-  std::string out;
-  char buf[4096];
-  std::size_t got = 0;
-  while ((got = std::fread(buf, 1, sizeof buf, pipe)) > 0) out.append(buf, got);
-  EXPECT_EQ(::pclose(pipe), 0);
-  for (const ParamSpec& p : model_registry().at("cloth").params)
-    EXPECT_NE(out.find("| " + p.key + " | " + to_string(p.type) + " | " + p.default_value + " |"),
-              std::string::npos)
-        << p.key << "\n"
-        << out;
   // The builders' defaults reach the registry: 16 × 16 cloth, 3 dofs per point.
   EXPECT_EQ(model("cloth")->dimension(), 2 * 3 * 16 * 16);
   EXPECT_EQ(model("cloth", {"n=5", "m=3"})->dimension(), 2 * 3 * 15);
