@@ -33,6 +33,10 @@ endforeach()
 install(FILES ${PROJECT_SOURCE_DIR}/include/stiffbench/stiffbench.hpp DESTINATION ${_sb_incdir})
 install(FILES ${PROJECT_BINARY_DIR}/generated/experiments/build_info.hpp
         DESTINATION ${_sb_incdir}/experiments)
+# Installed headers include each other as "stiffbench/core/..." (rewritten here), so only
+# <prefix>/include is on a consumer's include path: no top-level core/, models/, experiments/.
+install(CODE "set(DIR \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}/${_sb_incdir}\")
+              include(\"${PROJECT_SOURCE_DIR}/cmake/rewrite_includes.cmake\")")
 
 set(_sb_cmakedir ${CMAKE_INSTALL_LIBDIR}/cmake/stiffbench)
 install(EXPORT stiffbenchTargets NAMESPACE stiffbench:: DESTINATION ${_sb_cmakedir})

@@ -51,9 +51,7 @@ thread_local const IntegratorRegistry* t_integrators = nullptr;
 
 }  // namespace
 
-const ModelRegistry& model_registry() {
-  return t_models ? *t_models : mutable_model_registry();
-}
+const ModelRegistry& model_registry() { return t_models ? *t_models : mutable_model_registry(); }
 const IntegratorRegistry& integrator_registry() {
   return t_integrators ? *t_integrators : mutable_integrator_registry();
 }
@@ -119,7 +117,6 @@ void pop_object_scope() {
   t_models = t_scopes.empty() ? nullptr : &t_scopes.back()->models;
   t_integrators = t_scopes.empty() ? nullptr : &t_scopes.back()->integrators;
 }
-
 
 void register_model(ModelRegistry::Entry entry) {
   entry.built_in = false;

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "core/catalog.hpp"
+#include "core/registry_types.hpp"
 
 namespace stiffbench {
 

@@ -68,7 +68,7 @@ void models_table(std::ostream& out) {
 
 void integrators_table(std::ostream& out) {
   write_header({"integrator", "family", "kind", "order", "f per step", "step", "requires",
-                "parameters", "description", "reference"},
+                "parameters", "description", "literature"},
                out);
   for (const auto& e : integrator_registry().entries()) {
     const MethodInfo& m = e.info;

@@ -4,6 +4,7 @@
 
 #include "experiments/cli.hpp"
 #include "experiments/commands.hpp"
+#include "experiments/output.hpp"
 
 namespace stiffbench {
 
@@ -20,7 +21,10 @@ void add_report_command(CLI::App& app) {
   report->add_flag("--quick", opt->quick,
                    "apply each spec's [quick] overrides (fewer step sizes: a smoke run)");
   report->add_flag("--svg", opt->svg, "also write each plot as SVG");
-  report->callback([opt]() { cmd_report(*opt, std::cout, std::cerr); });
+  report->callback([opt]() {
+    opt->force = force_output();
+    cmd_report(*opt, std::cout, std::cerr);
+  });
 }
 
 }  // namespace stiffbench

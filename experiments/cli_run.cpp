@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "experiments/cli.hpp"
+#include "experiments/output.hpp"
 #include "experiments/sweep.hpp"
 
 namespace stiffbench {
@@ -43,6 +44,7 @@ void add_run_commands(CLI::App& app) {
   run->add_option("--time", st->opt.time_limit, "Slurm time limit, e.g. 01:00:00 (with --slurm)");
   run->callback([st]() {
     if (!st->shard.empty()) parse_shard(st->shard, st->opt.shard_index, st->opt.shard_count);
+    st->opt.force = force_output();
     const int code = run_spec(st->opt, std::cout, std::cerr);
     if (code != 0) {
       std::cout.flush();
@@ -57,7 +59,8 @@ void add_run_commands(CLI::App& app) {
   merge->add_option("--out", st->merge_out, "output directory")->required();
   merge->add_option("dirs", st->merge_dirs, "shard folders")->required();
   merge->callback([st]() {
-    const int code = merge_shards(st->merge_out, st->merge_dirs, std::cout, std::cerr);
+    const int code =
+        merge_shards(st->merge_out, st->merge_dirs, std::cout, std::cerr, force_output());
     if (code != 0) {
       std::cout.flush();
       std::exit(code);

@@ -58,6 +58,7 @@ struct ReportOptions {
   std::string out_dir = "results";
   bool quick = false;
   bool svg = false;
+  bool force = false;  // --force: replace a report of another suite in out_dir
   // Spec files and folders of spec files (each folder's *.toml in name order), one section per
   // spec; empty: the built-in suite (experiments/specs/report/, compiled in).
   std::vector<std::string> suite;

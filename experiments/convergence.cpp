@@ -74,10 +74,10 @@ std::vector<ParamSpec> step_study_options(const StepStudyDefaults& d) {
       {"levels", P::integer, d.ladder_levels, "number of step sizes", Bounds::at_least(2)},
       {"refine", P::real, "2", "ratio between consecutive step sizes", Bounds::above(1)},
       {"reference", P::text, "auto", d.ref_help},
-      {"reference_rtol", P::real, d.ref_rtol,
-       "relative tolerance of an adaptive reference run", Bounds::positive()},
-      {"reference_atol", P::real, d.ref_atol,
-       "absolute tolerance of an adaptive reference run", Bounds::positive()},
+      {"reference_rtol", P::real, d.ref_rtol, "relative tolerance of an adaptive reference run",
+       Bounds::positive()},
+      {"reference_atol", P::real, d.ref_atol, "absolute tolerance of an adaptive reference run",
+       Bounds::positive()},
   };
 }
 
@@ -232,28 +232,14 @@ std::vector<Vec> compute_reference(const ReferencePlan& plan, const OdeSystem& s
   return out;
 }
 
-std::uint64_t fnv1a(const std::string& s, std::uint64_t h = 14695981039346656037ull) {
-  for (const unsigned char c : s) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  return h;
-}
-
-std::string hex16(std::uint64_t x) {
-  char buf[20];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(x));
-  return buf;
-}
-
 // Everything the reference values depend on, as one line of JSON (keys sorted).
 std::string cache_key(const ConvergenceSpec& spec, const OdeSystem& sys, const ReferencePlan& plan,
                       const std::vector<double>& times) {
   const Params model_params = resolve_params(model_registry().at(spec.model).params, spec.params,
                                              nullptr, "model '" + spec.model + "'");
-  std::uint64_t y0_hash = 14695981039346656037ull;
+  std::uint64_t y0_hash = kFnvOffset;
   const Vec y0 = sys.initial_state();
-  for (Index i = 0; i < y0.size(); ++i) y0_hash = fnv1a(g17(y0[i]) + ",", y0_hash);
+  for (Index i = 0; i < y0.size(); ++i) y0_hash = fnv1a64(g17(y0[i]) + ",", y0_hash);
   nlohmann::json key;
   key["cache_format"] = 1;
   key["stiffbench_version"] = STIFFBENCH_VERSION;
@@ -347,7 +333,8 @@ ReferenceValues reference_values(const ConvergenceSpec& spec, const OdeSystem& s
   std::string key_line;
   if (use_cache) {
     key_line = "# key: " + cache_key(spec, sys, plan, sorted);
-    path = std::filesystem::path(spec.cache_dir) / "reference" / (hex16(fnv1a(key_line)) + ".csv");
+    path =
+        std::filesystem::path(spec.cache_dir) / "reference" / (hex16(fnv1a64(key_line)) + ".csv");
     res.cache = path.string();
     if (auto cached = read_cache(path, key_line, sorted, sys.dimension())) {
       values = std::move(*cached);
@@ -507,21 +494,15 @@ ConvergenceResult run_local_error(const ConvergenceSpec& spec, std::ostream* pro
 
 std::optional<double> fitted_order(const std::vector<ConvergenceRow>& rows,
                                    const std::string& integrator, int points) {
-  std::vector<std::pair<double, double>> xy;
+  std::vector<double> lh, le;
   for (const auto& r : rows)
-    if (r.integrator == integrator && r.stats.status == Status::ok && r.error > 0)
-      xy.emplace_back(std::log(r.h), std::log(r.error));
-  if (xy.size() < 2) return std::nullopt;
-  const std::size_t n = std::min(xy.size(), static_cast<std::size_t>(points));
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (std::size_t i = xy.size() - n; i < xy.size(); ++i) {
-    sx += xy[i].first;
-    sy += xy[i].second;
-    sxx += xy[i].first * xy[i].first;
-    sxy += xy[i].first * xy[i].second;
-  }
-  const double dn = static_cast<double>(n);
-  return (dn * sxy - sx * sy) / (dn * sxx - sx * sx);
+    if (r.integrator == integrator && r.stats.status == Status::ok && r.error > 0) {
+      lh.push_back(std::log(r.h));
+      le.push_back(std::log(r.error));
+    }
+  const std::size_t n = std::min(lh.size(), static_cast<std::size_t>(points));
+  return least_squares_slope(std::vector<double>(lh.end() - n, lh.end()),
+                             std::vector<double>(le.end() - n, le.end()));
 }
 
 std::optional<double> last_observed_order(const std::vector<ConvergenceRow>& rows,
@@ -752,9 +733,9 @@ StudyKind step_size_kind(bool local) {
     if (o.key == "reference_atol") o.help += " (default rtol/100)";
   }
   if (!local) k.required = {"t_end"};
-  k.unit_columns = (local ? local_error_table(ConvergenceResult{})
-                          : convergence_table(ConvergenceResult{}))
-                       .columns;
+  k.unit_columns =
+      (local ? local_error_table(ConvergenceResult{}) : convergence_table(ConvergenceResult{}))
+          .columns;
   k.make = [local](const StudyTarget& t, const Params& o, const StudyContext& ctx) {
     ConvergenceSpec spec;
     spec.model = t.model;

@@ -405,14 +405,13 @@ class EnergyJob : public StudyJob {
   void print_summary(std::ostream& out) const override {
     out << energy_markdown_table(result_).to_markdown();
     for (const auto& run : result_.runs)
-      if (run.stats.status != Status::ok) out << run.integrator << ": " << run.stats.message << "\n";
+      if (run.stats.status != Status::ok)
+        out << run.integrator << ": " << run.stats.message << "\n";
   }
   std::string report_markdown(const std::string& note) const override {
     return note + "\n\n" + energy_markdown_table(result_).to_markdown() + "\n";
   }
-  std::string default_title() const override {
-    return "Energy drift: " + spec_.model;
-  }
+  std::string default_title() const override { return "Energy drift: " + spec_.model; }
   const EnergyResult& result() const { return result_; }
 
  private:

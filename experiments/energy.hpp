@@ -81,7 +81,7 @@ struct EnergyRun {
   double t_reached = 0;
   double max_rel_error = 0;
   double final_rel_error = 0;
-  double drift_rate = 0;         // per unit time
+  double drift_rate = 0;               // per unit time
   std::optional<double> growth_ratio;  // column `growth`: see the header comment
   // Other invariants: name and maximum error over the run (relative, or absolute when
   // invariant_error_is_absolute(I0)).

@@ -28,27 +28,62 @@ namespace {
 std::string g_command_line;
 bool g_command_line_set = false;
 
-std::string csv_escape(const std::string& s) {
-  if (s.find_first_of(",\"\n") == std::string::npos) return s;
-  std::string out = "\"";
-  for (char ch : s) {
-    if (ch == '"') out += '"';
-    out += ch;
-  }
-  out += '"';
-  return out;
-}
 }  // namespace
 
-std::string Table::to_csv() const {
-  std::ostringstream os;
-  for (std::size_t i = 0; i < columns.size(); ++i) os << (i ? "," : "") << csv_escape(columns[i]);
-  os << "\n";
-  for (const auto& r : rows) {
-    for (std::size_t i = 0; i < r.size(); ++i) os << (i ? "," : "") << csv_escape(r[i]);
-    os << "\n";
+std::string csv_field(const std::string& s) {
+  std::string f = s;
+  std::replace(f.begin(), f.end(), '\n', ' ');
+  std::replace(f.begin(), f.end(), '\r', ' ');
+  if (f.find_first_of(",\"") == std::string::npos) return f;
+  std::string q = "\"";
+  for (char c : f) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+std::string csv_line(const std::vector<std::string>& fields) {
+  std::string line;
+  for (std::size_t i = 0; i < fields.size(); ++i) line += (i ? "," : "") + csv_field(fields[i]);
+  return line + "\n";
+}
+
+std::uint64_t fnv1a64(std::string_view s, std::uint64_t h) {
+  for (const unsigned char c : s) {
+    h ^= c;
+    h *= 1099511628211ull;
   }
-  return os.str();
+  return h;
+}
+
+std::string hex16(std::uint64_t x) {
+  char buf[20];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(x));
+  return buf;
+}
+
+std::optional<double> least_squares_slope(const std::vector<double>& x,
+                                          const std::vector<double>& y) {
+  const std::size_t n = std::min(x.size(), y.size());
+  if (n < 2) return std::nullopt;
+  double mx = 0, my = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    mx += x[k];
+    my += y[k];
+  }
+  mx /= static_cast<double>(n);
+  my /= static_cast<double>(n);
+  double sxy = 0, sxx = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    sxy += (x[k] - mx) * (y[k] - my);
+    sxx += (x[k] - mx) * (x[k] - mx);
+  }
+  if (!(sxx > 0)) return std::nullopt;
+  return sxy / sxx;
+}
+
+std::string Table::to_csv() const {
+  std::string out = csv_line(columns);
+  for (const auto& r : rows) out += csv_line(r);
+  return out;
 }
 
 std::string Table::to_markdown() const {

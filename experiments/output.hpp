@@ -3,9 +3,12 @@
 // table.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <iosfwd>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -21,6 +24,24 @@ struct Table {
   std::string to_csv() const;
   std::string to_markdown() const;
 };
+
+// One CSV field: line breaks become spaces (one record per line, so `run` can append and resume
+// line by line), quoted (with "" for ") when it holds ',' or '"'.
+std::string csv_field(const std::string& s);
+// The fields joined by ',' with a final newline.
+std::string csv_line(const std::vector<std::string>& fields);
+
+// The 64-bit FNV-1a hash (Fowler, Noll, Vo) of `s`, continuing from `h`; as 16 hex digits. Names
+// the reference cache files and identifies spec files of `run`.
+inline constexpr std::uint64_t kFnvOffset = 14695981039346656037ull;
+std::uint64_t fnv1a64(std::string_view s, std::uint64_t h = kFnvOffset);
+std::string hex16(std::uint64_t x);
+
+// The least-squares slope of y against x (centred sums); empty with fewer than two points or
+// when every x is the same. The one fit behind observed orders, log-log slopes of stability
+// limits and growth rates.
+std::optional<double> least_squares_slope(const std::vector<double>& x,
+                                          const std::vector<double>& y);
 
 // Full precision (round-trips through text): for values in CSV files.
 std::string format_full(double x);

@@ -406,9 +406,7 @@ class RegionJob : public StudyJob {
   std::string report_markdown(const std::string& note) const override {
     return note + "\n\n" + region_limits_markdown_table(result_).to_markdown() + "\n";
   }
-  std::string default_title() const override {
-    return "Stability regions: boundary |R(z)| = 1";
-  }
+  std::string default_title() const override { return "Stability regions: boundary |R(z)| = 1"; }
   const RegionResult& result() const { return result_; }
 
  private:

@@ -2,11 +2,11 @@
 // framework into one folder per section and DIR/REPORT.md linking every table and plot.
 #include <algorithm>
 #include <cctype>
-#include <stdexcept>
 #include <filesystem>
 #include <fstream>
 #include <ostream>
 #include <sstream>
+#include <stdexcept>
 #include <string_view>
 
 #include "experiments/build_info.hpp"
@@ -91,7 +91,8 @@ nlohmann::json report_spec(const ReportOptions& opt) {
   nlohmann::json j = {{"suite", opt.quick ? "quick" : "full"}};
   if (!opt.suite.empty()) {
     nlohmann::json files = nlohmann::json::array();
-    for (const auto& f : report_suite_files(opt.suite)) files.push_back(load_spec_file(f, {}).to_json());
+    for (const auto& f : report_suite_files(opt.suite))
+      files.push_back(load_spec_file(f, {}).to_json());
     j["spec_files"] = files;
   }
   return j;
@@ -104,7 +105,7 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
   // suite is refused unless --force. Plot formats (--svg) are not part of it, as for the
   // studies. Written before the suite runs, so an interrupted report is identified too.
   const nlohmann::json spec = report_spec(opt);
-  check_existing_results(opt.out_dir, "report.json", {"REPORT.md"}, spec, force_output(), &err);
+  check_existing_results(opt.out_dir, "report.json", {"REPORT.md"}, spec, opt.force, &err);
   write_file_atomic(fs::path(opt.out_dir) / "report.json",
                     run_metadata("report", spec).dump(2) + "\n");
   std::ostringstream md;

@@ -219,6 +219,87 @@ SpecFile load_spec_file(const std::string& file, const std::vector<std::string>&
   return parse_spec_text(buffer.str(), file, sets);
 }
 
+namespace {
+
+// [quick]: the settings (and title, note, integrators, skip) `report --quick` applies.
+void read_quick(const toml::table& table, const std::string& file, SpecFile& spec) {
+  for (const auto& [qk, qnode] : table) {
+    const std::string qkey(qk.str());
+    SpecEntry e = entry_of(qnode, "quick." + qkey, qkey, where_of(file, qnode));
+    if (qkey == "title" || qkey == "note") {
+      if (e.is_list || e.values.front().type != Type::text) spec_error(e, "expected a string");
+    } else if (qkey == "skip") {
+      if (e.is_list || e.values.front().type != Type::boolean)
+        spec_error(e, "expected true or false");
+    } else if (qkey == "integrators") {
+      for (const auto& v : e.values)
+        if (v.type != Type::text) spec_error(e, "expected integrator names (strings)");
+    } else {
+      check_setting(spec.kind, e);
+    }
+    spec.quick.push_back(std::move(e));
+  }
+}
+
+// --set KEY=VALUE: VALUE parsed as TOML; a bare word that is not TOML is a string.
+void apply_sets(const std::vector<std::string>& sets, std::vector<SpecEntry>& settings,
+                std::vector<SpecEntry>& params, SpecEntry& integrators) {
+  for (const auto& s : sets) {
+    const auto eq = s.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw BadInput("--set '" + s + "': expected KEY=VALUE (KEY like t_end or params.n)");
+    const std::string path = s.substr(0, eq), text = s.substr(eq + 1);
+    toml::table parsed;
+    try {
+      require_ascii_outside_strings("v = " + text, "--set " + s);
+      parsed = toml::parse("v = " + text);
+    } catch (const BadInput&) {
+      parsed = toml::table{{"v", text}};
+    } catch (const toml::parse_error&) {
+      parsed = toml::table{{"v", text}};
+    }
+    const std::string where = "--set " + s;
+    const toml::node& node = *parsed.get("v");
+    if (path == "kind") throw BadInput(where + ": the kind cannot be changed");
+    if (path.rfind("params.", 0) == 0) {
+      const std::string key = path.substr(7);
+      if (key.empty() || key.find('.') != std::string::npos)
+        throw BadInput(where + ": expected params.NAME");
+      put(params, entry_of(node, path, key, where));
+    } else if (path.find('.') != std::string::npos) {
+      throw BadInput(where + ": unknown table in '" + path + "' (only params.NAME is dotted)");
+    } else if (path == "integrators") {
+      integrators = entry_of(node, path, path, where);
+    } else {
+      put(settings, entry_of(node, path, path, where));
+    }
+  }
+}
+
+// `integrators`: a list of names, or one string "a,b,c" as on the command line.
+void read_integrators(const SpecEntry& integrators, SpecFile& spec) {
+  if (!integrators.values.empty()) {
+    spec.integrators_where = integrators.where;
+    for (const auto& v : integrators.values) {
+      if (v.type != Type::text) spec_error(integrators, "expected integrator names (strings)");
+      if (!integrators.is_list) {  // "a,b,c" as on the command line
+        std::stringstream ss(v.text);
+        std::string item;
+        while (std::getline(ss, item, ',')) {
+          if (item.empty()) spec_error(integrators, "empty name in '" + v.text + "'");
+          spec.integrators.push_back(item);
+        }
+      } else {
+        spec.integrators.push_back(v.text);
+      }
+    }
+  } else if (study_kind(spec.kind).integrators_required) {
+    throw BadInput(spec.file + ": key 'integrators' missing (a list of integrator names)");
+  }
+}
+
+}  // namespace
+
 SpecFile parse_spec_text(const std::string& source, const std::string& file,
                          const std::vector<std::string>& sets) {
   toml::table root;
@@ -255,23 +336,7 @@ SpecFile parse_spec_text(const std::string& source, const std::string& file,
     if (key == "quick") {
       const auto* table = node.as_table();
       if (!table) throw BadInput(where + ": key 'quick': expected a table ([quick])");
-      for (const auto& [qk, qnode] : *table) {
-        const std::string qkey(qk.str());
-        SpecEntry e = entry_of(qnode, "quick." + qkey, qkey, where_of(file, qnode));
-        if (qkey == "title" || qkey == "note") {
-          if (e.is_list || e.values.front().type != Type::text)
-            spec_error(e, "expected a string");
-        } else if (qkey == "skip") {
-          if (e.is_list || e.values.front().type != Type::boolean)
-            spec_error(e, "expected true or false");
-        } else if (qkey == "integrators") {
-          for (const auto& v : e.values)
-            if (v.type != Type::text) spec_error(e, "expected integrator names (strings)");
-        } else {
-          check_setting(spec.kind, e);
-        }
-        spec.quick.push_back(std::move(e));
-      }
+      read_quick(*table, file, spec);
       continue;
     }
     if (key == "params") {
@@ -293,57 +358,9 @@ SpecFile parse_spec_text(const std::string& source, const std::string& file,
       settings.push_back(std::move(e));
   }
 
-  // --set KEY=VALUE: VALUE parsed as TOML; a bare word that is not TOML is a string.
-  for (const auto& s : sets) {
-    const auto eq = s.find('=');
-    if (eq == std::string::npos || eq == 0)
-      throw BadInput("--set '" + s + "': expected KEY=VALUE (KEY like t_end or params.n)");
-    const std::string path = s.substr(0, eq), text = s.substr(eq + 1);
-    toml::table parsed;
-    try {
-      require_ascii_outside_strings("v = " + text, "--set " + s);
-      parsed = toml::parse("v = " + text);
-    } catch (const BadInput&) {
-      parsed = toml::table{{"v", text}};
-    } catch (const toml::parse_error&) {
-      parsed = toml::table{{"v", text}};
-    }
-    const std::string where = "--set " + s;
-    const toml::node& node = *parsed.get("v");
-    if (path == "kind") throw BadInput(where + ": the kind cannot be changed");
-    if (path.rfind("params.", 0) == 0) {
-      const std::string key = path.substr(7);
-      if (key.empty() || key.find('.') != std::string::npos)
-        throw BadInput(where + ": expected params.NAME");
-      put(params, entry_of(node, path, key, where));
-    } else if (path.find('.') != std::string::npos) {
-      throw BadInput(where + ": unknown table in '" + path + "' (only params.NAME is dotted)");
-    } else if (path == "integrators") {
-      integrators = entry_of(node, path, path, where);
-    } else {
-      put(settings, entry_of(node, path, path, where));
-    }
-  }
-
+  apply_sets(sets, settings, params, integrators);
   for (const auto& e : settings) check_setting(spec.kind, e);
-  if (!integrators.values.empty()) {
-    spec.integrators_where = integrators.where;
-    for (const auto& v : integrators.values) {
-      if (v.type != Type::text) spec_error(integrators, "expected integrator names (strings)");
-      if (!integrators.is_list) {  // "a,b,c" as on the command line
-        std::stringstream ss(v.text);
-        std::string item;
-        while (std::getline(ss, item, ',')) {
-          if (item.empty()) spec_error(integrators, "empty name in '" + v.text + "'");
-          spec.integrators.push_back(item);
-        }
-      } else {
-        spec.integrators.push_back(v.text);
-      }
-    }
-  } else if (study_kind(spec.kind).integrators_required) {
-    throw BadInput(file + ": key 'integrators' missing (a list of integrator names)");
-  }
+  read_integrators(integrators, spec);
   if (study_kind(spec.kind).takes_model) {
     const bool has_model = std::any_of(settings.begin(), settings.end(),
                                        [](const auto& e) { return e.key == "model"; });

@@ -43,8 +43,8 @@ struct SpecFile {
   // [quick] may also replace `integrators` and set `skip = true` (no section in a quick report).
   std::string title, note;
   std::vector<SpecEntry> quick;
-  bool skip = false;  // set by apply_quick
-  nlohmann::json to_json() const;   // canonical form (hashed for shards, stored in run.json)
+  bool skip = false;               // set by apply_quick
+  nlohmann::json to_json() const;  // canonical form (hashed for shards, stored in run.json)
 };
 
 // The experiment kinds `run` accepts: the registered studies (experiments/study.hpp).

@@ -120,22 +120,11 @@ Vec perturbed_state(const OdeSystem& sys, const StabilitySpec& spec) {
 }
 
 // Least-squares slope of log y against t.
+// The slope of log y against t (y > 0).
 std::optional<double> semilog_slope(const std::vector<double>& t, const std::vector<double>& y) {
-  if (t.size() < 2) return std::nullopt;
-  double mt = 0, ml = 0;
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    mt += t[k];
-    ml += std::log(y[k]);
-  }
-  mt /= static_cast<double>(t.size());
-  ml /= static_cast<double>(t.size());
-  double sxy = 0, sxx = 0;
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    sxy += (t[k] - mt) * (std::log(y[k]) - ml);
-    sxx += (t[k] - mt) * (t[k] - mt);
-  }
-  if (!(sxx > 0)) return std::nullopt;
-  return sxy / sxx;
+  std::vector<double> ly;
+  for (double v : y) ly.push_back(std::log(v));
+  return least_squares_slope(t, ly);
 }
 
 struct Probe {
@@ -208,6 +197,32 @@ Probe probe(const OdeSystem& sys, Integrator& integ, double t0, const Vec& y0, d
   return p;
 }
 
+// Mechanical systems with an energy invariant are judged by their energy (unless --criterion
+// norm); BadInput for --criterion energy on a system without one.
+std::function<double(double, CVecRef)> energy_criterion(const OdeSystem& sys,
+                                                        const StabilitySpec& spec) {
+  std::function<double(double, CVecRef)> energy;
+  if (sys.as_mechanical() != nullptr && spec.criterion != "norm")
+    for (const auto& inv : sys.invariants())
+      if (inv.name == "energy") energy = inv.value;
+  require_input(energy || spec.criterion != "energy",
+                "--criterion energy: model " + spec.model +
+                    " is not a mechanical system with an 'energy' invariant");
+  return energy;
+}
+
+// The linear-theory limit of the method on the system's spectrum, into `row`.
+void predict(const Integrator& integ, const Spectrum& spec_sys, bool mechanical, double h_cap,
+             StabilityRow& row) {
+  if (auto ls = integ.linear_stability(); ls && !spec_sys.eigenvalues.empty()) {
+    const StepLimit lim = predicted_step_limit(*ls, spec_sys.eigenvalues, mechanical, h_cap);
+    if (lim.unbounded)
+      row.predicted_unbounded = true;
+    else
+      row.h_predicted = lim.h;
+  }
+}
+
 StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& spec_sys,
                      const Vec& y0, const StabilitySpec& spec) {
   StabilityRow row;
@@ -222,13 +237,7 @@ StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& sp
       omega > 0 ? 2.0 / omega : (spec.horizon ? *spec.horizon / spec.min_steps : 0.0);
   const double h_cap = spec.h_cap_factor * h_ref;
 
-  if (auto ls = integ.linear_stability(); ls && !spec_sys.eigenvalues.empty()) {
-    const StepLimit lim = predicted_step_limit(*ls, spec_sys.eigenvalues, mechanical, h_cap);
-    if (lim.unbounded)
-      row.predicted_unbounded = true;
-    else
-      row.h_predicted = lim.h;
-  }
+  predict(integ, spec_sys, mechanical, h_cap, row);
 
   // First guess: 0.8 × the prediction (not the prediction itself, so the bracket never starts
   // on the predicted value), else the model's suggested step, else 2/ω.
@@ -239,14 +248,7 @@ StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& sp
     h0 = sug->h;
   const double h_floor = 1e-3 * std::min(h0, h_ref);
 
-  // Mechanical systems with an energy invariant are judged by their energy.
-  std::function<double(double, CVecRef)> energy;
-  if (mechanical && spec.criterion != "norm")
-    for (const auto& inv : sys.invariants())
-      if (inv.name == "energy") energy = inv.value;
-  require_input(energy || spec.criterion != "energy",
-                "--criterion energy: model " + spec.model +
-                    " is not a mechanical system with an 'energy' invariant");
+  const std::function<double(double, CVecRef)> energy = energy_criterion(sys, spec);
   // A probe that timed out or threw says nothing about stability: the row ends there with
   // status timeout or failed (treating it as unstable would bias h_max low silently).
   auto run = [&](double h, int mult) {
@@ -339,7 +341,8 @@ void StabilitySpec::validate() const {
   require_input(rel_tol > 0 && rel_tol < 0.5, "--rel-tol must be in (0, 0.5), got " + num(rel_tol));
   require_input(periods > 0 && std::isfinite(periods), "--periods must be > 0");
   require_input(min_steps >= 1, "--min-steps must be >= 1");
-  require_input(energy_growth > 1 && std::isfinite(energy_growth), "--growth must be a finite factor > 1");
+  require_input(energy_growth > 1 && std::isfinite(energy_growth),
+                "--growth must be a finite factor > 1");
   require_input(norm_growth > 1 && std::isfinite(norm_growth),
                 "--norm-growth must be a finite factor > 1");
   require_input(perturbation >= 0 && perturbation < 1, "--perturbation must be in [0, 1)");
@@ -423,21 +426,7 @@ std::optional<double> loglog_slope(const std::vector<double>& x, const std::vect
       lx.push_back(std::log(std::abs(x[k])));
       ly.push_back(std::log(y[k]));
     }
-  if (lx.size() < 2) return std::nullopt;
-  double mx = 0, my = 0;
-  for (std::size_t k = 0; k < lx.size(); ++k) {
-    mx += lx[k];
-    my += ly[k];
-  }
-  mx /= static_cast<double>(lx.size());
-  my /= static_cast<double>(lx.size());
-  double sxy = 0, sxx = 0;
-  for (std::size_t k = 0; k < lx.size(); ++k) {
-    sxy += (lx[k] - mx) * (ly[k] - my);
-    sxx += (lx[k] - mx) * (lx[k] - mx);
-  }
-  if (!(sxx > 0)) return std::nullopt;
-  return sxy / sxx;
+  return least_squares_slope(lx, ly);
 }
 
 StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress) {
@@ -742,7 +731,9 @@ StudyKind stability_study_kind() {
        "mechanical systems: a run is unstable when its energy exceeds E0 + (growth - 1)|E0| at "
        "any step",
        Bounds::above(1)},
-      {"criterion", P::text, "auto",
+      {"criterion",
+       P::text,
+       "auto",
        "auto (energy for mechanical systems with an energy invariant, else the norm), energy, or "
        "norm (for models whose energy has an arbitrary zero, e.g. gravity)",
        {"auto", "energy", "norm"}},
@@ -757,7 +748,9 @@ StudyKind stability_study_kind() {
        "largest step tried, in units of 2/omega (A-stable methods are reported stable_up_to it)",
        Bounds::above(1)},
       {"max_steps", P::integer, "20000000", "step budget of one run", Bounds::at_least(10)},
-      {"ray", P::text, "auto",
+      {"ray",
+       P::text,
+       "auto",
        "where the stiffness() estimate is placed when the spectrum is not computed: auto "
        "(imaginary axis for mechanical systems, real axis otherwise), imag, real",
        {"auto", "imag", "real"}},

@@ -71,9 +71,9 @@ struct StabilitySpec {
   double rel_tol = 1e-3;             // bisection tolerance on h
   double periods = 500;              // horizon in periods of the fastest mode
   long min_steps = 200;              // and at least this many steps
-  double energy_growth = 2;  // option `growth`: energy factor (mechanical systems with energy)
-  double norm_growth = 10;           // blow-up factor on the max-norm (every system)
-  double perturbation = 1e-3;        // ε
+  double energy_growth = 2;    // option `growth`: energy factor (mechanical systems with energy)
+  double norm_growth = 10;     // blow-up factor on the max-norm (every system)
+  double perturbation = 1e-3;  // ε
   unsigned long seed = 1;
   double h_cap_factor = 1e3;    // largest step tried: h_cap_factor × 2/ω
   long max_steps = 20'000'000;  // per probe run (also limits h_floor)

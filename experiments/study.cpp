@@ -137,9 +137,9 @@ std::unique_ptr<StudyJob> make_study(const StudyKind& kind, const StudyTarget& t
                                      const Params& options, const StudyContext& ctx,
                                      const std::function<std::string(const std::string&)>& how) {
   if (kind.takes_model) require_input(!target.model.empty(), how("model") + " is required");
-  require_input(kind.takes_params || target.params.empty(),
-                "--param does not apply to " + kind.name +
-                    ": it depends only on the methods' coefficients");
+  require_input(
+      kind.takes_params || target.params.empty(),
+      "--param does not apply to " + kind.name + ": it depends only on the methods' coefficients");
   if (kind.integrators_required)
     require_input(!target.integrators.empty(), "--integrators: no integrator given");
   return kind.make(target, resolve_study_options(kind, options, how), ctx);

@@ -47,19 +47,19 @@ struct StudyTarget {
   std::string model;                     // a registered model (or the name of `system`)
   Params params;                         // model and integrator parameters (--param)
   std::vector<std::string> integrators;  // registered integrators, run in this order
-  StudyObjects objects;  // a user's own system and integrators (optional)
+  StudyObjects objects;                  // a user's own system and integrators (optional)
 };
 
 // Settings of one invocation, passed to the pipeline instead of process-wide flags.
 struct StudyContext {
-  bool force = false;                 // replace results of a different spec in the folder
-  PlotOptions plot;                   // --svg
-  std::ostream* progress = nullptr;   // progress lines (stderr on the command line)
-  std::ostream* out = nullptr;        // the summary table and "wrote ..." lines
-  std::ostream* err = nullptr;        // notes and warnings
-  std::string title;                  // plot title (empty: the job's default title)
-  std::string cache_dir;              // reference cache folder (convergence; empty: none)
-  bool use_output_cache = true;       // one-off commands: the cache lives in --out
+  bool force = false;                // replace results of a different spec in the folder
+  PlotOptions plot;                  // --svg
+  std::ostream* progress = nullptr;  // progress lines (stderr on the command line)
+  std::ostream* out = nullptr;       // the summary table and "wrote ..." lines
+  std::ostream* err = nullptr;       // notes and warnings
+  std::string title;                 // plot title (empty: the job's default title)
+  std::string cache_dir;             // reference cache folder (convergence; empty: none)
+  bool use_output_cache = true;      // one-off commands: the cache lives in --out
 };
 
 // A study configured from resolved options: run it, then write and summarise its results.
@@ -93,10 +93,10 @@ struct StudyKind {
   bool integrators_required = true;  // region: default every method with stability data
   // `run`: one unit per integrator; false: one unit per point with every integrator (region).
   bool unit_per_integrator = true;
-  std::vector<ParamSpec> options;          // the study's own options, declared once
-  std::vector<std::string> required;       // options that must be given
-  std::vector<std::string> extra_files;    // besides STEM.{csv,md,json}, e.g. energy_summary.csv
-  std::vector<std::string> unit_columns;   // the columns of StudyJob::unit_table()
+  std::vector<ParamSpec> options;         // the study's own options, declared once
+  std::vector<std::string> required;      // options that must be given
+  std::vector<std::string> extra_files;   // besides STEM.{csv,md,json}, e.g. energy_summary.csv
+  std::vector<std::string> unit_columns;  // the columns of StudyJob::unit_table()
   // Builds the job from resolved options (every declared key with a default is present; an
   // option without default is present only when given). BadInput naming the option for values
   // the declaration cannot express (combinations, lists).

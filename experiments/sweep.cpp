@@ -194,21 +194,6 @@ void validate_point(const SpecFile& s, const Point& p) {
 
 // ---- CSV -------------------------------------------------------------------------------------
 
-std::string csv_field(std::string s) {
-  std::replace(s.begin(), s.end(), '\n', ' ');
-  std::replace(s.begin(), s.end(), '\r', ' ');
-  if (s.find_first_of(",\"") == std::string::npos) return s;
-  std::string q = "\"";
-  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return q + "\"";
-}
-
-std::string csv_line(const std::vector<std::string>& fields) {
-  std::string line;
-  for (std::size_t i = 0; i < fields.size(); ++i) line += (i ? "," : "") + csv_field(fields[i]);
-  return line + "\n";
-}
-
 // Reads a run CSV (experiments/csv.hpp): the header and the complete units.
 CsvContent read_run_csv(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -228,20 +213,7 @@ std::string md_name(const std::string& kind) {
   return fs::path(csv_name(kind)).replace_extension(".md").string();
 }
 
-std::string hex16(std::uint64_t h) {
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return buf;
-}
-
-std::string spec_hash(const SpecFile& s) {
-  std::uint64_t h = 14695981039346656037ull;
-  for (unsigned char c : s.to_json().dump()) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  return hex16(h);
-}
+std::string spec_hash(const SpecFile& s) { return hex16(fnv1a64(s.to_json().dump())); }
 
 void write_all(const fs::path& path, const std::string& header,
                const std::map<long, UnitRows>& units) {
@@ -388,41 +360,11 @@ void parse_shard(const std::string& arg, int& index, int& count) {
     throw BadInput("--shard '" + arg + "': expected I/N with 0 <= I < N");
 }
 
-int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
-  const SpecFile spec = load_spec_file(opt.spec_file, opt.sets);
-  const Expansion ex = expand(spec);
-  for (const auto& p : ex.points) validate_point(spec, p);
-  if (opt.slurm_tasks < 0) throw BadInput("--slurm: expected a number of tasks >= 1");
+namespace {
 
-  const std::string kind = spec.kind;
-  const bool unit_per_integrator = study_kind(kind).unit_per_integrator;
-  const long per_point = ex.units_per_point;
-  auto unit_integrators = [&](long u) {
-    if (!unit_per_integrator) return spec.integrators;
-    return std::vector<std::string>{spec.integrators[static_cast<std::size_t>(u % per_point)]};
-  };
-  out << spec.file << ": " << kind << ", " << ex.points.size() << " point(s) x "
-      << (!unit_per_integrator ? std::string("1 unit (all integrators)")
-                           : std::to_string(per_point) + " integrator(s)")
-      << " = " << ex.units() << " unit(s)\n";
-  if (opt.check_only) {
-    for (std::size_t i = 0; i < ex.points.size(); ++i)
-      out << "  point " << i << ": " << (ex.points[i].label.empty() ? "-" : ex.points[i].label)
-          << "\n";
-    return 0;
-  }
-  if (opt.slurm_tasks > 0) {
-    write_slurm(opt, spec, ex, out);
-    return 0;
-  }
-
-  const fs::path dir = opt.out_dir;
-  require_output_dir(dir);
-  const fs::path csv = dir / csv_name(kind);
-  const std::string hash = spec_hash(spec);
-
-  // Columns: unit, unit_rows, tags, study columns, unit_status, unit_message.
-  const std::vector<std::string> study = study_kind(kind).unit_columns;
+// The run CSV's columns: unit, unit_rows, the sweep dimensions, the study's own columns,
+// unit_status, unit_message.
+std::string run_header(const std::vector<std::string>& study, const Expansion& ex) {
   std::vector<std::string> columns = {"unit", "unit_rows"};
   for (const auto* d : ex.dims) {
     const bool clash = std::find(study.begin(), study.end(), d->path) != study.end() ||
@@ -432,18 +374,25 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   columns.insert(columns.end(), study.begin(), study.end());
   columns.push_back("unit_status");
   columns.push_back("unit_message");
-  const std::string header = csv_line(columns);
+  return csv_line(columns);
+}
 
-  // Output safety: a folder holding a run of a different spec (run.json) is refused unless
-  // --force; one holding units of this spec needs --resume (run the missing ones) or --force
-  // (start over).
-  require_input(!(opt.resume && force_output()),
+// Output safety: a folder holding a run of a different spec (run.json) is refused unless
+// --force; one holding units of this spec needs --resume (run the missing ones) or --force
+// (start over). Returns the units kept by --resume.
+std::map<long, UnitRows> kept_units(const RunOptions& opt, const SpecFile& spec,
+                                    const Expansion& ex, const std::string& header,
+                                    const std::string& hash, std::ostream& err) {
+  const fs::path dir = opt.out_dir;
+  const std::string kind = spec.kind;
+  const fs::path csv = dir / csv_name(kind);
+  require_input(!(opt.resume && opt.force),
                 "--resume and --force: choose one (--resume keeps the units in " + dir.string() +
                     ", --force starts over)");
   const std::string shard = std::to_string(opt.shard_index) + "/" + std::to_string(opt.shard_count);
   if (check_existing_results(dir, "run.json", {csv_name(kind), md_name(kind)}, spec.to_json(),
-                             force_output(), force_output() ? &err : nullptr) &&
-      !opt.resume && !force_output()) {
+                             opt.force, opt.force ? &err : nullptr) &&
+      !opt.resume && !opt.force) {
     const long present = static_cast<long>(read_run_csv(csv).units.size());
     if (present > 0) {
       long in_shard = 0;
@@ -456,7 +405,7 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     err << "note: --out " << dir.string()
         << " holds a run of this spec without complete units: starting it again\n";
   }
-  if (force_output()) {
+  if (opt.force) {
     std::error_code ignore;
     fs::remove(dir / md_name(kind), ignore);  // the table of the run being replaced
   }
@@ -475,8 +424,14 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     if (c.dropped_rows > 0)
       err << "resume: dropped " << c.dropped_rows << " row(s) of incomplete units\n";
   }
-  write_all(csv, header, done);  // the kept units (or the header alone)
+  return done;
+}
 
+// OUT/run.json: the spec, its hash, the sweep dimensions and points, the shard.
+void write_run_json(const RunOptions& opt, const SpecFile& spec, const Expansion& ex,
+                    const std::string& hash) {
+  const std::string kind = spec.kind;
+  const std::string shard = std::to_string(opt.shard_index) + "/" + std::to_string(opt.shard_count);
   nlohmann::json run;
   run["spec"] = spec.to_json();
   run["spec_file"] = fs::absolute(spec.file).string();
@@ -498,19 +453,21 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
   run["shard"] = shard;
   run["sets"] = opt.sets;
   run["metadata"] = run_metadata("run", spec.to_json());
-  write_file_atomic(dir / "run.json", run.dump(2) + "\n");
+  write_file_atomic(fs::path(opt.out_dir) / "run.json", run.dump(2) + "\n");
+}
 
-  std::vector<long> todo;
-  long in_shard = 0;
-  for (long u = 0; u < ex.units(); ++u) {
-    if (u % opt.shard_count != opt.shard_index) continue;
-    ++in_shard;
-    if (!done.count(u)) todo.push_back(u);
-  }
-  if (opt.resume)
-    out << "resume: " << (in_shard - static_cast<long>(todo.size())) << " of " << in_shard
-        << " unit(s) already done\n";
-
+// Runs the units of `todo`, appending each unit's rows to the CSV as it finishes; returns with
+// `done` holding every unit's rows.
+void run_units(const SpecFile& spec, const Expansion& ex, const std::vector<long>& todo,
+               const fs::path& csv, const std::string& out_dir, std::map<long, UnitRows>& done,
+               std::ostream& err) {
+  const std::vector<std::string> study = study_kind(spec.kind).unit_columns;
+  const long per_point = ex.units_per_point;
+  const bool unit_per_integrator = study_kind(spec.kind).unit_per_integrator;
+  auto unit_integrators = [&](long u) {
+    if (!unit_per_integrator) return spec.integrators;
+    return std::vector<std::string>{spec.integrators[static_cast<std::size_t>(u % per_point)]};
+  };
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(csv.c_str(), "ab"), &std::fclose);
   std::FILE* f = file.get();
   if (!f) throw BadInput("--out: cannot append to " + csv.string());
@@ -525,7 +482,7 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
     std::vector<std::vector<std::string>> rows;
     std::string unit_status = "ok", message;
     try {
-      const Table t = run_unit(spec, p, integ, dir.string());
+      const Table t = run_unit(spec, p, integ, out_dir);
       rows = t.rows;
       for (const auto& r : rows) {
         const std::string st = static_cast<std::size_t>(status_col) < n_study
@@ -578,7 +535,53 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
           << "): " << unit_status << ": " << message << "\n";
     progress.tick(join(integ) + (p.label.empty() ? "" : ", " + p.label));
   }
-  file.reset();                  // closed before the sorted rewrite
+}
+
+}  // namespace
+
+int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
+  const SpecFile spec = load_spec_file(opt.spec_file, opt.sets);
+  const Expansion ex = expand(spec);
+  for (const auto& p : ex.points) validate_point(spec, p);
+  if (opt.slurm_tasks < 0) throw BadInput("--slurm: expected a number of tasks >= 1");
+
+  const std::string kind = spec.kind;
+  const bool unit_per_integrator = study_kind(kind).unit_per_integrator;
+  out << spec.file << ": " << kind << ", " << ex.points.size() << " point(s) x "
+      << (!unit_per_integrator ? std::string("1 unit (all integrators)")
+                               : std::to_string(ex.units_per_point) + " integrator(s)")
+      << " = " << ex.units() << " unit(s)\n";
+  if (opt.check_only) {
+    for (std::size_t i = 0; i < ex.points.size(); ++i)
+      out << "  point " << i << ": " << (ex.points[i].label.empty() ? "-" : ex.points[i].label)
+          << "\n";
+    return 0;
+  }
+  if (opt.slurm_tasks > 0) {
+    write_slurm(opt, spec, ex, out);
+    return 0;
+  }
+
+  const fs::path dir = opt.out_dir;
+  require_output_dir(dir);
+  const fs::path csv = dir / csv_name(kind);
+  const std::string hash = spec_hash(spec);
+  const std::string header = run_header(study_kind(kind).unit_columns, ex);
+  std::map<long, UnitRows> done = kept_units(opt, spec, ex, header, hash, err);
+  write_all(csv, header, done);  // the kept units (or the header alone)
+  write_run_json(opt, spec, ex, hash);
+
+  std::vector<long> todo;
+  long in_shard = 0;
+  for (long u = 0; u < ex.units(); ++u) {
+    if (u % opt.shard_count != opt.shard_index) continue;
+    ++in_shard;
+    if (!done.count(u)) todo.push_back(u);
+  }
+  if (opt.resume)
+    out << "resume: " << (in_shard - static_cast<long>(todo.size())) << " of " << in_shard
+        << " unit(s) already done\n";
+  run_units(spec, ex, todo, csv, dir.string(), done, err);
   write_all(csv, header, done);  // sorted by unit
   if (opt.shard_count == 1 && static_cast<long>(done.size()) == ex.units())
     write_markdown(csv, header, done);
@@ -592,7 +595,7 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
 }
 
 int merge_shards(const std::string& out_dir, const std::vector<std::string>& dirs,
-                 std::ostream& out, std::ostream& err) {
+                 std::ostream& out, std::ostream& err, bool force) {
   if (dirs.empty()) throw BadInput("merge: no shard folders given");
   nlohmann::json first;
   std::string header;
@@ -617,7 +620,7 @@ int merge_shards(const std::string& out_dir, const std::vector<std::string>& dir
   const std::string name = first.value("csv", "run.csv");
   // Output safety: an --out folder holding a run of a different spec is refused unless --force.
   check_existing_results(dir, "run.json", {name, fs::path(name).replace_extension(".md").string()},
-                         first.value("spec", nlohmann::json()), force_output(), &err);
+                         first.value("spec", nlohmann::json()), force, &err);
   write_all(dir / name, header, units);
   const long total = first.value("units", 0L);
   std::vector<std::string> missing;

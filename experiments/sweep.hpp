@@ -44,6 +44,7 @@ struct RunOptions {
   bool check_only = false;               // --check: validate and print the expansion
   int slurm_tasks = 0;                   // --slurm N: write job scripts instead of running
   std::string partition, time_limit;     // --partition, --time
+  bool force = false;                    // --force: replace a run of another spec in the folder
 };
 
 // Returns the exit code (0, or kExitRowsFailed). BadInput for any spec or option error, before
@@ -53,7 +54,7 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err);
 // `stiffbench merge --out OUT DIR...`; returns 0, or kExitRowsFailed when units are missing or
 // failed. BadInput when the folders hold different specs.
 int merge_shards(const std::string& out_dir, const std::vector<std::string>& dirs,
-                 std::ostream& out, std::ostream& err);
+                 std::ostream& out, std::ostream& err, bool force = false);
 
 // "I/N" of --shard (BadInput naming --shard unless 0 <= I < N).
 void parse_shard(const std::string& arg, int& index, int& count);

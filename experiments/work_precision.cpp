@@ -19,8 +19,9 @@ namespace {
 StepStudyDefaults work_precision_defaults() {
   StepStudyDefaults d;
   d.t_end_help = "final time (default: the model's literature end time)";
-  d.h_help = "coarsest step of fixed-step methods (default: the model's suggested step, else "
-             "(t_end - t0)/16000)";
+  d.h_help =
+      "coarsest step of fixed-step methods (default: the model's suggested step, else "
+      "(t_end - t0)/16000)";
   d.ladder_levels = "4";
   d.ref_rtol = "1e-14";
   d.ref_atol = "1e-16";
@@ -230,9 +231,8 @@ std::string WorkPrecisionJob::report_markdown(const std::string& note) const {
         fe = r.stats.f_evals;
       }
     }
-    summary.rows.push_back({name, std::to_string(n),
-                            std::isfinite(best) ? format_short(best) : "-", std::to_string(fe),
-                            status});
+    summary.rows.push_back({name, std::to_string(n), std::isfinite(best) ? format_short(best) : "-",
+                            std::to_string(fe), status});
   }
   md << summary.to_markdown() << "\n";
   return md.str();

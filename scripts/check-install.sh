@@ -3,7 +3,9 @@
 #  1. `cmake --install BUILD_DIR` into a fresh temporary prefix;
 #  2. examples/user_system configured against it with find_package (CMAKE_PREFIX_PATH=prefix),
 #     built (Release) and run in a temporary working folder; both CSVs must exist with data rows
-#     (and both PNGs when gnuplot is on PATH);
+#     (and both PNGs when gnuplot is on PATH); then examples/user_method (a user's own system and
+#     own Integrator class, not registered, through convergence, stability, energy and
+#     work-precision), which checks its method's order and stability limit against theory;
 #  3. a tiny add_subdirectory consumer written on the fly (its own project, CMAKE_BUILD_TYPE
 #     Debug, an executable that creates a model by name and takes one rk4 step) is configured,
 #     and its CMakeCache must show STIFFBENCH_BUILD_TESTS, STIFFBENCH_BUILD_BENCH and
@@ -74,6 +76,25 @@ if command -v gnuplot >/dev/null 2>&1; then
 else
   echo "check-install:   gnuplot not on PATH: PNGs not checked"
 fi
+
+# --- 2b. examples/user_method: a user's own system and own integrator (not registered by name)
+# through convergence, stability, energy and work-precision with the one-call functions; the
+# program checks ralston3's order (3) and stability limit (sqrt(3)/50) and exits 1 otherwise.
+example="$root/examples/user_method"
+echo "check-install: building examples/user_method with find_package(stiffbench)"
+cmake -S "$example" -B "$tmp/method-build" -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_PREFIX_PATH="$prefix" >"$log" 2>&1 ||
+  fail "configuring examples/user_method against the installed package"
+cmake --build "$tmp/method-build" -j "$jobs" >"$log" 2>&1 || fail "building examples/user_method"
+echo "check-install: running user_method"
+(cd "$run" && "$tmp/method-build/user_method" "$run/method") >"$log" 2>&1 ||
+  fail "user_method exited with status $? (or its order/stability check failed)"
+for csv in convergence/convergence.csv stability/stability.csv energy/energy_summary.csv \
+           work_precision/work_precision.csv; do
+  [ -s "$run/method/$csv" ] || fail "user_method wrote no $csv"
+  grep -q ralston3 "$run/method/$csv" || fail "$csv has no row of the user's ralston3"
+done
+echo "check-install:   user_method: $(tail -n 1 "$log")"
 
 # --- 3. add_subdirectory consumer: the parent keeps its build type, no tests/bench/-Werror
 consumer="$tmp/consumer"

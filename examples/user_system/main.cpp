@@ -58,13 +58,22 @@ int main(int argc, char** argv) {
                   [](const Params& p) {
                     return std::make_unique<Brusselator>(static_cast<int>(p.integer("n")));
                   }});
-  // clang-format off
-  ConvergenceSpec conv{.model = "brusselator", .integrators = {"backward_euler", "sdirk3", "bdf2"},
-                       .t_end = 10, .h = 0.1, .levels = 5, .reference = "cvode_bdf"};
+  ConvergenceSpec conv;
+  conv.model = "brusselator";
+  conv.integrators = {"backward_euler", "sdirk3", "bdf2"};
+  conv.t_end = 10;
+  conv.h = 0.1;
+  conv.levels = 5;
+  conv.reference = "cvode_bdf";
   convergence_study(conv, out + "/convergence", false, &std::cerr, std::cerr);
-  WorkPrecisionSpec wp{.model = "brusselator", .integrators = {"sdirk3", "radau5", "cvode_bdf"},
-                       .t_end = 10, .h = 0.05, .levels = 4, .tol_levels = 4, .rtol_max = 1e-4};
-  // clang-format on
+  WorkPrecisionSpec wp;
+  wp.model = "brusselator";
+  wp.integrators = {"sdirk3", "radau5", "cvode_bdf"};
+  wp.t_end = 10;
+  wp.h = 0.05;
+  wp.levels = 4;
+  wp.tol_levels = 4;
+  wp.rtol_max = 1e-4;
   const auto res = work_precision_study(wp, out + "/work_precision", &std::cerr, std::cerr);
   std::cout << work_precision_table(res).to_markdown();
 }

@@ -14,6 +14,9 @@
 //   core/registry.hpp, core/registry_types.hpp, experiments/catalog.hpp
 //                                           the registries, make_setup, register_model and
 //                                           register_integrator for a user's own entries
+//   experiments/study.hpp                   the study registry and pipeline: StudyTarget,
+//                                           StudyObjects (a user's own system and integrator
+//                                           objects, nothing registered), StudyContext, run_study
 //   experiments/convergence.hpp, local error (same header), experiments/work_precision.hpp,
 //   experiments/stability.hpp, experiments/energy.hpp, experiments/region.hpp
 //                                           the studies: spec in, records out, CSV/Markdown/JSON
@@ -42,4 +45,5 @@
 #include "experiments/plotting.hpp"
 #include "experiments/region.hpp"
 #include "experiments/stability.hpp"
+#include "experiments/study.hpp"
 #include "experiments/work_precision.hpp"

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/driver.hpp"
+#include "experiments/build_info.hpp"
 #include "experiments/cli_main.hpp"
 #include "experiments/convergence.hpp"
 #include "experiments/energy.hpp"
@@ -17,7 +18,6 @@
 #include "experiments/study.hpp"
 #include "experiments/sweep.hpp"
 #include "experiments/work_precision.hpp"
-#include "experiments/build_info.hpp"
 #include "tests/test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -54,11 +54,10 @@ bool names_key(const std::string& text, const std::string& key) {
         if (text[i] == '\\') ++i;
         literal += text[i];
       }
-      const bool flag_first =
-          literal.rfind(flag, 0) == 0 &&
-          (literal.size() == flag.size() ||
-           !(std::isalnum(static_cast<unsigned char>(literal[flag.size()])) ||
-             literal[flag.size()] == '-'));
+      const bool flag_first = literal.rfind(flag, 0) == 0 &&
+                              (literal.size() == flag.size() ||
+                               !(std::isalnum(static_cast<unsigned char>(literal[flag.size()])) ||
+                                 literal[flag.size()] == '-'));
       named = named || literal == key || flag_first;
       code += "\"\"";
     } else if (text[i] == '\'' && i + 2 < text.size()) {
@@ -134,8 +133,8 @@ class FevalJob : public StudyJob {
       opt.h = h_;
       opt.t_end = setup.model->initial_time() + static_cast<double>(steps_) * h_;
       const RunResult r = run_fixed_step(*setup.model, *integ, opt);
-      table_.rows.push_back({integ->info().name, std::to_string(r.stats.steps),
-                             std::to_string(r.stats.f_evals)});
+      table_.rows.push_back(
+          {integ->info().name, std::to_string(r.stats.steps), std::to_string(r.stats.f_evals)});
     }
   }
   Table unit_table() const override { return table_; }
@@ -198,8 +197,8 @@ TEST(StudyFramework, UserStudyRunsFromTheCommandLineAndFromASpecFile) {
                  "--steps", "7", "--out", out.string()}),
             0);
   EXPECT_EQ(slurp_file(out / "feval_count.csv"), "integrator,steps,f_evals\nrk4,7,28\nheun,7,14\n");
-  EXPECT_EQ(cli({"feval-count", "--model", "harmonic_oscillator", "--integrators", "rk4",
-                 "--steps", "0", "--out", fresh("bad").string()}),
+  EXPECT_EQ(cli({"feval-count", "--model", "harmonic_oscillator", "--integrators", "rk4", "--steps",
+                 "0", "--out", fresh("bad").string()}),
             2);  // the declared range (>= 1), checked before anything runs
 
   const fs::path dir = fresh("spec");
