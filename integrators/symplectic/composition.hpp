@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "core/tableau.hpp"
+#include "integrators/method_entry.hpp"
 
 namespace stiffbench {
 
@@ -31,14 +32,18 @@ struct CompositionMethod {
   int order = 0;
   std::vector<double> gamma;        // Verlet substep fractions; empty when kick/drift are given
   SplittingCoefficients splitting;  // the kick/drift form SplittingIntegrator runs
-  std::string description;
 };
 
 // The kick/drift form of the velocity-Verlet composition with substeps γ.
 SplittingCoefficients verlet_composition(const std::string& name, const std::vector<double>& gamma,
                                          int order);
 
-// yoshida4, yoshida6, blanes_moan.
+// yoshida4, yoshida6, blanes_moan: one entry each (coefficients, description, kind, reference,
+// step modes; integrators/method_entry.hpp). All require velocity-independent forces.
+using CompositionEntry = MethodEntry<CompositionMethod>;
+const std::vector<CompositionEntry>& composition_entries();
+
+// Their coefficients.
 const std::vector<CompositionMethod>& composition_methods();
 
 }  // namespace stiffbench

@@ -15,10 +15,25 @@
 
 #include "core/integrator.hpp"
 #include "core/tableau.hpp"
+#include "integrators/method_entry.hpp"
 
 namespace stiffbench {
 
-// symplectic_euler (v first, the seed's form), symplectic_euler_x (x first), velocity_verlet.
+// The coefficients of one kick/drift method, and whether it requires velocity-independent
+// forces (which also lets it reuse its last acceleration, see above).
+struct KickDriftScheme {
+  SplittingCoefficients kick_drift;
+  bool velocity_independent;
+  const std::string& name() const { return kick_drift.name; }
+};
+
+// One entry per method (coefficients, description, kind, reference, step modes;
+// integrators/method_entry.hpp): symplectic_euler (v first, the seed's form),
+// symplectic_euler_x (x first), velocity_verlet. The Verlet compositions are in composition.hpp.
+using KickDriftMethod = MethodEntry<KickDriftScheme>;
+const std::vector<KickDriftMethod>& kick_drift_methods();
+
+// Their coefficients.
 const std::vector<SplittingCoefficients>& splitting_methods();
 
 class SplittingIntegrator final : public Integrator {
