@@ -17,8 +17,8 @@
 #include "integrators/reference/gsl.hpp"
 #include "integrators/reference/sundials.hpp"
 #include "integrators/symplectic/composition.hpp"
+#include "integrators/symplectic/kick_drift.hpp"
 #include "integrators/symplectic/rattle.hpp"
-#include "integrators/symplectic/splitting.hpp"
 #include "integrators/symplectic/verlet.hpp"
 
 namespace stiffbench {
@@ -42,7 +42,9 @@ void register_explicit_integrators(IntegratorRegistry& reg) {
     const ButcherTableau& t = *m.coefficients;
     const std::string desc = m.text.description.str();
     if (!m.adaptive()) {
-      auto make = [t, desc](const Params&) { return std::make_unique<ExplicitRungeKutta>(t, desc); };
+      auto make = [t, desc](const Params&) {
+        return std::make_unique<ExplicitRungeKutta>(t, desc);
+      };
       add_method(reg, m, ExplicitRungeKutta(t, desc), {}, make);
     } else {
       auto make = [t, desc](const Params& p) {
@@ -58,18 +60,17 @@ void register_symplectic_integrators(IntegratorRegistry& reg) {
     const KickDriftScheme& c = *m.coefficients;
     const std::string desc = m.text.description.str();
     auto make = [c, desc](const Params&) {
-      return std::make_unique<SplittingIntegrator>(c.kick_drift, c.velocity_independent, desc);
+      return std::make_unique<KickDriftIntegrator>(c.kick_drift, c.velocity_independent, desc);
     };
-    add_method(reg, m, SplittingIntegrator(c.kick_drift, c.velocity_independent, desc), {},
-               make);
+    add_method(reg, m, KickDriftIntegrator(c.kick_drift, c.velocity_independent, desc), {}, make);
   }
   // Compositions of velocity Verlet (composition.hpp): velocity-independent forces only.
   for (const CompositionEntry& m : composition_entries()) {
-    auto make = [c = m.coefficients->splitting, desc = m.text.description.str()](const Params&) {
-      return std::make_unique<SplittingIntegrator>(c, true, desc);
+    auto make = [c = m.coefficients->kick_drift, desc = m.text.description.str()](const Params&) {
+      return std::make_unique<KickDriftIntegrator>(c, true, desc);
     };
     add_method(reg, m,
-               SplittingIntegrator(m.coefficients->splitting, true, m.text.description.str()), {},
+               KickDriftIntegrator(m.coefficients->kick_drift, true, m.text.description.str()), {},
                make);
   }
   reg.add({PositionVerlet().info(), {}, [](const Params&) {
@@ -168,7 +169,7 @@ void register_graphics_integrators(IntegratorRegistry& reg) {
            }});
 }
 
-void register_splitting_integrators(IntegratorRegistry& reg) {
+void register_operator_splitting_integrators(IntegratorRegistry& reg) {
   reg.add(
       {StableFluids().info(), {}, [](const Params&) { return std::make_unique<StableFluids>(); }});
 }

@@ -11,7 +11,7 @@
 #include "integrators/implicit/linearly_implicit.hpp"
 #include "integrators/method_notes.hpp"
 #include "integrators/symplectic/composition.hpp"
-#include "integrators/symplectic/splitting.hpp"
+#include "integrators/symplectic/kick_drift.hpp"
 
 namespace stiffbench {
 namespace {

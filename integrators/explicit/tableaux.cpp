@@ -39,7 +39,8 @@ const std::vector<ExplicitRkMethod>& explicit_rk_methods() {
   constexpr const char* kKutta = "W. Kutta, Z. Math. Phys. 46 (1901) 435-453";
   static const std::vector<ExplicitRkMethod> all = {
       {make("euler", 1, {{}}, {1.0}),
-       {"explicit (forward) Euler", "explicit RK", cite(kHairerNorsettWanner, "Sect. I.7 (Euler 1768)")},
+       {"explicit (forward) Euler", "explicit RK",
+        cite(kHairerNorsettWanner, "Sect. I.7 (Euler 1768)")},
        StepModes::fixed},
       {make("heun", 2, {{}, {1.0}}, {0.5, 0.5}),
        {"Heun's method (explicit trapezoidal rule)", "explicit RK",
@@ -68,9 +69,10 @@ const std::vector<ExplicitRkMethod>& explicit_rk_methods() {
        {"Kutta's 3/8-rule fourth-order method", "explicit RK", kKutta},
        StepModes::fixed},
       // Embedded pairs: fixed-step with --h, adaptive with rtol/atol (integrators/adaptive/).
-      {make_embedded(
-           "bs3", 3, 2, true, {{}, {1.0 / 2.0}, {0.0, 3.0 / 4.0}, {2.0 / 9.0, 1.0 / 3.0, 4.0 / 9.0}},
-           {2.0 / 9.0, 1.0 / 3.0, 4.0 / 9.0, 0.0}, {7.0 / 24.0, 1.0 / 4.0, 1.0 / 3.0, 1.0 / 8.0}),
+      {make_embedded("bs3", 3, 2, true,
+                     {{}, {1.0 / 2.0}, {0.0, 3.0 / 4.0}, {2.0 / 9.0, 1.0 / 3.0, 4.0 / 9.0}},
+                     {2.0 / 9.0, 1.0 / 3.0, 4.0 / 9.0, 0.0},
+                     {7.0 / 24.0, 1.0 / 4.0, 1.0 / 3.0, 1.0 / 8.0}),
        {"Bogacki-Shampine 3(2) embedded pair, FSAL; adaptive or fixed step", "embedded RK pair",
         "P. Bogacki & L. F. Shampine, Appl. Math. Lett. 2 (1989) 321-325"},
        StepModes::fixed_and_adaptive},
@@ -96,8 +98,7 @@ const std::vector<ExplicitRkMethod>& explicit_rk_methods() {
             {3.0 / 40.0, 9.0 / 40.0},
             {3.0 / 10.0, -9.0 / 10.0, 6.0 / 5.0},
             {-11.0 / 54.0, 5.0 / 2.0, -70.0 / 27.0, 35.0 / 27.0},
-            {1631.0 / 55296.0, 175.0 / 512.0, 575.0 / 13824.0, 44275.0 / 110592.0,
-             253.0 / 4096.0}},
+            {1631.0 / 55296.0, 175.0 / 512.0, 575.0 / 13824.0, 44275.0 / 110592.0, 253.0 / 4096.0}},
            {37.0 / 378.0, 0.0, 250.0 / 621.0, 125.0 / 594.0, 0.0, 512.0 / 1771.0},
            {2825.0 / 27648.0, 0.0, 18575.0 / 48384.0, 13525.0 / 55296.0, 277.0 / 14336.0,
             1.0 / 4.0}),

@@ -48,8 +48,8 @@ ButcherTableau trbdf2() {
   // Hosea & Shampine (1996), Appl. Numer. Math. 20: TR-BDF2 of Bank et al. (1985) as a
   // one-step ESDIRK; the embedded row is their third-order companion formula.
   const double g = 2.0 - std::sqrt(2.0), d = g / 2.0, w = std::sqrt(2.0) / 4.0;
-  return make_embedded("trbdf2", 2, 3, Mat{{0.0, 0.0, 0.0}, {d, d, 0.0}, {w, w, d}},
-                       Vec{{w, w, d}}, Vec{{(1.0 - w) / 3.0, (3.0 * w + 1.0) / 3.0, d / 3.0}});
+  return make_embedded("trbdf2", 2, 3, Mat{{0.0, 0.0, 0.0}, {d, d, 0.0}, {w, w, d}}, Vec{{w, w, d}},
+                       Vec{{(1.0 - w) / 3.0, (3.0 * w + 1.0) / 3.0, d / 3.0}});
 }
 
 ButcherTableau esdirk43() {
@@ -103,8 +103,7 @@ const std::vector<DirkMethod>& dirk_methods() {
         "J. Crank & P. Nicolson, Proc. Cambridge Philos. Soc. 43 (1947) 50-67"},
        StepModes::fixed},
       {sdirk2(),
-       {"two-stage SDIRK, gamma = 1 - 1/sqrt(2); L-stable, stiffly accurate", "SDIRK",
-        kAlexander},
+       {"two-stage SDIRK, gamma = 1 - 1/sqrt(2); L-stable, stiffly accurate", "SDIRK", kAlexander},
        StepModes::fixed},
       {sdirk3(),
        {"three-stage SDIRK of Alexander (1977); L-stable, stiffly accurate", "SDIRK", kAlexander},

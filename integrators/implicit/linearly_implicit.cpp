@@ -244,7 +244,6 @@ RosenbrockTableau rodas4() {
   }();
 }
 
-
 const RosenbrockTableau& rosenbrock_tableau(const std::string& name) {
   for (const RosenbrockMethod& m : rosenbrock_methods())
     if (m.name() == name) return *m.coefficients;

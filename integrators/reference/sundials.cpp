@@ -308,9 +308,9 @@ class SundialsAdapter {
       lin_ = requested;
       lin_note_ = std::string(to_string(lin_)) + " (linear_solver=" + to_string(lin_) + ")";
     }
-    require_input(lin_ != Lin::klu || use_analytic_,
-                  "integrator '" + name +
-                      "': linear_solver=klu needs the model's analytic sparse Jacobian");
+    require_input(
+        lin_ != Lin::klu || use_analytic_,
+        "integrator '" + name + "': linear_solver=klu needs the model's analytic sparse Jacobian");
     require_input(lin_ != Lin::velocity || (use_analytic_ && sys.as_mechanical() &&
                                             sys.as_mechanical()->has_force_jacobians()),
                   "integrator '" + name +
@@ -648,9 +648,8 @@ class SundialsFrontEnd : public Integrator {
     s.jac_evals = adapter_.use_analytic() ? adapter_.force_jacobian_evals() : c.nje;
     s.library_f_evals = c.nfe + c.nfi + c.nfels;
     if (needs_linear_solver())
-      s.library_report =
-          "Linear solver                = " + adapter_.linear_solver_note() + "\n" +
-          s.library_report;
+      s.library_report = "Linear solver                = " + adapter_.linear_solver_note() + "\n" +
+                         s.library_report;
   }
 
   Vec y_last_;
@@ -732,9 +731,7 @@ class ArkodeIntegrator final : public SundialsFrontEnd {
  private:
   bool needs_linear_solver() const override { return mode_ != ArkodeMode::explicit_only; }
   // IMEX with the model's split; all-implicit (arkode_imex on a model without one) otherwise.
-  bool split() const {
-    return mode_ == ArkodeMode::imex && adapter_.system()->has_imex_split();
-  }
+  bool split() const { return mode_ == ArkodeMode::imex && adapter_.system()->has_imex_split(); }
   ARKRhsFn explicit_rhs() const {
     return mode_ == ArkodeMode::explicit_only ? SundialsAdapter::rhs_cb
            : split()                          ? SundialsAdapter::rhs_explicit_cb
@@ -748,8 +745,7 @@ class ArkodeIntegrator final : public SundialsFrontEnd {
   void create(double t0, N_Vector y, const Ok& ok) override {
     mem_ = ARKStepCreate(explicit_rhs(), implicit_rhs(), t0, y, ctx_);
     ok(ARKStepSetUserData(mem_, &adapter_), "ARKStepSetUserData");
-    ok(ARKStepSetErrHandlerFn(mem_, SundialsAdapter::err_cb, &adapter_),
-       "ARKStepSetErrHandlerFn");
+    ok(ARKStepSetErrHandlerFn(mem_, SundialsAdapter::err_cb, &adapter_), "ARKStepSetErrHandlerFn");
     ok(ARKStepSStolerances(mem_, set_.rtol, set_.atol), "ARKStepSStolerances");
     ok(ARKStepSetMaxNumSteps(mem_, set_.max_steps), "ARKStepSetMaxNumSteps");
     // A part without a right-hand side gets no table.

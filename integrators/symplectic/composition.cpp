@@ -4,9 +4,9 @@
 
 namespace stiffbench {
 
-SplittingCoefficients verlet_composition(const std::string& name, const std::vector<double>& gamma,
+KickDriftCoefficients verlet_composition(const std::string& name, const std::vector<double>& gamma,
                                          int order) {
-  SplittingCoefficients c;
+  KickDriftCoefficients c;
   c.name = name;
   c.order = order;
   const std::size_t s = gamma.size();
@@ -26,7 +26,7 @@ CompositionMethod from_gamma(std::string name, int order, std::vector<double> ga
   CompositionMethod m;
   m.name = std::move(name);
   m.order = order;
-  m.splitting = verlet_composition(m.name, gamma, order);
+  m.kick_drift = verlet_composition(m.name, gamma, order);
   m.gamma = std::move(gamma);
   return m;
 }
@@ -53,7 +53,7 @@ CompositionMethod blanes_moan() {
   CompositionMethod bm;
   bm.name = "blanes_moan";
   bm.order = 4;
-  bm.splitting = {"blanes_moan", {b1, b2, b3, b4, b3, b2, b1}, {a1, a2, a3, a3, a2, a1, 0.0}, 4};
+  bm.kick_drift = {"blanes_moan", {b1, b2, b3, b4, b3, b2, b1}, {a1, a2, a3, a3, a2, a1, 0.0}, 4};
   return bm;
 }
 

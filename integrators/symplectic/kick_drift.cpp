@@ -1,4 +1,4 @@
-#include "integrators/symplectic/splitting.hpp"
+#include "integrators/symplectic/kick_drift.hpp"
 
 namespace stiffbench {
 
@@ -30,9 +30,9 @@ const std::vector<KickDriftMethod>& kick_drift_methods() {
   return all;
 }
 
-const std::vector<SplittingCoefficients>& splitting_methods() {
-  static const std::vector<SplittingCoefficients> all = [] {
-    std::vector<SplittingCoefficients> out;
+const std::vector<KickDriftCoefficients>& kick_drift_coefficients() {
+  static const std::vector<KickDriftCoefficients> all = [] {
+    std::vector<KickDriftCoefficients> out;
     for (const KickDriftMethod& m : kick_drift_methods()) out.push_back(m.coefficients->kick_drift);
     return out;
   }();
@@ -44,7 +44,7 @@ namespace {
 // First-same-as-last: the first stage kicks at the step's start position, the last kick is
 // followed by no drift (so it saw the end-of-step position), and the force cannot depend on
 // the velocity, which changed in between.
-bool is_fsal(const SplittingCoefficients& c, bool velocity_independent) {
+bool is_fsal(const KickDriftCoefficients& c, bool velocity_independent) {
   const std::size_t s = c.kick.size();
   std::size_t last_kick = s;
   for (std::size_t j = 0; j < s; ++j)
@@ -58,7 +58,7 @@ bool is_fsal(const SplittingCoefficients& c, bool velocity_independent) {
 
 }  // namespace
 
-SplittingIntegrator::SplittingIntegrator(SplittingCoefficients coeffs, bool velocity_independent,
+KickDriftIntegrator::KickDriftIntegrator(KickDriftCoefficients coeffs, bool velocity_independent,
                                          std::string description)
     : Integrator({coeffs.name, Family::symplectic, coeffs.order,
                   coeffs.evaluations_per_step() - (is_fsal(coeffs, velocity_independent) ? 1 : 0),
@@ -66,7 +66,7 @@ SplittingIntegrator::SplittingIntegrator(SplittingCoefficients coeffs, bool velo
       coeffs_(std::move(coeffs)),
       fsal_(is_fsal(coeffs_, velocity_independent)) {}
 
-void SplittingIntegrator::reset(const OdeSystem& sys, double, CVecRef) {
+void KickDriftIntegrator::reset(const OdeSystem& sys, double, CVecRef) {
   check_compatible(info(), sys);
   mech_ = sys.as_mechanical();
   acc_.resize(mech_->dofs());
@@ -75,9 +75,9 @@ void SplittingIntegrator::reset(const OdeSystem& sys, double, CVecRef) {
   cache_valid_ = false;
 }
 
-Status SplittingIntegrator::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats&) {
+Status KickDriftIntegrator::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats&) {
   if (&sys != mech_)
-    throw std::logic_error("SplittingIntegrator::step: system differs from reset()");
+    throw std::logic_error("KickDriftIntegrator::step: system differs from reset()");
   const Index n = mech_->dofs();
   auto x = y.head(n);
   auto v = y.tail(n);
