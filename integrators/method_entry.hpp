@@ -66,7 +66,7 @@ struct MethodText {
 };
 
 // One method of a family: Coefficients carries the name (ButcherTableau, RosenbrockTableau,
-// KickDriftCoefficients).
+// KickDriftScheme, CompositionMethod).
 template <class Coefficients>
 struct MethodEntry {
   Required<Coefficients> coefficients;

@@ -610,7 +610,7 @@ class SundialsFrontEnd : public Integrator {
   // projection) or when the driver restarts at another time.
   void sync(const OdeSystem& sys, double t, CVecRef y) {
     if (&sys != adapter_.system())
-      throw std::logic_error("SundialsIntegrator: system differs from reset()");
+      throw std::logic_error("SUNDIALS integrator: system differs from reset()");
     // The driver computes t0 + k·h while the library accumulates: equal up to rounding.
     if (std::abs(t - t_) <= 1e-13 * std::max(1.0, std::abs(t)) && y == y_last_) return;
     N_Vector yw = N_VMake_Serial(adapter_.size(), const_cast<double*>(y.data()), ctx_);
