@@ -10,7 +10,7 @@ std::string to_string(Family f) {
       return "implicit";
     case Family::symplectic:
       return "symplectic";
-    case Family::splitting:
+    case Family::operator_splitting:
       return "splitting";
     case Family::reference:
       return "reference";

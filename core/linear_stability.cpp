@@ -153,7 +153,7 @@ LinearStability multistep_stability(const std::vector<double>& alpha,
   return with_mechanical_from_scalar(std::move(s));
 }
 
-LinearStability splitting_stability(const SplittingCoefficients& c) {
+LinearStability kick_drift_stability(const KickDriftCoefficients& c) {
   // On x'' = a x + b x' in the variables (x, u = h v): a kick u ← u + k(h²a x + hb u) and a
   // drift x ← x + d u are 2×2 matrices depending only on (h²a, hb); the step is their product.
   LinearStability s;

@@ -51,7 +51,7 @@ LinearStability rosenbrock_stability(const Mat& alpha, const Mat& gamma, const V
 LinearStability multistep_stability(const std::vector<double>& alpha,
                                     const std::vector<double>& beta);
 // Kick/drift splitting (mechanical-only).
-LinearStability splitting_stability(const SplittingCoefficients& c);
+LinearStability kick_drift_stability(const KickDriftCoefficients& c);
 // Fills mechanical_amplification of a method that has `amplification`.
 LinearStability with_mechanical_from_scalar(LinearStability s);
 

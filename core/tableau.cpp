@@ -91,13 +91,13 @@ int ButcherTableau::satisfied_order(double tol, int max_order) const {
   return p;
 }
 
-int SplittingCoefficients::evaluations_per_step() const {
+int KickDriftCoefficients::evaluations_per_step() const {
   int n = 0;
   for (double k : kick) n += k != 0.0;
   return n;
 }
 
-double SplittingCoefficients::order_defect(int p) const {
+double KickDriftCoefficients::order_defect(int p) const {
   double sk = 0, sd = 0, second = 0, drift_before = 0;
   for (std::size_t j = 0; j < kick.size(); ++j) {
     sk += kick[j];
@@ -107,7 +107,7 @@ double SplittingCoefficients::order_defect(int p) const {
   }
   if (p == 1) return std::max(std::abs(sk - 1.0), std::abs(sd - 1.0));
   if (p == 2) return std::abs(second - 0.5);
-  throw std::logic_error("SplittingCoefficients::order_defect: only orders 1 and 2 are checked");
+  throw std::logic_error("KickDriftCoefficients::order_defect: only orders 1 and 2 are checked");
 }
 
 }  // namespace stiffbench

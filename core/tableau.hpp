@@ -45,7 +45,7 @@ struct ButcherTableau {
 //   v ← v + h·kick[j]·a(t_j, x, v);   x ← x + h·drift[j]·v;   t_j = t + h·Σ_{i<j} drift[i].
 // Zero kicks cost no evaluation. Each stage is a shear, so the map is symplectic whenever a does
 // not depend on v.
-struct SplittingCoefficients {
+struct KickDriftCoefficients {
   std::string name;
   std::vector<double> kick;
   std::vector<double> drift;

@@ -1,6 +1,7 @@
 #include "integrators/register.hpp"
 
-#include <map>
+#include <utility>
+#include <vector>
 
 #include "integrators/adaptive/embedded_rk.hpp"
 #include "integrators/explicit/explicit_rk.hpp"
@@ -16,66 +17,61 @@
 #include "integrators/reference/gsl.hpp"
 #include "integrators/reference/sundials.hpp"
 #include "integrators/symplectic/composition.hpp"
+#include "integrators/symplectic/kick_drift.hpp"
 #include "integrators/symplectic/rattle.hpp"
-#include "integrators/symplectic/splitting.hpp"
 #include "integrators/symplectic/verlet.hpp"
 
 namespace stiffbench {
 
+namespace {
+
+// Registers `entry` with the MethodInfo of `probe` (an instance made from the entry) plus the
+// entry's kind and reference.
+template <class Entry, class Make>
+void add_method(IntegratorRegistry& reg, const Entry& entry, const Integrator& probe,
+                std::vector<ParamSpec> specs, Make make) {
+  reg.add({with_text(probe.info(), entry.text), std::move(specs), std::move(make)});
+}
+
+}  // namespace
+
+// Explicit Runge-Kutta methods from their table (integrators/explicit/tableaux.hpp); the
+// embedded pairs run fixed-step with --h or adaptively with rtol/atol (integrators/adaptive/).
 void register_explicit_integrators(IntegratorRegistry& reg) {
-  static const std::map<std::string, std::string> descriptions = {
-      {"euler", "explicit (forward) Euler"},
-      {"heun", "Heun's method (explicit trapezoidal rule)"},
-      {"midpoint", "explicit midpoint rule"},
-      {"ralston", "Ralston's second-order method (minimum error bound)"},
-      {"kutta3", "Kutta's third-order method"},
-      {"ssprk3", "strong-stability-preserving RK3 (Shu-Osher)"},
-      {"rk4", "classic fourth-order Runge-Kutta"},
-      {"rk38", "Kutta's 3/8-rule fourth-order method"},
-  };
-  for (const ButcherTableau& t : explicit_tableaux()) {
-    const std::string desc = descriptions.at(t.name);
-    auto make = [t, desc](const Params&) { return std::make_unique<ExplicitRungeKutta>(t, desc); };
-    const MethodInfo info = ExplicitRungeKutta(t, desc).info();
-    reg.add({info, {}, make});
-  }
-  // Embedded pairs: fixed-step with --h, adaptive with rtol/atol (integrators/adaptive/).
-  static const std::map<std::string, std::string> embedded = {
-      {"bs3", "Bogacki-Shampine 3(2) embedded pair, FSAL; adaptive or fixed step"},
-      {"dopri5", "Dormand-Prince 5(4) embedded pair, FSAL; adaptive or fixed step"},
-      {"cash_karp", "Cash-Karp 5(4) embedded pair, fifth-order solution; adaptive or fixed step"},
-      {"rkf45", "Runge-Kutta-Fehlberg 4(5), fourth-order solution; adaptive or fixed step"},
-  };
-  for (const ButcherTableau& t : embedded_tableaux()) {
-    const std::string desc = embedded.at(t.name);
-    auto make = [t, desc](const Params& p) {
-      return std::make_unique<EmbeddedRungeKutta>(t, desc, read_controller_options(p));
-    };
-    reg.add({EmbeddedRungeKutta(t, desc, {}).info(), controller_param_specs(), make});
+  for (const ExplicitRkMethod& m : explicit_rk_methods()) {
+    const ButcherTableau& t = *m.coefficients;
+    const std::string desc = m.text.description.str();
+    if (!m.adaptive()) {
+      auto make = [t, desc](const Params&) {
+        return std::make_unique<ExplicitRungeKutta>(t, desc);
+      };
+      add_method(reg, m, ExplicitRungeKutta(t, desc), {}, make);
+    } else {
+      auto make = [t, desc](const Params& p) {
+        return std::make_unique<EmbeddedRungeKutta>(t, desc, read_controller_options(p));
+      };
+      add_method(reg, m, EmbeddedRungeKutta(t, desc, {}), controller_param_specs(), make);
+    }
   }
 }
 
 void register_symplectic_integrators(IntegratorRegistry& reg) {
-  static const std::map<std::string, std::pair<bool, std::string>> props = {
-      {"symplectic_euler",
-       {false, "symplectic Euler, velocity first: v+ = v + h a(t, x, v), x+ = x + h v+"}},
-      {"symplectic_euler_x",
-       {false, "symplectic Euler, position first: x+ = x + h v, v+ = v + h a(t+h, x+, v)"}},
-      {"velocity_verlet", {true, "velocity Verlet (kick-drift-kick), first-same-as-last"}},
-  };
-  for (const SplittingCoefficients& c : splitting_methods()) {
-    const auto& [vel_indep, desc] = props.at(c.name);
-    auto make = [c, vel_indep = vel_indep, desc = desc](const Params&) {
-      return std::make_unique<SplittingIntegrator>(c, vel_indep, desc);
+  for (const KickDriftMethod& m : kick_drift_methods()) {
+    const KickDriftScheme& c = *m.coefficients;
+    const std::string desc = m.text.description.str();
+    auto make = [c, desc](const Params&) {
+      return std::make_unique<KickDriftIntegrator>(c.kick_drift, c.velocity_independent, desc);
     };
-    reg.add({SplittingIntegrator(c, vel_indep, desc).info(), {}, make});
+    add_method(reg, m, KickDriftIntegrator(c.kick_drift, c.velocity_independent, desc), {}, make);
   }
   // Compositions of velocity Verlet (composition.hpp): velocity-independent forces only.
-  for (const CompositionMethod& m : composition_methods()) {
-    auto make = [c = m.splitting, desc = m.description](const Params&) {
-      return std::make_unique<SplittingIntegrator>(c, true, desc);
+  for (const CompositionEntry& m : composition_entries()) {
+    auto make = [c = m.coefficients->kick_drift, desc = m.text.description.str()](const Params&) {
+      return std::make_unique<KickDriftIntegrator>(c, true, desc);
     };
-    reg.add({SplittingIntegrator(m.splitting, true, m.description).info(), {}, make});
+    add_method(reg, m,
+               KickDriftIntegrator(m.coefficients->kick_drift, true, m.text.description.str()), {},
+               make);
   }
   reg.add({PositionVerlet().info(), {}, [](const Params&) {
              return std::make_unique<PositionVerlet>();
@@ -87,40 +83,26 @@ void register_symplectic_integrators(IntegratorRegistry& reg) {
 }
 
 void register_implicit_integrators(IntegratorRegistry& reg) {
-  static const std::map<std::string, std::string> descriptions = {
-      {"backward_euler", "backward (implicit) Euler with Newton; L-stable"},
-      {"implicit_midpoint", "implicit midpoint rule; A-stable, symplectic, no damping"},
-      {"trapezoidal", "trapezoidal rule (Crank-Nicolson); A-stable, no damping at infinity"},
-      {"sdirk2", "two-stage SDIRK, gamma = 1 - 1/sqrt(2); L-stable, stiffly accurate"},
-      {"sdirk3", "three-stage SDIRK of Alexander (1977); L-stable, stiffly accurate"},
-  };
   const auto newton_specs = implicit_param_specs(true);
   const auto linear_specs = implicit_param_specs(false);
-  for (const ButcherTableau& t : implicit_tableaux()) {
-    const std::string desc = descriptions.at(t.name);
-    auto make = [t, desc](const Params& p) {
-      return std::make_unique<DirkIntegrator>(t, desc, read_implicit_options(p, true));
-    };
-    reg.add({DirkIntegrator(t, desc, {}).info(), newton_specs, make});
-  }
-  // ESDIRK pairs with an embedded estimate: fixed step with --h, adaptive with rtol/atol.
-  static const std::map<std::string, std::string> esdirk = {
-      {"trbdf2",
-       "TR-BDF2 (Bank et al. 1985, IEEE Trans. CAD 4; as an ESDIRK 2(3) pair after Hosea & "
-       "Shampine 1996, Appl. Numer. Math. 20), gamma = 2 - sqrt(2); L-stable, stiffly "
-       "accurate, FSAL; adaptive or fixed step"},
-      {"esdirk43",
-       "ESDIRK4(3)6L[2]SA, implicit part of ARK4(3)6L[2]SA (Kennedy & Carpenter 2003, Appl. "
-       "Numer. Math. 44), gamma = 1/4; L-stable, stiffly accurate, FSAL; adaptive or fixed step"},
-  };
+  // DIRK methods (dirk.hpp); the ESDIRK pairs with an embedded estimate run fixed-step with --h
+  // or adaptively with rtol/atol.
   const auto esdirk_specs = esdirk_param_specs();
-  for (const ButcherTableau& t : esdirk_tableaux()) {
-    const std::string desc = esdirk.at(t.name);
-    auto make = [t, desc](const Params& p) {
-      return std::make_unique<DirkIntegrator>(t, desc, read_implicit_options(p, true),
-                                              read_controller_options(p), read_error_filter(p));
-    };
-    reg.add({DirkIntegrator(t, desc, {}).info(), esdirk_specs, make});
+  for (const DirkMethod& m : dirk_methods()) {
+    const ButcherTableau& t = *m.coefficients;
+    const std::string desc = m.text.description.str();
+    if (!m.adaptive()) {
+      auto make = [t, desc](const Params& p) {
+        return std::make_unique<DirkIntegrator>(t, desc, read_implicit_options(p, true));
+      };
+      add_method(reg, m, DirkIntegrator(t, desc, {}), newton_specs, make);
+    } else {
+      auto make = [t, desc](const Params& p) {
+        return std::make_unique<DirkIntegrator>(t, desc, read_implicit_options(p, true),
+                                                read_controller_options(p), read_error_filter(p));
+      };
+      add_method(reg, m, DirkIntegrator(t, desc, {}), esdirk_specs, make);
+    }
   }
   reg.add({Bdf2Integrator({}).info(), newton_specs, [](const Params& p) {
              return std::make_unique<Bdf2Integrator>(read_implicit_options(p, true));
@@ -128,33 +110,25 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
   reg.add({SemiImplicitEuler({}).info(), linear_specs, [](const Params& p) {
              return std::make_unique<SemiImplicitEuler>(read_implicit_options(p, false));
            }});
-  const std::string ros_desc =
-      "ROS2 Rosenbrock method (Verwer et al. 1999), gamma = 1 + 1/sqrt(2); L-stable";
-  reg.add({Rosenbrock(rosenbrock2_tableau(), ros_desc, {}).info(), linear_specs,
-           [ros_desc](const Params& p) {
-             return std::make_unique<Rosenbrock>(rosenbrock2_tableau(), ros_desc,
-                                                 read_implicit_options(p, false));
-           }});
-  // Rosenbrock pairs with an embedded estimate: fixed-step with --h, adaptive with rtol/atol.
+  // Rosenbrock methods (linearly_implicit.hpp); the pairs with an embedded estimate run
+  // fixed-step with --h or adaptively with rtol/atol.
   std::vector<ParamSpec> ros_adaptive_specs = controller_param_specs();
   ros_adaptive_specs.insert(ros_adaptive_specs.end(), linear_specs.begin(), linear_specs.end());
-  const std::vector<std::pair<const RosenbrockTableau*, std::string>> ros_pairs = {
-      {&ros3p_tableau(),
-       "ROS3P Rosenbrock 3(2) of Lang & Verwer (BIT 41, 2001): 3 stages (2 f evaluations), "
-       "gamma = 1/2 + sqrt(3)/6, A-stable, R(inf) = 1 - sqrt(3); adaptive (rtol/atol) or fixed "
-       "step. Its error estimate is zero on linear autonomous problems (the embedded method has "
-       "the same stability function): there only h_max limits the adaptive step"},
-      {&rodas4_tableau(),
-       "RODAS4 Rosenbrock 4(3) of Hairer & Wanner (Solving ODEs II, 2nd ed., Springer 1996; "
-       "code RODAS): 6 stages, gamma = 1/4, L-stable, stiffly accurate; adaptive (rtol/atol) "
-       "or fixed step"},
-  };
-  for (const auto& [tab, desc] : ros_pairs) {
-    auto make = [tab = tab, desc = desc](const Params& p) {
-      return std::make_unique<Rosenbrock>(*tab, desc, read_implicit_options(p, false),
-                                          read_controller_options(p));
-    };
-    reg.add({Rosenbrock(*tab, desc, {}).info(), ros_adaptive_specs, make});
+  for (const RosenbrockMethod& m : rosenbrock_methods()) {
+    const RosenbrockTableau* tab = &*m.coefficients;
+    const std::string desc = m.text.description.str();
+    if (!m.adaptive()) {
+      auto make = [tab, desc](const Params& p) {
+        return std::make_unique<Rosenbrock>(*tab, desc, read_implicit_options(p, false));
+      };
+      add_method(reg, m, Rosenbrock(*tab, desc, {}), linear_specs, make);
+    } else {
+      auto make = [tab, desc](const Params& p) {
+        return std::make_unique<Rosenbrock>(*tab, desc, read_implicit_options(p, false),
+                                            read_controller_options(p));
+      };
+      add_method(reg, m, Rosenbrock(*tab, desc, {}), ros_adaptive_specs, make);
+    }
   }
   reg.add({Radau5({}).info(), radau5_param_specs(),
            [](const Params& p) { return std::make_unique<Radau5>(read_radau5_options(p)); }});
@@ -195,7 +169,7 @@ void register_graphics_integrators(IntegratorRegistry& reg) {
            }});
 }
 
-void register_splitting_integrators(IntegratorRegistry& reg) {
+void register_operator_splitting_integrators(IntegratorRegistry& reg) {
   reg.add(
       {StableFluids().info(), {}, [](const Params&) { return std::make_unique<StableFluids>(); }});
 }

@@ -10,8 +10,13 @@ void register_symplectic_integrators(IntegratorRegistry& reg);
 void register_implicit_integrators(IntegratorRegistry& reg);
 // XPBD and projective dynamics (integrators/graphics/): mass-spring networks only.
 void register_graphics_integrators(IntegratorRegistry& reg);
-// Splitting schemes for particular model classes (stable_fluids: grid fluids).
-void register_splitting_integrators(IntegratorRegistry& reg);
+// Operator-splitting schemes for particular model classes (Family::operator_splitting, printed
+// "splitting"; stable_fluids: grid fluids).
+void register_operator_splitting_integrators(IntegratorRegistry& reg);
+// The former name of register_operator_splitting_integrators, kept while callers move over.
+inline void register_splitting_integrators(IntegratorRegistry& reg) {
+  register_operator_splitting_integrators(reg);
+}
 // The library references (integrators/reference/).
 void register_reference_integrators(IntegratorRegistry& reg);
 

@@ -13,7 +13,7 @@ Requirements fluid_needs() {
 }  // namespace
 
 StableFluids::StableFluids()
-    : Integrator({"stable_fluids", Family::splitting, 1, 0, fluid_needs(),
+    : Integrator({"stable_fluids", Family::operator_splitting, 1, 0, fluid_needs(),
                   "Stam's stable fluids (1999): body force, semi-Lagrangian advection, implicit "
                   "diffusion, pressure projection; grid fluids only (fluid_2d)"}) {}
 

@@ -62,12 +62,20 @@
 #include "core/tableau.hpp"
 #include "integrators/adaptive/controller.hpp"
 #include "integrators/implicit/implicit_core.hpp"
+#include "integrators/method_entry.hpp"
 
 namespace stiffbench {
 
+// The DIRK methods, one entry each (coefficients, description, kind, reference, step modes;
+// integrators/method_entry.hpp), in registration order: the fixed-step ones above, then the
+// ESDIRK pairs (StepModes::fixed_and_adaptive).
+using DirkMethod = MethodEntry<ButcherTableau>;
+const std::vector<DirkMethod>& dirk_methods();
+
+// Their tableaux: the fixed-step ones (and one by name), the ESDIRK pairs with embedded weights
+// (b_embedded: trbdf2, esdirk43).
 const std::vector<ButcherTableau>& implicit_tableaux();
 const ButcherTableau& implicit_tableau(const std::string& name);
-// ESDIRK pairs with embedded weights (b_embedded): trbdf2, esdirk43.
 const std::vector<ButcherTableau>& esdirk_tableaux();
 
 // One DIRK step with a shared ImplicitCore (used by DirkIntegrator and by BDF2's start-up).

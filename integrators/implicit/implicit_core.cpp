@@ -158,6 +158,23 @@ std::vector<int> color_columns(const SparseMat& pattern, int* n_colors) {
 
 void ImplicitCore::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   sys_ = &sys;
+  LinearSolverOptions lin = resolve_jacobian_source(sys);
+  krylov_tol_ = lin.krylov_tol;
+  velocity_.reset();
+  solver_.reset();
+  mech_inplace_ = nullptr;
+  const MechanicalSystem* mech = sys.as_mechanical();
+  const bool mech_blocks = mech && mech->has_force_jacobians();
+  if (mech_blocks && source_ == JacobianSource::analytic && opt_.form != SystemForm::first_order)
+    setup_velocity_form(*mech, lin, t0, y0);
+  else
+    setup_first_order(sys, lin, t0, y0);
+  allocate_workspaces(sys.dimension());
+  have_jac_ = jac_fresh_in_step_ = w_current_ = false;
+  error_.clear();
+}
+
+LinearSolverOptions ImplicitCore::resolve_jacobian_source(const OdeSystem& sys) {
   const Index n = sys.dimension();
   source_ = opt_.jacobian;
   LinearSolverOptions lin = user_linear_;
@@ -189,76 +206,88 @@ void ImplicitCore::reset(const OdeSystem& sys, double t0, CVecRef y0) {
     require_input(
         source_ == JacobianSource::analytic,
         "parameter 'system_form': velocity uses the model's K and D (jacobian=auto or analytic)");
-  if (source_ == JacobianSource::matrix_free) {
-    require_input(is_krylov(lin.kind),
-                  "jacobian=matrix_free needs a Krylov linear_solver (cg, bicgstab or gmres)");
-    require_input(
-        !(opt_.preconditioner_given && lin.preconditioner != PreconditionerKind::none),
-        "preconditioner=" +
-            std::string(lin.preconditioner == PreconditionerKind::ichol ? "ichol" : "jacobi") +
-            " needs an assembled matrix; jacobian=matrix_free has none");
-    lin.preconditioner = PreconditionerKind::none;
-    // Finite-difference products are accurate to ~√eps relative, so a restarted Krylov method
-    // cannot push the true residual much below that: solve to 1e-7 and let Newton iterate
-    // (inexact Newton; SUNDIALS likewise ties its linear tolerance to the nonlinear one).
-    lin.krylov_tol = std::max(lin.krylov_tol, kMatrixFreeKrylovTol);
-  }
-  krylov_tol_ = lin.krylov_tol;
-  velocity_.reset();
-  solver_.reset();
-  mech_inplace_ = nullptr;
-  if (mech_blocks && source_ == JacobianSource::analytic && opt_.form != SystemForm::first_order) {
-    velocity_ = std::make_unique<VelocityFormSolver>();
-    velocity_->reset(*mech, lin, t0, y0);
-    lin.kind = velocity_->kind();
-    opt_.linear = lin;
+  if (source_ == JacobianSource::matrix_free) restrict_to_matrix_free(lin);
+  return lin;
+}
+
+void ImplicitCore::restrict_to_matrix_free(LinearSolverOptions& lin) const {
+  require_input(is_krylov(lin.kind),
+                "jacobian=matrix_free needs a Krylov linear_solver (cg, bicgstab or gmres)");
+  require_input(
+      !(opt_.preconditioner_given && lin.preconditioner != PreconditionerKind::none),
+      "preconditioner=" +
+          std::string(lin.preconditioner == PreconditionerKind::ichol ? "ichol" : "jacobi") +
+          " needs an assembled matrix; jacobian=matrix_free has none");
+  lin.preconditioner = PreconditionerKind::none;
+  // Finite-difference products are accurate to ~√eps relative, so a restarted Krylov method
+  // cannot push the true residual much below that: solve to 1e-7 and let Newton iterate
+  // (inexact Newton; SUNDIALS likewise ties its linear tolerance to the nonlinear one).
+  lin.krylov_tol = std::max(lin.krylov_tol, kMatrixFreeKrylovTol);
+}
+
+void ImplicitCore::setup_velocity_form(const MechanicalSystem& mech, LinearSolverOptions lin,
+                                       double t0, CVecRef y0) {
+  velocity_ = std::make_unique<VelocityFormSolver>();
+  velocity_->reset(mech, lin, t0, y0);
+  lin.kind = velocity_->kind();
+  opt_.linear = lin;
+}
+
+void ImplicitCore::setup_first_order(const OdeSystem& sys, const LinearSolverOptions& lin,
+                                     double t0, CVecRef y0) {
+  const Index n = sys.dimension();
+  solver_ = make_linear_solver(lin, n);
+  opt_.linear = lin;
+  identity_.resize(n, n);
+  identity_.setIdentity();
+  identity_.makeCompressed();
+  // The pattern of J: analytic or declared structure, or dense for fd_dense.
+  if (source_ == JacobianSource::fd_dense) {
+    jac_ = Mat::Ones(n, n).sparseView();
+  } else if (source_ != JacobianSource::matrix_free) {
+    jac_ = sys.jacobian_pattern();
   } else {
-    solver_ = make_linear_solver(lin, n);
-    opt_.linear = lin;
-    identity_.resize(n, n);
-    identity_.setIdentity();
-    identity_.makeCompressed();
-    // The pattern of J: analytic or declared structure, or dense for fd_dense.
-    if (source_ == JacobianSource::fd_dense) {
-      jac_ = Mat::Ones(n, n).sparseView();
-    } else if (source_ != JacobianSource::matrix_free) {
-      jac_ = sys.jacobian_pattern();
-    } else {
-      jac_.resize(n, n);
-    }
-    jac_.makeCompressed();
-    if (mech_blocks && source_ == JacobianSource::analytic) {
-      // J = [[0, I], [K, D]] written in place: the position in J of every entry of K and D.
-      const Index nd = mech->dofs();
-      mech_inplace_ = mech;
-      k_.resize(0, 0);
-      d_.resize(0, 0);
-      mech->force_jacobians(t0, y0.head(nd), y0.tail(nd), k_, d_);
-      k_.makeCompressed();
-      d_.makeCompressed();
-      const auto map = [&](const SparseMat& b, Index col0, std::vector<int>& out) {
-        out.clear();
-        for (Index c = 0; c < b.outerSize(); ++c)
-          for (SparseMat::InnerIterator it(b, c); it; ++it) {
-            const int* begin = jac_.innerIndexPtr() + jac_.outerIndexPtr()[col0 + c];
-            const int* end = jac_.innerIndexPtr() + jac_.outerIndexPtr()[col0 + c + 1];
-            const int* pos = std::lower_bound(begin, end, static_cast<int>(nd + it.row()));
-            if (pos == end || *pos != nd + it.row())
-              throw std::logic_error("ImplicitCore: K/D entry missing from the Jacobian pattern");
-            out.push_back(static_cast<int>(pos - jac_.innerIndexPtr()));
-          }
-      };
-      map(k_, 0, k_in_jac_);
-      map(d_, nd, d_in_jac_);
-    }
-    if (source_ == JacobianSource::fd_colored) colors_ = color_columns(jac_, &n_colors_);
-    if (source_ == JacobianSource::fd_dense) {
-      colors_.resize(static_cast<std::size_t>(n));
-      for (Index j = 0; j < n; ++j) colors_[static_cast<std::size_t>(j)] = static_cast<int>(j);
-      n_colors_ = static_cast<int>(n);
-    }
-    if (source_ != JacobianSource::matrix_free) rebuild_w_pattern();
+    jac_.resize(n, n);
   }
+  jac_.makeCompressed();
+  const MechanicalSystem* mech = sys.as_mechanical();
+  if (mech && mech->has_force_jacobians() && source_ == JacobianSource::analytic)
+    map_force_jacobians(*mech, t0, y0);
+  if (source_ == JacobianSource::fd_colored) colors_ = color_columns(jac_, &n_colors_);
+  if (source_ == JacobianSource::fd_dense) {
+    colors_.resize(static_cast<std::size_t>(n));
+    for (Index j = 0; j < n; ++j) colors_[static_cast<std::size_t>(j)] = static_cast<int>(j);
+    n_colors_ = static_cast<int>(n);
+  }
+  if (source_ != JacobianSource::matrix_free) rebuild_w_pattern();
+}
+
+void ImplicitCore::map_force_jacobians(const MechanicalSystem& mech, double t0, CVecRef y0) {
+  // J = [[0, I], [K, D]] written in place: the position in J of every entry of K and D.
+  const Index nd = mech.dofs();
+  mech_inplace_ = &mech;
+  k_.resize(0, 0);
+  d_.resize(0, 0);
+  mech.force_jacobians(t0, y0.head(nd), y0.tail(nd), k_, d_);
+  k_.makeCompressed();
+  d_.makeCompressed();
+  const auto map = [&](const SparseMat& b, Index col0, std::vector<int>& out) {
+    out.clear();
+    for (Index c = 0; c < b.outerSize(); ++c)
+      for (SparseMat::InnerIterator it(b, c); it; ++it) {
+        const int* begin = jac_.innerIndexPtr() + jac_.outerIndexPtr()[col0 + c];
+        const int* end = jac_.innerIndexPtr() + jac_.outerIndexPtr()[col0 + c + 1];
+        const int* pos = std::lower_bound(begin, end, static_cast<int>(nd + it.row()));
+        if (pos == end || *pos != nd + it.row())
+          throw std::logic_error("ImplicitCore: K/D entry missing from the Jacobian pattern");
+        out.push_back(static_cast<int>(pos - jac_.innerIndexPtr()));
+      }
+  };
+  map(k_, 0, k_in_jac_);
+  map(d_, nd, d_in_jac_);
+}
+
+void ImplicitCore::allocate_workspaces(Index n) {
   lin_y_.resize(n);
   lin_f_.resize(n);
   tmp_.resize(n);
@@ -266,8 +295,6 @@ void ImplicitCore::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   g_.resize(n);
   delta_.resize(n);
   z0_.resize(n);
-  have_jac_ = jac_fresh_in_step_ = w_current_ = false;
-  error_.clear();
 }
 
 void ImplicitCore::rebuild_w_pattern() {

@@ -116,6 +116,18 @@ class ImplicitCore {
   const ImplicitOptions& options() const { return opt_; }
 
  private:
+  // reset() in steps: the Jacobian source (automatic resolved, combinations checked) and the
+  // linear-solver options it implies; the restrictions of matrix-free products; the
+  // velocity-form solver, or the first-order W = I - hγJ with J's pattern, its finite-difference
+  // colouring and (mechanical systems) the positions of K and D in J; the work vectors.
+  LinearSolverOptions resolve_jacobian_source(const OdeSystem& sys);
+  void restrict_to_matrix_free(LinearSolverOptions& lin) const;
+  void setup_velocity_form(const MechanicalSystem& mech, LinearSolverOptions lin, double t0,
+                           CVecRef y0);
+  void setup_first_order(const OdeSystem& sys, const LinearSolverOptions& lin, double t0,
+                         CVecRef y0);
+  void map_force_jacobians(const MechanicalSystem& mech, double t0, CVecRef y0);
+  void allocate_workspaces(Index n);
   void fd_jacobian(const OdeSystem& sys, double t, CVecRef y, CVecRef fy);
   void rebuild_w_pattern();
   bool is_krylov_run() const;

@@ -171,8 +171,10 @@ RosenbrockTableau rosenbrock_from_transformed(std::string name, int order, int e
   return r;
 }
 
-const RosenbrockTableau& rosenbrock2_tableau() {
-  static const RosenbrockTableau tab = [] {
+namespace {
+
+RosenbrockTableau rosenbrock2() {
+  return [] {
     RosenbrockTableau r;
     r.name = "rosenbrock2";
     r.order = 2;
@@ -182,13 +184,12 @@ const RosenbrockTableau& rosenbrock2_tableau() {
     r.b = Vec{{0.5, 0.5}};
     return r;
   }();
-  return tab;
 }
 
-const RosenbrockTableau& ros3p_tableau() {
+RosenbrockTableau ros3p() {
   // Lang & Verwer (BIT 41, 2001), in closed form: γ is the root ½ + √3/6 of γ² - γ + 1/6 = 0, the
   // third-order condition of the chain tree [[τ]].
-  static const RosenbrockTableau tab = [] {
+  return [] {
     RosenbrockTableau r;
     r.name = "ros3p";
     r.order = 3;
@@ -201,14 +202,13 @@ const RosenbrockTableau& ros3p_tableau() {
     r.b_embedded = Vec{{1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0}};
     return r;
   }();
-  return tab;
 }
 
-const RosenbrockTableau& rodas4_tableau() {
+RosenbrockTableau rodas4() {
   // The transformed coefficients of Hairer & Wanner's RODAS (METH = 1), γ = 1/4. Rows 5 and 6 of
   // (a_ij) are the embedded and the main solution's stage weights (stiffly accurate):
   // a_6j = a_5j (j < 5), a_65 = 1, m = (a_51..a_54, 1, 1), m̂ = (a_51..a_54, 1, 0).
-  static const RosenbrockTableau tab = [] {
+  return [] {
     Mat a = Mat::Zero(6, 6), c = Mat::Zero(6, 6);
     a(1, 0) = 1.544;
     a(2, 0) = 0.9466785280815826;
@@ -242,6 +242,54 @@ const RosenbrockTableau& rodas4_tableau() {
     Vec m_hat = a.row(5).transpose();
     return rosenbrock_from_transformed("rodas4", 4, 3, 0.25, a, c, m, m_hat);
   }();
+}
+
+const RosenbrockTableau& rosenbrock_tableau(const std::string& name) {
+  for (const RosenbrockMethod& m : rosenbrock_methods())
+    if (m.name() == name) return *m.coefficients;
+  throw std::logic_error("no Rosenbrock tableau '" + name + "'");
+}
+
+}  // namespace
+
+const std::vector<RosenbrockMethod>& rosenbrock_methods() {
+  static const std::vector<RosenbrockMethod> all = {
+      {rosenbrock2(),
+       {"ROS2 Rosenbrock method (Verwer et al. 1999), gamma = 1 + 1/sqrt(2); L-stable",
+        "Rosenbrock",
+        "J. G. Verwer, E. J. Spee, J. G. Blom & W. Hundsdorfer, SIAM J. Sci. Comput. 20 (1999) "
+        "1456-1480"},
+       StepModes::fixed},
+      // Pairs with an embedded estimate: fixed-step with --h, adaptive with rtol/atol.
+      {ros3p(),
+       {"ROS3P Rosenbrock 3(2) of Lang & Verwer (BIT 41, 2001): 3 stages (2 f evaluations), "
+        "gamma = 1/2 + sqrt(3)/6, A-stable, R(inf) = 1 - sqrt(3); adaptive (rtol/atol) or fixed "
+        "step. Its error estimate is zero on linear autonomous problems (the embedded method has "
+        "the same stability function): there only h_max limits the adaptive step",
+        "Rosenbrock (embedded pair)",
+        "J. Lang & J. G. Verwer, ROS3P - an accurate third-order Rosenbrock solver designed for "
+        "parabolic problems, BIT Numer. Math. 41 (2001) 731-738"},
+       StepModes::fixed_and_adaptive},
+      {rodas4(),
+       {"RODAS4 Rosenbrock 4(3) of Hairer & Wanner (Solving ODEs II, 2nd ed., Springer 1996; "
+        "code RODAS): 6 stages, gamma = 1/4, L-stable, stiffly accurate; adaptive (rtol/atol) "
+        "or fixed step",
+        "Rosenbrock (embedded pair)", cite(kHairerWanner, "Sect. VI.4 (RODAS)")},
+       StepModes::fixed_and_adaptive},
+  };
+  return all;
+}
+
+const RosenbrockTableau& rosenbrock2_tableau() {
+  static const RosenbrockTableau& tab = rosenbrock_tableau("rosenbrock2");
+  return tab;
+}
+const RosenbrockTableau& ros3p_tableau() {
+  static const RosenbrockTableau& tab = rosenbrock_tableau("ros3p");
+  return tab;
+}
+const RosenbrockTableau& rodas4_tableau() {
+  static const RosenbrockTableau& tab = rosenbrock_tableau("rodas4");
   return tab;
 }
 

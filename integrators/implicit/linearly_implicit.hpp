@@ -60,6 +60,7 @@
 #include "core/integrator.hpp"
 #include "integrators/adaptive/controller.hpp"
 #include "integrators/implicit/implicit_core.hpp"
+#include "integrators/method_entry.hpp"
 
 namespace stiffbench {
 
@@ -107,6 +108,11 @@ RosenbrockTableau rosenbrock_from_transformed(std::string name, int order, int e
                                               double gamma, const Mat& a, const Mat& c,
                                               const Vec& m, const Vec& m_embedded);
 
+// The Rosenbrock methods, one entry each (coefficients, description, kind, reference, step
+// modes; integrators/method_entry.hpp), in registration order: rosenbrock2 (fixed step), then
+// the embedded pairs ros3p and rodas4 (fixed step or adaptive); and their tableaux by name.
+using RosenbrockMethod = MethodEntry<RosenbrockTableau>;
+const std::vector<RosenbrockMethod>& rosenbrock_methods();
 const RosenbrockTableau& rosenbrock2_tableau();
 const RosenbrockTableau& ros3p_tableau();
 const RosenbrockTableau& rodas4_tableau();

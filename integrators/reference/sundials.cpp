@@ -97,8 +97,6 @@ class BlockMap {
   std::vector<Index> pos_;
 };
 
-enum class Kind { cvode_bdf, cvode_adams, arkode_erk, arkode_dirk, arkode_imex };
-
 struct Settings {
   double rtol = 1e-6, atol = 1e-10;
   Lin lin = Lin::automatic;
@@ -122,29 +120,182 @@ std::string capture(const std::function<void(FILE*)>& print) {
   return out;
 }
 
-class SundialsIntegrator final : public Integrator {
+// The library functions that attach a Jacobian to the linear solver, with the names the error
+// messages quote. CVODE's and ARKODE's callbacks have the same signatures, so one adapter serves
+// both.
+struct CvodeLinearSolverApi {
+  static constexpr auto set_jac_fn = CVodeSetJacFn;
+  static constexpr auto set_jac_times = CVodeSetJacTimes;
+  static constexpr auto set_preconditioner = CVodeSetPreconditioner;
+  static constexpr const char* set_jac_fn_name = "CVodeSetJacFn";
+  static constexpr const char* set_jac_times_name = "CVodeSetJacTimes";
+  static constexpr const char* set_preconditioner_name = "CVodeSetPreconditioner";
+};
+struct ArkodeLinearSolverApi {
+  static constexpr auto set_jac_fn = ARKStepSetJacFn;
+  static constexpr auto set_jac_times = ARKStepSetJacTimes;
+  static constexpr auto set_preconditioner = ARKStepSetPreconditioner;
+  static constexpr const char* set_jac_fn_name = "ARKStepSetJacFn";
+  static constexpr const char* set_jac_times_name = "ARKStepSetJacTimes";
+  static constexpr const char* set_preconditioner_name = "ARKStepSetPreconditioner";
+};
+
+// What CVODE and ARKODE share: the library's user data, i.e. the system seen through the C
+// callbacks (f, its IMEX parts, the analytic Jacobian in dense, band or sparse form, J v, the
+// velocity-form preconditioner) with the guard that carries exceptions across the C ABI, and
+// the linear solver — its choice (linear_solver=auto resolved per run), the fixed Jacobian
+// pattern with its index maps, and the SUNMatrix / SUNLinearSolver objects.
+class SundialsAdapter {
  public:
-  SundialsIntegrator(MethodInfo info, Kind kind, Settings s)
-      : Integrator(std::move(info)), kind_(kind), set_(std::move(s)) {
-    SUNContext_Create(nullptr, &ctx_);
-  }
-  ~SundialsIntegrator() override {
-    free_memory();
-    SUNContext_Free(&ctx_);
-  }
+  SundialsAdapter() = default;
+  SundialsAdapter(const SundialsAdapter&) = delete;
+  SundialsAdapter& operator=(const SundialsAdapter&) = delete;
 
-  bool supports_fixed_step() const override { return !is_cvode(); }
-  bool supports_adaptive() const override { return true; }
-
-  void reset(const OdeSystem& sys, double t0, CVecRef y0) override {
-    check_compatible(info(), sys);
+  // Starts a run of integrator `name` on `sys`: resolves the Jacobian (analytic or the
+  // library's difference quotients) and the linear solver, and with `linear` (a method with
+  // implicit stages) and an analytic Jacobian fixes its pattern.
+  void reset(const OdeSystem& sys, const std::string& name, const Settings& set, bool linear,
+             double t0, CVecRef y0) {
     sys_ = &sys;
     n_ = sys.dimension();
-    use_analytic_ = set_.jacobian == "analytic" || (set_.jacobian == "auto" && sys.has_jacobian());
-    require_input(
-        !use_analytic_ || sys.has_jacobian(),
-        "integrator '" + info().name + "': model '" + sys.name() + "' has no analytic Jacobian");
-    if (set_.lin == Lin::automatic) {
+    use_analytic_ = set.jacobian == "analytic" || (set.jacobian == "auto" && sys.has_jacobian());
+    require_input(!use_analytic_ || sys.has_jacobian(),
+                  "integrator '" + name + "': model '" + sys.name() + "' has no analytic Jacobian");
+    resolve_linear_solver(sys, name, set.lin);
+    force_jac_evals_ = 0;
+    if (use_analytic_ && linear) build_jacobian_layout(t0, y0);
+    vel_.reset();
+    if (lin_ == Lin::velocity) {
+      vel_ = std::make_unique<VelocityFormSolver>();
+      vel_->reset(*sys.as_mechanical(), LinearSolverOptions{}, t0, y0);
+    }
+  }
+
+  // The matrix and the linear solver of this run (the caller hands them to the library).
+  void create_linear_solver(N_Vector y, SUNContext ctx) {
+    switch (lin_) {
+      case Lin::automatic:  // resolved in reset()
+      case Lin::dense:
+        a_ = SUNDenseMatrix(n_, n_, ctx);
+        ls_ = SUNLinSol_Dense(y, a_, ctx);
+        break;
+      case Lin::band: {
+        Index mu = n_ - 1, ml = n_ - 1;
+        if (use_analytic_ || sys_->has_jacobian_pattern()) {
+          mu = ml = 0;
+          const SparseMat p = use_analytic_ ? jp_ : sys_->jacobian_pattern();
+          for (Index c = 0; c < p.outerSize(); ++c)
+            for (SparseMat::InnerIterator it(p, c); it; ++it) {
+              mu = std::max(mu, c - it.row());
+              ml = std::max(ml, it.row() - c);
+            }
+        }
+        a_ = SUNBandMatrix(n_, mu, ml, ctx);
+        ls_ = SUNLinSol_Band(y, a_, ctx);
+        break;
+      }
+      case Lin::klu:
+        a_ = SUNSparseMatrix(n_, n_, jp_.nonZeros(), CSC_MAT, ctx);
+        ls_ = SUNLinSol_KLU(y, a_, ctx);
+        break;
+      case Lin::spgmr:
+        ls_ = SUNLinSol_SPGMR(y, SUN_PREC_NONE, 0, ctx);
+        break;
+      case Lin::velocity:
+        // Flexible GMRES, right-preconditioned by the velocity-form solve of P = I - γJ (an
+        // inner Krylov solve to a relative kVelocityPrecTol is not a fixed linear operator, hence
+        // the flexible variant); with the exact J the outer iteration converges in one or two.
+        ls_ = SUNLinSol_SPFGMR(y, SUN_PREC_RIGHT, 5, ctx);
+        break;
+    }
+  }
+  SUNLinearSolver linear_solver() const { return ls_; }
+  SUNMatrix matrix() const { return a_; }
+
+  // After the library took the linear solver: the analytic Jacobian's callbacks (none for the
+  // library's difference quotients).
+  template <class Api, class Ok>
+  void attach_jacobian(void* mem, Ok&& ok) {
+    if (!use_analytic_) return;  // the library's difference quotients
+    if (lin_ == Lin::velocity) {
+      // J v from the K and D of the last preconditioner set-up (a Jacobian as current as the
+      // Newton matrix of the matrix-based solvers), no per-solve Jacobian fill.
+      ok(Api::set_preconditioner(mem, psetup_cb, psolve_cb), Api::set_preconditioner_name);
+      ok(Api::set_jac_times(mem, nullptr, velocity_jtimes_cb), Api::set_jac_times_name);
+      return;
+    }
+    if (lin_ == Lin::spgmr) {
+      ok(Api::set_jac_times(mem, jtsetup_cb, jtimes_cb), Api::set_jac_times_name);
+      return;
+    }
+    auto fn = lin_ == Lin::dense  ? jac_matrix_cb<false>
+              : lin_ == Lin::band ? jac_matrix_cb<true>
+                                  : jac_sparse_cb;
+    ok(Api::set_jac_fn(mem, fn), Api::set_jac_fn_name);
+  }
+
+  // Frees the linear solver and the matrix (after the library memory that uses them).
+  void free_linear_solver() {
+    if (ls_) SUNLinSolFree(ls_);
+    if (a_) SUNMatDestroy(a_);
+    ls_ = nullptr;
+    a_ = nullptr;
+  }
+
+  // --- callbacks (C ABI: exceptions must not cross it); user data is the adapter ----------
+  static int rhs_cb(sunrealtype t, N_Vector y, N_Vector yd, void* ud) {
+    auto* self = static_cast<SundialsAdapter*>(ud);
+    return self->guarded([&] {
+      Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), self->n_);
+      Eigen::Map<Vec> dv(N_VGetArrayPointer(yd), self->n_);
+      self->sys_->rhs(t, yv, dv);
+      return dv.allFinite() ? 0 : 1;  // non-finite: recoverable, the library retries smaller
+    });
+  }
+  static int rhs_explicit_cb(sunrealtype t, N_Vector y, N_Vector yd, void* ud) {
+    auto* self = static_cast<SundialsAdapter*>(ud);
+    return self->guarded([&] {
+      Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), self->n_);
+      Eigen::Map<Vec> dv(N_VGetArrayPointer(yd), self->n_);
+      self->sys_->rhs_explicit_part(t, yv, dv);
+      return dv.allFinite() ? 0 : 1;
+    });
+  }
+  static int rhs_implicit_cb(sunrealtype t, N_Vector y, N_Vector yd, void* ud) {
+    auto* self = static_cast<SundialsAdapter*>(ud);
+    return self->guarded([&] {
+      Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), self->n_);
+      Eigen::Map<Vec> dv(N_VGetArrayPointer(yd), self->n_);
+      self->sys_->rhs_implicit_part(t, yv, dv);
+      return dv.allFinite() ? 0 : 1;
+    });
+  }
+  static void err_cb(int code, const char* module, const char* function, char* msg, void* ud) {
+    if (code > 0) return;  // warnings
+    auto* self = static_cast<SundialsAdapter*>(ud);
+    self->library_error_ = std::string(module) + "::" + function + ": " + msg;
+  }
+
+  // Before a library call: no error recorded yet.
+  void clear_errors() {
+    library_error_.clear();
+    callback_error_.clear();
+    guard_.clear();
+  }
+  // After it: rethrows what a callback threw.
+  void rethrow() { guard_.rethrow(); }
+  const std::string& library_error() const { return library_error_; }
+  const std::string& callback_error() const { return callback_error_; }
+
+  const OdeSystem* system() const { return sys_; }
+  Index size() const { return n_; }
+  bool use_analytic() const { return use_analytic_; }
+  long force_jacobian_evals() const { return force_jac_evals_; }
+  const std::string& linear_solver_note() const { return lin_note_; }
+
+ private:
+  void resolve_linear_solver(const OdeSystem& sys, const std::string& name, Lin requested) {
+    if (requested == Lin::automatic) {
       const MechanicalSystem* m = sys.as_mechanical();
       const bool velocity = use_analytic_ && m && m->has_force_jacobians();
       const SundialsLinearSolverChoice c = sundials_auto_linear_solver(n_, use_analytic_, velocity);
@@ -154,100 +305,19 @@ class SundialsIntegrator final : public Integrator {
                                       : Lin::dense;
       lin_note_ = std::string(to_string(lin_)) + " (linear_solver=auto: " + c.rule + ")";
     } else {
-      lin_ = set_.lin;
+      lin_ = requested;
       lin_note_ = std::string(to_string(lin_)) + " (linear_solver=" + to_string(lin_) + ")";
     }
-    require_input(lin_ != Lin::klu || use_analytic_,
-                  "integrator '" + info().name +
-                      "': linear_solver=klu needs the model's analytic sparse Jacobian");
+    require_input(
+        lin_ != Lin::klu || use_analytic_,
+        "integrator '" + name + "': linear_solver=klu needs the model's analytic sparse Jacobian");
     require_input(lin_ != Lin::velocity || (use_analytic_ && sys.as_mechanical() &&
                                             sys.as_mechanical()->has_force_jacobians()),
-                  "integrator '" + info().name +
+                  "integrator '" + name +
                       "': linear_solver=velocity needs a mechanical model with force Jacobians "
                       "(and jacobian=auto or analytic)");
-    force_jac_evals_ = 0;
-    if (use_analytic_ && needs_linear_solver()) build_jacobian_layout(t0, y0);
-    vel_.reset();
-    if (lin_ == Lin::velocity) {
-      vel_ = std::make_unique<VelocityFormSolver>();
-      vel_->reset(*sys.as_mechanical(), LinearSolverOptions{}, t0, y0);
-    }
-    t_ = t0;
-    y_last_ = y0;
-    fixed_h_ = 0;
-    fixed_mode_ = false;
-    create(t0, y0);
   }
 
-  Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override {
-    require_input(!is_cvode(), "integrator '" + info().name +
-                                   "' is adaptive only: give --param rtol=R, not --h");
-    sync(sys, t, y);
-    if (h != fixed_h_) {
-      if (!check(ARKStepSetFixedStep(mem_, h), "ARKStepSetFixedStep", stats))
-        return Status::solver_error;
-      fixed_h_ = h;
-    }
-    // One internal step of exactly h (ARK_ONE_STEP with a fixed step size).
-    fixed_mode_ = true;
-    return evolve(t + h, y, ARK_ONE_STEP, stats);
-  }
-
-  Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) override {
-    sync(sys, t_, y);
-    // Step exactly to t_out instead of stepping past it and interpolating: ARKODE's dense
-    // output at tolerances near 1e-8 was measured to be off by 1e-5 on y' = (-1+3i)y.
-    const int flag = is_cvode() ? CVodeSetStopTime(mem_, t_out) : ARKStepSetStopTime(mem_, t_out);
-    if (!check(flag, "SetStopTime", stats)) return Status::solver_error;
-    return evolve(t_out, y, is_cvode() ? CV_NORMAL : ARK_NORMAL, stats);
-  }
-
- private:
-  bool is_cvode() const { return kind_ == Kind::cvode_bdf || kind_ == Kind::cvode_adams; }
-  bool needs_linear_solver() const { return kind_ != Kind::arkode_erk; }
-
-  void free_memory() {
-    if (mem_) {
-      if (is_cvode())
-        CVodeFree(&mem_);
-      else
-        ARKStepFree(&mem_);
-    }
-    if (ls_) SUNLinSolFree(ls_);
-    if (a_) SUNMatDestroy(a_);
-    mem_ = nullptr;
-    ls_ = nullptr;
-    a_ = nullptr;
-  }
-
-  // --- callbacks (C ABI: exceptions must not cross it) -----------------------------------
-  static int rhs_cb(sunrealtype t, N_Vector y, N_Vector yd, void* ud) {
-    auto* self = static_cast<SundialsIntegrator*>(ud);
-    return self->guarded([&] {
-      Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), self->n_);
-      Eigen::Map<Vec> dv(N_VGetArrayPointer(yd), self->n_);
-      self->sys_->rhs(t, yv, dv);
-      return dv.allFinite() ? 0 : 1;  // non-finite: recoverable, the library retries smaller
-    });
-  }
-  static int rhs_explicit_cb(sunrealtype t, N_Vector y, N_Vector yd, void* ud) {
-    auto* self = static_cast<SundialsIntegrator*>(ud);
-    return self->guarded([&] {
-      Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), self->n_);
-      Eigen::Map<Vec> dv(N_VGetArrayPointer(yd), self->n_);
-      self->sys_->rhs_explicit_part(t, yv, dv);
-      return dv.allFinite() ? 0 : 1;
-    });
-  }
-  static int rhs_implicit_cb(sunrealtype t, N_Vector y, N_Vector yd, void* ud) {
-    auto* self = static_cast<SundialsIntegrator*>(ud);
-    return self->guarded([&] {
-      Eigen::Map<const Vec> yv(N_VGetArrayPointer(y), self->n_);
-      Eigen::Map<Vec> dv(N_VGetArrayPointer(yd), self->n_);
-      self->sys_->rhs_implicit_part(t, yv, dv);
-      return dv.allFinite() ? 0 : 1;
-    });
-  }
   // The fixed pattern jp_ = pattern(J) ∪ diagonal, computed once per reset(), and the maps
   // from the model's matrices into it. Structure only: the evaluations here are not counted.
   void build_jacobian_layout(double t0, CVecRef y0) {
@@ -329,7 +399,7 @@ class SundialsIntegrator final : public Integrator {
   template <bool Band>
   static int jac_matrix_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector,
                            N_Vector, N_Vector) {
-    auto* self = static_cast<SundialsIntegrator*>(ud);
+    auto* self = static_cast<SundialsAdapter*>(ud);
     return self->guarded([&] {
       const SparseMat& m = self->jp_;
       self->fill_jacobian(t, y, self->jp_.valuePtr());
@@ -347,7 +417,7 @@ class SundialsIntegrator final : public Integrator {
   // values written in place into the library's array.
   static int jac_sparse_cb(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* ud, N_Vector,
                            N_Vector, N_Vector) {
-    auto* self = static_cast<SundialsIntegrator*>(ud);
+    auto* self = static_cast<SundialsAdapter*>(ud);
     return self->guarded([&] {
       if (SUNSparseMatrix_NNZ(j) < static_cast<sunindextype>(self->rowind_.size()))
         throw std::logic_error("KLU matrix smaller than the Jacobian pattern");
@@ -357,12 +427,12 @@ class SundialsIntegrator final : public Integrator {
     });
   }
   static int jtsetup_cb(sunrealtype t, N_Vector y, N_Vector, void* ud) {
-    auto* self = static_cast<SundialsIntegrator*>(ud);
+    auto* self = static_cast<SundialsAdapter*>(ud);
     return self->guarded([&] { self->fill_jacobian(t, y, self->jp_.valuePtr()); });
   }
   static int jtimes_cb(N_Vector v, N_Vector jv, sunrealtype, N_Vector, N_Vector, void* ud,
                        N_Vector) {
-    auto* self = static_cast<SundialsIntegrator*>(ud);
+    auto* self = static_cast<SundialsAdapter*>(ud);
     Eigen::Map<const Vec> vv(N_VGetArrayPointer(v), self->n_);
     Eigen::Map<Vec> out(N_VGetArrayPointer(jv), self->n_);
     out.noalias() = self->jp_ * vv;
@@ -374,7 +444,7 @@ class SundialsIntegrator final : public Integrator {
   static constexpr double kVelocityPrecTol = 1e-4;
   static int psetup_cb(sunrealtype t, N_Vector y, N_Vector, sunbooleantype jok,
                        sunbooleantype* jcur, sunrealtype gamma, void* ud) {
-    auto* self = static_cast<SundialsIntegrator*>(ud);
+    auto* self = static_cast<SundialsAdapter*>(ud);
     return self->guarded([&] {
       if (!jok) {
         Eigen::Map<const Vec> yy(N_VGetArrayPointer(y), self->n_);
@@ -392,7 +462,7 @@ class SundialsIntegrator final : public Integrator {
   }
   static int psolve_cb(sunrealtype, N_Vector, N_Vector, N_Vector r, N_Vector z, sunrealtype,
                        sunrealtype, int, void* ud) {
-    auto* self = static_cast<SundialsIntegrator*>(ud);
+    auto* self = static_cast<SundialsAdapter*>(ud);
     return self->guarded([&] {
       Eigen::Map<const Vec> rr(N_VGetArrayPointer(r), self->n_);
       Eigen::Map<Vec> zz(N_VGetArrayPointer(z), self->n_);
@@ -402,239 +472,22 @@ class SundialsIntegrator final : public Integrator {
   }
   static int velocity_jtimes_cb(N_Vector v, N_Vector jv, sunrealtype, N_Vector, N_Vector, void* ud,
                                 N_Vector) {
-    auto* self = static_cast<SundialsIntegrator*>(ud);
+    auto* self = static_cast<SundialsAdapter*>(ud);
     return self->guarded([&] {
       Eigen::Map<const Vec> vv(N_VGetArrayPointer(v), self->n_);
       Eigen::Map<Vec> out(N_VGetArrayPointer(jv), self->n_);
       self->vel_->jacobian_times(vv, out);
     });
   }
-  static void err_cb(int code, const char* module, const char* function, char* msg, void* ud) {
-    if (code > 0) return;  // warnings
-    auto* self = static_cast<SundialsIntegrator*>(ud);
-    self->library_error_ = std::string(module) + "::" + function + ": " + msg;
-  }
 
-  bool check(int flag, const char* what, SolveStats& stats) {
-    if (flag >= 0) return true;
-    // The library allocates the flag name; the caller frees it.
-    char* name = is_cvode() ? CVodeGetReturnFlagName(flag) : ARKStepGetReturnFlagName(flag);
-    stats.message = std::string(what) + " failed: " + (name ? name : "unknown flag") +
-                    (library_error_.empty() ? "" : " (" + library_error_ + ")");
-    std::free(name);
-    if (!callback_error_.empty()) stats.message += "; " + callback_error_;
-    std::cerr << "stiffbench: " << info().name << ": " << stats.message << "\n";
-    return false;
-  }
-
-  void create(double t0, CVecRef y0) {
-    free_memory();
-    // The library copies y0 into its own vectors; the wrapper only lends it the data.
-    N_Vector y = N_VMake_Serial(n_, const_cast<double*>(y0.data()), ctx_);
-    SolveStats dummy;
-    auto ok = [&](int flag, const char* what) {
-      if (!check(flag, what, dummy)) throw std::runtime_error(dummy.message);
-    };
-    if (is_cvode()) {
-      mem_ = CVodeCreate(kind_ == Kind::cvode_bdf ? CV_BDF : CV_ADAMS, ctx_);
-      ok(CVodeInit(mem_, rhs_cb, t0, y), "CVodeInit");
-      ok(CVodeSetUserData(mem_, this), "CVodeSetUserData");
-      ok(CVodeSetErrHandlerFn(mem_, err_cb, this), "CVodeSetErrHandlerFn");
-      ok(CVodeSStolerances(mem_, set_.rtol, set_.atol), "CVodeSStolerances");
-      ok(CVodeSetMaxNumSteps(mem_, set_.max_steps), "CVodeSetMaxNumSteps");
-      if (set_.max_order > 0) ok(CVodeSetMaxOrd(mem_, set_.max_order), "CVodeSetMaxOrd");
-    } else {
-      const bool imex = kind_ == Kind::arkode_imex && sys_->has_imex_split();
-      ARKRhsFn fe = kind_ == Kind::arkode_erk ? rhs_cb : imex ? rhs_explicit_cb : nullptr;
-      ARKRhsFn fi = kind_ == Kind::arkode_erk ? nullptr : imex ? rhs_implicit_cb : rhs_cb;
-      mem_ = ARKStepCreate(fe, fi, t0, y, ctx_);
-      ok(ARKStepSetUserData(mem_, this), "ARKStepSetUserData");
-      ok(ARKStepSetErrHandlerFn(mem_, err_cb, this), "ARKStepSetErrHandlerFn");
-      ok(ARKStepSStolerances(mem_, set_.rtol, set_.atol), "ARKStepSStolerances");
-      ok(ARKStepSetMaxNumSteps(mem_, set_.max_steps), "ARKStepSetMaxNumSteps");
-      const char* itab =
-          kind_ == Kind::arkode_erk ? "ARKODE_DIRK_NONE" : set_.implicit_table.c_str();
-      const char* etab = kind_ == Kind::arkode_dirk || (kind_ == Kind::arkode_imex && !imex)
-                             ? "ARKODE_ERK_NONE"
-                             : set_.explicit_table.c_str();
-      ok(ARKStepSetTableName(mem_, itab, etab), "ARKStepSetTableName");
-    }
-    if (needs_linear_solver()) attach_linear_solver(y, ok);
-    N_VDestroy(y);
-  }
-
-  template <class Ok>
-  void attach_linear_solver(N_Vector y, Ok&& ok) {
-    const bool cv = is_cvode();
-    switch (lin_) {
-      case Lin::automatic:  // resolved in reset()
-      case Lin::dense:
-        a_ = SUNDenseMatrix(n_, n_, ctx_);
-        ls_ = SUNLinSol_Dense(y, a_, ctx_);
-        break;
-      case Lin::band: {
-        Index mu = n_ - 1, ml = n_ - 1;
-        if (use_analytic_ || sys_->has_jacobian_pattern()) {
-          mu = ml = 0;
-          const SparseMat p = use_analytic_ ? jp_ : sys_->jacobian_pattern();
-          for (Index c = 0; c < p.outerSize(); ++c)
-            for (SparseMat::InnerIterator it(p, c); it; ++it) {
-              mu = std::max(mu, c - it.row());
-              ml = std::max(ml, it.row() - c);
-            }
-        }
-        a_ = SUNBandMatrix(n_, mu, ml, ctx_);
-        ls_ = SUNLinSol_Band(y, a_, ctx_);
-        break;
-      }
-      case Lin::klu:
-        a_ = SUNSparseMatrix(n_, n_, jp_.nonZeros(), CSC_MAT, ctx_);
-        ls_ = SUNLinSol_KLU(y, a_, ctx_);
-        break;
-      case Lin::spgmr:
-        ls_ = SUNLinSol_SPGMR(y, SUN_PREC_NONE, 0, ctx_);
-        break;
-      case Lin::velocity:
-        // Flexible GMRES, right-preconditioned by the velocity-form solve of P = I - γJ (an
-        // inner Krylov solve to a relative kVelocityPrecTol is not a fixed linear operator, hence
-        // the flexible variant); with the exact J the outer iteration converges in one or two.
-        ls_ = SUNLinSol_SPFGMR(y, SUN_PREC_RIGHT, 5, ctx_);
-        break;
-    }
-    if (cv) {
-      ok(CVodeSetLinearSolver(mem_, ls_, a_), "CVodeSetLinearSolver");
-    } else {
-      ok(ARKStepSetLinearSolver(mem_, ls_, a_), "ARKStepSetLinearSolver");
-      ok(ARKStepSetLSetupFrequency(mem_, static_cast<int>(set_.lsetup_frequency)),
-         "ARKStepSetLSetupFrequency");
-    }
-    if (!use_analytic_) return;  // the library's difference quotients
-    if (lin_ == Lin::velocity) {
-      // J v from the K and D of the last preconditioner set-up (a Jacobian as current as the
-      // Newton matrix of the matrix-based solvers), no per-solve Jacobian fill.
-      if (cv) {
-        ok(CVodeSetPreconditioner(mem_, psetup_cb, psolve_cb), "CVodeSetPreconditioner");
-        ok(CVodeSetJacTimes(mem_, nullptr, velocity_jtimes_cb), "CVodeSetJacTimes");
-      } else {
-        ok(ARKStepSetPreconditioner(mem_, psetup_cb, psolve_cb), "ARKStepSetPreconditioner");
-        ok(ARKStepSetJacTimes(mem_, nullptr, velocity_jtimes_cb), "ARKStepSetJacTimes");
-      }
-      return;
-    }
-    if (lin_ == Lin::spgmr) {
-      if (cv)
-        ok(CVodeSetJacTimes(mem_, jtsetup_cb, jtimes_cb), "CVodeSetJacTimes");
-      else
-        ok(ARKStepSetJacTimes(mem_, jtsetup_cb, jtimes_cb), "ARKStepSetJacTimes");
-      return;
-    }
-    auto fn = lin_ == Lin::dense  ? jac_matrix_cb<false>
-              : lin_ == Lin::band ? jac_matrix_cb<true>
-                                  : jac_sparse_cb;
-    if (cv)
-      ok(CVodeSetJacFn(mem_, fn), "CVodeSetJacFn");
-    else
-      ok(ARKStepSetJacFn(mem_, fn), "ARKStepSetJacFn");
-  }
-
-  // Re-initialises the library when the state was changed from outside (e.g. a constraint
-  // projection) or when the driver restarts at another time.
-  void sync(const OdeSystem& sys, double t, CVecRef y) {
-    if (&sys != sys_) throw std::logic_error("SundialsIntegrator: system differs from reset()");
-    // The driver computes t0 + k·h while the library accumulates: equal up to rounding.
-    if (std::abs(t - t_) <= 1e-13 * std::max(1.0, std::abs(t)) && y == y_last_) return;
-    N_Vector yw = N_VMake_Serial(n_, const_cast<double*>(y.data()), ctx_);
-    if (is_cvode())
-      CVodeReInit(mem_, t, yw);
-    else {
-      const bool imex = kind_ == Kind::arkode_imex && sys_->has_imex_split();
-      ARKStepReInit(mem_,
-                    kind_ == Kind::arkode_erk ? rhs_cb
-                    : imex                    ? rhs_explicit_cb
-                                              : nullptr,
-                    kind_ == Kind::arkode_erk ? nullptr
-                    : imex                    ? rhs_implicit_cb
-                                              : rhs_cb,
-                    t, yw);
-    }
-    N_VDestroy(yw);
-    t_ = t;
-  }
-
-  Status evolve(double t_out, VecRef y, int mode, SolveStats& stats) {
-    library_error_.clear();
-    callback_error_.clear();
-    guard_.clear();
-    N_Vector yout = N_VMake_Serial(n_, y.data(), ctx_);  // the driver's storage: no copy
-    sunrealtype tret = t_;
-    const int flag = is_cvode() ? CVode(mem_, t_out, yout, &tret, mode)
-                                : ARKStepEvolve(mem_, t_out, yout, &tret, mode);
-    N_VDestroy(yout);
-    read_counters(stats);
-    guard_.rethrow();
-    if (!check(flag, is_cvode() ? "CVode" : "ARKStepEvolve", stats)) return Status::solver_error;
-    t_ = tret;
-    y_last_ = y;
-    return Status::ok;
-  }
-
-  void read_counters(SolveStats& s) {
-    long steps = 0, etf = 0, nni = 0, ncf = 0, nsetups = 0, nje = 0, nli = 0, nfe = 0, nfi = 0,
-         nfels = 0;
-    if (is_cvode()) {
-      CVodeGetNumSteps(mem_, &steps);
-      CVodeGetNumErrTestFails(mem_, &etf);
-      CVodeGetNumRhsEvals(mem_, &nfe);
-      CVodeGetNumNonlinSolvIters(mem_, &nni);
-      CVodeGetNumNonlinSolvConvFails(mem_, &ncf);
-      CVodeGetNumLinSolvSetups(mem_, &nsetups);
-      CVodeGetNumJacEvals(mem_, &nje);
-      CVodeGetNumLinIters(mem_, &nli);
-      CVodeGetNumLinRhsEvals(mem_, &nfels);
-      s.library_report =
-          capture([&](FILE* f) { CVodePrintAllStats(mem_, f, SUN_OUTPUTFORMAT_TABLE); });
-    } else {
-      ARKStepGetNumSteps(mem_, &steps);
-      ARKStepGetNumErrTestFails(mem_, &etf);
-      ARKStepGetNumRhsEvals(mem_, &nfe, &nfi);
-      if (needs_linear_solver()) {
-        ARKStepGetNumNonlinSolvIters(mem_, &nni);
-        ARKStepGetNumNonlinSolvConvFails(mem_, &ncf);
-        ARKStepGetNumLinSolvSetups(mem_, &nsetups);
-        ARKStepGetNumJacEvals(mem_, &nje);
-        ARKStepGetNumLinIters(mem_, &nli);
-        ARKStepGetNumLinRhsEvals(mem_, &nfels);
-      }
-      s.library_report =
-          capture([&](FILE* f) { ARKStepPrintAllStats(mem_, f, SUN_OUTPUTFORMAT_TABLE); });
-    }
-    if (!fixed_mode_) s.steps = steps;  // the fixed-step driver counts its own steps
-    s.rejected_steps = etf;
-    s.newton_iters = nni;
-    s.newton_fails = ncf;
-    s.lin_setups = nsetups;
-    s.lin_solves = needs_linear_solver() ? nni : 0;  // one linear solve per Newton iteration
-    s.krylov_iters = nli;
-    // Analytic Jacobians through OdeSystem::jacobian() are counted at the system boundary,
-    // force_jacobians() calls here; difference-quotient ones are the library's count.
-    s.jac_evals = use_analytic_ ? force_jac_evals_ : nje;
-    s.library_f_evals = nfe + nfi + nfels;
-    if (needs_linear_solver())
-      s.library_report = "Linear solver                = " + lin_note_ + "\n" + s.library_report;
-  }
-
-  Kind kind_;
-  Settings set_;
-  SUNContext ctx_ = nullptr;
-  void* mem_ = nullptr;
-  SUNLinearSolver ls_ = nullptr;
-  SUNMatrix a_ = nullptr;
   const OdeSystem* sys_ = nullptr;
   Index n_ = 0;
   bool use_analytic_ = false;
   Lin lin_ = Lin::dense;                     // the linear solver of this run (auto resolved)
   std::unique_ptr<VelocityFormSolver> vel_;  // linear_solver=velocity: the preconditioner
   std::string lin_note_;  // which solver and why, first line of the library report
+  SUNLinearSolver ls_ = nullptr;
+  SUNMatrix a_ = nullptr;
   // Analytic Jacobian: fixed pattern with current values, its structure in SUNDIALS' index type,
   // the maps into it, the model's matrices kept between calls.
   SparseMat jp_;
@@ -644,11 +497,298 @@ class SundialsIntegrator final : public Integrator {
   BlockMap k_map_, d_map_, j_map_;
   std::vector<Index> ones_;  // positions of the identity block's entries
   long force_jac_evals_ = 0;
+  std::string library_error_, callback_error_;
+  CallbackGuard guard_;  // what a callback threw, rethrown when the library returns
+};
+
+// The Integrator face of a SUNDIALS library: reset, fixed steps, adaptive runs to exact stops,
+// restarts after outside changes to y, error messages and counters. CvodeIntegrator and
+// ArkodeIntegrator supply the library calls; both run on one SundialsAdapter (the callbacks'
+// user data and the linear solver).
+class SundialsFrontEnd : public Integrator {
+ public:
+  SundialsFrontEnd(MethodInfo info, Settings s) : Integrator(std::move(info)), set_(std::move(s)) {
+    SUNContext_Create(nullptr, &ctx_);
+  }
+  // The derived class frees the library memory (free_memory()) before the context goes.
+  ~SundialsFrontEnd() override { SUNContext_Free(&ctx_); }
+
+  bool supports_adaptive() const override { return true; }
+
+  void reset(const OdeSystem& sys, double t0, CVecRef y0) override {
+    check_compatible(info(), sys);
+    adapter_.reset(sys, info().name, set_, needs_linear_solver(), t0, y0);
+    t_ = t0;
+    y_last_ = y0;
+    fixed_h_ = 0;
+    fixed_mode_ = false;
+    free_memory();
+    // The library copies y0 into its own vectors; the wrapper only lends it the data.
+    N_Vector y = N_VMake_Serial(adapter_.size(), const_cast<double*>(y0.data()), ctx_);
+    SolveStats dummy;
+    auto ok = [&](int flag, const char* what) {
+      if (!check(flag, what, dummy)) throw std::runtime_error(dummy.message);
+    };
+    create(t0, y, ok);
+    if (needs_linear_solver()) {
+      adapter_.create_linear_solver(y, ctx_);
+      attach_linear_solver(ok);
+    }
+    N_VDestroy(y);
+  }
+
+  Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) override {
+    sync(sys, t_, y);
+    // Step exactly to t_out instead of stepping past it and interpolating: ARKODE's dense
+    // output at tolerances near 1e-8 was measured to be off by 1e-5 on y' = (-1+3i)y.
+    if (!check(set_stop_time(t_out), "SetStopTime", stats)) return Status::solver_error;
+    return evolve(t_out, y, false, stats);
+  }
+
+ protected:
+  using Ok = std::function<void(int, const char*)>;
+
+  // --- the library calls ---------------------------------------------------------------
+  virtual bool needs_linear_solver() const = 0;
+  // Creates mem_ at (t0, y) with the user data, error handler, tolerances and options.
+  virtual void create(double t0, N_Vector y, const Ok& ok) = 0;
+  // Hands the adapter's linear solver to the library, then the adapter's Jacobian.
+  virtual void attach_linear_solver(const Ok& ok) = 0;
+  virtual void reinit(double t, N_Vector y) = 0;
+  virtual int set_stop_time(double t_out) = 0;
+  // One call of the library's solver towards t_out (one step when one_step), named `name`.
+  virtual int solve(double t_out, N_Vector yout, sunrealtype* tret, bool one_step) = 0;
+  virtual const char* solve_name() const = 0;
+  virtual char* flag_name(int flag) const = 0;  // allocated by the library; the caller frees it
+  // The library's counters, as read_counters() below maps them.
+  struct Counters {
+    long steps = 0, etf = 0, nni = 0, ncf = 0, nsetups = 0, nje = 0, nli = 0, nfe = 0, nfi = 0,
+         nfels = 0;
+  };
+  virtual Counters counters(SolveStats& s) const = 0;  // also sets s.library_report
+  virtual void free_library_memory() = 0;
+
+  void free_memory() {
+    if (mem_) free_library_memory();
+    adapter_.free_linear_solver();
+    mem_ = nullptr;
+  }
+
+  // One step of exactly h (fixed-step mode; ARKODE only).
+  Status fixed_step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats,
+                    int (*set_fixed_step)(void*, sunrealtype)) {
+    sync(sys, t, y);
+    if (h != fixed_h_) {
+      if (!check(set_fixed_step(mem_, h), "ARKStepSetFixedStep", stats))
+        return Status::solver_error;
+      fixed_h_ = h;
+    }
+    fixed_mode_ = true;
+    return evolve(t + h, y, true, stats);
+  }
+
+  Settings set_;
+  SUNContext ctx_ = nullptr;
+  void* mem_ = nullptr;
+  SundialsAdapter adapter_;
+
+ private:
+  bool check(int flag, const char* what, SolveStats& stats) {
+    if (flag >= 0) return true;
+    // The library allocates the flag name; the caller frees it.
+    char* name = flag_name(flag);
+    const std::string& lib = adapter_.library_error();
+    stats.message = std::string(what) + " failed: " + (name ? name : "unknown flag") +
+                    (lib.empty() ? "" : " (" + lib + ")");
+    std::free(name);
+    if (!adapter_.callback_error().empty()) stats.message += "; " + adapter_.callback_error();
+    std::cerr << "stiffbench: " << info().name << ": " << stats.message << "\n";
+    return false;
+  }
+
+  // Re-initialises the library when the state was changed from outside (e.g. a constraint
+  // projection) or when the driver restarts at another time.
+  void sync(const OdeSystem& sys, double t, CVecRef y) {
+    if (&sys != adapter_.system())
+      throw std::logic_error("SUNDIALS integrator: system differs from reset()");
+    // The driver computes t0 + k·h while the library accumulates: equal up to rounding.
+    if (std::abs(t - t_) <= 1e-13 * std::max(1.0, std::abs(t)) && y == y_last_) return;
+    N_Vector yw = N_VMake_Serial(adapter_.size(), const_cast<double*>(y.data()), ctx_);
+    reinit(t, yw);
+    N_VDestroy(yw);
+    t_ = t;
+  }
+
+  Status evolve(double t_out, VecRef y, bool one_step, SolveStats& stats) {
+    adapter_.clear_errors();
+    // The driver's storage: no copy.
+    N_Vector yout = N_VMake_Serial(adapter_.size(), y.data(), ctx_);
+    sunrealtype tret = t_;
+    const int flag = solve(t_out, yout, &tret, one_step);
+    N_VDestroy(yout);
+    read_counters(stats);
+    adapter_.rethrow();
+    if (!check(flag, solve_name(), stats)) return Status::solver_error;
+    t_ = tret;
+    y_last_ = y;
+    return Status::ok;
+  }
+
+  void read_counters(SolveStats& s) {
+    const Counters c = counters(s);
+    if (!fixed_mode_) s.steps = c.steps;  // the fixed-step driver counts its own steps
+    s.rejected_steps = c.etf;
+    s.newton_iters = c.nni;
+    s.newton_fails = c.ncf;
+    s.lin_setups = c.nsetups;
+    s.lin_solves = needs_linear_solver() ? c.nni : 0;  // one linear solve per Newton iteration
+    s.krylov_iters = c.nli;
+    // Analytic Jacobians through OdeSystem::jacobian() are counted at the system boundary,
+    // force_jacobians() calls here; difference-quotient ones are the library's count.
+    s.jac_evals = adapter_.use_analytic() ? adapter_.force_jacobian_evals() : c.nje;
+    s.library_f_evals = c.nfe + c.nfi + c.nfels;
+    if (needs_linear_solver())
+      s.library_report = "Linear solver                = " + adapter_.linear_solver_note() + "\n" +
+                         s.library_report;
+  }
+
   Vec y_last_;
   double t_ = 0, fixed_h_ = 0;
   bool fixed_mode_ = false;
-  std::string library_error_, callback_error_;
-  CallbackGuard guard_;  // what a callback threw, rethrown when the library returns
+};
+
+// cvode_bdf, cvode_adams: variable order and step, adaptive only.
+class CvodeIntegrator final : public SundialsFrontEnd {
+ public:
+  CvodeIntegrator(MethodInfo info, int lmm, Settings s)
+      : SundialsFrontEnd(std::move(info), std::move(s)), lmm_(lmm) {}
+  ~CvodeIntegrator() override { free_memory(); }
+
+  bool supports_fixed_step() const override { return false; }
+  Status step(const OdeSystem&, double, VecRef, double, SolveStats&) override {
+    throw BadInput("integrator '" + info().name +
+                   "' is adaptive only: give --param rtol=R, not --h");
+  }
+
+ private:
+  bool needs_linear_solver() const override { return true; }
+  void create(double t0, N_Vector y, const Ok& ok) override {
+    mem_ = CVodeCreate(lmm_, ctx_);
+    ok(CVodeInit(mem_, SundialsAdapter::rhs_cb, t0, y), "CVodeInit");
+    ok(CVodeSetUserData(mem_, &adapter_), "CVodeSetUserData");
+    ok(CVodeSetErrHandlerFn(mem_, SundialsAdapter::err_cb, &adapter_), "CVodeSetErrHandlerFn");
+    ok(CVodeSStolerances(mem_, set_.rtol, set_.atol), "CVodeSStolerances");
+    ok(CVodeSetMaxNumSteps(mem_, set_.max_steps), "CVodeSetMaxNumSteps");
+    if (set_.max_order > 0) ok(CVodeSetMaxOrd(mem_, set_.max_order), "CVodeSetMaxOrd");
+  }
+  void attach_linear_solver(const Ok& ok) override {
+    ok(CVodeSetLinearSolver(mem_, adapter_.linear_solver(), adapter_.matrix()),
+       "CVodeSetLinearSolver");
+    adapter_.attach_jacobian<CvodeLinearSolverApi>(mem_, ok);
+  }
+  void reinit(double t, N_Vector y) override { CVodeReInit(mem_, t, y); }
+  int set_stop_time(double t_out) override { return CVodeSetStopTime(mem_, t_out); }
+  int solve(double t_out, N_Vector yout, sunrealtype* tret, bool one_step) override {
+    return CVode(mem_, t_out, yout, tret, one_step ? CV_ONE_STEP : CV_NORMAL);
+  }
+  const char* solve_name() const override { return "CVode"; }
+  char* flag_name(int flag) const override { return CVodeGetReturnFlagName(flag); }
+  Counters counters(SolveStats& s) const override {
+    Counters c;
+    CVodeGetNumSteps(mem_, &c.steps);
+    CVodeGetNumErrTestFails(mem_, &c.etf);
+    CVodeGetNumRhsEvals(mem_, &c.nfe);
+    CVodeGetNumNonlinSolvIters(mem_, &c.nni);
+    CVodeGetNumNonlinSolvConvFails(mem_, &c.ncf);
+    CVodeGetNumLinSolvSetups(mem_, &c.nsetups);
+    CVodeGetNumJacEvals(mem_, &c.nje);
+    CVodeGetNumLinIters(mem_, &c.nli);
+    CVodeGetNumLinRhsEvals(mem_, &c.nfels);
+    s.library_report =
+        capture([&](FILE* f) { CVodePrintAllStats(mem_, f, SUN_OUTPUTFORMAT_TABLE); });
+    return c;
+  }
+  void free_library_memory() override { CVodeFree(&mem_); }
+
+  int lmm_;  // CV_BDF or CV_ADAMS
+};
+
+// arkode_erk, arkode_dirk, arkode_imex: ARKStep with explicit, implicit or IMEX tables;
+// adaptive or fixed step.
+enum class ArkodeMode { explicit_only, implicit_only, imex };
+
+class ArkodeIntegrator final : public SundialsFrontEnd {
+ public:
+  ArkodeIntegrator(MethodInfo info, ArkodeMode mode, Settings s)
+      : SundialsFrontEnd(std::move(info), std::move(s)), mode_(mode) {}
+  ~ArkodeIntegrator() override { free_memory(); }
+
+  // One internal step of exactly h (ARK_ONE_STEP with a fixed step size).
+  Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override {
+    return fixed_step(sys, t, y, h, stats, ARKStepSetFixedStep);
+  }
+
+ private:
+  bool needs_linear_solver() const override { return mode_ != ArkodeMode::explicit_only; }
+  // IMEX with the model's split; all-implicit (arkode_imex on a model without one) otherwise.
+  bool split() const { return mode_ == ArkodeMode::imex && adapter_.system()->has_imex_split(); }
+  ARKRhsFn explicit_rhs() const {
+    return mode_ == ArkodeMode::explicit_only ? SundialsAdapter::rhs_cb
+           : split()                          ? SundialsAdapter::rhs_explicit_cb
+                                              : nullptr;
+  }
+  ARKRhsFn implicit_rhs() const {
+    return mode_ == ArkodeMode::explicit_only ? nullptr
+           : split()                          ? SundialsAdapter::rhs_implicit_cb
+                                              : SundialsAdapter::rhs_cb;
+  }
+  void create(double t0, N_Vector y, const Ok& ok) override {
+    mem_ = ARKStepCreate(explicit_rhs(), implicit_rhs(), t0, y, ctx_);
+    ok(ARKStepSetUserData(mem_, &adapter_), "ARKStepSetUserData");
+    ok(ARKStepSetErrHandlerFn(mem_, SundialsAdapter::err_cb, &adapter_), "ARKStepSetErrHandlerFn");
+    ok(ARKStepSStolerances(mem_, set_.rtol, set_.atol), "ARKStepSStolerances");
+    ok(ARKStepSetMaxNumSteps(mem_, set_.max_steps), "ARKStepSetMaxNumSteps");
+    // A part without a right-hand side gets no table.
+    const char* itab = implicit_rhs() ? set_.implicit_table.c_str() : "ARKODE_DIRK_NONE";
+    const char* etab = explicit_rhs() ? set_.explicit_table.c_str() : "ARKODE_ERK_NONE";
+    ok(ARKStepSetTableName(mem_, itab, etab), "ARKStepSetTableName");
+  }
+  void attach_linear_solver(const Ok& ok) override {
+    ok(ARKStepSetLinearSolver(mem_, adapter_.linear_solver(), adapter_.matrix()),
+       "ARKStepSetLinearSolver");
+    ok(ARKStepSetLSetupFrequency(mem_, static_cast<int>(set_.lsetup_frequency)),
+       "ARKStepSetLSetupFrequency");
+    adapter_.attach_jacobian<ArkodeLinearSolverApi>(mem_, ok);
+  }
+  void reinit(double t, N_Vector y) override {
+    ARKStepReInit(mem_, explicit_rhs(), implicit_rhs(), t, y);
+  }
+  int set_stop_time(double t_out) override { return ARKStepSetStopTime(mem_, t_out); }
+  int solve(double t_out, N_Vector yout, sunrealtype* tret, bool one_step) override {
+    return ARKStepEvolve(mem_, t_out, yout, tret, one_step ? ARK_ONE_STEP : ARK_NORMAL);
+  }
+  const char* solve_name() const override { return "ARKStepEvolve"; }
+  char* flag_name(int flag) const override { return ARKStepGetReturnFlagName(flag); }
+  Counters counters(SolveStats& s) const override {
+    Counters c;
+    ARKStepGetNumSteps(mem_, &c.steps);
+    ARKStepGetNumErrTestFails(mem_, &c.etf);
+    ARKStepGetNumRhsEvals(mem_, &c.nfe, &c.nfi);
+    if (needs_linear_solver()) {
+      ARKStepGetNumNonlinSolvIters(mem_, &c.nni);
+      ARKStepGetNumNonlinSolvConvFails(mem_, &c.ncf);
+      ARKStepGetNumLinSolvSetups(mem_, &c.nsetups);
+      ARKStepGetNumJacEvals(mem_, &c.nje);
+      ARKStepGetNumLinIters(mem_, &c.nli);
+      ARKStepGetNumLinRhsEvals(mem_, &c.nfels);
+    }
+    s.library_report =
+        capture([&](FILE* f) { ARKStepPrintAllStats(mem_, f, SUN_OUTPUTFORMAT_TABLE); });
+    return c;
+  }
+  void free_library_memory() override { ARKStepFree(&mem_); }
+
+  ArkodeMode mode_;
 };
 
 std::vector<ParamSpec> common_specs(bool linear) {
@@ -744,21 +884,21 @@ void register_sundials_integrators(IntegratorRegistry& reg) {
   using B = Bounds;
   // CVodeSetMaxOrd refuses an order above the method's (CV_ILL_INPUT): at most 5 for BDF, 12 for
   // Adams.
-  for (const auto& [name, kind, max_order, desc] :
-       {std::tuple{"cvode_bdf", Kind::cvode_bdf, 5,
+  for (const auto& [name, lmm, max_order, desc] :
+       {std::tuple{"cvode_bdf", CV_BDF, 5,
                    "SUNDIALS CVODE, variable-order BDF (1-5) with Newton; adaptive"},
-        std::tuple{"cvode_adams", Kind::cvode_adams, 12,
+        std::tuple{"cvode_adams", CV_ADAMS, 12,
                    "SUNDIALS CVODE, variable-order Adams-Moulton (1-12) with Newton; adaptive"}}) {
     auto cvode_specs = common_specs(true);
     cvode_specs.push_back({"max_order", P::integer, "0",
                            "maximum order (0: CVODE default, 5 for BDF, 12 for Adams)",
                            B::in(0, max_order)});
     const MethodInfo info{name, Family::reference, 0, 0, {}, desc};
-    reg.add({info, cvode_specs, [info, kind = kind](const Params& p) {
+    reg.add({info, cvode_specs, [info, lmm = lmm](const Params& p) {
                Settings s = read_common(p, true);
                s.max_order = static_cast<int>(p.integer("max_order"));
                require_input(s.max_order >= 0, "parameter 'max_order' must be >= 0");
-               return std::make_unique<SundialsIntegrator>(info, kind, s);
+               return std::make_unique<CvodeIntegrator>(info, lmm, s);
              }});
   }
   auto erk_specs = common_specs(false);
@@ -780,7 +920,7 @@ void register_sundials_integrators(IntegratorRegistry& reg) {
                              0,
                              {},
                              "ARKODE ERK " + s.explicit_table};
-             return std::make_unique<SundialsIntegrator>(info, Kind::arkode_erk, s);
+             return std::make_unique<ArkodeIntegrator>(info, ArkodeMode::explicit_only, s);
            }});
   // ARKODE's default reuses M - γJ for up to 20 steps; with ARKODE_SDIRK_5_3_4 and a matrix
   // solver that gave errors of 2e-6 at rtol = 1e-8 on y' = (-1+3i)y (SPGMR: 5e-11), measured
@@ -812,7 +952,7 @@ void register_sundials_integrators(IntegratorRegistry& reg) {
                              0,
                              {},
                              "ARKODE DIRK " + s.implicit_table};
-             return std::make_unique<SundialsIntegrator>(info, Kind::arkode_dirk, s);
+             return std::make_unique<ArkodeIntegrator>(info, ArkodeMode::implicit_only, s);
            }});
   auto imex_specs = common_specs(true);
   imex_specs.push_back(lsetup);
@@ -840,7 +980,7 @@ void register_sundials_integrators(IntegratorRegistry& reg) {
                              0,
                              {},
                              "ARKODE IMEX " + s.explicit_table + " / " + s.implicit_table};
-             return std::make_unique<SundialsIntegrator>(info, Kind::arkode_imex, s);
+             return std::make_unique<ArkodeIntegrator>(info, ArkodeMode::imex, s);
            }});
 }
 

@@ -20,6 +20,13 @@
 // driver takes exactly one step of h; implicit stages still use Newton with tolerances derived
 // from rtol/atol, so tighten rtol for convergence studies).
 //
+// Structure (all in sundials.cpp): two front-ends, CvodeIntegrator (cvode_bdf, cvode_adams) and
+// ArkodeIntegrator (arkode_erk, arkode_dirk, arkode_imex), implement the library calls of one
+// SundialsFrontEnd (the Integrator face: reset, fixed steps, adaptive runs to exact stops,
+// restarts, error messages, counters); both run on a shared SundialsAdapter, the library's user
+// data: the C callbacks (f, IMEX parts, analytic Jacobian, J v, the velocity-form
+// preconditioner) with their exception guard, and the linear solver with its Jacobian pattern.
+//
 // State vectors are wrapped, not copied: N_VMake_Serial on the driver's y. Library errors
 // become Status::solver_error with the library's flag name and message (also on stderr).
 // Counters: the library's steps, error-test failures, nonlinear iterations and failures,

@@ -3,7 +3,7 @@
 // A composition Φ_h = V_{γ_s h} ∘ … ∘ V_{γ_1 h} of velocity Verlet steps V (kick ½, drift 1,
 // kick ½) is itself a kick/drift splitting: neighbouring half kicks merge, so
 //   kick = (γ_1/2, (γ_1+γ_2)/2, …, (γ_{s-1}+γ_s)/2, γ_s/2),  drift = (γ_1, …, γ_s, 0),
-// and SplittingIntegrator (splitting.hpp) runs it with first-same-as-last reuse: s force
+// and KickDriftIntegrator (kick_drift.hpp) runs it with first-same-as-last reuse: s force
 // evaluations per step after the first. A method that is a splitting but not a Verlet
 // composition (Blanes–Moan) gives its kick/drift table directly. Symmetric γ (γ_j = γ_{s+1-j})
 // make the method symmetric, so its order is even; order 4 needs Σγ = 1 and Σγ³ = 0, order 6
@@ -23,22 +23,27 @@
 #include <vector>
 
 #include "core/tableau.hpp"
+#include "integrators/method_entry.hpp"
 
 namespace stiffbench {
 
 struct CompositionMethod {
   std::string name;
   int order = 0;
-  std::vector<double> gamma;        // Verlet substep fractions; empty when kick/drift are given
-  SplittingCoefficients splitting;  // the kick/drift form SplittingIntegrator runs
-  std::string description;
+  std::vector<double> gamma;         // Verlet substep fractions; empty when kick/drift are given
+  KickDriftCoefficients kick_drift;  // the form KickDriftIntegrator runs
 };
 
 // The kick/drift form of the velocity-Verlet composition with substeps γ.
-SplittingCoefficients verlet_composition(const std::string& name, const std::vector<double>& gamma,
+KickDriftCoefficients verlet_composition(const std::string& name, const std::vector<double>& gamma,
                                          int order);
 
-// yoshida4, yoshida6, blanes_moan.
+// yoshida4, yoshida6, blanes_moan: one entry each (coefficients, description, kind, reference,
+// step modes; integrators/method_entry.hpp). All require velocity-independent forces.
+using CompositionEntry = MethodEntry<CompositionMethod>;
+const std::vector<CompositionEntry>& composition_entries();
+
+// Their coefficients.
 const std::vector<CompositionMethod>& composition_methods();
 
 }  // namespace stiffbench

@@ -35,7 +35,7 @@ class PositionVerlet final : public Integrator {
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   std::optional<LinearStability> linear_stability() const override {
-    return splitting_stability({"velocity_verlet", {0.5, 0.5}, {1.0, 0.0}, 2});
+    return kick_drift_stability({"velocity_verlet", {0.5, 0.5}, {1.0, 0.0}, 2});
   }
 
  private:
@@ -52,7 +52,7 @@ class Leapfrog final : public Integrator {
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   std::optional<LinearStability> linear_stability() const override {
-    return splitting_stability({"velocity_verlet", {0.5, 0.5}, {1.0, 0.0}, 2});
+    return kick_drift_stability({"velocity_verlet", {0.5, 0.5}, {1.0, 0.0}, 2});
   }
 
  private:

@@ -28,7 +28,7 @@ double power_sum(const std::vector<double>& g, int p) {
 TEST(Composition, OrderConditionsOfTheCoefficientTables) {
   for (const CompositionMethod& m : composition_methods()) {
     SCOPED_TRACE(m.name);
-    const auto& c = m.splitting;
+    const auto& c = m.kick_drift;
     ASSERT_EQ(c.kick.size(), c.drift.size());
     double sk = 0.0, sd = 0.0;
     for (std::size_t j = 0; j < c.kick.size(); ++j) {

@@ -9,13 +9,13 @@
 #include "experiments/catalog.hpp"
 #include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/explicit/tableaux.hpp"
-#include "integrators/symplectic/splitting.hpp"
+#include "integrators/symplectic/kick_drift.hpp"
 #include "models/problems/dahlquist.hpp"
 
 namespace stiffbench {
 // Readable test parameter names instead of byte dumps.
 inline void PrintTo(const ButcherTableau& t, std::ostream* os) { *os << t.name; }
-inline void PrintTo(const SplittingCoefficients& t, std::ostream* os) { *os << t.name; }
+inline void PrintTo(const KickDriftCoefficients& t, std::ostream* os) { *os << t.name; }
 namespace {
 
 class TableauTest : public ::testing::TestWithParam<ButcherTableau> {};
@@ -89,10 +89,10 @@ TEST(TableauRegistry, EveryExplicitTableauIsRegistered) {
   }
 }
 
-class SplittingTest : public ::testing::TestWithParam<SplittingCoefficients> {};
+class SplittingTest : public ::testing::TestWithParam<KickDriftCoefficients> {};
 
 TEST_P(SplittingTest, OrderConditions) {
-  const SplittingCoefficients& c = GetParam();
+  const KickDriftCoefficients& c = GetParam();
   EXPECT_LE(c.order_defect(1), 1e-15);
   if (c.order >= 2) {
     EXPECT_LE(c.order_defect(2), 1e-15);
@@ -101,7 +101,7 @@ TEST_P(SplittingTest, OrderConditions) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Symplectic, SplittingTest, ::testing::ValuesIn(splitting_methods()),
+INSTANTIATE_TEST_SUITE_P(Symplectic, SplittingTest, ::testing::ValuesIn(kick_drift_coefficients()),
                          [](const auto& param_info) { return param_info.param.name; });
 
 }  // namespace

@@ -1,5 +1,6 @@
-// Symplectic splitting methods for mechanical systems y = [x; v], as kick/drift coefficient
-// data (core/tableau.hpp SplittingCoefficients) read by one stepper:
+// Kick/drift methods: symplectic splittings of mechanical systems y = [x; v] (of the flow into
+// kicks and drifts; not the operator splitting of Family::operator_splitting), as coefficient
+// data (core/tableau.hpp KickDriftCoefficients) read by one stepper, KickDriftIntegrator:
 //   for j = 1..s:  v ← v + h·kick_j·a(t_j, x, v);   x ← x + h·drift_j·v.
 // When a stage's kick is followed only by zero drifts, the acceleration it evaluates is the
 // one at the end of the step; for velocity-independent forces the next step reuses it
@@ -15,26 +16,41 @@
 
 #include "core/integrator.hpp"
 #include "core/tableau.hpp"
+#include "integrators/method_entry.hpp"
 
 namespace stiffbench {
 
-// symplectic_euler (v first, the seed's form), symplectic_euler_x (x first), velocity_verlet.
-const std::vector<SplittingCoefficients>& splitting_methods();
+// The coefficients of one kick/drift method, and whether it requires velocity-independent
+// forces (which also lets it reuse its last acceleration, see above).
+struct KickDriftScheme {
+  KickDriftCoefficients kick_drift;
+  bool velocity_independent;
+  const std::string& name() const { return kick_drift.name; }
+};
 
-class SplittingIntegrator final : public Integrator {
+// One entry per method (coefficients, description, kind, reference, step modes;
+// integrators/method_entry.hpp): symplectic_euler (v first, the seed's form),
+// symplectic_euler_x (x first), velocity_verlet. The Verlet compositions are in composition.hpp.
+using KickDriftMethod = MethodEntry<KickDriftScheme>;
+const std::vector<KickDriftMethod>& kick_drift_methods();
+
+// Their coefficients.
+const std::vector<KickDriftCoefficients>& kick_drift_coefficients();
+
+class KickDriftIntegrator final : public Integrator {
  public:
-  SplittingIntegrator(SplittingCoefficients coeffs, bool velocity_independent,
+  KickDriftIntegrator(KickDriftCoefficients coeffs, bool velocity_independent,
                       std::string description);
 
-  const SplittingCoefficients& coefficients() const { return coeffs_; }
+  const KickDriftCoefficients& coefficients() const { return coeffs_; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   std::optional<LinearStability> linear_stability() const override {
-    return splitting_stability(coeffs_);
+    return kick_drift_stability(coeffs_);
   }
 
  private:
-  SplittingCoefficients coeffs_;
+  KickDriftCoefficients coeffs_;
   bool fsal_;  // reuse the last stage's acceleration as the next step's first
   const MechanicalSystem* mech_ = nullptr;
   Vec acc_;       // acceleration workspace

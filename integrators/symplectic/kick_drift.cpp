@@ -1,4 +1,4 @@
-#include "integrators/symplectic/splitting.hpp"
+#include "integrators/symplectic/kick_drift.hpp"
 
 namespace stiffbench {
 
@@ -7,16 +7,35 @@ namespace {
 constexpr Index kParallelEntries = 50000;
 }  // namespace
 
-const std::vector<SplittingCoefficients>& splitting_methods() {
+const std::vector<KickDriftMethod>& kick_drift_methods() {
   // Hairer, Lubich & Wanner, Geometric Numerical Integration (2006), §I.1 and §II.5.
-  static const std::vector<SplittingCoefficients> all = {
+  static const std::vector<KickDriftMethod> all = {
       // v⁺ = v + h a(t, x, v),  x⁺ = x + h v⁺
-      {"symplectic_euler", {1.0}, {1.0}, 1},
+      {KickDriftScheme{{"symplectic_euler", {1.0}, {1.0}, 1}, false},
+       {"symplectic Euler, velocity first: v+ = v + h a(t, x, v), x+ = x + h v+", "splitting",
+        cite(kGeometricIntegration, "Sect. I.1.2")},
+       StepModes::fixed},
       // x⁺ = x + h v,  v⁺ = v + h a(t + h, x⁺, v)
-      {"symplectic_euler_x", {0.0, 1.0}, {1.0, 0.0}, 1},
+      {KickDriftScheme{{"symplectic_euler_x", {0.0, 1.0}, {1.0, 0.0}, 1}, false},
+       {"symplectic Euler, position first: x+ = x + h v, v+ = v + h a(t+h, x+, v)", "splitting",
+        cite(kGeometricIntegration, "Sect. I.1.2")},
+       StepModes::fixed},
       // kick ½, drift 1, kick ½ (Störmer–Verlet in velocity form)
-      {"velocity_verlet", {0.5, 0.5}, {1.0, 0.0}, 2},
+      {KickDriftScheme{{"velocity_verlet", {0.5, 0.5}, {1.0, 0.0}, 2}, true},
+       {"velocity Verlet (kick-drift-kick), first-same-as-last", "splitting",
+        "W. C. Swope, H. C. Andersen, P. H. Berens & K. R. Wilson, J. Chem. Phys. 76 (1982) "
+        "637-649"},
+       StepModes::fixed},
   };
+  return all;
+}
+
+const std::vector<KickDriftCoefficients>& kick_drift_coefficients() {
+  static const std::vector<KickDriftCoefficients> all = [] {
+    std::vector<KickDriftCoefficients> out;
+    for (const KickDriftMethod& m : kick_drift_methods()) out.push_back(m.coefficients->kick_drift);
+    return out;
+  }();
   return all;
 }
 
@@ -25,7 +44,7 @@ namespace {
 // First-same-as-last: the first stage kicks at the step's start position, the last kick is
 // followed by no drift (so it saw the end-of-step position), and the force cannot depend on
 // the velocity, which changed in between.
-bool is_fsal(const SplittingCoefficients& c, bool velocity_independent) {
+bool is_fsal(const KickDriftCoefficients& c, bool velocity_independent) {
   const std::size_t s = c.kick.size();
   std::size_t last_kick = s;
   for (std::size_t j = 0; j < s; ++j)
@@ -39,7 +58,7 @@ bool is_fsal(const SplittingCoefficients& c, bool velocity_independent) {
 
 }  // namespace
 
-SplittingIntegrator::SplittingIntegrator(SplittingCoefficients coeffs, bool velocity_independent,
+KickDriftIntegrator::KickDriftIntegrator(KickDriftCoefficients coeffs, bool velocity_independent,
                                          std::string description)
     : Integrator({coeffs.name, Family::symplectic, coeffs.order,
                   coeffs.evaluations_per_step() - (is_fsal(coeffs, velocity_independent) ? 1 : 0),
@@ -47,7 +66,7 @@ SplittingIntegrator::SplittingIntegrator(SplittingCoefficients coeffs, bool velo
       coeffs_(std::move(coeffs)),
       fsal_(is_fsal(coeffs_, velocity_independent)) {}
 
-void SplittingIntegrator::reset(const OdeSystem& sys, double, CVecRef) {
+void KickDriftIntegrator::reset(const OdeSystem& sys, double, CVecRef) {
   check_compatible(info(), sys);
   mech_ = sys.as_mechanical();
   acc_.resize(mech_->dofs());
@@ -56,9 +75,9 @@ void SplittingIntegrator::reset(const OdeSystem& sys, double, CVecRef) {
   cache_valid_ = false;
 }
 
-Status SplittingIntegrator::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats&) {
+Status KickDriftIntegrator::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats&) {
   if (&sys != mech_)
-    throw std::logic_error("SplittingIntegrator::step: system differs from reset()");
+    throw std::logic_error("KickDriftIntegrator::step: system differs from reset()");
   const Index n = mech_->dofs();
   auto x = y.head(n);
   auto v = y.tail(n);
