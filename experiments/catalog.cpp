@@ -36,7 +36,7 @@ IntegratorRegistry& mutable_integrator_registry() {
     register_symplectic_integrators(r);
     register_implicit_integrators(r);
     register_graphics_integrators(r);
-    register_splitting_integrators(r);
+    register_operator_splitting_integrators(r);
     register_reference_integrators(r);
     annotate_built_in_integrators(r);
     return r;

@@ -43,7 +43,6 @@ def functions(path):
         for ch in line:
             if ch == "{":
                 # The header: text since the last ';', '{' or '}' at this level.
-                head = code_prefix[-1] if False else None
                 prev = "\n".join(lines[header_start:n + 1])
                 last = max(prev.rfind(";"), prev.rfind("}"))
                 head = prev[last + 1:] if last >= 0 else prev
@@ -52,9 +51,8 @@ def functions(path):
                     and all(k in ("ns", "class") for k in outer)
                 kind = "func" if is_func else ("class" if re.search(r"\b(class|struct)\b", head) else
                                                ("ns" if "namespace" in head else "other"))
-                first = n - head.strip("\n").count("\n") if is_func else n
-                # header's first non-empty line
-                hl = [l for l in head.split("\n")]
+                # The header's first non-empty line.
+                hl = head.split("\n")
                 start = n - (len(hl) - 1)
                 while start < n and not lines[start].strip():
                     start += 1
@@ -66,8 +64,6 @@ def functions(path):
                     if kind == "func":
                         result.append((n - start + 1, start + 1, head))
                 header_start = n
-        if not stack or stack[-1][0] in ("ns", "class"):
-            pass
     return result
 
 

@@ -10,6 +10,8 @@ jobs="$(nproc 2>/dev/null || echo 2)"
 echo "== Release build and tests"
 "$root/scripts/build.sh" "$root/build"
 (cd "$root/build" && ctest --output-on-failure -j "$jobs")
+echo "== Function lengths: none in experiments/ over 120 lines (the five longest)"
+python3 "$root/scripts/function_lengths.py" -n 5 --max 120 "$root"/experiments/*.cpp
 echo "== Install check (cmake --install, examples/user_system with find_package, add_subdirectory)"
 "$root/scripts/check-install.sh" "$root/build"
 echo "== stiffbench report --quick (every experiment kind with its plot)"
