@@ -72,13 +72,12 @@ struct Profile {
   std::vector<std::vector<double>> rows;
 };
 
-class OdeSystem {
+// What a problem's literature says beyond its equations: the end time, a published solution, a
+// suggested step. A capability of OdeSystem apart from the mathematics; every hook has a default
+// (none), so a system overrides only what it has.
+class ProblemMetadata {
  public:
-  virtual ~OdeSystem() = default;
-
-  virtual std::string name() const = 0;
-  virtual Index dimension() const = 0;
-  virtual double initial_time() const { return 0.0; }
+  virtual ~ProblemMetadata() = default;
   // The literature's end time of the problem, used when a command is given no --t-end.
   virtual std::optional<double> end_time() const { return std::nullopt; }
   // A published solution at one time (IVP test set, Hairer–Wanner) for problems without an exact
@@ -89,6 +88,41 @@ class OdeSystem {
     std::string source;
   };
   virtual std::optional<PublishedSolution> published_solution() const { return std::nullopt; }
+  // Suggested fixed step (see SuggestedStep). Empty when the model has none.
+  virtual std::optional<SuggestedStep> suggested_step() const { return std::nullopt; }
+};
+
+// What `solve --frames` writes besides the state: particle and grid views, profiles and
+// monitored observables. A capability of OdeSystem apart from the mathematics (defaults: none).
+class FrameOutput {
+ public:
+  virtual ~FrameOutput() = default;
+  // Monitored quantities that are not conserved (a dam break's surge front, the largest density
+  // error), recorded beside the invariants by `solve --frames` in observables.csv.
+  virtual std::vector<Invariant> observables() const { return {}; }
+
+  // Particle view for frame output (`solve --frames N --out DIR` writes VTK files from it).
+  virtual bool has_particles() const { return false; }
+  virtual ParticleFrame particles(double /*t*/, CVecRef /*y*/) const { return {}; }
+
+  // Grid view for frame output (`solve --frames N --out DIR` writes VTK image data from it).
+  virtual bool has_grid() const { return false; }
+  virtual GridFrame grid_frame(double /*t*/, CVecRef /*y*/) const { return {}; }
+  // Profiles written beside the frames (see Profile).
+  virtual std::vector<Profile> profiles(double /*t*/, CVecRef /*y*/) const { return {}; }
+};
+
+// The mathematics of y' = f(t, y) — dimension, initial value, f and its Jacobian, the optional
+// IMEX split, exact solution, invariants, stiffness, constraints — and, as capability
+// interfaces inherited beside it, the problem's metadata (ProblemMetadata) and its frame output
+// (FrameOutput). A system overrides the hooks it has under the same names as before the split.
+class OdeSystem : public ProblemMetadata, public FrameOutput {
+ public:
+  ~OdeSystem() override = default;
+
+  virtual std::string name() const = 0;
+  virtual Index dimension() const = 0;
+  virtual double initial_time() const { return 0.0; }
   virtual Vec initial_state() const = 0;
 
   // y' = f(t, y). Counted as one f evaluation.
@@ -139,22 +173,6 @@ class OdeSystem {
     return std::nullopt;
   }
 
-  // Suggested fixed step (see SuggestedStep). Empty when the model has none.
-  virtual std::optional<SuggestedStep> suggested_step() const { return std::nullopt; }
-
-  // Monitored quantities that are not conserved (a dam break's surge front, the largest density
-  // error), recorded beside the invariants by `solve --frames` in observables.csv.
-  virtual std::vector<Invariant> observables() const { return {}; }
-
-  // Particle view for frame output (`solve --frames N --out DIR` writes VTK files from it).
-  virtual bool has_particles() const { return false; }
-  virtual ParticleFrame particles(double /*t*/, CVecRef /*y*/) const { return {}; }
-
-  // Grid view for frame output (`solve --frames N --out DIR` writes VTK image data from it).
-  virtual bool has_grid() const { return false; }
-  virtual GridFrame grid_frame(double /*t*/, CVecRef /*y*/) const { return {}; }
-  // Profiles written beside the frames (see Profile).
-  virtual std::vector<Profile> profiles(double /*t*/, CVecRef /*y*/) const { return {}; }
 
   // Optional holonomic constraints C(y) = 0 enforced strictly, not by forces. The fixed-step
   // driver calls project() after every accepted step of every integrator except those that
