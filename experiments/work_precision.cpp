@@ -83,6 +83,18 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
   for (int k = 0; k < spec.tol_levels; ++k) tols.push_back(spec.rtol_max / std::pow(10.0, k));
   for (double h : hs) fixed_step_count(t0, spec.t_end, h, FixedStepOptions{}.max_steps);
 
+  // An adaptive method runs over the tolerance ladder, so it must take rtol and atol (a user's
+  // integrator object without them would run at its own tolerance in every row).
+  for (const auto& integ : setup.integrators) {
+    if (!integ->supports_adaptive()) continue;
+    const auto& entry = integrator_registry().at(integ->info().name);
+    bool tolerances = false;
+    for (const auto& p : entry.params) tolerances = tolerances || p.key == "rtol";
+    require_input(tolerances, "integrator '" + integ->info().name +
+                                  "' is adaptive but takes no rtol/atol parameters: "
+                                  "work-precision cannot run it over a tolerance ladder "
+                                  "(register it with rtol and atol, or give it a fixed-step mode)");
+  }
   WorkPrecisionResult res;
   res.t_end = spec.t_end;
   res.h = spec.h;

@@ -99,8 +99,8 @@ int main(int argc, char** argv) {
   ConvergenceSpec conv;  // exact reference: the system has one
   conv.integrators = {"rk4"};
   conv.t_end = 1;
-  conv.h = 0.01;
-  conv.levels = 4;
+  conv.h = 0.004;  // h*w from 0.2 down to 0.00625 on the stiff mode: the asymptotic range
+  conv.levels = 6;
   const ConvergenceResult c = convergence_study(conv, mine, out + "/convergence", false, ctx);
 
   StabilitySpec stab;  // largest stable step of each method on the w = 50 mode

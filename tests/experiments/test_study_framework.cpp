@@ -262,3 +262,33 @@ TEST(StudyFramework, UserIntegratorObjectRunsWithoutRegistration) {
   EXPECT_NEAR(*r.rows[5].observed_order, 1.0, 0.1);
   EXPECT_EQ(integrator_registry().find("my_euler"), nullptr);  // nothing registered
 }
+
+namespace {
+
+// A user's adaptive method object: its factory takes no parameters, so it has no rtol/atol.
+class MyAdaptiveEuler : public MyEuler {
+ public:
+  bool supports_adaptive() const override { return true; }
+};
+
+}  // namespace
+
+// Work-precision runs adaptive methods over a tolerance ladder: an object that cannot take the
+// ladder's rtol would give rows at one tolerance labelled with many, so it is refused up front.
+TEST(StudyFramework, AdaptiveObjectWithoutTolerancesIsRefusedByWorkPrecision) {
+  WorkPrecisionSpec spec;
+  spec.model = "harmonic_oscillator";
+  spec.t_end = 1;
+  spec.h = 0.1;
+  spec.levels = 2;
+  spec.tol_levels = 2;
+  spec.repeats = 1;
+  try {
+    run_work_precision(
+        spec, StudyObjects{nullptr, {[] { return std::make_unique<MyAdaptiveEuler>(); }}},
+        nullptr);
+    ADD_FAILURE() << "not refused";
+  } catch (const BadInput& e) {
+    EXPECT_NE(std::string(e.what()).find("takes no rtol/atol"), std::string::npos) << e.what();
+  }
+}
