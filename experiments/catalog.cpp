@@ -7,7 +7,6 @@
 #include <set>
 #include <sstream>
 
-#include "integrators/method_notes.hpp"
 #include "integrators/register.hpp"
 #include "models/register.hpp"
 
@@ -38,7 +37,6 @@ IntegratorRegistry& mutable_integrator_registry() {
     register_graphics_integrators(r);
     register_operator_splitting_integrators(r);
     register_reference_integrators(r);
-    annotate_built_in_integrators(r);
     return r;
   }();
   return reg;

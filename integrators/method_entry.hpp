@@ -1,9 +1,17 @@
-// One entry per coefficient-defined method: its coefficients, description, kind, literature
-// reference and step modes, side by side. Each family keeps one table of these entries
+// One entry per method: its description, kind, literature reference (and, for a
+// coefficient-defined method, its coefficients and step modes), side by side.
+//
+// Coefficient-defined methods: each family keeps one table of MethodEntry
 // (integrators/explicit/tableaux.cpp, implicit/dirk.cpp, implicit/linearly_implicit.cpp,
 // symplectic/kick_drift.cpp, symplectic/composition.cpp); registration (integrators/register.cpp),
 // the MethodInfo kind and reference, and the tableau lookups the tests use are all derived from
 // those tables.
+//
+// Methods implemented as classes (verlet, leapfrog, rattle, bdf2, semi_implicit_euler, radau5,
+// gauss4/6, baraff_witkin, xpbd, projective_dynamics, stable_fluids, the library references):
+// a MethodText sits next to the constructor (or the registration) that builds the method's
+// MethodInfo with method_info(), which takes it as an argument. add_built_in_integrator()
+// refuses, naming the method, a registration without a description, kind or reference.
 //
 // Every field is required at compile time: `Text` and `Required<T>` have no default constructor,
 // so an entry that leaves one out does not compile, and a `Text` is built from a string literal
@@ -12,36 +20,49 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <utility>
 
 #include "core/integrator.hpp"
+#include "core/registry_types.hpp"
 
 namespace stiffbench {
 
-// Non-empty text known at compile time: a string literal, or literals joined by cite().
+// Non-empty text known at compile time: a string literal, or literals joined by cite() and
+// join_text().
 class Text {
  public:
   // NOLINTNEXTLINE(google-explicit-constructor): entries are written as string literals.
-  consteval Text(const char* s) : parts_{std::string_view(s), {}, {}} {
+  consteval Text(const char* s) : parts_{std::string_view(s)}, size_(1) {
     if (parts_[0].empty()) throw "a method's description, kind and reference must not be empty";
   }
   std::string str() const {
     std::string s;
-    for (const std::string_view p : parts_) s += p;
+    for (std::size_t i = 0; i < size_; ++i) s += parts_[i];
     return s;
   }
-  friend consteval Text cite(Text book, Text where);
+  friend consteval Text join_text(Text a, std::string_view sep, Text b);
 
  private:
-  consteval Text(std::string_view a, std::string_view sep, std::string_view b)
-      : parts_{a, sep, b} {}
-  std::array<std::string_view, 3> parts_;
+  static constexpr std::size_t kMaxParts = 8;
+  std::array<std::string_view, kMaxParts> parts_;
+  std::size_t size_;
 };
 
+// "a" + sep + "b", e.g. a paper and a textbook section: join_text(paper, "; ", cite(book, where)).
+consteval Text join_text(Text a, std::string_view sep, Text b) {
+  if (a.size_ + 1 + b.size_ > Text::kMaxParts) throw "a method's text joins too many parts";
+  Text t = a;
+  t.parts_[t.size_++] = sep;
+  for (std::size_t i = 0; i < b.size_; ++i) t.parts_[t.size_++] = b.parts_[i];
+  return t;
+}
+
 // "book, where": a textbook cited by section.
-consteval Text cite(Text book, Text where) { return Text(book.parts_[0], ", ", where.parts_[0]); }
+consteval Text cite(Text book, Text where) { return join_text(book, ", ", where); }
 
 // A field that must be given: no default constructor.
 template <class T>
@@ -55,7 +76,8 @@ struct Required {
 
 // Which runs the method supports: fixed steps only (`--h`), or also adaptive ones (rtol/atol:
 // the coefficients carry an embedded error estimate). Registration chooses the parameters and
-// the constructor from it; tests/test_method_notes.cpp checks it against the integrator.
+// the constructor from it; tests/integrators/test_method_notes.cpp checks it against the
+// integrator.
 enum class StepModes { fixed, fixed_and_adaptive };
 
 // What `list integrators` and `describe NAME` print about a method.
@@ -82,12 +104,39 @@ struct MethodEntry {
   bool adaptive() const { return *steps == StepModes::fixed_and_adaptive; }
 };
 
-// `info` with the entry's kind and reference (the description is passed to the integrator's
-// constructor, which builds the rest of the MethodInfo from the coefficients).
+// `info` with the entry's description, kind and reference (a coefficient-defined method's
+// constructor builds the rest of the MethodInfo from its coefficients, with the same
+// description).
 inline MethodInfo with_text(MethodInfo info, const MethodText& text) {
+  info.description = text.description.str();
   info.kind = text.kind.str();
   info.reference = text.reference.str();
   return info;
+}
+
+// The MethodInfo of a method implemented as a class, built next to its constructor (or its
+// registration): every field is an argument, so a class without its text does not compile.
+inline MethodInfo method_info(std::string name, Family family, int order, int stages,
+                              Requirements needs, const MethodText& text) {
+  MethodInfo info{std::move(name), family, order, stages, needs, text.description.str()};
+  info.kind = text.kind.str();
+  info.reference = text.reference.str();
+  return info;
+}
+
+// Registers a built-in integrator; a logic_error naming the method when its MethodInfo has no
+// description, kind or reference (it was built without its MethodText).
+inline void add_built_in_integrator(IntegratorRegistry& reg, IntegratorRegistry::Entry entry) {
+  const MethodInfo& i = entry.info;
+  for (const auto& [field, value] :
+       {std::pair<const char*, const std::string*>{"description", &i.description},
+        {"kind", &i.kind},
+        {"reference", &i.reference}})
+    if (value->empty())
+      throw std::logic_error("integrator '" + i.name + "' is registered without a " + field +
+                             " (build its MethodInfo with method_info(), "
+                             "integrators/method_entry.hpp)");
+  reg.add(std::move(entry));
 }
 
 // The textbooks cited by section.

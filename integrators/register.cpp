@@ -14,6 +14,7 @@
 #include "integrators/implicit/gauss.hpp"
 #include "integrators/implicit/linearly_implicit.hpp"
 #include "integrators/implicit/radau5.hpp"
+#include "integrators/method_entry.hpp"
 #include "integrators/reference/gsl.hpp"
 #include "integrators/reference/sundials.hpp"
 #include "integrators/symplectic/composition.hpp"
@@ -26,11 +27,21 @@ namespace stiffbench {
 namespace {
 
 // Registers `entry` with the MethodInfo of `probe` (an instance made from the entry) plus the
-// entry's kind and reference.
+// entry's description, kind and reference.
 template <class Entry, class Make>
 void add_method(IntegratorRegistry& reg, const Entry& entry, const Integrator& probe,
                 std::vector<ParamSpec> specs, Make make) {
-  reg.add({with_text(probe.info(), entry.text), std::move(specs), std::move(make)});
+  add_built_in_integrator(reg,
+                          {with_text(probe.info(), entry.text), std::move(specs), std::move(make)});
+}
+
+// Registers a method implemented as a class with the MethodInfo of `probe`, which its
+// constructor builds with its description, kind and reference (method_info() and the class's
+// MethodText, next to the constructor).
+template <class Make>
+void add_class(IntegratorRegistry& reg, const Integrator& probe, std::vector<ParamSpec> specs,
+               Make make) {
+  add_built_in_integrator(reg, {probe.info(), std::move(specs), std::move(make)});
 }
 
 }  // namespace
@@ -73,13 +84,12 @@ void register_symplectic_integrators(IntegratorRegistry& reg) {
                KickDriftIntegrator(m.coefficients->kick_drift, true, m.text.description.str()), {},
                make);
   }
-  reg.add({PositionVerlet().info(), {}, [](const Params&) {
-             return std::make_unique<PositionVerlet>();
-           }});
-  reg.add({Leapfrog().info(), {}, [](const Params&) { return std::make_unique<Leapfrog>(); }});
+  add_class(reg, PositionVerlet(), {},
+            [](const Params&) { return std::make_unique<PositionVerlet>(); });
+  add_class(reg, Leapfrog(), {}, [](const Params&) { return std::make_unique<Leapfrog>(); });
   // RATTLE: constrained systems only (holonomic_constraints(), core/constraints.hpp).
-  reg.add({Rattle({}).info(), rattle_param_specs(),
-           [](const Params& p) { return std::make_unique<Rattle>(read_rattle_options(p)); }});
+  add_class(reg, Rattle({}), rattle_param_specs(),
+            [](const Params& p) { return std::make_unique<Rattle>(read_rattle_options(p)); });
 }
 
 void register_implicit_integrators(IntegratorRegistry& reg) {
@@ -104,12 +114,12 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
       add_method(reg, m, DirkIntegrator(t, desc, {}), esdirk_specs, make);
     }
   }
-  reg.add({Bdf2Integrator({}).info(), newton_specs, [](const Params& p) {
-             return std::make_unique<Bdf2Integrator>(read_implicit_options(p, true));
-           }});
-  reg.add({SemiImplicitEuler({}).info(), linear_specs, [](const Params& p) {
-             return std::make_unique<SemiImplicitEuler>(read_implicit_options(p, false));
-           }});
+  add_class(reg, Bdf2Integrator({}), newton_specs, [](const Params& p) {
+    return std::make_unique<Bdf2Integrator>(read_implicit_options(p, true));
+  });
+  add_class(reg, SemiImplicitEuler({}), linear_specs, [](const Params& p) {
+    return std::make_unique<SemiImplicitEuler>(read_implicit_options(p, false));
+  });
   // Rosenbrock methods (linearly_implicit.hpp); the pairs with an embedded estimate run
   // fixed-step with --h or adaptively with rtol/atol.
   std::vector<ParamSpec> ros_adaptive_specs = controller_param_specs();
@@ -130,12 +140,12 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
       add_method(reg, m, Rosenbrock(*tab, desc, {}), ros_adaptive_specs, make);
     }
   }
-  reg.add({Radau5({}).info(), radau5_param_specs(),
-           [](const Params& p) { return std::make_unique<Radau5>(read_radau5_options(p)); }});
+  add_class(reg, Radau5({}), radau5_param_specs(),
+            [](const Params& p) { return std::make_unique<Radau5>(read_radau5_options(p)); });
   for (const int s : {2, 3}) {
-    reg.add({GaussCollocation(s, {}).info(), gauss_param_specs(), [s](const Params& p) {
-               return std::make_unique<GaussCollocation>(s, read_gauss_options(p));
-             }});
+    add_class(reg, GaussCollocation(s, {}), gauss_param_specs(), [s](const Params& p) {
+      return std::make_unique<GaussCollocation>(s, read_gauss_options(p));
+    });
   }
   // Baraff–Witkin is velocity-form by construction (no `form`), and its single Krylov solve
   // defaults to a relative 1e-6 (baraff_witkin.hpp).
@@ -154,24 +164,24 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
     }
     bw_specs.push_back(s);
   }
-  reg.add({BaraffWitkin({}).info(), bw_specs, [](const Params& p) {
-             return std::make_unique<BaraffWitkin>(read_implicit_options(p, false));
-           }});
+  add_class(reg, BaraffWitkin({}), bw_specs, [](const Params& p) {
+    return std::make_unique<BaraffWitkin>(read_implicit_options(p, false));
+  });
 }
 
 // The graphics community's solvers for stiff springs (integrators/graphics/): they work on the
 // system's springs and refuse models that do not list them.
 void register_graphics_integrators(IntegratorRegistry& reg) {
-  reg.add({Xpbd({}).info(), xpbd_param_specs(),
-           [](const Params& p) { return std::make_unique<Xpbd>(read_xpbd_options(p)); }});
-  reg.add({ProjectiveDynamics({}).info(), projective_dynamics_param_specs(), [](const Params& p) {
-             return std::make_unique<ProjectiveDynamics>(read_projective_dynamics_options(p));
-           }});
+  add_class(reg, Xpbd({}), xpbd_param_specs(),
+            [](const Params& p) { return std::make_unique<Xpbd>(read_xpbd_options(p)); });
+  add_class(reg, ProjectiveDynamics({}), projective_dynamics_param_specs(), [](const Params& p) {
+    return std::make_unique<ProjectiveDynamics>(read_projective_dynamics_options(p));
+  });
 }
 
 void register_operator_splitting_integrators(IntegratorRegistry& reg) {
-  reg.add(
-      {StableFluids().info(), {}, [](const Params&) { return std::make_unique<StableFluids>(); }});
+  add_class(reg, StableFluids(), {},
+            [](const Params&) { return std::make_unique<StableFluids>(); });
 }
 
 void register_reference_integrators(IntegratorRegistry& reg) {

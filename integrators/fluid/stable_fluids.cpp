@@ -1,6 +1,7 @@
 #include "integrators/fluid/stable_fluids.hpp"
 
 #include "core/grid_fluid.hpp"
+#include "integrators/method_entry.hpp"
 
 namespace stiffbench {
 
@@ -12,10 +13,16 @@ Requirements fluid_needs() {
 }
 }  // namespace
 
+constexpr MethodText kStableFluidsText{
+    .description =
+        "Stam's stable fluids (1999): body force, semi-Lagrangian advection, implicit "
+        "diffusion, pressure projection; grid fluids only (fluid_2d)",
+    .kind = "operator splitting (semi-Lagrangian)",
+    .reference = "J. Stam, Stable fluids, SIGGRAPH 1999, 121-128"};
+
 StableFluids::StableFluids()
-    : Integrator({"stable_fluids", Family::operator_splitting, 1, 0, fluid_needs(),
-                  "Stam's stable fluids (1999): body force, semi-Lagrangian advection, implicit "
-                  "diffusion, pressure projection; grid fluids only (fluid_2d)"}) {}
+    : Integrator(method_info("stable_fluids", Family::operator_splitting, 1, 0, fluid_needs(),
+                             kStableFluidsText)) {}
 
 void StableFluids::reset(const OdeSystem& sys, double, CVecRef y0) {
   check_compatible(info(), sys);

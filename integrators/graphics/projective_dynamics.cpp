@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "integrators/graphics/spring_requirements.hpp"
+#include "integrators/method_entry.hpp"
 
 namespace stiffbench {
 
@@ -23,11 +24,21 @@ ProjectiveDynamicsOptions read_projective_dynamics_options(const Params& p) {
   return o;
 }
 
+namespace {
+constexpr MethodText kProjectiveDynamicsText{
+    .description =
+        "projective dynamics / fast mass-spring (Liu, Bargteil, O'Brien & Kavan "
+        "2013): local/global iterations of backward Euler, M + h^2 L factorised once "
+        "per h; needs a spring network without dashpots",
+    .kind = "local/global backward Euler",
+    .reference =
+        "T. Liu, A. W. Bargteil, J. F. O'Brien & L. Kavan, Fast simulation of "
+        "mass-spring systems, ACM Trans. Graph. 32(6) (SIGGRAPH Asia 2013) 214"};
+}  // namespace
+
 ProjectiveDynamics::ProjectiveDynamics(ProjectiveDynamicsOptions opt)
-    : Integrator({"projective_dynamics", Family::graphics, 1, 0, spring_network_requirements(),
-                  "projective dynamics / fast mass-spring (Liu, Bargteil, O'Brien & Kavan "
-                  "2013): local/global iterations of backward Euler, M + h^2 L factorised once "
-                  "per h; needs a spring network without dashpots"}),
+    : Integrator(method_info("projective_dynamics", Family::graphics, 1, 0,
+                             spring_network_requirements(), kProjectiveDynamicsText)),
       opt_(opt) {}
 
 void ProjectiveDynamics::reset(const OdeSystem& sys, double /*t0*/, CVecRef y0) {

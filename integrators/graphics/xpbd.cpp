@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "integrators/graphics/spring_requirements.hpp"
+#include "integrators/method_entry.hpp"
 
 namespace stiffbench {
 
@@ -36,11 +37,22 @@ XpbdOptions read_xpbd_options(const Params& p) {
   return o;
 }
 
+namespace {
+constexpr MethodText kXpbdText{
+    .description =
+        "XPBD (Macklin, Mueller & Chentanez 2016): springs as compliant distance "
+        "constraints, compliance 1/k, multipliers reset each substep; substeps "
+        "(Macklin et al. 2019), Gauss-Seidel or Jacobi sweeps; needs a spring network",
+    .kind = "position-based (compliant constraints)",
+    .reference =
+        "M. Macklin, M. Mueller & N. Chentanez, XPBD: position-based simulation of "
+        "compliant constrained dynamics, Motion in Games (MIG) 2016, 49-54; substeps: "
+        "M. Macklin et al., Small steps in physics simulation, SCA 2019"};
+}  // namespace
+
 Xpbd::Xpbd(XpbdOptions opt)
-    : Integrator({"xpbd", Family::graphics, 1, 0, spring_network_requirements(),
-                  "XPBD (Macklin, Mueller & Chentanez 2016): springs as compliant distance "
-                  "constraints, compliance 1/k, multipliers reset each substep; substeps "
-                  "(Macklin et al. 2019), Gauss-Seidel or Jacobi sweeps; needs a spring network"}),
+    : Integrator(
+          method_info("xpbd", Family::graphics, 1, 0, spring_network_requirements(), kXpbdText)),
       opt_(opt) {}
 
 void Xpbd::reset(const OdeSystem& sys, double /*t0*/, CVecRef y0) {

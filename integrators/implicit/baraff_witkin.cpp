@@ -2,12 +2,22 @@
 
 #include <sstream>
 
+#include "integrators/method_entry.hpp"
+
 namespace stiffbench {
 
+namespace {
+constexpr MethodText kBaraffWitkinText{
+    .description =
+        "Baraff-Witkin semi-implicit Euler in velocity form (M - hD - h^2 K) dv = "
+        "h (f + h K v)",
+    .kind = "linearly implicit (velocity form)",
+    .reference = "D. Baraff & A. Witkin, Large steps in cloth simulation, SIGGRAPH 1998, 43-54"};
+}  // namespace
+
 BaraffWitkin::BaraffWitkin(ImplicitOptions opt)
-    : Integrator({"baraff_witkin", Family::implicit, 1, 1, Requirements{true, false, true},
-                  "Baraff-Witkin semi-implicit Euler in velocity form (M - hD - h^2 K) dv = "
-                  "h (f + h K v)"}),
+    : Integrator(method_info("baraff_witkin", Family::implicit, 1, 1,
+                             Requirements{true, false, true}, kBaraffWitkinText)),
       opt_(std::move(opt)) {}
 
 void BaraffWitkin::reset(const OdeSystem& sys, double t0, CVecRef y0) {

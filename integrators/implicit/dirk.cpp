@@ -319,13 +319,13 @@ Status DirkIntegrator::advance_to(const OdeSystem& sys, double t_out, VecRef y, 
   return st;
 }
 
+constexpr MethodText kBdf2Text{
+    .description = "two-step backward differentiation formula; sdirk2 start-up step",
+    .kind = "multistep (BDF)",
+    .reference = cite(kHairerWanner, "Sect. V.1 (Curtiss & Hirschfelder 1952)")};
+
 Bdf2Integrator::Bdf2Integrator(ImplicitOptions opt)
-    : Integrator({"bdf2",
-                  Family::implicit,
-                  2,
-                  1,
-                  {},
-                  "two-step backward differentiation formula; sdirk2 start-up step"}),
+    : Integrator(method_info("bdf2", Family::implicit, 2, 1, {}, kBdf2Text)),
       core_(std::move(opt)),
       startup_(implicit_tableau("sdirk2")) {}
 

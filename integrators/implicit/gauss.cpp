@@ -6,6 +6,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "integrators/method_entry.hpp"
+
 namespace stiffbench {
 
 namespace {
@@ -140,26 +142,35 @@ ImplicitOptions core_options(const GaussOptions& o) {
   return io;
 }
 
-std::string describe(int s) {
-  return s == 2 ? "Gauss-Legendre collocation, 2 stages, order 4 (Butcher 1964, Math. Comp. 18; "
-                  "Hairer, Lubich & Wanner, Geometric Numerical Integration, Springer 2006): "
-                  "symplectic, symmetric, A-stable with |R(iy)| = 1; transformed simplified "
-                  "Newton; fixed step"
-                : "Gauss-Legendre collocation, 3 stages, order 6 (Butcher 1964, Math. Comp. 18; "
-                  "Hairer, Lubich & Wanner, Geometric Numerical Integration, Springer 2006): "
-                  "symplectic, symmetric, A-stable with |R(iy)| = 1; transformed simplified "
-                  "Newton; fixed step";
-}
+constexpr Text kGaussReference =
+    join_text("J. C. Butcher, Implicit Runge-Kutta processes, Math. Comp. 18 (1964) 50-64", "; ",
+              cite(kGeometricIntegration, "Sect. II.1.3, VI.4"));
+
+constexpr MethodText kGauss4Text{
+    .description =
+        "Gauss-Legendre collocation, 2 stages, order 4 (Butcher 1964, Math. Comp. 18; "
+        "Hairer, Lubich & Wanner, Geometric Numerical Integration, Springer 2006): "
+        "symplectic, symmetric, A-stable with |R(iy)| = 1; transformed simplified "
+        "Newton; fixed step",
+    .kind = "Gauss collocation (2 stages)",
+    .reference = kGaussReference};
+
+constexpr MethodText kGauss6Text{
+    .description =
+        "Gauss-Legendre collocation, 3 stages, order 6 (Butcher 1964, Math. Comp. 18; "
+        "Hairer, Lubich & Wanner, Geometric Numerical Integration, Springer 2006): "
+        "symplectic, symmetric, A-stable with |R(iy)| = 1; transformed simplified "
+        "Newton; fixed step",
+    .kind = "Gauss collocation (3 stages)",
+    .reference = kGaussReference};
+
+const MethodText& method_text(int s) { return s == 2 ? kGauss4Text : kGauss6Text; }
 
 }  // namespace
 
 GaussCollocation::GaussCollocation(int stages, GaussOptions opt)
-    : Integrator({gauss_tableau(stages).name,
-                  Family::implicit,
-                  gauss_tableau(stages).order,
-                  stages,
-                  {},
-                  describe(stages)}),
+    : Integrator(method_info(gauss_tableau(stages).name, Family::implicit,
+                             gauss_tableau(stages).order, stages, {}, method_text(stages))),
       s_(stages),
       tableau_(gauss_tableau(stages)),
       k_(gauss_constants(stages)),

@@ -8,13 +8,14 @@
 
 namespace stiffbench {
 
+constexpr MethodText kSemiImplicitEulerText{
+    .description = "linearly implicit Euler (I - hJ) dy = h f(t, y): one linear solve, no Newton",
+    .kind = "linearly implicit",
+    .reference = cite(kHairerWanner, "Sect. IV.9")};
+
 SemiImplicitEuler::SemiImplicitEuler(ImplicitOptions opt)
-    : Integrator({"semi_implicit_euler",
-                  Family::implicit,
-                  1,
-                  1,
-                  {},
-                  "linearly implicit Euler (I - hJ) dy = h f(t, y): one linear solve, no Newton"}),
+    : Integrator(
+          method_info("semi_implicit_euler", Family::implicit, 1, 1, {}, kSemiImplicitEulerText)),
       core_(std::move(opt)) {}
 
 void SemiImplicitEuler::reset(const OdeSystem& sys, double t0, CVecRef y0) {

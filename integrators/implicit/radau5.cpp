@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "integrators/method_entry.hpp"
+
 namespace stiffbench {
 
 const ButcherTableau& radau5_tableau() {
@@ -200,15 +202,16 @@ ImplicitOptions core_options(const Radau5Options& o) {
 
 }  // namespace
 
+constexpr MethodText kRadau5Text{
+    .description =
+        "Radau IIA order 5 (3 stages, L-stable, stiffly accurate); simplified Newton "
+        "split into one real and one complex linear system (Hairer-Wanner IV.8); "
+        "adaptive (rtol/atol) or fixed step",
+    .kind = "Radau IIA collocation",
+    .reference = cite(kHairerWanner, "Sect. IV.8 (RADAU5)")};
+
 Radau5::Radau5(Radau5Options opt)
-    : Integrator({"radau5",
-                  Family::implicit,
-                  5,
-                  3,
-                  {},
-                  "Radau IIA order 5 (3 stages, L-stable, stiffly accurate); simplified Newton "
-                  "split into one real and one complex linear system (Hairer-Wanner IV.8); "
-                  "adaptive (rtol/atol) or fixed step"}),
+    : Integrator(method_info("radau5", Family::implicit, 5, 3, {}, kRadau5Text)),
       opt_(opt),
       core_(core_options(opt)),
       ctrl_(opt.control, 4) {}

@@ -7,11 +7,14 @@
 #include <iostream>
 #include <utility>
 
+#include "integrators/method_entry.hpp"
 #include "integrators/reference/callback_guard.hpp"
 
 namespace stiffbench {
 
 namespace {
+
+constexpr const char* kGsl = "M. Galassi et al., GNU Scientific Library Reference Manual, odeiv2";
 
 struct GslMethod {
   const char* name;
@@ -19,27 +22,86 @@ struct GslMethod {
   int order;                                // 0: variable order
   bool needs_jacobian;
   bool fixed_ok;
-  const char* description;
+  MethodText text;
 };
 
 const std::vector<GslMethod>& gsl_methods() {
   static const std::vector<GslMethod> all = {
-      {"gsl_rk4", &gsl_odeiv2_step_rk4, 4, false, true,
-       "GSL classic RK4 (step doubling for the error)"},
-      {"gsl_rkf45", &gsl_odeiv2_step_rkf45, 5, false, true, "GSL Runge-Kutta-Fehlberg 4(5)"},
-      {"gsl_rkck", &gsl_odeiv2_step_rkck, 5, false, true, "GSL Cash-Karp 4(5)"},
-      {"gsl_rk8pd", &gsl_odeiv2_step_rk8pd, 8, false, true, "GSL Prince-Dormand 8(7)"},
-      {"gsl_rk2imp", &gsl_odeiv2_step_rk2imp, 2, true, true,
-       "GSL implicit Gauss-Legendre, 1 stage (midpoint)"},
-      {"gsl_rk4imp", &gsl_odeiv2_step_rk4imp, 4, true, true,
-       "GSL implicit Gauss-Legendre, 2 stages"},
-      {"gsl_bsimp", &gsl_odeiv2_step_bsimp, 0, true, false,
-       "GSL Bader-Deuflhard semi-implicit extrapolation (order set by the tolerance); adaptive "
-       "only"},
-      {"gsl_msadams", &gsl_odeiv2_step_msadams, 0, false, false,
-       "GSL variable-order Adams (1-12); adaptive only"},
-      {"gsl_msbdf", &gsl_odeiv2_step_msbdf, 0, true, false,
-       "GSL variable-order BDF (1-5); adaptive only"},
+      {"gsl_rk4",
+       &gsl_odeiv2_step_rk4,
+       4,
+       false,
+       true,
+       {.description = "GSL classic RK4 (step doubling for the error)",
+        .kind = "library: GSL",
+        .reference = kGsl}},
+      {"gsl_rkf45",
+       &gsl_odeiv2_step_rkf45,
+       5,
+       false,
+       true,
+       {.description = "GSL Runge-Kutta-Fehlberg 4(5)",
+        .kind = "library: GSL",
+        .reference = join_text(kGsl, "; ", "Fehlberg 1969")}},
+      {"gsl_rkck",
+       &gsl_odeiv2_step_rkck,
+       5,
+       false,
+       true,
+       {.description = "GSL Cash-Karp 4(5)",
+        .kind = "library: GSL",
+        .reference = join_text(kGsl, "; ", "Cash & Karp 1990")}},
+      {"gsl_rk8pd",
+       &gsl_odeiv2_step_rk8pd,
+       8,
+       false,
+       true,
+       {.description = "GSL Prince-Dormand 8(7)",
+        .kind = "library: GSL",
+        .reference = join_text(
+            kGsl, "; ", "P. J. Prince & J. R. Dormand, J. Comput. Appl. Math. 7 (1981) 67-75")}},
+      {"gsl_rk2imp",
+       &gsl_odeiv2_step_rk2imp,
+       2,
+       true,
+       true,
+       {.description = "GSL implicit Gauss-Legendre, 1 stage (midpoint)",
+        .kind = "library: GSL (Gauss collocation)",
+        .reference = kGsl}},
+      {"gsl_rk4imp",
+       &gsl_odeiv2_step_rk4imp,
+       4,
+       true,
+       true,
+       {.description = "GSL implicit Gauss-Legendre, 2 stages",
+        .kind = "library: GSL (Gauss collocation)",
+        .reference = kGsl}},
+      {"gsl_bsimp",
+       &gsl_odeiv2_step_bsimp,
+       0,
+       true,
+       false,
+       {.description = "GSL Bader-Deuflhard semi-implicit extrapolation (order set by the "
+                       "tolerance); adaptive only",
+        .kind = "library: GSL",
+        .reference =
+            join_text(kGsl, "; ", "G. Bader & P. Deuflhard, Numer. Math. 41 (1983) 373-398")}},
+      {"gsl_msadams",
+       &gsl_odeiv2_step_msadams,
+       0,
+       false,
+       false,
+       {.description = "GSL variable-order Adams (1-12); adaptive only",
+        .kind = "library: GSL",
+        .reference = kGsl}},
+      {"gsl_msbdf",
+       &gsl_odeiv2_step_msbdf,
+       0,
+       true,
+       false,
+       {.description = "GSL variable-order BDF (1-5); adaptive only",
+        .kind = "library: GSL",
+        .reference = kGsl}},
   };
   return all;
 }
@@ -209,14 +271,15 @@ void register_gsl_integrators(IntegratorRegistry& reg) {
       {"h0", P::real, "1e-6", "initial step of the adaptive driver", B::positive()},
   };
   for (const GslMethod& m : gsl_methods()) {
-    const MethodInfo info{m.name, Family::reference, m.order, 0, {}, m.description};
-    reg.add({info, specs, [info, m](const Params& p) {
-               const double rtol = p.real("rtol"), atol = p.real("atol"), h0 = p.real("h0");
-               require_input(rtol >= 0 && atol >= 0 && rtol + atol > 0,
-                             "parameters 'rtol'/'atol' must be >= 0, not both 0");
-               require_input(h0 > 0, "parameter 'h0' must be > 0");
-               return std::make_unique<GslIntegrator>(info, m, rtol, atol, h0);
-             }});
+    const MethodInfo info = method_info(m.name, Family::reference, m.order, 0, {}, m.text);
+    add_built_in_integrator(
+        reg, {info, specs, [info, m](const Params& p) {
+                const double rtol = p.real("rtol"), atol = p.real("atol"), h0 = p.real("h0");
+                require_input(rtol >= 0 && atol >= 0 && rtol + atol > 0,
+                              "parameters 'rtol'/'atol' must be >= 0, not both 0");
+                require_input(h0 > 0, "parameter 'h0' must be > 0");
+                return std::make_unique<GslIntegrator>(info, m, rtol, atol, h0);
+              }});
   }
 }
 

@@ -25,6 +25,7 @@
 
 #include "core/run_control.hpp"
 #include "integrators/implicit/velocity_form.hpp"
+#include "integrators/method_entry.hpp"
 #include "integrators/reference/callback_guard.hpp"
 
 namespace stiffbench {
@@ -879,49 +880,94 @@ SundialsLinearSolverChoice sundials_auto_linear_solver(Index unknowns, bool anal
   return {"spgmr", size + " > " + limit + " and no analytic Jacobian"};
 }
 
+namespace {
+
+constexpr const char* kSundials =
+    "A. C. Hindmarsh et al., SUNDIALS: suite of nonlinear and differential/algebraic equation "
+    "solvers, ACM Trans. Math. Softw. 31 (2005) 363-396";
+constexpr const char* kArkode =
+    "D. R. Reynolds, D. J. Gardner, C. S. Woodward & R. Chinomona, ARKODE: a flexible IVP "
+    "solver infrastructure for one-step methods, ACM Trans. Math. Softw. 49 (2023) 19";
+
+struct CvodeMethod {
+  const char* name;
+  int lmm;
+  int max_order;
+  MethodText text;
+};
+
+constexpr MethodText kArkodeErkText{
+    .description = "SUNDIALS ARKODE ARKStep, explicit table by name; adaptive or fixed step",
+    .kind = "library: ARKODE",
+    .reference = kArkode};
+constexpr MethodText kArkodeDirkText{
+    .description =
+        "SUNDIALS ARKODE ARKStep, DIRK table by name (default L-stable SDIRK order 4); "
+        "adaptive or fixed step",
+    .kind = "library: ARKODE",
+    .reference = kArkode};
+constexpr MethodText kArkodeImexText{
+    .description = "SUNDIALS ARKODE ARKStep IMEX with the model's split (all-implicit without one)",
+    .kind = "library: ARKODE",
+    .reference = kArkode};
+
+// The MethodInfo of an ARKODE integrator created with the given tables: the registered kind
+// and reference, and a description naming the tables.
+MethodInfo arkode_info(const char* name, int order, const MethodText& text,
+                       std::string description) {
+  MethodInfo info = method_info(name, Family::reference, order, 0, {}, text);
+  info.description = std::move(description);
+  return info;
+}
+
+}  // namespace
+
 void register_sundials_integrators(IntegratorRegistry& reg) {
   using P = ParamType;
   using B = Bounds;
   // CVodeSetMaxOrd refuses an order above the method's (CV_ILL_INPUT): at most 5 for BDF, 12 for
   // Adams.
-  for (const auto& [name, lmm, max_order, desc] :
-       {std::tuple{"cvode_bdf", CV_BDF, 5,
-                   "SUNDIALS CVODE, variable-order BDF (1-5) with Newton; adaptive"},
-        std::tuple{"cvode_adams", CV_ADAMS, 12,
-                   "SUNDIALS CVODE, variable-order Adams-Moulton (1-12) with Newton; adaptive"}}) {
+  for (const CvodeMethod& m :
+       {CvodeMethod{
+            "cvode_bdf",
+            CV_BDF,
+            5,
+            {.description = "SUNDIALS CVODE, variable-order BDF (1-5) with Newton; adaptive",
+            .kind = "library: CVODE",
+            .reference = kSundials}},
+        CvodeMethod{"cvode_adams",
+                    CV_ADAMS,
+                    12,
+                    {.description = "SUNDIALS CVODE, variable-order Adams-Moulton (1-12) with "
+                                    "Newton; adaptive",
+                    .kind = "library: CVODE",
+                    .reference = kSundials}}}) {
     auto cvode_specs = common_specs(true);
     cvode_specs.push_back({"max_order", P::integer, "0",
                            "maximum order (0: CVODE default, 5 for BDF, 12 for Adams)",
-                           B::in(0, max_order)});
-    const MethodInfo info{name, Family::reference, 0, 0, {}, desc};
-    reg.add({info, cvode_specs, [info, lmm = lmm](const Params& p) {
-               Settings s = read_common(p, true);
-               s.max_order = static_cast<int>(p.integer("max_order"));
-               require_input(s.max_order >= 0, "parameter 'max_order' must be >= 0");
-               return std::make_unique<CvodeIntegrator>(info, lmm, s);
-             }});
+                           B::in(0, m.max_order)});
+    const MethodInfo info = method_info(m.name, Family::reference, 0, 0, {}, m.text);
+    add_built_in_integrator(reg, {info, cvode_specs, [info, lmm = m.lmm](const Params& p) {
+                                    Settings s = read_common(p, true);
+                                    s.max_order = static_cast<int>(p.integer("max_order"));
+                                    require_input(s.max_order >= 0,
+                                                  "parameter 'max_order' must be >= 0");
+                                    return std::make_unique<CvodeIntegrator>(info, lmm, s);
+                                  }});
   }
   auto erk_specs = common_specs(false);
   erk_specs.push_back({"explicit_table", P::text, "ARKODE_DORMAND_PRINCE_7_4_5",
                        "ARKODE explicit Butcher table name"});
-  reg.add({{"arkode_erk",
-            Family::reference,
-            erk_order("ARKODE_DORMAND_PRINCE_7_4_5"),
-            7,
-            {},
-            "SUNDIALS ARKODE ARKStep, explicit table by name; adaptive or fixed step"},
-           erk_specs,
-           [](const Params& p) {
-             Settings s = read_common(p, false);
-             s.explicit_table = p.text("explicit_table");
-             MethodInfo info{"arkode_erk",
-                             Family::reference,
-                             erk_order(s.explicit_table),
-                             0,
-                             {},
-                             "ARKODE ERK " + s.explicit_table};
-             return std::make_unique<ArkodeIntegrator>(info, ArkodeMode::explicit_only, s);
-           }});
+  add_built_in_integrator(
+      reg, {method_info("arkode_erk", Family::reference, erk_order("ARKODE_DORMAND_PRINCE_7_4_5"),
+                        7, {}, kArkodeErkText),
+            erk_specs, [](const Params& p) {
+              Settings s = read_common(p, false);
+              s.explicit_table = p.text("explicit_table");
+              MethodInfo info = arkode_info("arkode_erk", erk_order(s.explicit_table),
+                                            kArkodeErkText, "ARKODE ERK " + s.explicit_table);
+              return std::make_unique<ArkodeIntegrator>(info, ArkodeMode::explicit_only, s);
+            }});
   // ARKODE's default reuses M - γJ for up to 20 steps; with ARKODE_SDIRK_5_3_4 and a matrix
   // solver that gave errors of 2e-6 at rtol = 1e-8 on y' = (-1+3i)y (SPGMR: 5e-11), measured
   // with a standalone ARKODE 5.4.1 program. A setup every step restores the accuracy.
@@ -933,55 +979,39 @@ void register_sundials_integrators(IntegratorRegistry& reg) {
   dirk_specs.push_back(lsetup);
   dirk_specs.push_back(
       {"implicit_table", P::text, "ARKODE_SDIRK_5_3_4", "ARKODE implicit Butcher table name"});
-  reg.add({{"arkode_dirk",
-            Family::reference,
-            dirk_order("ARKODE_SDIRK_5_3_4"),
-            5,
-            {},
-            "SUNDIALS ARKODE ARKStep, DIRK table by name (default L-stable SDIRK order 4); "
-            "adaptive or fixed step"},
-           dirk_specs,
-           [](const Params& p) {
-             Settings s = read_common(p, true);
-             s.lsetup_frequency = p.integer("lsetup_frequency");
-             require_input(s.lsetup_frequency >= 1, "parameter 'lsetup_frequency' must be >= 1");
-             s.implicit_table = p.text("implicit_table");
-             MethodInfo info{"arkode_dirk",
-                             Family::reference,
-                             dirk_order(s.implicit_table),
-                             0,
-                             {},
-                             "ARKODE DIRK " + s.implicit_table};
-             return std::make_unique<ArkodeIntegrator>(info, ArkodeMode::implicit_only, s);
-           }});
+  add_built_in_integrator(
+      reg, {method_info("arkode_dirk", Family::reference, dirk_order("ARKODE_SDIRK_5_3_4"), 5, {},
+                        kArkodeDirkText),
+            dirk_specs, [](const Params& p) {
+              Settings s = read_common(p, true);
+              s.lsetup_frequency = p.integer("lsetup_frequency");
+              require_input(s.lsetup_frequency >= 1, "parameter 'lsetup_frequency' must be >= 1");
+              s.implicit_table = p.text("implicit_table");
+              MethodInfo info = arkode_info("arkode_dirk", dirk_order(s.implicit_table),
+                                            kArkodeDirkText, "ARKODE DIRK " + s.implicit_table);
+              return std::make_unique<ArkodeIntegrator>(info, ArkodeMode::implicit_only, s);
+            }});
   auto imex_specs = common_specs(true);
   imex_specs.push_back(lsetup);
   imex_specs.push_back(
       {"explicit_table", P::text, "ARKODE_ARK436L2SA_ERK_6_3_4", "explicit table of the ARK pair"});
   imex_specs.push_back({"implicit_table", P::text, "ARKODE_ARK436L2SA_DIRK_6_3_4",
                         "implicit table of the ARK pair"});
-  reg.add({{"arkode_imex",
-            Family::reference,
-            dirk_order("ARKODE_ARK436L2SA_DIRK_6_3_4"),
-            6,
-            {},
-            "SUNDIALS ARKODE ARKStep IMEX with the model's split (all-implicit without one)"},
-           imex_specs,
-           [](const Params& p) {
-             Settings s = read_common(p, true);
-             s.lsetup_frequency = p.integer("lsetup_frequency");
-             require_input(s.lsetup_frequency >= 1, "parameter 'lsetup_frequency' must be >= 1");
-             s.explicit_table = p.text("explicit_table");
-             s.implicit_table = p.text("implicit_table");
-             const int q = std::min(erk_order(s.explicit_table), dirk_order(s.implicit_table));
-             MethodInfo info{"arkode_imex",
-                             Family::reference,
-                             q,
-                             0,
-                             {},
-                             "ARKODE IMEX " + s.explicit_table + " / " + s.implicit_table};
-             return std::make_unique<ArkodeIntegrator>(info, ArkodeMode::imex, s);
-           }});
+  add_built_in_integrator(
+      reg, {method_info("arkode_imex", Family::reference,
+                        dirk_order("ARKODE_ARK436L2SA_DIRK_6_3_4"), 6, {}, kArkodeImexText),
+            imex_specs, [](const Params& p) {
+              Settings s = read_common(p, true);
+              s.lsetup_frequency = p.integer("lsetup_frequency");
+              require_input(s.lsetup_frequency >= 1, "parameter 'lsetup_frequency' must be >= 1");
+              s.explicit_table = p.text("explicit_table");
+              s.implicit_table = p.text("implicit_table");
+              const int q = std::min(erk_order(s.explicit_table), dirk_order(s.implicit_table));
+              MethodInfo info =
+                  arkode_info("arkode_imex", q, kArkodeImexText,
+                              "ARKODE IMEX " + s.explicit_table + " / " + s.implicit_table);
+              return std::make_unique<ArkodeIntegrator>(info, ArkodeMode::imex, s);
+            }});
 }
 
 }  // namespace stiffbench

@@ -4,6 +4,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "integrators/method_entry.hpp"
+
 namespace stiffbench {
 
 namespace {
@@ -39,12 +41,20 @@ RattleOptions read_rattle_options(const Params& p) {
   return o;
 }
 
+constexpr MethodText kRattleText{
+    .description =
+        "RATTLE (Andersen 1983, J. Comput. Phys. 52; Hairer-Lubich-Wanner VII.1): "
+        "velocity Verlet with holonomic constraints, Newton on the multipliers for "
+        "g(x) = 0 in the drift, velocities projected onto G(x) v = 0 in the closing "
+        "kick; symmetric, symplectic",
+    .kind = "constrained splitting (RATTLE)",
+    .reference =
+        join_text("H. C. Andersen, Rattle: a \"velocity\" version of the Shake algorithm for "
+                  "molecular dynamics calculations, J. Comput. Phys. 52 (1983) 24-34",
+                  "; ", cite(kGeometricIntegration, "Sect. VII.1"))};
+
 Rattle::Rattle(RattleOptions opt)
-    : Integrator({"rattle", Family::symplectic, 2, 1, kRattleNeeds,
-                  "RATTLE (Andersen 1983, J. Comput. Phys. 52; Hairer-Lubich-Wanner VII.1): "
-                  "velocity Verlet with holonomic constraints, Newton on the multipliers for "
-                  "g(x) = 0 in the drift, velocities projected onto G(x) v = 0 in the closing "
-                  "kick; symmetric, symplectic"}),
+    : Integrator(method_info("rattle", Family::symplectic, 2, 1, kRattleNeeds, kRattleText)),
       opt_(opt) {}
 
 void Rattle::reset(const OdeSystem& sys, double, CVecRef) {

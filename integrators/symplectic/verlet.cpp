@@ -1,5 +1,7 @@
 #include "integrators/symplectic/verlet.hpp"
 
+#include "integrators/method_entry.hpp"
+
 namespace stiffbench {
 
 namespace {
@@ -25,10 +27,16 @@ bool must_restart(bool started, double h, double h_last, const double* y, const 
 }
 }  // namespace
 
+constexpr MethodText kPositionVerletText{
+    .description =
+        "two-step position Verlet x+ = 2x - x- + h^2 a(x); Taylor start-up; "
+        "central-difference velocities",
+    .kind = "two-step (Stormer-Verlet)",
+    .reference = "L. Verlet, Phys. Rev. 159 (1967) 98-103"};
+
 PositionVerlet::PositionVerlet()
-    : Integrator({"verlet", Family::symplectic, 2, 1, kVerletNeeds,
-                  "two-step position Verlet x+ = 2x - x- + h^2 a(x); Taylor start-up; "
-                  "central-difference velocities"}) {}
+    : Integrator(
+          method_info("verlet", Family::symplectic, 2, 1, kVerletNeeds, kPositionVerletText)) {}
 
 void PositionVerlet::reset(const OdeSystem& sys, double, CVecRef) {
   check_compatible(info(), sys);
@@ -78,10 +86,16 @@ Status PositionVerlet::step(const OdeSystem& sys, double t, VecRef y, double h, 
   return Status::ok;
 }
 
+constexpr MethodText kLeapfrogText{
+    .description =
+        "kick-drift leapfrog with half-step velocities; half-step start-up; reports "
+        "the synchronised velocity",
+    .kind = "splitting (staggered)",
+    .reference =
+        "R. W. Hockney & J. W. Eastwood, Computer Simulation Using Particles, McGraw-Hill 1981"};
+
 Leapfrog::Leapfrog()
-    : Integrator({"leapfrog", Family::symplectic, 2, 1, kVerletNeeds,
-                  "kick-drift leapfrog with half-step velocities; half-step start-up; reports the "
-                  "synchronised velocity"}) {}
+    : Integrator(method_info("leapfrog", Family::symplectic, 2, 1, kVerletNeeds, kLeapfrogText)) {}
 
 void Leapfrog::reset(const OdeSystem& sys, double, CVecRef) {
   check_compatible(info(), sys);

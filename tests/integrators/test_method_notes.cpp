@@ -3,13 +3,15 @@
 #include <gtest/gtest.h>
 
 #include <sstream>
+#include <stdexcept>
+#include <string>
 
 #include "experiments/catalog.hpp"
 #include "experiments/commands.hpp"
 #include "integrators/explicit/tableaux.hpp"
 #include "integrators/implicit/dirk.hpp"
 #include "integrators/implicit/linearly_implicit.hpp"
-#include "integrators/method_notes.hpp"
+#include "integrators/method_entry.hpp"
 #include "integrators/symplectic/composition.hpp"
 #include "integrators/symplectic/kick_drift.hpp"
 
@@ -19,15 +21,51 @@ namespace {
 TEST(MethodNotes, EveryBuiltInIntegratorHasKindAndReference) {
   for (const auto& e : integrator_registry().entries()) {
     if (!e.built_in) continue;
-    EXPECT_FALSE(e.info.kind.empty()) << e.info.name << " has no kind in method_notes.cpp";
+    EXPECT_FALSE(e.info.description.empty()) << e.info.name << " has no description";
+    EXPECT_FALSE(e.info.kind.empty()) << e.info.name << " has no kind";
     EXPECT_FALSE(e.info.reference.empty()) << e.info.name << " has no reference";
   }
 }
 
-TEST(MethodNotes, TableNamesOnlyRegisteredIntegrators) {
-  // A stale entry (a renamed or removed method) would never be printed.
-  for (const auto& [name, note] : method_notes())
-    EXPECT_NE(integrator_registry().find(name), nullptr) << name << " is not registered";
+// The methods implemented as classes build their MethodInfo with their text (method_info(),
+// integrators/method_entry.hpp): an instance made by the registry carries the registered kind
+// and reference.
+TEST(MethodNotes, ClassMethodsCarryTheirTextInTheirMethodInfo) {
+  for (const char* name :
+       {"verlet", "leapfrog", "rattle", "bdf2", "semi_implicit_euler", "radau5", "gauss4", "gauss6",
+        "baraff_witkin", "xpbd", "projective_dynamics", "stable_fluids", "cvode_bdf", "cvode_adams",
+        "arkode_erk", "arkode_dirk", "arkode_imex", "gsl_rk4", "gsl_msbdf"}) {
+    SCOPED_TRACE(name);
+    const auto* e = integrator_registry().find(name);
+    ASSERT_NE(e, nullptr);
+    const auto integ = integrator_registry().create(name, {});
+    EXPECT_EQ(integ->info().kind, e->info.kind);
+    EXPECT_EQ(integ->info().reference, e->info.reference);
+  }
+}
+
+// A built-in registration without its text is refused, naming that method only.
+TEST(MethodNotes, RegistrationWithoutTextNamesTheMethod) {
+  IntegratorRegistry reg("integrator");
+  MethodInfo info;
+  info.name = "no_text";
+  info.description = "a method without kind or reference";
+  try {
+    add_built_in_integrator(
+        reg, {info, {}, [](const Params&) { return std::unique_ptr<Integrator>(); }});
+    FAIL() << "registered without a kind";
+  } catch (const std::logic_error& err) {
+    EXPECT_NE(std::string(err.what()).find("integrator 'no_text'"), std::string::npos)
+        << err.what();
+    EXPECT_NE(std::string(err.what()).find("kind"), std::string::npos) << err.what();
+  }
+  EXPECT_EQ(reg.find("no_text"), nullptr);
+}
+
+// join_text()/cite() keep the text of every part.
+TEST(MethodNotes, JoinedTextKeepsEveryPart) {
+  constexpr Text t = join_text("A", "; ", cite("Book", "Sect. 1"));
+  EXPECT_EQ(t.str(), "A; Book, Sect. 1");
 }
 
 // The coefficient-defined methods declare kind, reference and step modes in their table entry
