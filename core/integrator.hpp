@@ -43,8 +43,8 @@ struct MethodInfo {
   Requirements requires_ = {};
   std::string description;
   // The method class within its family ("embedded RK pair", "Rosenbrock", "Gauss collocation")
-  // and the literature reference, for `list integrators` and `describe` (built-in methods get
-  // them from integrators/method_notes.cpp when registered).
+  // and the literature reference, for `list integrators` and `describe` (built-in methods keep
+  // them beside their coefficients or constructor: integrators/method_entry.hpp).
   std::string kind = {};
   std::string reference = {};
 };

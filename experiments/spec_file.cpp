@@ -10,37 +10,12 @@
 #include "core/params.hpp"
 #include "core/types.hpp"
 #include "experiments/output.hpp"
-#include "experiments/study.hpp"
 
 namespace stiffbench {
 
 namespace {
 
 using Type = SpecScalar::Type;
-
-Type spec_type(ParamType t) {
-  switch (t) {
-    case ParamType::real:
-      return Type::real;
-    case ParamType::integer:
-      return Type::integer;
-    case ParamType::boolean:
-      return Type::boolean;
-    case ParamType::text:
-      return Type::text;
-  }
-  return Type::text;
-}
-
-// The keys of a kind (besides kind, integrators, [params] and the report's title, note and
-// [quick]): its study's options (experiments/study.hpp), and `model` where it takes one.
-std::map<std::string, Type> kind_keys(const std::string& kind) {
-  const StudyKind& k = study_kind(kind);
-  std::map<std::string, Type> keys;
-  if (k.takes_model) keys["model"] = Type::text;
-  for (const auto& o : k.options) keys[o.key] = spec_type(o.type);
-  return keys;
-}
 
 std::string type_name(Type t) {
   switch (t) {
@@ -99,8 +74,9 @@ SpecEntry entry_of(const toml::node& n, const std::string& path, const std::stri
 }
 
 // Checks the value types of a top-level key against the kind's table.
-void check_setting(const std::string& kind, const SpecEntry& e) {
-  const auto keys = kind_keys(kind);
+void check_setting(const SpecKindSchema& schema, const std::string& kind, const SpecEntry& e) {
+  std::map<std::string, Type> keys = schema.keys;
+  if (schema.takes_model) keys["model"] = Type::text;
   const auto it = keys.find(e.key);
   if (it == keys.end()) {
     std::vector<std::string> known = {"kind", "integrators", "params", "title", "note", "quick"};
@@ -139,8 +115,6 @@ nlohmann::json SpecScalar::to_json() const {
   }
   return text;
 }
-
-std::vector<std::string> spec_kinds() { return study_names(); }
 
 void spec_error(const SpecEntry& e, const std::string& message) {
   throw BadInput(e.where + ": key '" + e.path + "': " + message);
@@ -211,18 +185,20 @@ void require_ascii_outside_strings(const std::string& text, const std::string& w
 
 }  // namespace
 
-SpecFile load_spec_file(const std::string& file, const std::vector<std::string>& sets) {
+SpecFile load_spec_file(const std::string& file, const std::vector<std::string>& sets,
+                        const SpecSchema& schema) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw BadInput(file + ": cannot read the spec file");
   std::stringstream buffer;
   buffer << in.rdbuf();
-  return parse_spec_text(buffer.str(), file, sets);
+  return parse_spec_text(buffer.str(), file, sets, schema);
 }
 
 namespace {
 
 // [quick]: the settings (and title, note, integrators, skip) `report --quick` applies.
-void read_quick(const toml::table& table, const std::string& file, SpecFile& spec) {
+void read_quick(const toml::table& table, const std::string& file, const SpecKindSchema& schema,
+                SpecFile& spec) {
   for (const auto& [qk, qnode] : table) {
     const std::string qkey(qk.str());
     SpecEntry e = entry_of(qnode, "quick." + qkey, qkey, where_of(file, qnode));
@@ -235,7 +211,7 @@ void read_quick(const toml::table& table, const std::string& file, SpecFile& spe
       for (const auto& v : e.values)
         if (v.type != Type::text) spec_error(e, "expected integrator names (strings)");
     } else {
-      check_setting(spec.kind, e);
+      check_setting(schema, spec.kind, e);
     }
     spec.quick.push_back(std::move(e));
   }
@@ -277,7 +253,7 @@ void apply_sets(const std::vector<std::string>& sets, std::vector<SpecEntry>& se
 }
 
 // `integrators`: a list of names, or one string "a,b,c" as on the command line.
-void read_integrators(const SpecEntry& integrators, SpecFile& spec) {
+void read_integrators(const SpecEntry& integrators, const SpecKindSchema& schema, SpecFile& spec) {
   if (!integrators.values.empty()) {
     spec.integrators_where = integrators.where;
     for (const auto& v : integrators.values) {
@@ -293,7 +269,7 @@ void read_integrators(const SpecEntry& integrators, SpecFile& spec) {
         spec.integrators.push_back(v.text);
       }
     }
-  } else if (study_kind(spec.kind).integrators_required) {
+  } else if (schema.integrators_required) {
     throw BadInput(spec.file + ": key 'integrators' missing (a list of integrator names)");
   }
 }
@@ -301,7 +277,7 @@ void read_integrators(const SpecEntry& integrators, SpecFile& spec) {
 }  // namespace
 
 SpecFile parse_spec_text(const std::string& source, const std::string& file,
-                         const std::vector<std::string>& sets) {
+                         const std::vector<std::string>& sets, const SpecSchema& schema) {
   toml::table root;
   try {
     require_ascii_outside_strings(source, file);
@@ -315,11 +291,13 @@ SpecFile parse_spec_text(const std::string& source, const std::string& file,
   spec.file = file;
   const toml::node* kind = root.get("kind");
   if (!kind || !kind->is_string())
-    throw BadInput(file + ": key 'kind' missing or not a string; one of " + join(spec_kinds()));
+    throw BadInput(file + ": key 'kind' missing or not a string; one of " + join(schema.kinds));
   spec.kind = kind->as_string()->get();
-  if (!find_study(spec.kind))
+  const std::optional<SpecKindSchema> found = schema.find(spec.kind);
+  if (!found)
     throw BadInput(where_of(file, *kind) + ": key 'kind': unknown kind '" + spec.kind + "'" +
-                   did_you_mean(spec.kind, spec_kinds()) + "; known: " + join(spec_kinds()));
+                   did_you_mean(spec.kind, schema.kinds) + "; known: " + join(schema.kinds));
+  const SpecKindSchema& kind_schema = *found;
 
   std::vector<SpecEntry> settings, params;
   SpecEntry integrators;
@@ -336,7 +314,7 @@ SpecFile parse_spec_text(const std::string& source, const std::string& file,
     if (key == "quick") {
       const auto* table = node.as_table();
       if (!table) throw BadInput(where + ": key 'quick': expected a table ([quick])");
-      read_quick(*table, file, spec);
+      read_quick(*table, file, kind_schema, spec);
       continue;
     }
     if (key == "params") {
@@ -359,9 +337,9 @@ SpecFile parse_spec_text(const std::string& source, const std::string& file,
   }
 
   apply_sets(sets, settings, params, integrators);
-  for (const auto& e : settings) check_setting(spec.kind, e);
-  read_integrators(integrators, spec);
-  if (study_kind(spec.kind).takes_model) {
+  for (const auto& e : settings) check_setting(kind_schema, spec.kind, e);
+  read_integrators(integrators, kind_schema, spec);
+  if (kind_schema.takes_model) {
     const bool has_model = std::any_of(settings.begin(), settings.end(),
                                        [](const auto& e) { return e.key == "model"; });
     if (!has_model) throw BadInput(file + ": key 'model' missing");

@@ -6,6 +6,9 @@
 // sweeps").
 #pragma once
 
+#include <functional>
+#include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,6 +50,22 @@ struct SpecFile {
   nlohmann::json to_json() const;  // canonical form (hashed for shards, stored in run.json)
 };
 
+// What spec files of one kind may hold: whether the kind takes a model and needs integrators,
+// and the type of each of its keys.
+struct SpecKindSchema {
+  bool takes_model = true;
+  bool integrators_required = true;
+  std::map<std::string, SpecScalar::Type> keys;
+};
+// The kinds a reader knows: the registered studies (spec_schema(), from each study's option
+// declarations; experiments/spec_schema.cpp), or a schema of a program's own (the fuzz targets
+// pass a small one, so that they link without the studies).
+struct SpecSchema {
+  std::vector<std::string> kinds;
+  std::function<std::optional<SpecKindSchema>(const std::string& kind)> find;
+};
+const SpecSchema& spec_schema();
+
 // The experiment kinds `run` accepts: the registered studies (experiments/study.hpp).
 std::vector<std::string> spec_kinds();
 
@@ -54,6 +73,8 @@ std::vector<std::string> spec_kinds();
 // [8,16], "rk4"; a bare word is a string). Checks keys and value types for the kind; the
 // names of models, integrators and parameters are checked when the sweep is expanded.
 SpecFile load_spec_file(const std::string& file, const std::vector<std::string>& sets);
+SpecFile load_spec_file(const std::string& file, const std::vector<std::string>& sets,
+                        const SpecSchema& schema);
 
 // Replaces the settings (and title, note) by the spec's [quick] values.
 void apply_quick(SpecFile& spec);
@@ -61,6 +82,8 @@ void apply_quick(SpecFile& spec);
 // The same for the text of a spec file; `file` names it in messages.
 SpecFile parse_spec_text(const std::string& text, const std::string& file,
                          const std::vector<std::string>& sets);
+SpecFile parse_spec_text(const std::string& text, const std::string& file,
+                         const std::vector<std::string>& sets, const SpecSchema& schema);
 
 // BadInput with "WHERE: key 'KEY': MESSAGE".
 [[noreturn]] void spec_error(const SpecEntry& e, const std::string& message);

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -66,6 +68,48 @@ void params_one(std::string_view data) {
   }
 }
 
+namespace {
+
+// The spec-file schema the fuzz build parses against. The fuzz targets link only the parser
+// (scripts/fuzz.sh), not the studies whose option declarations give the program's schema
+// (spec_schema()), so this is a copy of their shapes: kinds with a model and keys of every type,
+// a sweepable text option, and a kind without a model or required integrators. It exercises the
+// same parser paths as the real schema; the real keys are tested in tests/experiments.
+const SpecSchema& fuzz_schema() {
+  using T = SpecScalar::Type;
+  static const std::map<std::string, SpecKindSchema> kinds = {
+      {"convergence",
+       {true,
+        true,
+        {{"t_end", T::real},
+         {"h", T::real},
+         {"levels", T::integer},
+         {"refine", T::real},
+         {"reference", T::text},
+         {"reference_rtol", T::real}}}},
+      {"work-precision",
+       {true, true, {{"t_end", T::real}, {"levels", T::integer}, {"repeats", T::integer}}}},
+      {"stability",
+       {true,
+        true,
+        {{"sweep", T::text}, {"rel_tol", T::real}, {"seed", T::integer}, {"criterion", T::text}}}},
+      {"energy", {true, true, {{"h", T::real}, {"t_end", T::real}, {"samples", T::integer}}}},
+      {"region", {false, false, {{"box", T::text}, {"resolution", T::integer}}}}};
+  static const SpecSchema schema = [] {
+    SpecSchema s;
+    for (const auto& [name, k] : kinds) s.kinds.push_back(name);
+    s.find = [](const std::string& kind) -> std::optional<SpecKindSchema> {
+      const auto it = kinds.find(kind);
+      if (it == kinds.end()) return std::nullopt;
+      return it->second;
+    };
+    return s;
+  }();
+  return schema;
+}
+
+}  // namespace
+
 void spec_file_one(std::string_view data) {
   // load_spec_file reads a file: one per process, rewritten for every input.
   static const std::string path = [] {
@@ -78,7 +122,7 @@ void spec_file_one(std::string_view data) {
     f.write(data.data(), static_cast<std::streamsize>(data.size()));
   }
   try {
-    const SpecFile s = load_spec_file(path, {});
+    const SpecFile s = load_spec_file(path, {}, fuzz_schema());
     (void)s.to_json().dump();
     if (s.kind.empty()) fail("a spec without a kind was accepted");
   } catch (const BadInput&) {
