@@ -32,6 +32,10 @@ void add_study_command(CLI::App& app, const StudyKind& kind) {
     std::string help = o.help;
     if (!o.choices.empty()) help += " (one of: " + join(o.choices, ", ") + ")";
     auto* opt = cmd->add_option(option_flag(o.key), st->values[o.key], help);
+    opt->type_name(o.type == ParamType::real      ? "FLOAT"
+                   : o.type == ParamType::integer ? "INT"
+                   : o.type == ParamType::boolean ? "BOOL"
+                                                  : "TEXT");
     if (!o.default_value.empty()) opt->default_str(o.default_value);
     for (const auto& r : kind.required)
       if (r == o.key) opt->required();
