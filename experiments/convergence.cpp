@@ -233,6 +233,44 @@ std::vector<Vec> compute_reference(const ReferencePlan& plan, const OdeSystem& s
 }
 
 // Everything the reference values depend on, as one line of JSON (keys sorted).
+// A fingerprint of the system's right-hand side, so that a changed f (a user's edited system
+// under the same name, a model whose equations changed within one revision) never reuses a stale
+// reference: f at three documented states — y0 at t0, and y0 + d and y0 - d/2 at t0 + 1/2 with
+// d_i = 1e-3 (1 + |y0_i|) sin(i + 1) — and, where the model has one, the analytic Jacobian's
+// values at y0 + d, hashed (FNV-1a) over the bytes of the doubles.
+std::string system_fingerprint(const OdeSystem& sys) {
+  const Vec y0 = sys.initial_state();
+  const double t0 = sys.initial_time();
+  Vec d(y0.size());
+  for (Index i = 0; i < y0.size(); ++i)
+    d[i] = 1e-3 * (1 + std::abs(y0[i])) * std::sin(static_cast<double>(i + 1));
+  std::uint64_t h = kFnvOffset;
+  auto add = [&h](const double* x, Index n) {
+    h = fnv1a64(std::string_view(reinterpret_cast<const char*>(x),
+                                 static_cast<std::size_t>(n) * sizeof(double)),
+                h);
+  };
+  Vec f(y0.size());
+  const std::vector<std::pair<double, Vec>> states = {
+      {t0, y0}, {t0 + 0.5, y0 + d}, {t0 + 0.5, y0 - 0.5 * d}};
+  try {
+    for (const auto& [t, y] : states) {
+      sys.rhs(t, y, f);
+      add(f.data(), f.size());
+    }
+    if (sys.has_jacobian()) {
+      SparseMat jac;
+      sys.jacobian(t0 + 0.5, y0 + d, jac);
+      jac.makeCompressed();
+      add(jac.valuePtr(), static_cast<Index>(jac.nonZeros()));
+    }
+  } catch (const std::exception& e) {
+    // A system that refuses one of these states is fingerprinted by what it said.
+    h = fnv1a64(e.what(), h);
+  }
+  return hex16(h);
+}
+
 std::string cache_key(const ConvergenceSpec& spec, const OdeSystem& sys, const ReferencePlan& plan,
                       const std::vector<double>& times) {
   const Params model_params = resolve_params(model_registry().at(spec.model).params, spec.params,
@@ -241,13 +279,14 @@ std::string cache_key(const ConvergenceSpec& spec, const OdeSystem& sys, const R
   const Vec y0 = sys.initial_state();
   for (Index i = 0; i < y0.size(); ++i) y0_hash = fnv1a64(g17(y0[i]) + ",", y0_hash);
   nlohmann::json key;
-  key["cache_format"] = 1;
+  key["cache_format"] = 2;  // 2: with the system's fingerprint
   key["stiffbench_version"] = STIFFBENCH_VERSION;
   key["git_revision"] = git_revision();
   key["model"] = spec.model;
   key["model_params"] = model_params.values();
   key["dimension"] = static_cast<long>(sys.dimension());
   key["initial_state_fnv1a"] = hex16(y0_hash);
+  key["system_fingerprint"] = system_fingerprint(sys);
   key["reference"] = plan.method;
   key["mode"] = plan.kind == RefKind::adaptive ? "adaptive" : "fixed_step";
   key["reference_params"] = plan.params.values();

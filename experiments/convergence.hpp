@@ -19,17 +19,17 @@
 // Cache: with `cache_dir` set (the commands pass --out), a non-exact reference is stored in
 // DIR/reference/<16 hex digits>.csv: a comment line with the key (JSON: cache format,
 // stiffbench version and git revision, model and its parameters with defaults filled in, a hash
-// of the initial state, reference integrator and its effective parameters including rtol/atol
-// or the fixed step, t0 and the reference times), a readable comment line, then `t,y0,y1,...`
-// rows at the reference times (t_end; or t0 + h_k for the local study) printed with %.17g.
-// The file name is the 64-bit FNV-1a hash of the key; a file is reused only when its key line
-// matches exactly and its rows are complete, otherwise the reference is recomputed and the file
-// rewritten (atomically). The integrators under study and the h ladder (except through a fixed
-// reference's step or the local study's times) are not in the key: adding an integrator
-// reuses the reference.
-// observed_order between consecutive rows of one integrator is log(e_k/e_{k+1})/log(h_k/h_{k+1})
-// using the steps actually taken; a global error should give the method's order p, a local
-// error p + 1.
+// of the initial state, a fingerprint of the right-hand side (f at three documented states and
+// the analytic Jacobian where there is one, so a changed system never reuses a stale reference),
+// reference integrator and its effective parameters including rtol/atol or the fixed step, t0 and
+// the reference times), a readable comment line, then `t,y0,y1,...` rows at the reference times
+// (t_end; or t0 + h_k for the local study) printed with %.17g. The file name is the 64-bit FNV-1a
+// hash of the key; a file is reused only when its key line matches exactly and its rows are
+// complete, otherwise the reference is recomputed and the file rewritten (atomically). The
+// integrators under study and the h ladder (except through a fixed reference's step or the local
+// study's times) are not in the key: adding an integrator reuses the reference. observed_order
+// between consecutive rows of one integrator is log(e_k/e_{k+1})/log(h_k/h_{k+1}) using the steps
+// actually taken; a global error should give the method's order p, a local error p + 1.
 #pragma once
 
 #include <iosfwd>

@@ -13,8 +13,8 @@
 #include "core/driver.hpp"
 #include "experiments/commands.hpp"
 #include "experiments/convergence.hpp"
-#include "tests/test_support.hpp"
 #include "tests/cli_support.hpp"
+#include "tests/test_support.hpp"
 
 namespace stiffbench {
 namespace {
@@ -187,6 +187,50 @@ TEST(ReferenceCache, KeyFollowsTheReferenceSpec) {
 // the global error of a method of order p is O(h^p)). Van der Pol, mu = 1, t_end = 1: rk4 -> 4,
 // backward Euler -> 1. HIRES (stiff), t_end = 1: backward Euler -> 1, sdirk3 -> 3 (measured
 // 4.05, 1.007, 0.998, 2.990).
+// y' = -rate * y from y(0) = 1, always named "decay": a user who edits the right-hand side and
+// keeps the name must not get the reference of the old system.
+class Decay final : public OdeSystem {
+ public:
+  explicit Decay(double rate) : rate_(rate) {}
+  std::string name() const override { return "decay"; }
+  Index dimension() const override { return 1; }
+  Vec initial_state() const override { return Vec::Ones(1); }
+  void eval_rhs(double, CVecRef y, VecRef f) const override { f[0] = -rate_ * y[0]; }
+
+ private:
+  double rate_;
+};
+
+// The cache key carries a fingerprint of f: the same name, initial state, reference and times
+// with another rate compute a new reference (whose value is exp(-2), not exp(-1), at t = 1: rk4
+// at h = 0.1/16 is accurate to ~1e-12 there), and the same system again reuses its file.
+TEST(ReferenceCache, ChangedRightHandSideIsNotServedAStaleReference) {
+  const fs::path dir = fresh_dir("fingerprint");
+  ConvergenceSpec spec;
+  spec.integrators = {"rk4"};
+  spec.t_end = 1;
+  spec.h = 0.1;
+  spec.levels = 2;
+  spec.reference = "rk4";
+  spec.cache_dir = dir.string();
+  auto run = [&](double rate) {
+    return run_convergence(spec, StudyObjects{[rate] { return std::make_unique<Decay>(rate); }, {}},
+                           nullptr);
+  };
+  const ConvergenceResult a = run(1.0);
+  EXPECT_FALSE(a.reference_from_cache);
+  const ConvergenceResult b = run(2.0);
+  EXPECT_FALSE(b.reference_from_cache) << "reused " << b.reference_cache;
+  EXPECT_NE(a.reference_cache, b.reference_cache);
+  // rk4 at h = 0.05 on y' = -2y: its error is the reference's (exp(-2)) distance, ~1e-7, not
+  // exp(-1) - exp(-2) = 0.23 as a stale reference would give.
+  EXPECT_LT(b.rows.back().error, 1e-6);
+  const ConvergenceResult c = run(2.0);
+  EXPECT_TRUE(c.reference_from_cache);
+  EXPECT_EQ(c.reference_cache, b.reference_cache);
+  fs::remove_all(dir);
+}
+
 TEST(ReferenceCache, ObservedOrdersAgainstAnAdaptiveReference) {
   ConvergenceSpec spec = vdp_spec(fs::path());
   spec.cache_dir.clear();
