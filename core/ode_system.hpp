@@ -173,7 +173,6 @@ class OdeSystem : public ProblemMetadata, public FrameOutput {
     return std::nullopt;
   }
 
-
   // Optional holonomic constraints C(y) = 0 enforced strictly, not by forces. The fixed-step
   // driver calls project() after every accepted step of every integrator except those that
   // enforce the constraints themselves (Requirements::constraints: rattle); the model projects

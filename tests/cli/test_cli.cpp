@@ -421,8 +421,8 @@ TEST(Cli, CvodeOnSphRunsMatrixFree) {
 }
 
 // Issue #9, "done when" 2 (regions): the region command writes region.csv in the contract with
-// the limits table on stdout (rk4's imaginary-axis limit 2√2 = 2.8284, docs/reference-values.md); an
-// integrator without stability data is bad input naming it.
+// the limits table on stdout (rk4's imaginary-axis limit 2√2 = 2.8284, docs/reference-values.md);
+// an integrator without stability data is bad input naming it.
 TEST(Cli, RegionWritesContractFiles) {
   const auto dir = std::filesystem::temp_directory_path() /
                    (std::string("sb_region_cli") + "_" + std::to_string(::getpid()));

@@ -27,7 +27,8 @@ LinearStability stability_of(const std::string& name) {
 // Closed forms: rk4 |R(iy)|² = 1 − y⁶/72 + y⁸/576 → y = 2√2; kutta3 |R(iy)|² = 1 − y⁴/12 +
 // y⁶/36 → y = √3; heun R(−x) = 1 − x + x²/2 = 1 → x = 2; euler R(−x) = −1 → x = 2. The real
 // limits of rk4 and kutta3 are where |R(−x)| = 1 (rk4: R = +1, kutta3: R = −1), quoted in
-// docs/reference-values.md as 2.7853 and 2.5127; refined here by bisection on the polynomial on [2, 3].
+// docs/reference-values.md as 2.7853 and 2.5127; refined here by bisection on the polynomial on [2,
+// 3].
 double real_limit_of_polynomial(const std::vector<double>& taylor) {
   auto g = [&](double x) {
     double r = 0.0;

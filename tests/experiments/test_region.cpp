@@ -1,7 +1,7 @@
 // The stability-region experiment (experiments/region.hpp): limits against the published values
-// of docs/reference-values.md and their closed forms, region.csv points checked against R(z) recomputed
-// independently from each tableau (ButcherTableau::stability), the polyline contract of the
-// CSV, the fitted box, and the refusals.
+// of docs/reference-values.md and their closed forms, region.csv points checked against R(z)
+// recomputed independently from each tableau (ButcherTableau::stability), the polyline contract of
+// the CSV, the fitted box, and the refusals.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -40,8 +40,8 @@ RegionSpec four_methods() {
   return spec;
 }
 
-// docs/reference-values.md, "Linear stability": rk4 real −2.7853, imaginary 2√2 = 2.8284; kutta3 real
-// −2.5127, imaginary √3 = 1.7321; heun real −2 (R(−2) = 1 − 2 + 2 = 1) and unstable on the
+// docs/reference-values.md, "Linear stability": rk4 real −2.7853, imaginary 2√2 = 2.8284; kutta3
+// real −2.5127, imaginary √3 = 1.7321; heun real −2 (R(−2) = 1 − 2 + 2 = 1) and unstable on the
 // whole imaginary axis (|R(iy)|² = 1 + y⁴/4); sdirk3 is A-stable (Alexander 1977).
 TEST(RegionExperiment, LimitsMatchPublishedValues) {
   const RegionResult r = run_region(four_methods());

@@ -12,7 +12,8 @@
 namespace stiffbench {
 namespace {
 
-// Fixed-fixed chain, k = m = 1, N = 10: ω_max = 2 sin(10π/22) = 1.979643 (docs/reference-values.md).
+// Fixed-fixed chain, k = m = 1, N = 10: ω_max = 2 sin(10π/22) = 1.979643
+// (docs/reference-values.md).
 const double kOmegaMax = 2.0 * std::sin(10.0 * std::numbers::pi / 22.0);
 
 const StabilityRow& row_of(const StabilityResult& r, const std::string& integrator,

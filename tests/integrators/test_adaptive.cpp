@@ -281,8 +281,8 @@ double mescd(CVecRef y, CVecRef ref, double ratio) {
 }
 
 // HIRES at t = 321.8122 with rtol = 1e-10, atol = 1e-12 against the IVP test set's reference
-// solution (as in tests/models/test_stiff_problems.cpp; docs/reference-values.md): mescd ≥ 6, and the
-// counters of the run are filled in (measured: mescd 12.3, 1744 steps).
+// solution (as in tests/models/test_stiff_problems.cpp; docs/reference-values.md): mescd ≥ 6, and
+// the counters of the run are filled in (measured: mescd 12.3, 1744 steps).
 TEST(Radau5, HiresMatchesPublishedReference) {
   auto sys = model("hires");
   auto integ = make("radau5", {"rtol=1e-10", "atol=1e-12"});

@@ -368,11 +368,11 @@ double mescd(CVecRef y, CVecRef ref, double ratio) {
 }
 
 // HIRES at t = 321.8122 with rtol = 1e-8, atol = 1e-12 against the IVP test set's reference
-// solution (the values of Radau5.HiresMatchesPublishedReference, tests/integrators/test_adaptive.cpp):
-// mescd >= 6 (measured 10.5; 3093 steps, none rejected, 18559 f evaluations). The counters follow
-// the header's count: A accepted and R rejected trials, analytic Jacobian, autonomous model: one
-// Jacobian and f(t, y) per accepted point, 5 stage evaluations per trial, one for the starting-step
-// heuristic:
+// solution (the values of Radau5.HiresMatchesPublishedReference,
+// tests/integrators/test_adaptive.cpp): mescd >= 6 (measured 10.5; 3093 steps, none rejected, 18559
+// f evaluations). The counters follow the header's count: A accepted and R rejected trials,
+// analytic Jacobian, autonomous model: one Jacobian and f(t, y) per accepted point, 5 stage
+// evaluations per trial, one for the starting-step heuristic:
 //   f_evals = A + 5 (A + R) + 1,  jac_evals = A,  lin_solves = 6 (A + R).
 TEST(RosenbrockAdaptive, Rodas4HiresMatchesPublishedReference) {
   auto sys = model("hires");

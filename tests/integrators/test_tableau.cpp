@@ -61,8 +61,8 @@ TEST_P(TableauTest, StabilityFunctionApproximatesExponential) {
 INSTANTIATE_TEST_SUITE_P(Explicit, TableauTest, ::testing::ValuesIn(explicit_tableaux()),
                          [](const auto& param_info) { return param_info.param.name; });
 
-// Real-axis stability limit of classic RK4, -2.7853 (docs/reference-values.md table, Hairer–Wanner II
-// Fig. IV.2.1), found by bisection on |R(x)| = 1.
+// Real-axis stability limit of classic RK4, -2.7853 (docs/reference-values.md table, Hairer–Wanner
+// II Fig. IV.2.1), found by bisection on |R(x)| = 1.
 TEST(TableauStability, Rk4RealAxisLimit) {
   const ButcherTableau* rk4 = nullptr;
   for (const auto& t : explicit_tableaux())

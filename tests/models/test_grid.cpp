@@ -210,10 +210,10 @@ TEST(Fluid2d, TaylorGreenStartsDivergenceFree) {
 }
 
 // Measured decay rate -ln(E(T)/E(0))/T of the Taylor–Green kinetic energy against the PDE's
-// 16π²ν (ν = 1/Re = 0.01; docs/reference-values.md): 32 x 32 cells, T = 0.5. The spatial discretisation's
-// own rate for this mode is 16ν·sin²(πΔx)/Δx² (the 5-point stencil's eigenvalue), 0.3% low at
-// Δx = 1/32, and central advection of the discrete field adds O(Δx²); rk4 at h = 0.01 (hρ ≈ 0.8
-// on the diffusion eigenvalues, well inside its region) adds a negligible time error.
+// 16π²ν (ν = 1/Re = 0.01; docs/reference-values.md): 32 x 32 cells, T = 0.5. The spatial
+// discretisation's own rate for this mode is 16ν·sin²(πΔx)/Δx² (the 5-point stencil's eigenvalue),
+// 0.3% low at Δx = 1/32, and central advection of the discrete field adds O(Δx²); rk4 at h = 0.01
+// (hρ ≈ 0.8 on the diffusion eigenvalues, well inside its region) adds a negligible time error.
 double measured_ke_rate(const std::string& integrator, double h, std::vector<std::string> params,
                         SolveStats* stats = nullptr) {
   auto sys = model("fluid_2d", params);

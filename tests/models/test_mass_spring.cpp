@@ -1,9 +1,9 @@
 // Mass-spring networks (models/mass_spring), checked against theory and independent
 // computations: analytic K = ∂a/∂x and D = ∂a/∂v against central finite differences of the
 // acceleration; conservation laws under integrators that preserve them; the chain's normal-mode
-// frequencies and exact solution (docs/reference-values.md); Lanczos against Eigen's dense eigensolvers;
-// bitwise thread-count independence; pinned points; the constraint projection; and the
-// stiff-spring pendulum chain converging to the constrained one as k → ∞.
+// frequencies and exact solution (docs/reference-values.md); Lanczos against Eigen's dense
+// eigensolvers; bitwise thread-count independence; pinned points; the constraint projection; and
+// the stiff-spring pendulum chain converging to the constrained one as k → ∞.
 #include <gtest/gtest.h>
 #include <omp.h>
 

@@ -199,8 +199,8 @@ double central_diff2(const F& f, double r, double d) {
 
 TEST(SphKernel, GradientMatchesFiniteDifference) {
   // Independent computation: dW/dr = finite difference of W (a wrong analytic gradient is the
-  // bug docs/reference-values.md warns about). Sample points avoid r = 0 and [h - 1e-3h, h); the step is
-  // 1e-3·min(r, h - r) so the stencil stays inside one smooth piece except at the cubic
+  // bug docs/reference-values.md warns about). Sample points avoid r = 0 and [h - 1e-3h, h); the
+  // step is 1e-3·min(r, h - r) so the stencil stays inside one smooth piece except at the cubic
   // spline's q = 1/2, where it is C2 and the difference still converges.
   const int n = 400;
   double worst = 0.0;

@@ -1,8 +1,8 @@
 // SPH fluid model (models/sph), checked against theory and independent computations
-// (docs/reference-values.md, SPH): conservation of linear momentum by the antisymmetric pair forces;
-// dissipation by both viscosities (against the pair sums written out here); bounded energy error
-// of velocity Verlet on the conservative drop against explicit Euler; hydrostatic pressure in a
-// settled tank; the dam-break surge front against Koshizuka & Oka (1996); bitwise thread-count
+// (docs/reference-values.md, SPH): conservation of linear momentum by the antisymmetric pair
+// forces; dissipation by both viscosities (against the pair sums written out here); bounded energy
+// error of velocity Verlet on the conservative drop against explicit Euler; hydrostatic pressure in
+// a settled tank; the dam-break surge front against Koshizuka & Oka (1996); bitwise thread-count
 // independence; velocity dependence and the integrators that refuse it; the CFL step; particle
 // masses and the initial front.
 #include <gtest/gtest.h>
@@ -61,7 +61,8 @@ double power_scale(const SphFluid& f, CVecRef v, CVecRef a) {
   return (f.masses().array() * v.array() * a.array()).abs().sum();
 }
 
-// Wendland C2 in 2D with support h (docs/reference-values.md), written out independently of kernels.hpp.
+// Wendland C2 in 2D with support h (docs/reference-values.md), written out independently of
+// kernels.hpp.
 double wendland2d(double r, double h) {
   const double q = r / h;
   if (q >= 1.0) return 0.0;
@@ -161,7 +162,8 @@ void for_random_states(const SphFluid& f, unsigned seed, Check&& check) {
 }
 
 // Müller's viscosity with the pressure off (k = 0, so p = k(ρ - ρ0) = 0), no gravity, no walls:
-// a_i = (μ/ρ_i) Σ_j m_j (v_j - v_i)/ρ_j L(r_ij), L = 40/(π h⁵)(h - r) ≥ 0 (docs/reference-values.md), so
+// a_i = (μ/ρ_i) Σ_j m_j (v_j - v_i)/ρ_j L(r_ij), L = 40/(π h⁵)(h - r) ≥ 0
+// (docs/reference-values.md), so
 //   dKE/dt = Σ_i m_i v_i·a_i = -(μ/2) Σ_{i,j} m_i m_j L_ij/(ρ_i ρ_j) |v_i - v_j|²  ≤ 0,
 // computed here pair by pair from the model's densities and masses and compared with the
 // model's accelerations (1e-12 relative: two orderings of the same sum; measured <= 8e-15) at
@@ -289,8 +291,8 @@ TEST(SphModel, ArtificialViscosityNeverIncreasesKineticEnergy) {
 
 // The drop's defaults are the conservative model: variational pressure force, unclamped linear
 // EOS, no viscosity, no gravity, no walls, the same kernel for density and gradient; its energy
-// E = KE + Σ m u(ρ) is then conserved by the flow (docs/reference-values.md). Its equilibrium masses make
-// every particle start at ρ = ρ0 exactly, so E0 = KE0 (no surface tension to release).
+// E = KE + Σ m u(ρ) is then conserved by the flow (docs/reference-values.md). Its equilibrium
+// masses make every particle start at ρ = ρ0 exactly, so E0 = KE0 (no surface tension to release).
 //
 // Velocity Verlet is symplectic: at a stable step its energy error is that of a nearby
 // conserved modified energy, O(h²), bounded and without secular drift (backward error analysis).
@@ -559,8 +561,8 @@ DamBreakRecord dam_break_run() {
 // The default 2D dam break through T = 6: surge front against the experiment, and the run stays
 // physical (in the tank, speeds bounded, weakly compressible bulk). One run (about 4 s) for all.
 //
-// Koshizuka & Oka (1996) surge front, Z = front/a against T = t √(2g/a) (docs/reference-values.md). WCSPH
-// without gate or wall friction leads the experiment by 5–20% for T ∈ [1, 3] (PySPH's WCSPH:
+// Koshizuka & Oka (1996) surge front, Z = front/a against T = t √(2g/a) (docs/reference-values.md).
+// WCSPH without gate or wall friction leads the experiment by 5–20% for T ∈ [1, 3] (PySPH's WCSPH:
 // +8% to +19%); |Z - Z_KO| ≤ 20% Z_KO at every experimental point in [1, 3], Z interpolated
 // linearly between steps. Measured (defaults): +8.2%, +5.9%, +8.1%, +11.5%, +14.4% at
 // T = 1.153 ... 2.719 (masses=lattice: +11%, +8%, +11%, +14%, +16%).

@@ -465,8 +465,8 @@ TEST(StiffProblemsInvariants, KeptBySdirk3) {
 // ---------------------------------------------------------------------------------------------
 // Convergence of fixed-step sdirk3 (order 3): Richardson's check without a reference solution.
 // With runs at n, 2n, 4n steps, (y_n - y_2n)/(y_2n - y_4n) → 2³ = 8 in the asymptotic range;
-// docs/reference-values.md accepts an observed order within 0.2 of theory (ratio in [6.96, 9.19]). Each
-// case's step sizes were chosen in the asymptotic range (measured ratios in the comments).
+// docs/reference-values.md accepts an observed order within 0.2 of theory (ratio in [6.96, 9.19]).
+// Each case's step sizes were chosen in the asymptotic range (measured ratios in the comments).
 // Newton tolerances are tightened where its error floor (about N·tol, implicit_core.hpp) would
 // otherwise reach the differences.
 
