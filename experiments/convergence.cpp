@@ -756,7 +756,6 @@ StudyKind step_size_kind(bool local) {
                     : "global error at t_end against h = H/refine^k; writes "
                       "convergence.{csv,md,json}";
   StepStudyDefaults d;
-  d.t_end_required = !local;
   d.t_end_help = local ? "unused by the local study's error; kept for symmetry" : "final time";
   d.h_help = "coarsest step size (default: the model's suggested step, where it has one)";
   d.ref_help =

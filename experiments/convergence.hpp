@@ -78,10 +78,10 @@ struct StepStudySpec {
   void apply_defaults(const StepStudyDefaults& d);
 };
 
-// The options of StepStudySpec for the study registry: `t_end_required` (convergence) and the
-// defaults of the ladder and of the reference tolerances differ between the studies.
+// The options of StepStudySpec for the study registry (which of them a study requires is its
+// StudyKind::required); the help texts and the defaults of the ladder and of the reference
+// tolerances differ between the studies.
 struct StepStudyDefaults {
-  bool t_end_required = false;
   std::string t_end_help, h_help;
   std::string ladder_levels = "5", ref_rtol, ref_atol, ref_help;
 };

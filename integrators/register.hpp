@@ -13,10 +13,6 @@ void register_graphics_integrators(IntegratorRegistry& reg);
 // Operator-splitting schemes for particular model classes (Family::operator_splitting, printed
 // "splitting"; stable_fluids: grid fluids).
 void register_operator_splitting_integrators(IntegratorRegistry& reg);
-// The former name of register_operator_splitting_integrators, kept while callers move over.
-inline void register_splitting_integrators(IntegratorRegistry& reg) {
-  register_operator_splitting_integrators(reg);
-}
 // The library references (integrators/reference/).
 void register_reference_integrators(IntegratorRegistry& reg);
 
