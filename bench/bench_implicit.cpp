@@ -113,7 +113,7 @@ void testbed_bw_run(benchmark::State& st, const std::string& key, const Params& 
       st.SkipWithError((to_string(r.stats.status) + ": " + r.stats.message).c_str());
       break;
     }
-    krylov += r.stats.krylov_iters;
+    krylov += r.stats.linear_iters;
   }
   if (st.error_occurred()) return;
   finals()[key] = r.y;

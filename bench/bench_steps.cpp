@@ -74,7 +74,7 @@ void integrator_step(benchmark::State& st, long side, const std::string& name, c
   const double f_time =
       best_seconds_per_call([&] { mech->acceleration(t, y.head(n), y.tail(n), a); }, 3);
   sys.reset_counters();
-  const long jac_before = stats.jac_evals, krylov_before = stats.krylov_iters,
+  const long jac_before = stats.jac_evals, krylov_before = stats.linear_iters,
              newton_before = stats.newton_iters;
   long steps = 0;
   const double start = now_seconds();
@@ -107,9 +107,9 @@ void integrator_step(benchmark::State& st, long side, const std::string& name, c
   if (stats.newton_iters > newton_before)
     st.counters["newton/step"] =
         static_cast<double>(stats.newton_iters - newton_before) / static_cast<double>(steps);
-  if (stats.krylov_iters > krylov_before)
+  if (stats.linear_iters > krylov_before)
     st.counters["krylov/step"] =
-        static_cast<double>(stats.krylov_iters - krylov_before) / static_cast<double>(steps);
+        static_cast<double>(stats.linear_iters - krylov_before) / static_cast<double>(steps);
   st.counters["f_time"] = f_time;
   st.counters["overhead"] = f_per_step > 0 ? per_step / (f_per_step * f_time) : 0.0;
   st.counters["allocs/step"] = static_cast<double>(allocs) / static_cast<double>(steps);

@@ -23,9 +23,20 @@ std::string to_string(Status s) {
   return "?";
 }
 
+std::vector<std::string> SolveStats::counter_names() {
+  return {"newton_iters", "newton_conv_failures", "error_test_failures", "linear_setups",
+          "linear_iters"};
+}
+
+std::vector<std::string> SolveStats::counter_values() const {
+  return {std::to_string(newton_iters), std::to_string(newton_conv_failures),
+          std::to_string(error_test_failures), std::to_string(linear_setups),
+          std::to_string(linear_iters)};
+}
+
 std::vector<std::string> SolveStats::field_names() {
-  return {"status",     "steps",        "rejected_steps", "f_evals",      "jac_evals", "lin_setups",
-          "lin_solves", "newton_iters", "newton_fails",   "krylov_iters", "wall_s"};
+  return {"status",     "steps",        "error_test_failures", "f_evals",      "jac_evals", "linear_setups",
+          "lin_solves", "newton_iters", "newton_conv_failures",   "linear_iters", "wall_s"};
 }
 
 std::vector<std::string> SolveStats::field_values() const {
@@ -33,14 +44,14 @@ std::vector<std::string> SolveStats::field_values() const {
   wall << std::setprecision(6) << wall_s;
   return {to_string(status),
           std::to_string(steps),
-          std::to_string(rejected_steps),
+          std::to_string(error_test_failures),
           std::to_string(f_evals),
           std::to_string(jac_evals),
-          std::to_string(lin_setups),
+          std::to_string(linear_setups),
           std::to_string(lin_solves),
           std::to_string(newton_iters),
-          std::to_string(newton_fails),
-          std::to_string(krylov_iters),
+          std::to_string(newton_conv_failures),
+          std::to_string(linear_iters),
           wall.str()};
 }
 

@@ -16,14 +16,15 @@ std::string to_string(Status s);
 
 struct SolveStats {
   long steps = 0;
-  long rejected_steps = 0;
+  long error_test_failures = 0;  // rejected steps: the error test failed (adaptive runs)
   long f_evals = 0;    // counted at the system boundary (rhs and acceleration calls)
   long jac_evals = 0;  // analytic Jacobian evaluations (finite-difference ones count as f_evals)
-  long lin_setups = 0;
+  long linear_setups = 0;  // matrix assemblies / factorizations (Krylov: preconditioner set-ups)
   long lin_solves = 0;
   long newton_iters = 0;
-  long newton_fails = 0;
-  long krylov_iters = 0;
+  long newton_conv_failures = 0;  // Newton solves that did not converge (the step was retried
+                                  // or the run ended with newton_failed)
+  long linear_iters = 0;          // Krylov iterations
   // The library's own count of f evaluations (references only; -1 when not reported). It can
   // differ from f_evals, which the testbed counts at the system boundary: see the reference
   // integrators' headers for why.
@@ -32,6 +33,13 @@ struct SolveStats {
   Status status = Status::ok;
   std::string message;         // why a run did not end ok (empty otherwise)
   std::string library_report;  // a library's own statistics printout (references), or empty
+
+  // The solver counters every study's CSV carries beside f_evals, jac_evals and lin_solves, in
+  // this order: newton_iters, newton_conv_failures, error_test_failures (rejected steps),
+  // linear_setups (matrix assemblies / factorizations), linear_iters (Krylov iterations). The
+  // names are the columns' names (a contract, docs/design.md).
+  static std::vector<std::string> counter_names();
+  std::vector<std::string> counter_values() const;
 
   // Field names and values in a fixed order, shared by the table and CSV printers.
   static std::vector<std::string> field_names();

@@ -121,7 +121,7 @@ Status ProjectiveDynamics::step(const OdeSystem& sys, double t, VecRef y, double
   double* x = y.data();
   double* v = y.data() + n;
   if (h != factored_h_) {
-    ++stats.lin_setups;
+    ++stats.linear_setups;
     if (!factor(h)) {
       std::ostringstream msg;
       msg << "projective_dynamics: M + h^2 L refused at t = " << t << ": " << solver_->error();

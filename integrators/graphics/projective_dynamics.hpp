@@ -25,7 +25,7 @@
 // Distance constraints of the model are enforced by the driver's projection, as for every
 // integrator. Cost per step: `iterations` × (one pass over the springs + dim triangular solve
 // pairs); no f evaluations (f_evals stays 0: compare cost by wall time). Counted in the stats:
-// lin_setups (factorisations), lin_solves (dim per iteration).
+// linear_setups (factorisations), lin_solves (dim per iteration).
 #pragma once
 
 #include <memory>

@@ -43,7 +43,7 @@ Status BaraffWitkin::step(const OdeSystem& sys, double t, VecRef y, double h, So
   r_.head(n) = h * v;
   solver_.update(t, y);
   ++stats.jac_evals;
-  ++stats.lin_setups;
+  ++stats.linear_setups;
   const auto fail = [&](const char* what) {
     std::ostringstream msg;
     msg << "baraff_witkin: " << what << " at t = " << t << ": " << solver_.error();
@@ -53,7 +53,7 @@ Status BaraffWitkin::step(const OdeSystem& sys, double t, VecRef y, double h, So
   if (!solver_.factor(h)) return fail("matrix M - hD - h^2 K refused");
   ++stats.lin_solves;
   const LinearSolveResult r = solver_.solve(r_, k_);
-  stats.krylov_iters += r.iterations;
+  stats.linear_iters += r.iterations;
   if (!r.ok) return fail("linear solve failed");
   if (!k_.allFinite()) return fail("non-finite solution");
   v += k_.tail(n);

@@ -315,7 +315,7 @@ Status DirkIntegrator::advance_to(const OdeSystem& sys, double t_out, VecRef y, 
   };
   const Status st = advance_adaptive(ctrl_, t_, t_out, h_, counts_, stats.message, trial, commit);
   stats.steps = counts_.accepted;
-  stats.rejected_steps = counts_.rejected;
+  stats.error_test_failures = counts_.rejected;
   return st;
 }
 

@@ -43,8 +43,8 @@
 // like -(√2/3) hλ (the raw estimate of a stiff component ∝ |hλ|, the filtered one bounded),
 // esdirk43's R̂(∞) = -0.15 (values from the tableaux, tests/test_esdirk_gauss.cpp).
 // The shared controller (integrators/adaptive/controller.hpp) runs with k = p̂ + 1. A Newton or
-// linear-solver failure rejects the trial and retries with h/2 (counted in rejected_steps;
-// Newton failures also in newton_fails). The Newton tolerance of a trial (in
+// linear-solver failure rejects the trial and retries with h/2 (counted in error_test_failures;
+// Newton failures also in newton_conv_failures). The Newton tolerance of a trial (in
 // ImplicitCore's norm, relative to 1 + |z_i|) is max(0.01 min_i (atol + rtol |y_i|)/(1 + |y_i|),
 // 1e-14), in place of newton_tol: the Newton error stays two orders below the error the
 // controller allows in every component (else the estimate measures Newton noise and the steps

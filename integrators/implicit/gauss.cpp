@@ -302,11 +302,11 @@ Status GaussCollocation::step(const OdeSystem& sys, double t, VecRef y, double h
   const SparseMat& jac = core_.jacobian_matrix();
   bool ok = true;
   for (std::size_t r = 0; r < real_.size(); ++r) {
-    ++stats.lin_setups;
+    ++stats.linear_setups;
     ok = ok && real_[r].factor(k_.real[r] / h, jac);
   }
   for (std::size_t p = 0; p < complex_.size(); ++p) {
-    ++stats.lin_setups;
+    ++stats.linear_setups;
     ok = ok && complex_[p].factor(std::complex<double>(k_.a[p], -k_.b[p]) / h, jac);
   }
   if (!ok) {
@@ -314,7 +314,7 @@ Status GaussCollocation::step(const OdeSystem& sys, double t, VecRef y, double h
     return Status::solver_error;
   }
   if (!solve_stages(sys, t, y, h, stats)) {
-    ++stats.newton_fails;
+    ++stats.newton_conv_failures;
     have_prev_ = false;
     stats.message = info().name +
                     ": simplified Newton did not converge at t = " + std::to_string(t) +

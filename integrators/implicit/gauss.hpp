@@ -35,7 +35,7 @@
 // each step. Failure (θ ≥ 0.99 above tolerance, non-finite values, newton_max_iter iterations) ends
 // the run with newton_failed.
 //
-// Counting: s f evaluations per Newton iteration; lin_setups +1 per factorisation (real or
+// Counting: s f evaluations per Newton iteration; linear_setups +1 per factorisation (real or
 // complex), lin_solves +1 per system solved; J at every step (analytic, or finite differences
 // through the shared ImplicitCore, always the first-order form of mechanical systems). The
 // dense path allocates nothing per step; Eigen's SparseLU allocates in factorize().

@@ -394,7 +394,7 @@ bool ImplicitCore::prepare(double hg, SolveStats& stats) {
   w_hg_ = hg;
   w_current_ = true;
   if (source_ == JacobianSource::matrix_free) return true;
-  ++stats.lin_setups;
+  ++stats.linear_setups;
   if (velocity_) {
     const bool ok = velocity_->factor(hg);
     if (!ok) {
@@ -433,7 +433,7 @@ bool ImplicitCore::solve(CVecRef b, VecRef x, SolveStats& stats) {
     r = solver_->solve(b, x);
     if (!r.ok) error_ = solver_->error();
   }
-  stats.krylov_iters += r.iterations;
+  stats.linear_iters += r.iterations;
   if (r.ok && !x.allFinite()) {
     error_ = to_string(linear_solver()) + ": non-finite solution";
     return false;
@@ -537,7 +537,7 @@ Status ImplicitCore::solve_stage(const OdeSystem& sys, double t, CVecRef psi, do
     }
   }
   if (linear_failed) return linear_failure(t, stats);
-  ++stats.newton_fails;
+  ++stats.newton_conv_failures;
   std::ostringstream msg;
   msg << "Newton did not converge at t = " << t << " (hγ = " << hg << ", " << opt_.newton_max_iter
       << " iterations max, tol " << opt_.newton_tol << ")";

@@ -416,7 +416,7 @@ Status Rosenbrock::advance_to(const OdeSystem& sys, double t_out, VecRef y, Solv
   };
   const Status st = advance_adaptive(ctrl_, t_, t_out, h_, counts_, stats.message, trial, commit);
   stats.steps = counts_.accepted;
-  stats.rejected_steps = counts_.rejected;
+  stats.error_test_failures = counts_.rejected;
   return st;
 }
 

@@ -265,7 +265,7 @@ bool Radau5::ensure_factors(double h, SolveStats& stats) {
   if (fact_valid_ && h == fact_h_) return true;
   const Radau5Constants& k = radau5_constants();
   const SparseMat& jac = core_.jacobian_matrix();
-  stats.lin_setups += 2;
+  stats.linear_setups += 2;
   fact_h_ = h;
   fact_valid_ = real_.factor(k.gamma_hat / h, jac) &&
                 complex_.factor(std::complex<double>(k.a, -k.b) / h, jac);
@@ -403,7 +403,7 @@ Status Radau5::step(const OdeSystem& sys, double t, VecRef y, double h, SolveSta
     return Status::solver_error;
   }
   if (!solve_stages(sys, t, y, h, false, stats)) {
-    ++stats.newton_fails;
+    ++stats.newton_conv_failures;
     have_prev_ = false;
     return Status::newton_failed;
   }
@@ -435,7 +435,7 @@ Status Radau5::advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveSta
     ensure_jacobian(sys, t, y, stats);
     if (!ensure_factors(h, stats)) return TrialResult{0.0, 0.5};
     if (!solve_stages(sys, t, y, h, true, stats)) {
-      ++stats.newton_fails;
+      ++stats.newton_conv_failures;
       return TrialResult{0.0, 0.5};
     }
     ynew_ = y + z_.col(2);
@@ -449,7 +449,7 @@ Status Radau5::advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveSta
   };
   const Status st = advance_adaptive(ctrl_, t_, t_out, h_, counts_, stats.message, trial, commit);
   stats.steps = counts_.accepted;
-  stats.rejected_steps = counts_.rejected;
+  stats.error_test_failures = counts_.rejected;
   return st;
 }
 

@@ -34,8 +34,8 @@
 // estimate is O(h⁴), so the shared controller (integrators/adaptive/controller.hpp) uses k = 4.
 //
 // Counting: f evaluations at the system boundary (3 per Newton iteration, f(t_n, y_n) once per
-// new point, finite-difference Jacobian columns); newton_iters; lin_setups +2 per factorisation
-// pair; lin_solves +2 per Newton iteration (+1 per error estimate); steps and rejected_steps.
+// new point, finite-difference Jacobian columns); newton_iters; linear_setups +2 per factorisation
+// pair; lin_solves +2 per Newton iteration (+1 per error estimate); steps and error_test_failures.
 // The dense path allocates nothing per step; Eigen's SparseLU allocates in factorize().
 #pragma once
 

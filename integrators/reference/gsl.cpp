@@ -231,7 +231,7 @@ class GslIntegrator final : public Integrator {
   Status finish(int status, double tt, VecRef y, SolveStats& stats, bool fixed) {
     if (!fixed) {
       stats.steps = static_cast<long>(driver_->e->count);
-      stats.rejected_steps = static_cast<long>(driver_->e->failed_steps);
+      stats.error_test_failures = static_cast<long>(driver_->e->failed_steps);
     }
     stats.jac_evals = fd_jacobians_;
     if (status != GSL_SUCCESS) {

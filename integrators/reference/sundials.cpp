@@ -638,12 +638,12 @@ class SundialsFrontEnd : public Integrator {
   void read_counters(SolveStats& s) {
     const Counters c = counters(s);
     if (!fixed_mode_) s.steps = c.steps;  // the fixed-step driver counts its own steps
-    s.rejected_steps = c.etf;
+    s.error_test_failures = c.etf;
     s.newton_iters = c.nni;
-    s.newton_fails = c.ncf;
-    s.lin_setups = c.nsetups;
+    s.newton_conv_failures = c.ncf;
+    s.linear_setups = c.nsetups;
     s.lin_solves = needs_linear_solver() ? c.nni : 0;  // one linear solve per Newton iteration
-    s.krylov_iters = c.nli;
+    s.linear_iters = c.nli;
     // Analytic Jacobians through OdeSystem::jacobian() are counted at the system boundary,
     // force_jacobians() calls here; difference-quotient ones are the library's count.
     s.jac_evals = adapter_.use_analytic() ? adapter_.force_jacobian_evals() : c.nje;

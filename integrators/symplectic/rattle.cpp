@@ -82,7 +82,7 @@ bool Rattle::project_velocity(VecRef v, SolveStats& stats) {
   const SparseMat wg = w_.asDiagonal() * SparseMat(g_new_.transpose());
   const SparseMat a = g_new_ * wg;
   ldlt_.compute(a);
-  ++stats.lin_setups;
+  ++stats.linear_setups;
   if (ldlt_.info() != Eigen::Success) return false;
   const double tol = opt_.constraint_tol * std::max(1.0, max_abs(v));
   for (int pass = 0; pass < 3; ++pass) {
@@ -136,7 +136,7 @@ Status Rattle::step(const OdeSystem& sys, double t, VecRef y, double h, SolveSta
     cons_->constraint_jacobian(step_, g_new_);
     const SparseMat jac = g_new_ * wgt_;  // ∂g(x̄ - W G_nᵀ Λ)/∂Λ = -G(x^k) W G_nᵀ
     lu_.compute(jac);
-    ++stats.lin_setups;
+    ++stats.linear_setups;
     ++stats.newton_iters;
     if (lu_.info() != Eigen::Success) {
       singular = true;
@@ -148,7 +148,7 @@ Status Rattle::step(const OdeSystem& sys, double t, VecRef y, double h, SolveSta
   }
   if (!converged) {
     started_ = false;  // g_new_ holds a Newton iterate's G now: a retry starts afresh
-    ++stats.newton_fails;
+    ++stats.newton_conv_failures;
     std::ostringstream msg;
     msg << "rattle: the position constraint g(x) = 0 ";
     if (singular)
@@ -171,7 +171,7 @@ Status Rattle::step(const OdeSystem& sys, double t, VecRef y, double h, SolveSta
     cons_->constraint_jacobian(x, g_new_);
     if (!project_velocity(v, stats)) {
       started_ = false;
-      ++stats.newton_fails;
+      ++stats.newton_conv_failures;
       stats.message = "rattle: the velocity constraint G(x) v = 0 could not be solved at t = " +
                       std::to_string(t + h) + " (singular G M^-1 G^T: dependent constraints?)";
       return Status::solver_error;

@@ -312,7 +312,7 @@ TEST(Rattle, ReportsFailedConstraintSolves) {
   EXPECT_EQ(r.stats.status, Status::newton_failed);
   EXPECT_NE(r.stats.message.find("did not converge in 1 Newton"), std::string::npos)
       << r.stats.message;
-  EXPECT_EQ(r.stats.newton_fails, 1);
+  EXPECT_EQ(r.stats.newton_conv_failures, 1);
 
   std::vector<MassPoint> pts(3);
   pts[0].pinned = true;
