@@ -242,15 +242,29 @@ Table energy_table(const EnergyResult& r) {
   return t;
 }
 
+// The columns of before issue 24 first, then the run's counters (docs/design.md).
 Table energy_summary_table(const EnergyResult& r) {
   Table t{{"model", "integrator", "h", "t_end", "max_rel_error", "final_rel_error", "drift_rate",
-           "growth", "status"},
+           "growth", "status", "steps", "f_evals", "jac_evals", "lin_solves"},
           {}};
-  for (const auto& run : r.runs)
-    t.rows.push_back({r.model, run.integrator, format_full(run.h), format_full(run.t_end),
-                      format_full(run.max_rel_error), format_full(run.final_rel_error),
-                      format_full(run.drift_rate), optional_full(run.growth_ratio),
-                      to_string(run.stats.status)});
+  for (const auto& c : SolveStats::counter_names()) t.columns.push_back(c);
+  for (const auto& run : r.runs) {
+    std::vector<std::string> row = {r.model,
+                                    run.integrator,
+                                    format_full(run.h),
+                                    format_full(run.t_end),
+                                    format_full(run.max_rel_error),
+                                    format_full(run.final_rel_error),
+                                    format_full(run.drift_rate),
+                                    optional_full(run.growth_ratio),
+                                    to_string(run.stats.status),
+                                    std::to_string(run.stats.steps),
+                                    std::to_string(run.stats.f_evals),
+                                    std::to_string(run.stats.jac_evals),
+                                    std::to_string(run.stats.lin_solves)};
+    for (auto& v : run.stats.counter_values()) row.push_back(std::move(v));
+    t.rows.push_back(std::move(row));
+  }
   return t;
 }
 
@@ -263,6 +277,17 @@ Table energy_markdown_table(const EnergyResult& r) {
                              ? "max abs. error "
                              : "max rel. error ") +
                         r.other_invariants[i]);
+  // f evaluations, and of the solver counters those some run reports (implicit methods).
+  t.columns.push_back("f_evals");
+  std::vector<std::size_t> counters;
+  const auto names = SolveStats::counter_names();
+  for (std::size_t c = 0; c < names.size(); ++c)
+    for (const auto& run : r.runs)
+      if (run.stats.counter_values()[c] != "0") {
+        counters.push_back(c);
+        t.columns.push_back(names[c]);
+        break;
+      }
   t.columns.push_back("wall s");
   for (const auto& run : r.runs) {
     std::vector<std::string> row = {run.integrator,
@@ -274,6 +299,9 @@ Table energy_markdown_table(const EnergyResult& r) {
                                     run.growth_ratio ? format_short(*run.growth_ratio, 2) : "-",
                                     to_string(run.stats.status)};
     for (const auto& [name, value] : run.other_max_rel_error) row.push_back(format_short(value, 2));
+    row.push_back(std::to_string(run.stats.f_evals));
+    const auto values = run.stats.counter_values();
+    for (std::size_t c : counters) row.push_back(values[c]);
     row.push_back(format_short(run.stats.wall_s, 2));
     t.rows.push_back(std::move(row));
   }

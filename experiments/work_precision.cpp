@@ -1,5 +1,6 @@
 #include "experiments/work_precision.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -31,6 +32,65 @@ StepStudyDefaults work_precision_defaults() {
 
 }  // namespace
 
+std::size_t uniform_index(std::mt19937_64& rng, std::size_t n) {
+  // Rejection: draws above the largest multiple of n are redrawn, so every index is equally
+  // likely (2^64 mod n of the 2^64 values are rejected).
+  const std::uint64_t range = static_cast<std::uint64_t>(n);
+  const std::uint64_t limit =
+      std::numeric_limits<std::uint64_t>::max() - std::numeric_limits<std::uint64_t>::max() % range;
+  std::uint64_t x = rng();
+  while (x >= limit) x = rng();
+  return static_cast<std::size_t>(x % range);
+}
+
+std::vector<std::size_t> run_order(std::size_t n, std::uint64_t seed, std::uint64_t round) {
+  std::vector<std::size_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = i;
+  std::seed_seq seq{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32),
+                    static_cast<std::uint32_t>(round), 0u};
+  std::mt19937_64 rng(seq);
+  for (std::size_t i = n; i > 1; --i) std::swap(order[i - 1], order[uniform_index(rng, i)]);
+  return order;
+}
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const std::size_t m = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m), v.end());
+  if (v.size() % 2 == 1) return v[m];
+  const double hi = v[m];
+  const double lo = *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m));
+  return 0.5 * (lo + hi);
+}
+
+TimingSpread timing_spread(const std::vector<double>& samples, std::uint64_t seed,
+                           std::uint64_t stream, int resamples) {
+  if (samples.empty()) throw std::logic_error("timing_spread: empty sample");
+  if (resamples < 1) throw std::logic_error("timing_spread: resamples must be >= 1");
+  TimingSpread t;
+  t.repeats = static_cast<int>(samples.size());
+  t.median = median_of(samples);
+  t.min = *std::min_element(samples.begin(), samples.end());
+  std::seed_seq seq{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32),
+                    static_cast<std::uint32_t>(stream), static_cast<std::uint32_t>(stream >> 32),
+                    1u};
+  std::mt19937_64 rng(seq);
+  std::vector<double> medians(static_cast<std::size_t>(resamples)), draw(samples.size());
+  for (auto& m : medians) {
+    for (auto& d : draw) d = samples[uniform_index(rng, samples.size())];
+    m = median_of(draw);
+  }
+  std::sort(medians.begin(), medians.end());
+  // m_(ceil(q·B)), 1-based.
+  const auto quantile = [&](double q) {
+    const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(resamples) - 1e-9));
+    return medians[std::clamp<std::size_t>(k, 1, medians.size()) - 1];
+  };
+  t.ci_low = quantile(0.025);
+  t.ci_high = quantile(0.975);
+  return t;
+}
+
 WorkPrecisionSpec::WorkPrecisionSpec() {
   t_end = 0;
   h = 0;
@@ -43,10 +103,30 @@ nlohmann::json WorkPrecisionSpec::to_json() const {
   j["rtol_max"] = rtol_max;
   j["atol_factor"] = atol_factor;
   j["repeats"] = repeats;
+  j["seed"] = seed;
   return j;
 }
 
 namespace {
+
+// The first field in which a repeat differs from the first run ("" when none): the status, the
+// final state (bit for bit) and every SolveStats field but the wall time.
+std::string repeat_mismatch(const RunResult& a, const RunResult& b) {
+  if (a.stats.status != b.stats.status)
+    return "status (" + to_string(b.stats.status) + " against " + to_string(a.stats.status) + ")";
+  if (a.y.size() != b.y.size() || a.y != b.y)
+    return "the final state (max difference " +
+           (a.y.size() == b.y.size() ? format_short(max_abs_diff(a.y, b.y)) : "size") + ")";
+  const auto names = SolveStats::field_names();
+  const auto va = a.stats.field_values(), vb = b.stats.field_values();
+  for (std::size_t i = 0; i < names.size(); ++i)
+    if (names[i] != "wall_s" && va[i] != vb[i])
+      return names[i] + " (" + vb[i] + " against " + va[i] + ")";
+  if (a.stats.library_f_evals != b.stats.library_f_evals)
+    return "library_f_evals (" + std::to_string(b.stats.library_f_evals) + " against " +
+           std::to_string(a.stats.library_f_evals) + ")";
+  return {};
+}
 
 double mescd(CVecRef y, CVecRef ref, double ratio) {
   double m = 0;
@@ -102,69 +182,182 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
   const Vec ref = reference_at_end(spec, sys, spec.t_end, hs.back(), &res.reference_description);
   if (progress) *progress << "reference: " << res.reference_description << "\n";
 
-  std::size_t total = 0, done = 0;
-  for (const auto& integ : setup.integrators)
-    total += integ->supports_adaptive() ? tols.size() : hs.size();
+  // The points in the rows' order; run in rounds (see kRepeatBudget in the header).
+  struct Point {
+    std::size_t integ, k;
+    bool adaptive;
+    RunResult first;
+    std::vector<double> walls;
+    bool stopped = false;
+    std::string mismatch;
+  };
+  std::vector<Point> points;
   for (std::size_t i = 0; i < setup.integrators.size(); ++i) {
-    const std::string name = spec.integrators[i];
     const bool adaptive = setup.integrators[i]->supports_adaptive();
-    const std::size_t n_settings = adaptive ? tols.size() : hs.size();
-    for (std::size_t k = 0; k < n_settings; ++k) {
-      WorkPrecisionRow row;
-      row.model = spec.model;
-      row.integrator = name;
-      double best_wall = std::numeric_limits<double>::infinity();
-      RunResult r;
-      for (int rep = 0; rep < spec.repeats; ++rep) {
-        if (adaptive) {
-          Params p = spec.params;
-          p.set("rtol", format_full(tols[k]));
-          p.set("atol", format_full(tols[k] * spec.atol_factor));
-          auto integ = integrator_registry().create(name, p);
-          r = run_adaptive(sys, *integ, {spec.t_end, 0});
-          row.setting = "rtol=" + format_short(tols[k], 0);
-        } else {
-          FixedStepOptions opt;
-          opt.t_end = spec.t_end;
-          opt.h = hs[k];
-          r = run_fixed_step(sys, *setup.integrators[i], opt);
-          row.setting = "h=" + format_full(r.h);
+    for (std::size_t k = 0; k < (adaptive ? tols.size() : hs.size()); ++k)
+      points.push_back(Point{i, k, adaptive, {}, {}, false, {}});
+  }
+  const auto run_point = [&](const Point& p) {
+    const std::string& name = spec.integrators[p.integ];
+    if (p.adaptive) {
+      Params prm = spec.params;
+      prm.set("rtol", format_full(tols[p.k]));
+      prm.set("atol", format_full(tols[p.k] * spec.atol_factor));
+      auto integ = integrator_registry().create(name, prm);
+      return run_adaptive(sys, *integ, {spec.t_end, 0});
+    }
+    FixedStepOptions opt;
+    opt.t_end = spec.t_end;
+    opt.h = hs[p.k];
+    return run_fixed_step(sys, *setup.integrators[p.integ], opt);
+  };
+  const auto repeats_more = [&](const Point& p) {
+    double total = 0;
+    for (double w : p.walls) total += w;
+    return !p.stopped && static_cast<int>(p.walls.size()) < spec.repeats &&
+           p.walls.front() < kRepeatLongRun && total < kRepeatBudget;
+  };
+
+  std::size_t done = 0;
+  for (int round = 1; round <= spec.repeats; ++round) {
+    std::size_t ran = 0;
+    double spent = 0;
+    for (const std::size_t idx : run_order(points.size(), spec.seed, round)) {
+      Point& p = points[idx];
+      if (round > 1 && !repeats_more(p)) continue;
+      RunResult r = run_point(p);
+      ++ran;
+      spent += r.stats.wall_s;
+      if (round == 1) {
+        p.walls.push_back(r.stats.wall_s);
+        p.stopped = r.stats.status != Status::ok;  // a failed run is not repeated
+        p.first = std::move(r);
+        if (progress) {
+          const RunResult& f = p.first;
+          const bool ok = f.stats.status == Status::ok;
+          *progress << "[" << ++done << "/" << points.size() << "] " << spec.integrators[p.integ]
+                    << " "
+                    << (p.adaptive ? "rtol=" + format_short(tols[p.k], 0) : "h=" + format_full(f.h))
+                    << " error="
+                    << (ok ? format_short(max_abs_diff(f.y, ref)) : to_string(f.stats.status))
+                    << " f_evals=" << f.stats.f_evals << " (" << format_short(f.stats.wall_s, 2)
+                    << " s)\n"
+                    << std::flush;
         }
-        best_wall = std::min(best_wall, r.stats.wall_s);
-        if (r.stats.status != Status::ok) break;  // a failed run is not repeated
-      }
-      row.stats = r.stats;
-      row.stats.wall_s = best_wall;
-      const bool ok = r.stats.status == Status::ok;
-      row.error = ok ? max_abs_diff(r.y, ref) : std::numeric_limits<double>::quiet_NaN();
-      row.mescd = ok ? mescd(r.y, ref, spec.atol_factor) : std::numeric_limits<double>::quiet_NaN();
-      res.rows.push_back(row);
-      if (progress) {
-        *progress << "[" << ++done << "/" << total << "] " << name << " " << row.setting
-                  << " error=" << (ok ? format_short(row.error) : to_string(r.stats.status))
-                  << " f_evals=" << row.stats.f_evals << " (" << format_short(best_wall, 2)
-                  << " s)\n"
-                  << std::flush;
+      } else if (r.stats.status == Status::timeout) {
+        p.stopped = true;  // over --max-wall: the runs so far stand
+      } else {
+        p.mismatch = repeat_mismatch(p.first, r);
+        if (!p.mismatch.empty()) {
+          p.mismatch = "not deterministic: run " + std::to_string(p.walls.size() + 1) +
+                       " differs from run 1 in " + p.mismatch;
+          p.stopped = true;
+        } else {
+          p.walls.push_back(r.stats.wall_s);
+        }
       }
     }
+    if (progress && round > 1 && ran > 0)
+      *progress << "repeat round " << round << "/" << spec.repeats << ": " << ran << " runs ("
+                << format_short(spent, 2) << " s)\n"
+                << std::flush;
+    if (ran == 0) break;
+  }
+
+  for (std::size_t idx = 0; idx < points.size(); ++idx) {
+    const Point& p = points[idx];
+    WorkPrecisionRow row;
+    row.model = spec.model;
+    row.integrator = spec.integrators[p.integ];
+    row.setting = p.adaptive ? "rtol=" + format_short(tols[p.k], 0) : "h=" + format_full(p.first.h);
+    row.stats = p.first.stats;
+    row.wall = timing_spread(p.walls, spec.seed, idx);
+    row.stats.wall_s = row.wall.median;
+    if (!p.mismatch.empty()) {
+      row.stats.status = Status::error;
+      row.stats.message = p.mismatch;
+    }
+    const bool ok = row.stats.status == Status::ok;
+    row.error = ok ? max_abs_diff(p.first.y, ref) : std::numeric_limits<double>::quiet_NaN();
+    row.mescd =
+        ok ? mescd(p.first.y, ref, spec.atol_factor) : std::numeric_limits<double>::quiet_NaN();
+    res.rows.push_back(std::move(row));
   }
   return res;
 }
 
+// The CSV contract: the columns of before issue 24 first, then the solver counters and the
+// timing spread (docs/design.md, output files).
 Table work_precision_table(const WorkPrecisionResult& res) {
   Table t{{"model", "integrator", "setting", "error", "f_evals", "jac_evals", "lin_solves", "steps",
            "wall_s", "status", "mescd"},
           {}};
+  for (const auto& c : SolveStats::counter_names()) t.columns.push_back(c);
+  for (const char* c :
+       {"wall_s_median", "wall_s_min", "wall_s_ci_low", "wall_s_ci_high", "repeats"})
+    t.columns.push_back(c);
   for (const auto& r : res.rows) {
     const bool ok = r.stats.status == Status::ok;
-    t.rows.push_back({r.model, r.integrator, r.setting, ok ? format_full(r.error) : "",
-                      std::to_string(r.stats.f_evals), std::to_string(r.stats.jac_evals),
-                      std::to_string(r.stats.lin_solves), std::to_string(r.stats.steps),
-                      format_full(r.stats.wall_s), to_string(r.stats.status),
-                      ok ? format_full(r.mescd) : ""});
+    std::vector<std::string> row = {r.model,
+                                    r.integrator,
+                                    r.setting,
+                                    ok ? format_full(r.error) : "",
+                                    std::to_string(r.stats.f_evals),
+                                    std::to_string(r.stats.jac_evals),
+                                    std::to_string(r.stats.lin_solves),
+                                    std::to_string(r.stats.steps),
+                                    format_full(r.wall.median),
+                                    to_string(r.stats.status),
+                                    ok ? format_full(r.mescd) : ""};
+    for (auto& v : r.stats.counter_values()) row.push_back(std::move(v));
+    for (double w : {r.wall.median, r.wall.min, r.wall.ci_low, r.wall.ci_high})
+      row.push_back(format_full(w));
+    row.push_back(std::to_string(r.wall.repeats));
+    t.rows.push_back(std::move(row));
   }
   return t;
 }
+
+namespace {
+
+// The Markdown table: errors and times to a few digits, the wall time as "median [low, high]",
+// and of the solver counters only those some row reports (non-zero).
+Table work_precision_markdown_table(const WorkPrecisionResult& res) {
+  const Table full = work_precision_table(res);
+  const auto col = [&](const std::string& name) {
+    return static_cast<std::size_t>(std::find(full.columns.begin(), full.columns.end(), name) -
+                                    full.columns.begin());
+  };
+  std::vector<std::string> shown = {"integrator", "setting", "error",     "mescd",
+                                    "steps",      "f_evals", "jac_evals", "lin_solves"};
+  for (const auto& c : SolveStats::counter_names())
+    for (const auto& row : full.rows)
+      if (row[col(c)] != "0") {
+        shown.push_back(c);
+        break;
+      }
+  Table t{shown, {}};
+  t.columns.insert(t.columns.end(), {"wall s (median)", "95% interval", "repeats", "status"});
+  for (const auto& row : full.rows) {
+    std::vector<std::string> out;
+    for (const auto& c : shown) {
+      const std::string& v = row[col(c)];
+      out.push_back(v.empty()      ? ""
+                    : c == "error" ? format_short(std::stod(v))
+                    : c == "mescd" ? format_fixed(std::stod(v), 2)
+                                   : v);
+    }
+    out.push_back(format_short(std::stod(row[col("wall_s_median")]), 2));
+    out.push_back("[" + format_short(std::stod(row[col("wall_s_ci_low")]), 2) + ", " +
+                  format_short(std::stod(row[col("wall_s_ci_high")]), 2) + "]");
+    out.push_back(row[col("repeats")]);
+    out.push_back(row[col("status")]);
+    t.rows.push_back(std::move(out));
+  }
+  return t;
+}
+
+}  // namespace
 
 void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpec& spec,
                                   const WorkPrecisionResult& res) {
@@ -175,22 +368,30 @@ void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpe
   md << "# Work-precision: " << spec.model
      << "\n\nError: max-norm at t_end = " << format_full(res.t_end) << " against "
      << res.reference_description << "; mescd with atol/rtol = " << format_full(spec.atol_factor)
-     << "; wall time: minimum over " << spec.repeats << " runs.\n\n";
-  Table short_t = t;
-  for (auto& row : short_t.rows) {
-    if (!row[3].empty()) row[3] = format_short(std::stod(row[3]));
-    row[8] = format_short(std::stod(row[8]), 2);
-    if (!row[10].empty()) row[10] = format_fixed(std::stod(row[10]), 2);
-  }
+     << ". Wall time: the median over up to " << spec.repeats
+     << " runs per row (fewer for slow rows: a first run of " << format_short(kRepeatLongRun, 2)
+     << " s or more runs once, and repeats stop once a row's runs total "
+     << format_short(kRepeatBudget, 2) << " s), run in shuffled rounds (seed " << spec.seed
+     << "), with a bootstrap 95% interval of the median (" << kBootstrapResamples
+     << " resamples).\n\n";
   std::vector<RunNote> notes;
   for (const auto& r : res.rows) notes.push_back({r.integrator + ", " + r.setting, &r.stats});
-  md << short_t.to_markdown() << failed_runs_markdown(notes)
+  md << work_precision_markdown_table(res).to_markdown() << failed_runs_markdown(notes)
      << "\nFull precision: `work_precision.csv`; metadata: `work_precision.json`.\n";
   write_file_atomic(d / "work_precision.md", md.str());
   nlohmann::json meta = run_metadata("work-precision", spec.to_json());
   add_step_study_metadata(meta, res.h, res.h_source, res.reference_description);
   meta["t_end_used"] = res.t_end;
   meta["error_norm"] = "max-norm of the absolute error at t_end";
+  meta["timing"] = {
+      {"seed", spec.seed},
+      {"max_repeats", spec.repeats},
+      {"repeat_long_run_s", kRepeatLongRun},
+      {"repeat_budget_s", kRepeatBudget},
+      {"bootstrap_resamples", kBootstrapResamples},
+      {"interval", "bootstrap 95% percentile interval of the median"},
+      {"order", "rounds; each round every point still repeating, shuffled with the seed"},
+      {"wall_s", "the median (wall_s_median)"}};
   write_file_atomic(d / "work_precision.json", meta.dump(2) + "\n");
 }
 
@@ -266,8 +467,12 @@ StudyKind work_precision_study_kind() {
        Bounds::at_least(2)},
       {"rtol_max", P::real, "1e-05", "loosest relative tolerance (< 1)", Bounds::positive()},
       {"atol_factor", P::real, "0.001", "atol = atol_factor * rtol", Bounds::non_negative()},
-      {"repeats", P::integer, "3", "runs per setting; wall time is the minimum",
-       Bounds::at_least(1)}};
+      {"repeats", P::integer, "5",
+       "most runs per setting (a first run of 1 s or more runs once; repeats stop once a "
+       "setting's runs total 2 s); wall_s is their median, with a bootstrap 95% interval",
+       Bounds::at_least(1)},
+      {"seed", P::integer, "1", "seed of the shuffled run order and of the bootstrap",
+       Bounds::non_negative()}};
   k.options.insert(k.options.end(), own.begin(), own.end());
   k.unit_columns = work_precision_table(WorkPrecisionResult{}).columns;
   k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
@@ -281,6 +486,7 @@ StudyKind work_precision_study_kind() {
     spec.rtol_max = o.real("rtol_max");
     spec.atol_factor = o.real("atol_factor");
     spec.repeats = static_cast<int>(o.integer("repeats"));
+    spec.seed = static_cast<unsigned long>(o.integer("seed"));
     return std::make_unique<WorkPrecisionJob>(std::move(spec));
   };
   return k;

@@ -3,14 +3,19 @@
 // atol_k = atol_factor·rtol_k, all on one set of axes. Each row: the max-norm error at t_end
 // against the reference, the mescd score of the IVP test set
 //   mescd = -log10 ‖ |y - y_ref| / (atol/rtol + |y_ref|) ‖∞   (ratio atol/rtol = atol_factor),
-// the counters of SolveStats, and the wall time as the minimum over `repeats` runs.
+// the counters of SolveStats (f_evals, jac_evals, lin_solves, steps and SolveStats::counter_names),
+// and the wall time over repeated runs: its median, minimum and a bootstrap 95% interval of the
+// median (see "Timing with spread" below).
 // The reference is the exact solution where the model has one, otherwise a run of
 // `reference` (default cvode_bdf at rtol 1e-14, atol 1e-16 — on HIRES it agrees with the IVP
 // test set's published solution to ~1e-13, while rtol 1e-12 is off by ~1e-11; a fixed-step
 // reference method runs at (finest h)/16).
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <iosfwd>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -37,15 +42,54 @@ struct WorkPrecisionSpec : StepStudySpec {
   int tol_levels = 6;
   double rtol_max = 1e-5;
   double atol_factor = 1e-3;
-  int repeats = 3;
+  // Timing with spread: at most `repeats` runs per point (see kRepeatLongRun, kRepeatBudget),
+  // in rounds, each round every point still repeating in an order shuffled with `seed`.
+  int repeats = 5;
+  unsigned long seed = 1;
 
   nlohmann::json to_json() const;
 };
 
+// --- Timing with spread -------------------------------------------------------------------
+// Every point (one integrator at one h or tolerance) runs in round 1; in round k >= 2 it runs
+// again while it has run fewer than `repeats` times, its first run took under kRepeatLongRun
+// seconds and its runs so far took under kRepeatBudget seconds in total (a run of a second or
+// more runs once). Each round visits its points in an order shuffled with the spec's seed
+// (run_order), so methods are interleaved and slow drifts of the machine spread over all of
+// them. A point whose run did not end ok is not repeated. Every repeat must reproduce the first
+// run exactly (status, final state, every counter): a mismatch turns the row into status
+// `error` naming the field (a nondeterministic method is a bug).
+constexpr double kRepeatLongRun = 1.0;  // s: a first run this long is not repeated
+constexpr double kRepeatBudget = 2.0;   // s: total of a point's runs before it stops repeating
+constexpr int kBootstrapResamples = 2000;
+
+// An integer uniform in [0, n) from rng by rejection (exact and the same on every standard
+// library, unlike std::uniform_int_distribution). n >= 1.
+std::size_t uniform_index(std::mt19937_64& rng, std::size_t n);
+// The visiting order of round `round` over n points: a permutation of 0..n-1 by Fisher-Yates
+// with std::mt19937_64 seeded by std::seed_seq{seed, round, 0}; the same for the same arguments.
+std::vector<std::size_t> run_order(std::size_t n, std::uint64_t seed, std::uint64_t round);
+
+// Median (mean of the two middle values for an even count); NaN for an empty sample.
+double median_of(std::vector<double> v);
+
+struct TimingSpread {
+  double median = 0, min = 0, ci_low = 0, ci_high = 0;
+  int repeats = 0;
+};
+// Median and minimum of the sample and the bootstrap 95% percentile interval of the median:
+// `resamples` resamples of the sample's size drawn with replacement (uniform_index on
+// std::mt19937_64 seeded by std::seed_seq{seed, stream, 1}); the interval is the 2.5% and 97.5%
+// quantiles of their medians, each the order statistic m_(ceil(q·B)) of the B sorted medians.
+// A sample of one value gives the value itself. `samples` must not be empty.
+TimingSpread timing_spread(const std::vector<double>& samples, std::uint64_t seed,
+                           std::uint64_t stream, int resamples = kBootstrapResamples);
+
 struct WorkPrecisionRow {
   std::string model, integrator, setting;
   double error = 0, mescd = 0;
-  SolveStats stats;
+  SolveStats stats;  // the first run's (wall_s: the median over the repeats)
+  TimingSpread wall;
 };
 
 struct WorkPrecisionResult {

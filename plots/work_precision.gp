@@ -6,8 +6,11 @@
 #               npanels='1'; pmethods1='cvode_bdf sdirk3'; ptitle1='implicit'; ttl='title'; \
 #               plotdir='plots'" plots/work_precision.gp
 #
-# Columns: 2 integrator, 4 error, 5 f_evals, 9 wall_s. Rows without f evaluations (stable_fluids
-# composes the model's operators and never evaluates f) are left out of the f-evaluation panel.
+# Columns: 2 integrator, 4 error, 5 f_evals, 9 wall_s (the median over the repeats), 19
+# wall_s_ci_low, 20 wall_s_ci_high (its bootstrap 95% interval, drawn as error bars on the wall
+# time; a CSV written before these columns existed is drawn without them). Rows without f
+# evaluations (stable_fluids composes the model's operators and never evaluates f) are left out
+# of the f-evaluation panel.
 panelh = 460
 load plotdir."/common.gp"
 # Two panels (f evaluations, wall time) per family: override the layout of common.gp.
@@ -40,10 +43,19 @@ do for [K=1:np] {
        with linespoints lt j title word(m, j)
   eval empty_panel_off
   if (valid == 0) { eval empty_panel_on }
-  set ylabel "wall time [s] (minimum over repeats)"
+  stats csvfile every ::1 using (inlist(strcol(2), m) && column(4) > 0 && column(20) > 0 ? $20 : NaN) nooutput
+  spread = exists("STATS_records") ? STATS_records : 0
+  undefine STATS_*
   set title ptitle(K)." - wall time" noenhanced
-  plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 ? $4 : NaN):9 \
-       with linespoints lt j title word(m, j)
+  if (spread > 0) {
+    set ylabel "wall time [s] (median, bootstrap 95% interval)"
+    plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 ? $4 : NaN):9:19:20 \
+         with yerrorlines lt j title word(m, j)
+  } else {
+    set ylabel "wall time [s]"
+    plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 ? $4 : NaN):9 \
+         with linespoints lt j title word(m, j)
+  }
   eval empty_panel_off
 }
 unset multiplot

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Determinism (issue 14), on a built tree:
-#  1. the same command twice gives byte-identical CSVs apart from the wall-time columns
-#     (wall_s): a convergence study, a work-precision study and a spec sweep;
+#  1. the same command twice gives byte-identical CSVs apart from the timing columns (wall_s,
+#     wall_s_*, and repeats, whose count follows the measured times): a convergence study, a
+#     work-precision study and a spec sweep;
 #  2. 1 and 2 OpenMP threads give byte-identical trajectories for every registered model (its
 #     defaults; parallel_threshold=1 where the model has one, so its parallel right-hand side
 #     runs even at the small default size): 10 rk4 steps of h = 1e-4 written at full precision.
@@ -16,9 +17,9 @@ trap 'rm -rf "$work"' EXIT
 fail=0
 checks=0
 
-# CSV without the columns named wall_s (any position).
+# CSV without the timing columns: wall_s, wall_s_*, repeats (any position).
 strip_wall() {
-  awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == "wall_s") skip[i] = 1 }
+  awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == "wall_s" || $i ~ /^wall_s_/ || $i == "repeats") skip[i] = 1 }
            { out = ""; for (i = 1; i <= NF; i++) if (!skip[i]) out = out (out == "" ? "" : ",") $i;
              print out }' "$1"
 }
@@ -32,7 +33,7 @@ same_twice() {
   done
   checks=$((checks + 1))
   if cmp -s <(strip_wall "$work/$name-1/$csv") <(strip_wall "$work/$name-2/$csv"); then
-    echo "determinism: $name twice: $csv identical apart from wall_s ($(wc -l <"$work/$name-1/$csv") lines)"
+    echo "determinism: $name twice: $csv identical apart from the timing columns ($(wc -l <"$work/$name-1/$csv") lines)"
   else
     echo "determinism: $name twice: $csv DIFFERS"
     diff <(strip_wall "$work/$name-1/$csv") <(strip_wall "$work/$name-2/$csv") | head -n 10

@@ -5,14 +5,15 @@
   compare_csv.py --run RUN_CSV STUDY_CSV       the rows of `stiffbench run` (unit bookkeeping
                                                columns dropped) against a study's own CSV
 
-Columns named wall_s (and, with --run, unit, unit_rows, unit_status, unit_message) are left out;
-every other field must be equal as text. Prints one line per file and exits 1 on a difference.
+The timing columns (wall_s, wall_s_* and repeats, whose count follows the measured times; and,
+with --run, unit, unit_rows, unit_status, unit_message) are left out; every other field must be
+equal as text. Prints one line per file and exits 1 on a difference.
 """
 import csv
 import os
 import sys
 
-IGNORED = {"wall_s"}
+IGNORED = {"wall_s", "repeats"}
 RUN_COLUMNS = {"unit", "unit_rows", "unit_status", "unit_message"}
 
 
@@ -21,7 +22,7 @@ def read(path, drop):
         rows = list(csv.reader(f))
     if not rows:
         return [], []
-    keep = [i for i, c in enumerate(rows[0]) if c not in drop]
+    keep = [i for i, c in enumerate(rows[0]) if c not in drop and not c.startswith("wall_s_")]
     return [rows[0][i] for i in keep], [[r[i] for i in keep] for r in rows[1:]]
 
 
@@ -64,7 +65,7 @@ def main(argv):
                 ok = False
                 continue
             ok = compare(os.path.join(root, name), other, IGNORED, IGNORED, rel) and ok
-    print(f"{n} CSV file(s) compared: {'all equal' if ok else 'DIFFERENCES'} (wall_s ignored)")
+    print(f"{n} CSV file(s) compared: {'all equal' if ok else 'DIFFERENCES'} (timing columns ignored)")
     return 0 if ok and n > 0 else 1
 
 

@@ -275,15 +275,23 @@ TEST(Cli, WorkPrecisionOnHiresErrorFallsAsWorkRises) {
   ASSERT_EQ(o.code, 0) << o.err;
   const auto table = read_csv(dir / "work_precision.csv");
   ASSERT_FALSE(table.empty());
-  EXPECT_EQ(
-      join_cells(table.front()),
-      "model,integrator,setting,error,f_evals,jac_evals,lin_solves,steps,wall_s,status,mescd");
+  // The columns of before issue 24, then the solver counters and the timing spread.
+  EXPECT_EQ(join_cells(table.front()),
+            "model,integrator,setting,error,f_evals,jac_evals,lin_solves,steps,wall_s,status,mescd,"
+            "newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_iters,"
+            "wall_s_median,wall_s_min,wall_s_ci_low,wall_s_ci_high,repeats");
   std::map<std::string, std::vector<std::pair<long, double>>> by_method;
   for (std::size_t r = 1; r < table.size(); ++r) {
     const auto& c = table[r];
     const std::string line = join_cells(c);
-    ASSERT_EQ(c.size(), 11u) << line;
+    ASSERT_EQ(c.size(), 21u) << line;
     ASSERT_EQ(c[9], "ok") << line;
+    EXPECT_EQ(c[20], "1") << line;    // --repeats 1
+    EXPECT_EQ(c[8], c[16]) << line;   // wall_s is the median
+    EXPECT_EQ(c[16], c[17]) << line;  // one run: median = min = both interval ends
+    EXPECT_EQ(c[16], c[18]) << line;
+    EXPECT_EQ(c[16], c[19]) << line;
+    EXPECT_GT(std::stol(c[11]), 0) << line;  // every method here is implicit: Newton iterations
     by_method[c[1]].emplace_back(std::stol(c[4]), std::stod(c[3]));
   }
   EXPECT_EQ(by_method.size(), 6u);

@@ -208,8 +208,47 @@ TEST(EnergyFailures, BlowUpEndsOneIntegratorOnly) {
   EXPECT_EQ(be.samples.back().t, 10.0);
   // The summary table says which one failed.
   const Table t = energy_summary_table(r);
-  EXPECT_EQ(t.rows.at(0).back(), "unstable");
-  EXPECT_EQ(t.rows.at(1).back(), "ok");
+  const auto status = static_cast<std::size_t>(
+      std::find(t.columns.begin(), t.columns.end(), "status") - t.columns.begin());
+  ASSERT_LT(status, t.columns.size());
+  EXPECT_EQ(t.rows.at(0).at(status), "unstable");
+  EXPECT_EQ(t.rows.at(1).at(status), "ok");
+}
+
+// energy_summary.csv carries each run's counters after the columns of before (a contract:
+// docs/design.md). An explicit method solves no equations, so its five solver counters are 0;
+// backward Euler solves one nonlinear system per step, so it makes at least one Newton
+// iteration per step and at least one matrix set-up, and each iteration solves one linear
+// system (the counters are the run's SolveStats, printed as they are).
+TEST(EnergyOutputs, SummaryCarriesTheCounters) {
+  const EnergyResult r = run_energy(spec_for("harmonic_oscillator", {"k=4", "x0=1", "v0=0"},
+                                             {"rk4", "backward_euler"}, 0.01, 1.0, 10),
+                                    nullptr);
+  const Table t = energy_summary_table(r);
+  const std::vector<std::string> before = {
+      "model",  "integrator", "h",     "t_end",   "max_rel_error", "final_rel_error", "drift_rate",
+      "growth", "status",     "steps", "f_evals", "jac_evals",     "lin_solves"};
+  std::vector<std::string> expected = before;
+  for (const auto& c : SolveStats::counter_names()) expected.push_back(c);
+  ASSERT_EQ(t.columns, expected);
+  const auto value = [&](std::size_t row, const std::string& col) {
+    const auto c = static_cast<std::size_t>(std::find(t.columns.begin(), t.columns.end(), col) -
+                                            t.columns.begin());
+    return std::stol(t.rows.at(row).at(c));
+  };
+  ASSERT_EQ(t.rows.size(), 2u);
+  for (const auto& c : SolveStats::counter_names()) EXPECT_EQ(value(0, c), 0) << "rk4 " << c;
+  EXPECT_EQ(value(0, "steps"), 100);
+  EXPECT_EQ(value(0, "f_evals"), 400);  // four stages per step
+  const SolveStats& be = run_of(r, "backward_euler").stats;
+  EXPECT_EQ(value(1, "steps"), 100);
+  EXPECT_GE(value(1, "newton_iters"), 100);
+  EXPECT_GE(value(1, "linear_setups"), 1);
+  EXPECT_EQ(value(1, "newton_iters"), be.newton_iters);
+  EXPECT_EQ(value(1, "linear_setups"), be.linear_setups);
+  EXPECT_EQ(value(1, "lin_solves"), be.lin_solves);
+  EXPECT_EQ(value(1, "newton_conv_failures"), 0);
+  EXPECT_EQ(value(1, "error_test_failures"), 0);  // fixed steps: no error test
 }
 
 TEST(EnergyFailures, BadInputNamesWhatIsWrong) {
@@ -289,7 +328,9 @@ TEST(EnergyOutputs, FilesFollowTheContract) {
   EXPECT_EQ(first_line(dir / "energy.csv"),
             "model,integrator,h,t,energy,rel_error,max_rel_error_since_last");
   EXPECT_EQ(first_line(dir / "energy_summary.csv"),
-            "model,integrator,h,t_end,max_rel_error,final_rel_error,drift_rate,growth,status");
+            "model,integrator,h,t_end,max_rel_error,final_rel_error,drift_rate,growth,status,"
+            "steps,f_evals,jac_evals,lin_solves,newton_iters,newton_conv_failures,"
+            "error_test_failures,linear_setups,linear_iters");
   EXPECT_EQ(first_line(dir / "energy.md"), "# Energy drift: kepler");
   std::ifstream md(dir / "energy.md");
   const std::string text((std::istreambuf_iterator<char>(md)), {});

@@ -1,0 +1,247 @@
+// Work-precision's timing with spread (issue 24): the bootstrap interval of the median, the
+// shuffled run order, the counter and timing columns, and the check that repeats reproduce the
+// first run. No assertion here depends on how long anything took.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <random>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/driver.hpp"
+#include "experiments/work_precision.hpp"
+
+namespace stiffbench {
+namespace {
+
+std::size_t column(const Table& t, const std::string& name) {
+  const auto it = std::find(t.columns.begin(), t.columns.end(), name);
+  EXPECT_NE(it, t.columns.end()) << name;
+  return static_cast<std::size_t>(it - t.columns.begin());
+}
+
+TEST(TimingSpread, MedianOfOddAndEvenSamples) {
+  EXPECT_EQ(median_of({3.0, 1.0, 2.0}), 2.0);
+  EXPECT_EQ(median_of({4.0, 1.0, 3.0, 2.0}), 2.5);  // mean of the two middle values
+  EXPECT_EQ(median_of({7.0}), 7.0);
+  EXPECT_TRUE(std::isnan(median_of({})));
+}
+
+// Every resample of a constant sample is that constant, so the interval collapses to it.
+TEST(TimingSpread, EqualValuesCollapseTheInterval) {
+  for (const std::vector<double>& s : {std::vector<double>{0.25}, std::vector<double>(5, 0.25)}) {
+    const TimingSpread t = timing_spread(s, 7, 0);
+    EXPECT_EQ(t.repeats, static_cast<int>(s.size()));
+    EXPECT_EQ(t.median, 0.25);
+    EXPECT_EQ(t.min, 0.25);
+    EXPECT_EQ(t.ci_low, 0.25);
+    EXPECT_EQ(t.ci_high, 0.25);
+  }
+}
+
+// Five distinct values x_(1) < ... < x_(5). A resample's median is x_(k) with
+// P(median <= x_(k)) = P(Binomial(5, k/5) >= 3) (at least three of five draws at or below x_(k)):
+// 0.0579, 0.3174, 0.6826, 0.9421, 1 for k = 1..5 (computed independently from the binomial
+// sums). The 2.5% quantile is therefore x_(1) (0.0579 > 0.025) and the 97.5% quantile x_(5)
+// (0.9421 < 0.975); with 2000 resamples both margins are over 7 standard deviations of the
+// sampled fractions, so the interval is [min, max] whatever the seed.
+TEST(TimingSpread, FiveDistinctValuesGiveTheMinMaxInterval) {
+  const std::vector<double> s = {0.5, 0.1, 0.4, 0.2, 0.3};
+  for (std::uint64_t seed : {1u, 2u, 12345u}) {
+    const TimingSpread t = timing_spread(s, seed, 3);
+    EXPECT_EQ(t.median, 0.3);
+    EXPECT_EQ(t.min, 0.1);
+    EXPECT_EQ(t.ci_low, 0.1) << seed;
+    EXPECT_EQ(t.ci_high, 0.5) << seed;
+  }
+}
+
+// The resampling against the exact bootstrap distribution of the median of three values:
+// P(median = x_(1)) = P(Binomial(3, 1/3) >= 2) = 7/27, P(median = x_(3)) = 7/27,
+// P(median = x_(2)) = 13/27 (binomial sums, by hand). 20000 resample medians drawn with the
+// building blocks of timing_spread (uniform_index on an mt19937_64, median_of) must match within
+// 5 standard deviations; the interval's ends are then x_(1) and x_(3) (each 0.26 > 0.025).
+TEST(TimingSpread, ResampledMediansFollowTheExactBootstrapDistribution) {
+  std::mt19937_64 rng(99);
+  std::map<int, int> count;
+  const int n = 20000;
+  for (int i = 0; i < n; ++i) {
+    std::vector<double> d(3);
+    for (auto& x : d) x = static_cast<double>(uniform_index(rng, 3));
+    ++count[static_cast<int>(median_of(d))];
+  }
+  const std::vector<double> p = {7.0 / 27, 13.0 / 27, 7.0 / 27};
+  for (int k = 0; k < 3; ++k) {
+    const double sd = std::sqrt(p[k] * (1 - p[k]) / n);
+    EXPECT_NEAR(count[k] / static_cast<double>(n), p[k], 5 * sd) << k;
+  }
+  const TimingSpread t = timing_spread({0.3, 0.1, 0.2}, 5, 0);
+  EXPECT_EQ(t.ci_low, 0.1);
+  EXPECT_EQ(t.ci_high, 0.3);
+  // The same seed and stream give the same interval; the sample order does not matter.
+  const TimingSpread u = timing_spread({0.2, 0.4, 0.1, 0.3}, 5, 2);
+  const TimingSpread v = timing_spread({0.2, 0.4, 0.1, 0.3}, 5, 2);
+  EXPECT_EQ(u.ci_low, v.ci_low);
+  EXPECT_EQ(u.ci_high, v.ci_high);
+  EXPECT_EQ(u.median, 0.25);
+  EXPECT_LE(u.ci_low, u.median);
+  EXPECT_GE(u.ci_high, u.median);
+}
+
+TEST(RunOrder, EachRoundIsAPermutationReproducibleFromTheSeed) {
+  const std::size_t n = 37;
+  std::set<std::vector<std::size_t>> rounds;
+  for (std::uint64_t round = 1; round <= 5; ++round) {
+    const auto order = run_order(n, 42, round);
+    std::vector<std::size_t> sorted = order;
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<std::size_t> iota(n);
+    std::iota(iota.begin(), iota.end(), 0);
+    EXPECT_EQ(sorted, iota) << "round " << round;
+    EXPECT_EQ(order, run_order(n, 42, round));  // reproducible
+    rounds.insert(order);
+  }
+  EXPECT_EQ(rounds.size(), 5u);                         // rounds are shuffled afresh
+  EXPECT_NE(run_order(n, 42, 1), run_order(n, 43, 1));  // the seed matters
+  EXPECT_EQ(run_order(1, 42, 1), std::vector<std::size_t>{0});
+  EXPECT_TRUE(run_order(0, 42, 1).empty());
+}
+
+// Fisher-Yates with an exact uniform index makes the 6 orders of 3 points equally likely
+// (1/6 each): 12000 rounds, each order within 5 standard deviations of 2000.
+TEST(RunOrder, OrdersOfThreePointsAreEquallyLikely) {
+  std::map<std::vector<std::size_t>, int> count;
+  const int n = 12000;
+  for (int r = 0; r < n; ++r) ++count[run_order(3, 7, static_cast<std::uint64_t>(r))];
+  ASSERT_EQ(count.size(), 6u);
+  const double sd = std::sqrt(n * (1.0 / 6) * (5.0 / 6));
+  for (const auto& [order, c] : count) EXPECT_NEAR(c, n / 6.0, 5 * sd);
+}
+
+// A work-precision run on the harmonic oscillator (exact solution): the timing columns follow
+// the counters, wall_s is the median, the interval brackets it, every row ran at least once and
+// at most --repeats times, and the repeats reproduced the first run (status ok).
+TEST(WorkPrecisionTiming, ColumnsAndRepeats) {
+  WorkPrecisionSpec spec;
+  spec.model = "harmonic_oscillator";
+  spec.integrators = {"rk4", "backward_euler", "cvode_bdf"};
+  spec.t_end = 1;
+  spec.h = 0.05;
+  spec.levels = 2;
+  spec.tol_levels = 2;
+  spec.repeats = 3;
+  spec.seed = 11;
+  const WorkPrecisionResult res = run_work_precision(spec, nullptr);
+  const Table t = work_precision_table(res);
+  const std::vector<std::string> tail = {"newton_iters",        "newton_conv_failures",
+                                         "error_test_failures", "linear_setups",
+                                         "linear_iters",        "wall_s_median",
+                                         "wall_s_min",          "wall_s_ci_low",
+                                         "wall_s_ci_high",      "repeats"};
+  ASSERT_EQ(t.columns.size(), 11u + tail.size());
+  EXPECT_EQ(std::vector<std::string>(t.columns.begin() + 11, t.columns.end()), tail);
+  ASSERT_EQ(t.rows.size(), 6u);
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    const auto& row = t.rows[i];
+    const auto& r = res.rows[i];
+    EXPECT_EQ(row[column(t, "status")], "ok") << r.stats.message;
+    const int reps = std::stoi(row[column(t, "repeats")]);
+    EXPECT_GE(reps, 1);
+    EXPECT_LE(reps, 3);
+    EXPECT_EQ(row[column(t, "wall_s")], row[column(t, "wall_s_median")]);
+    EXPECT_LE(r.wall.min, r.wall.median);
+    EXPECT_LE(r.wall.min, r.wall.ci_low);
+    EXPECT_LE(r.wall.ci_low, r.wall.median);
+    EXPECT_LE(r.wall.median, r.wall.ci_high);
+    EXPECT_EQ(row[column(t, "newton_iters")], std::to_string(r.stats.newton_iters));
+  }
+  // rk4 is explicit: no Newton iterations, no set-ups; backward Euler and CVODE's BDF solve a
+  // nonlinear system per step.
+  EXPECT_EQ(res.rows[0].stats.newton_iters, 0);
+  EXPECT_EQ(res.rows[0].stats.linear_setups, 0);
+  for (std::size_t i = 2; i < 6; ++i) {
+    EXPECT_GE(res.rows[i].stats.newton_iters, res.rows[i].stats.steps) << res.rows[i].integrator;
+    EXPECT_GE(res.rows[i].stats.linear_setups, 1) << res.rows[i].integrator;
+  }
+  // The same seed gives the same rows apart from the times.
+  const WorkPrecisionResult again = run_work_precision(spec, nullptr);
+  for (std::size_t i = 0; i < res.rows.size(); ++i) {
+    EXPECT_EQ(again.rows[i].error, res.rows[i].error);
+    EXPECT_EQ(again.rows[i].stats.f_evals, res.rows[i].stats.f_evals);
+    EXPECT_EQ(again.rows[i].stats.counter_values(), res.rows[i].stats.counter_values());
+  }
+}
+
+// A method whose work changes from run to run (its k-th run makes k extra f evaluations in its
+// first step): its repeats do not reproduce the first run, and the row says so.
+class Fickle : public Integrator {
+ public:
+  Fickle() : Integrator(info()) {}
+  void reset(const OdeSystem& sys, double, CVecRef) override {
+    k_.resize(sys.dimension());
+    extra_ = ++resets_;
+  }
+  Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats&) override {
+    for (; extra_ > 0; --extra_) sys.rhs(t, y, k_);
+    sys.rhs(t, y, k_);
+    y += h * k_;
+    return Status::ok;
+  }
+
+ private:
+  static MethodInfo info() {
+    MethodInfo i;
+    i.name = "fickle_euler";
+    i.description = "explicit Euler with a varying extra f evaluation";
+    i.family = Family::explicit_rk;
+    i.order = 1;
+    i.stages = 1;
+    return i;
+  }
+  Vec k_;
+  int resets_ = 0, extra_ = 0;
+};
+
+TEST(WorkPrecisionTiming, RepeatThatDiffersIsAnError) {
+  WorkPrecisionSpec spec;
+  spec.model = "harmonic_oscillator";
+  spec.integrators = {"euler"};
+  spec.t_end = 1;
+  spec.h = 0.1;
+  spec.levels = 2;
+  spec.repeats = 2;
+  const WorkPrecisionResult res = run_work_precision(
+      spec, StudyObjects{nullptr, {[] { return std::make_unique<Fickle>(); }}}, nullptr);
+  ASSERT_EQ(res.rows.size(), 4u);
+  for (std::size_t i = 0; i < 2; ++i) {  // euler: deterministic
+    EXPECT_EQ(res.rows[i].stats.status, Status::ok) << res.rows[i].stats.message;
+  }
+  // fickle_euler: every run of the object makes a different number of f evaluations.
+  for (std::size_t i = 2; i < 4; ++i) {
+    const auto& r = res.rows[i];
+    EXPECT_EQ(r.integrator, "fickle_euler");
+    EXPECT_EQ(r.stats.status, Status::error);
+    EXPECT_NE(r.stats.message.find("not deterministic"), std::string::npos) << r.stats.message;
+    EXPECT_NE(r.stats.message.find("f_evals"), std::string::npos) << r.stats.message;
+  }
+}
+
+TEST(WorkPrecisionTiming, SeedIsRecordedAndRepeatsValidated) {
+  WorkPrecisionSpec spec;
+  spec.seed = 77;
+  EXPECT_EQ(spec.to_json().at("seed"), 77);
+  EXPECT_EQ(spec.to_json().at("repeats"), 5);  // the default
+  spec.model = "harmonic_oscillator";
+  spec.integrators = {"rk4"};
+  spec.t_end = 1;
+  spec.h = 0.1;
+  spec.repeats = 0;
+  EXPECT_THROW(run_work_precision(spec, nullptr), BadInput);
+}
+
+}  // namespace
+}  // namespace stiffbench
