@@ -1,5 +1,6 @@
 #include "core/solve_stats.hpp"
 
+#include <algorithm>
 #include <iomanip>
 #include <sstream>
 
@@ -35,8 +36,10 @@ std::vector<std::string> SolveStats::counter_values() const {
 }
 
 std::vector<std::string> SolveStats::field_names() {
-  return {"status",     "steps",        "error_test_failures", "f_evals",      "jac_evals", "linear_setups",
-          "lin_solves", "newton_iters", "newton_conv_failures",   "linear_iters", "wall_s"};
+  return {"status",       "steps",        "error_test_failures",
+          "f_evals",      "jac_evals",    "linear_setups",
+          "lin_solves",   "newton_iters", "newton_conv_failures",
+          "linear_iters", "wall_s"};
 }
 
 std::vector<std::string> SolveStats::field_values() const {
@@ -58,13 +61,17 @@ std::vector<std::string> SolveStats::field_values() const {
 void print_stats_table(std::ostream& os, const SolveStats& s) {
   const auto names = SolveStats::field_names();
   const auto values = s.field_values();
+  // The longest name (newton_conv_failures) and two spaces.
+  std::size_t w = 0;
+  for (const auto& n : names) w = std::max(w, n.size() + 2);
+  const auto width = static_cast<int>(w);
   for (std::size_t i = 0; i < names.size(); ++i)
-    os << "  " << std::left << std::setw(16) << names[i] << std::right << values[i] << "\n";
+    os << "  " << std::left << std::setw(width) << names[i] << std::right << values[i] << "\n";
   if (s.library_f_evals >= 0)
-    os << "  " << std::left << std::setw(16) << "library_f_evals" << std::right << s.library_f_evals
-       << "\n";
+    os << "  " << std::left << std::setw(width) << "library_f_evals" << std::right
+       << s.library_f_evals << "\n";
   if (!s.message.empty())
-    os << "  " << std::left << std::setw(16) << "message" << s.message << "\n";
+    os << "  " << std::left << std::setw(width) << "message" << s.message << "\n";
   if (!s.library_report.empty()) os << "\nlibrary statistics:\n" << s.library_report;
 }
 

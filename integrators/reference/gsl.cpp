@@ -128,6 +128,7 @@ class GslIntegrator final : public Integrator {
     tmp_.resize(n_);
     yerr_.resize(n_);
     fixed_steps_ = 0;
+    accepted_ = banked_count_ = banked_failed_ = 0;
     gsys_ = {func, method_.needs_jacobian ? jac : nullptr, static_cast<std::size_t>(n_), this};
     fixed_h_ = 0;
     make_driver(h0_);
@@ -156,6 +157,7 @@ class GslIntegrator final : public Integrator {
     double tt = t_;
     guard_.clear();
     const int status = gsl_odeiv2_driver_apply(driver_, &tt, t_out, y.data());
+    accepted_ += static_cast<long>(driver_->n);  // the steps this call accepted
     guard_.rethrow();
     return finish(status, tt, y, stats, false);
   }
@@ -212,7 +214,15 @@ class GslIntegrator final : public Integrator {
     driver_ = nullptr;
   }
 
+  // Keeps the evolve object's counts before a reset or a new driver clears them.
+  void bank_counts() {
+    if (!driver_) return;
+    banked_count_ += static_cast<long>(driver_->e->count);
+    banked_failed_ += static_cast<long>(driver_->e->failed_steps);
+  }
+
   void make_driver(double h) {
+    bank_counts();
     free_driver();
     driver_ = gsl_odeiv2_driver_alloc_y_new(&gsys_, *method_.type, h, atol_, rtol_);
     if (!driver_)
@@ -224,14 +234,24 @@ class GslIntegrator final : public Integrator {
   void sync(const OdeSystem& sys, double t, CVecRef y) {
     if (&sys != sys_) throw std::logic_error("GslIntegrator: system differs from reset()");
     if (std::abs(t - t_) <= 1e-13 * std::max(1.0, std::abs(t)) && y == y_last_) return;
+    bank_counts();
     gsl_odeiv2_driver_reset(driver_);
     t_ = t;
   }
 
   Status finish(int status, double tt, VecRef y, SolveStats& stats, bool fixed) {
     if (!fixed) {
-      stats.steps = static_cast<long>(driver_->e->count);
-      stats.error_test_failures = static_cast<long>(driver_->e->failed_steps);
+      // GSL's evolve counts every step it computed (`count`: accepted ones and those the error
+      // test rejected) and every retry with a smaller step (`failed_steps`: error-test
+      // rejections and steps whose stepper failed, e.g. its implicit solve did not converge);
+      // the driver counts the accepted ones (`n`, per call). Hence accepted steps, error-test
+      // failures = count - accepted, and stepper failures = failed_steps - error-test failures
+      // (the implicit steppers' nonlinear solve failures; 0 for explicit ones).
+      const long count = banked_count_ + static_cast<long>(driver_->e->count);
+      const long failed = banked_failed_ + static_cast<long>(driver_->e->failed_steps);
+      stats.steps = accepted_;
+      stats.error_test_failures = count - accepted_;
+      stats.newton_conv_failures = failed - stats.error_test_failures;
     }
     stats.jac_evals = fd_jacobians_;
     if (status != GSL_SUCCESS) {
@@ -254,6 +274,9 @@ class GslIntegrator final : public Integrator {
   SparseMat jac_;
   Vec f0_, f1_, tmp_, yerr_, y_last_;
   long fixed_steps_ = 0;
+  // Adaptive counts: steps accepted (the driver's n, summed over calls) and the evolve object's
+  // count and failed_steps from drivers or resets already gone.
+  long accepted_ = 0, banked_count_ = 0, banked_failed_ = 0;
   CallbackGuard guard_;  // what a callback threw, rethrown when GSL returns
   double t_ = 0, fixed_h_ = 0;
   long fd_jacobians_ = 0;

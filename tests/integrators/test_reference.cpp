@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include "core/driver.hpp"
 #include "experiments/catalog.hpp"
@@ -248,6 +249,76 @@ TEST(ReferenceLinearSolvers, MechanicalJacobianCountsAndKluMatchesDense) {
 // Robertson's three concentrations sum to 1 for all time (the rates cancel in the sum); CVODE
 // at rtol = 1e-8 keeps the sum to 1e-10 up to t = 1e11 (any linear multistep method preserves
 // linear invariants up to the Newton and round-off errors).
+// The number after "LABEL = " in a library's PrintAllStats table (SUN_OUTPUTFORMAT_TABLE), or -1.
+long library_stat(const std::string& report, const std::string& label) {
+  const std::string key = "\n" + label + " ";
+  const auto at = ("\n" + report).find(key);
+  if (at == std::string::npos) return -1;
+  const auto eq = report.find('=', at);
+  return eq == std::string::npos ? -1 : std::stol(report.substr(eq + 1));
+}
+
+// The SUNDIALS counters map into SolveStats (issue 24): on HIRES (stiff) each solver counter
+// equals the library's own figure as its PrintAllStats table prints it (read independently of
+// the CVodeGet*/ARKStepGet* calls the mapping makes). By construction of a modified Newton
+// iteration with a direct (dense) solver: at least one Newton iteration per step, one linear
+// solve per Newton iteration, and at most one matrix set-up per Newton iteration (set-ups are
+// skipped while the old matrix still converges), so 0 < linear_setups <= newton_iters; a dense
+// solver makes no Krylov iterations.
+TEST(ReferenceCounts, SundialsSolverCountersAreTheLibrarys) {
+  for (const std::string name : {"cvode_bdf", "arkode_dirk"}) {
+    auto sys = model("hires");
+    auto integ = make(name, {"rtol=1e-6", "atol=1e-9"});
+    const RunResult r = run_adaptive(*sys, *integ, {321.8122, 0});
+    ASSERT_EQ(r.stats.status, Status::ok) << name << ": " << r.stats.message;
+    const SolveStats& s = r.stats;
+    const std::string& lib = s.library_report;
+    EXPECT_EQ(s.steps, library_stat(lib, "Steps")) << name;
+    EXPECT_EQ(s.error_test_failures, library_stat(lib, "Error test fails")) << name;
+    EXPECT_EQ(s.newton_iters, library_stat(lib, "NLS iters")) << name;
+    EXPECT_EQ(s.newton_conv_failures, library_stat(lib, "NLS fails")) << name;
+    EXPECT_EQ(s.linear_setups, library_stat(lib, "LS setups")) << name;
+    EXPECT_EQ(s.linear_iters, library_stat(lib, "LS iters")) << name;
+    EXPECT_GE(s.newton_iters, s.steps) << name;
+    EXPECT_GT(s.linear_setups, 0) << name;
+    EXPECT_LE(s.linear_setups, s.newton_iters) << name;
+    EXPECT_EQ(s.lin_solves, s.newton_iters) << name;
+    EXPECT_EQ(s.linear_iters, 0) << name;
+    EXPECT_GT(s.error_test_failures, 0) << name;  // HIRES's transients reject some steps
+  }
+  // With GMRES the linear iterations are counted, one or more per Newton iteration.
+  auto sys = model("hires");
+  auto integ = make("cvode_bdf", {"rtol=1e-6", "atol=1e-9", "linear_solver=spgmr"});
+  const RunResult r = run_adaptive(*sys, *integ, {321.8122, 0});
+  ASSERT_EQ(r.stats.status, Status::ok) << r.stats.message;
+  EXPECT_EQ(r.stats.linear_iters, library_stat(r.stats.library_report, "LS iters"));
+  EXPECT_GE(r.stats.linear_iters, r.stats.newton_iters);
+}
+
+// An explicit method solves no equations: every solver counter is 0 (ARKODE's explicit mode and
+// GSL's explicit pairs), while the pericentre passages of an eccentric Kepler orbit make the
+// error test reject steps. GSL's rejected steps come from its evolve object (computed steps
+// minus the accepted ones): rkf45 computes 6 stages per attempted step, the first from the
+// previous step's end derivative, plus one f(t0, y0) at the start, so
+// f_evals = 1 + 6·(accepted + rejected) exactly when the split is right.
+TEST(ReferenceCounts, ExplicitReferencesSolveNothingAndCountRejections) {
+  auto sys = model("kepler", {"e=0.9"});
+  for (const std::string name : {"arkode_erk", "gsl_rkf45"}) {
+    auto integ = make(name, {"rtol=1e-6", "atol=1e-9"});
+    const RunResult r = run_adaptive(*sys, *integ, {20.0, 0});
+    ASSERT_EQ(r.stats.status, Status::ok) << name << ": " << r.stats.message;
+    EXPECT_EQ(r.stats.newton_iters, 0) << name;
+    EXPECT_EQ(r.stats.newton_conv_failures, 0) << name;
+    EXPECT_EQ(r.stats.linear_setups, 0) << name;
+    EXPECT_EQ(r.stats.linear_iters, 0) << name;
+    EXPECT_EQ(r.stats.lin_solves, 0) << name;
+    EXPECT_GT(r.stats.error_test_failures, 0) << name;
+    if (name == "gsl_rkf45") {
+      EXPECT_EQ(r.stats.f_evals, 1 + 6 * (r.stats.steps + r.stats.error_test_failures));
+    }
+  }
+}
+
 TEST(ReferenceStiff, RobertsonMassConservedByCvode) {
   auto sys = model("robertson");
   auto integ = make("cvode_bdf", {"rtol=1e-8", "atol=1e-14"});
