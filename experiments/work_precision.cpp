@@ -427,25 +427,32 @@ std::string WorkPrecisionJob::report_markdown(const std::string& note) const {
   std::ostringstream md;
   md << note << " Reference: " << result_.reference_description
      << ". Fixed-step methods over h, references over rtol (atol = "
-     << format_full(spec_.atol_factor) << "·rtol).\n\n";
-  Table summary{{"integrator", "settings", "best error", "f_evals at best", "status"}, {}};
+     << format_full(spec_.atol_factor) << "·rtol). Wall time: the median over up to "
+     << spec_.repeats << " runs per setting in rounds shuffled with seed " << spec_.seed
+     << ", with a bootstrap 95% interval.\n\n";
+  Table summary{{"integrator", "settings", "best error", "f_evals at best", "newton_iters at best",
+                 "wall s at best (median [95% interval])", "status"},
+                {}};
   for (const auto& name : spec_.integrators) {
     int n = 0;
-    double best = std::numeric_limits<double>::infinity();
-    long fe = 0;
+    const WorkPrecisionRow* best = nullptr;
     std::string status = "ok";
     for (const auto& r : result_.rows) {
       if (r.integrator != name) continue;
       ++n;
       if (r.stats.status != Status::ok)
         status = to_string(r.stats.status);
-      else if (r.error < best) {
-        best = r.error;
-        fe = r.stats.f_evals;
-      }
+      else if (!best || r.error < best->error)
+        best = &r;
     }
-    summary.rows.push_back({name, std::to_string(n), std::isfinite(best) ? format_short(best) : "-",
-                            std::to_string(fe), status});
+    summary.rows.push_back({name, std::to_string(n), best ? format_short(best->error) : "-",
+                            best ? std::to_string(best->stats.f_evals) : "-",
+                            best ? std::to_string(best->stats.newton_iters) : "-",
+                            best ? format_short(best->wall.median, 2) + " [" +
+                                       format_short(best->wall.ci_low, 2) + ", " +
+                                       format_short(best->wall.ci_high, 2) + "]"
+                                 : "-",
+                            status});
   }
   md << summary.to_markdown() << "\n";
   return md.str();
