@@ -6,6 +6,7 @@
 #include <deque>
 
 #include "experiments/catalog.hpp"
+#include "experiments/work_precision.hpp"
 
 namespace stiffbench::bench {
 
@@ -68,6 +69,18 @@ const CachedModel& cached_model(const std::string& name,
 
 OmpThreads::OmpThreads(int n) : previous_(omp_get_max_threads()) { omp_set_num_threads(n); }
 OmpThreads::~OmpThreads() { omp_set_num_threads(previous_); }
+
+void summarise_repetitions(const std::string& name, Result& r) {
+  // FNV-1a of the name: each benchmark's bootstrap draws its own reproducible stream.
+  std::uint64_t stream = 1469598103934665603ull;
+  for (const unsigned char c : name) stream = (stream ^ c) * 1099511628211ull;
+  const TimingSpread t = timing_spread(r.samples, 1, stream);
+  r.seconds = t.median;
+  r.min_seconds = t.min;
+  r.ci_low = t.ci_low;
+  r.ci_high = t.ci_high;
+  r.repetitions = t.repeats;
+}
 
 double now_seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();

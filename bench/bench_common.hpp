@@ -29,15 +29,26 @@ struct Config {
   long alloc_self_check = -1;
 };
 
-// One measured benchmark as the summary sees it.
+// One measured benchmark as the summary sees it. With --benchmark_repetitions=N every
+// repetition's real time per iteration is kept: `seconds` is their median, `min_seconds` the
+// fastest, and [ci_low, ci_high] a bootstrap 95% interval of the median (timing_spread of
+// experiments/work_precision.hpp: 2000 resamples, seeded by the benchmark's name, so the same
+// times give the same interval; with 5 repetitions it spans the fastest to the slowest).
+// `counters` are those of the repetition at the median (the lower middle one for an even N).
 struct Result {
-  double seconds = 0.0;  // real time per iteration (best over repetitions)
+  double seconds = 0.0;  // real time per iteration: median over repetitions
+  double min_seconds = 0.0, ci_low = 0.0, ci_high = 0.0;
+  int repetitions = 0;
+  std::vector<double> samples;  // each repetition's seconds, in run order
   long iterations = 0;
   std::map<std::string, double> counters;
   bool error = false;
   std::string message;
 };
 using Results = std::map<std::string, Result>;
+
+// Fills seconds, min_seconds, ci_low, ci_high and repetitions of r from r.samples.
+void summarise_repetitions(const std::string& name, Result& r);
 
 // A model built once and kept while consecutive benchmarks use it (the cache holds the two most
 // recently used models), with a "warm" state: the initial state, or for SPH scenes the state

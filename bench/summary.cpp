@@ -78,7 +78,9 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
       "benchmarks took %.1f s)\n",
       cfg.quick ? "--quick" : "full", sysconf(_SC_NPROCESSORS_ONLN), load_average().c_str(),
       wall_seconds);
-  std::printf("Each ratio divides two measurements of this run. Times are real (wall) time.\n\n");
+  std::printf(
+      "Each ratio divides two measurements of this run. Times are real (wall) time per "
+      "iteration, the median over the repetitions (spread: see the end).\n\n");
 
   // ---- Target table (issue #10, "Targets"; 2 threads).
   const std::string plain2 = "implicit/plain_bw/cloth:64/omp:2";
@@ -297,6 +299,25 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
 
   std::printf("\n2-thread speed-ups (time at 1 thread / time at 2):\n%s",
               speedups.empty() ? "    (none measured at both thread counts)\n" : speedups.c_str());
+  // Spread over repetitions: median, fastest, and the bootstrap 95% interval of the median.
+  int most = 0;
+  for (const auto& [name, res] : results) most = std::max(most, res.repetitions);
+  std::printf(
+      "\nSpread over repetitions (real time per iteration: median, minimum, bootstrap 95%% "
+      "interval of the median, 2000 resamples; its half-width relative to the median)%s:\n\n",
+      most <= 1 ? " -- one repetition each: pass --benchmark_repetitions=N for a spread" : "");
+  std::printf(
+      "| benchmark | repetitions | median | min | 95%% interval | +/- "
+      "|\n|---|---|---|---|---|---|\n");
+  for (const auto& [name, res] : results) {
+    if (res.error) continue;
+    const double half = 0.5 * (res.ci_high - res.ci_low) / res.seconds;
+    std::printf("| %s | %d | %s s | %s s | [%s, %s] s | %s |\n", name.c_str(), res.repetitions,
+                fmt("%.4g", res.seconds).c_str(), fmt("%.4g", res.min_seconds).c_str(),
+                fmt("%.4g", res.ci_low).c_str(), fmt("%.4g", res.ci_high).c_str(),
+                fmt("%.1f%%", 100.0 * half).c_str());
+  }
+
   std::vector<std::pair<double, std::string>> spent;
   for (const auto& [name, t] : time_spent()) spent.emplace_back(t, name);
   std::sort(spent.rbegin(), spent.rend());

@@ -5,8 +5,10 @@
 # Installs the Debian packages the benchmark needs (idempotent: apt is skipped when all are
 # present), configures a Release build with -DSTIFFBENCH_BUILD_BENCH=ON (default folder
 # build-bench), builds stiffbench_bench and runs it with --quick (under two minutes on a
-# 2-core machine), or every size and thread count with --full. Further flags go to the
-# program, e.g. --benchmark_filter='rhs/.*' or --benchmark_repetitions=3.
+# 2-core machine), or every size and thread count with --full (5 repetitions of each unless
+# --benchmark_repetitions=N is given; the summary reports medians and a bootstrap 95% interval of
+# each median). Further flags go to the program, e.g. --benchmark_filter='rhs/.*' or
+# --benchmark_repetitions=3.
 # PySPH's dam break beside the testbed's: scripts/bench_pysph.sh.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
