@@ -3,8 +3,12 @@
 // first run. No assertion here depends on how long anything took.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <numeric>
 #include <random>
@@ -228,6 +232,39 @@ TEST(WorkPrecisionTiming, RepeatThatDiffersIsAnError) {
     EXPECT_NE(r.stats.message.find("not deterministic"), std::string::npos) << r.stats.message;
     EXPECT_NE(r.stats.message.find("f_evals"), std::string::npos) << r.stats.message;
   }
+}
+
+// The files record how the times were taken: the JSON's timing block (seed, the repeat rule,
+// the resamples) and the Markdown's "median [interval]" columns.
+TEST(WorkPrecisionTiming, OutputsRecordTheTimingRule) {
+  WorkPrecisionSpec spec;
+  spec.model = "harmonic_oscillator";
+  spec.integrators = {"rk4"};
+  spec.t_end = 1;
+  spec.h = 0.1;
+  spec.levels = 2;
+  spec.repeats = 2;
+  spec.seed = 5;
+  const WorkPrecisionResult res = run_work_precision(spec, nullptr);
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("sb_wp_timing_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  write_work_precision_outputs(dir.string(), spec, res);
+  std::ifstream js(dir / "work_precision.json");
+  const auto meta = nlohmann::json::parse(js);
+  EXPECT_EQ(meta.at("spec").at("seed"), 5);
+  EXPECT_EQ(meta.at("timing").at("seed"), 5);
+  EXPECT_EQ(meta.at("timing").at("max_repeats"), 2);
+  EXPECT_EQ(meta.at("timing").at("bootstrap_resamples"), kBootstrapResamples);
+  EXPECT_EQ(meta.at("timing").at("repeat_long_run_s").get<double>(), kRepeatLongRun);
+  EXPECT_EQ(meta.at("timing").at("repeat_budget_s").get<double>(), kRepeatBudget);
+  std::ifstream md(dir / "work_precision.md");
+  const std::string text((std::istreambuf_iterator<char>(md)), {});
+  EXPECT_NE(text.find("| wall s (median) | 95% interval | repeats |"), std::string::npos) << text;
+  EXPECT_NE(text.find("seed 5"), std::string::npos) << text;
+  // rk4 solves nothing: no solver-counter column in the Markdown.
+  EXPECT_EQ(text.find("newton_iters"), std::string::npos) << text;
+  std::filesystem::remove_all(dir);
 }
 
 TEST(WorkPrecisionTiming, SeedIsRecordedAndRepeatsValidated) {
