@@ -12,8 +12,12 @@
 // differences, with ∂f/∂t by a forward difference for non-autonomous models; all of these f
 // evaluations go through the counted boundary. GSL's error handler is switched off; a failing
 // status becomes Status::solver_error with gsl_strerror's text.
-// GSL keeps no f counter of its own: library_f_evals is not reported (-1). Steps and failed
-// steps come from the evolve object's count and failed_steps.
+// GSL keeps no f counter of its own: library_f_evals is not reported (-1). Adaptive counters
+// (gsl.cpp, finish()): steps = the steps the driver accepted (its n, summed over calls),
+// error_test_failures = the evolve object's count (steps computed) minus the accepted ones,
+// newton_conv_failures = its failed_steps minus those rejections (attempts whose stepper
+// failed: the implicit steppers' solves that did not converge; GSL halves h and retries).
+// GSL reports no Newton iterations, factorisations or Krylov iterations: those stay 0.
 #pragma once
 
 #include "core/registry_types.hpp"
