@@ -202,5 +202,21 @@ TEST(Radau5Newton, FixedStepFailureNamesTheReason) {
       << r.stats.message;
 }
 
+// Gauss collocation shares the stopping test: on van der Pol (ε = 1e-6) at h = 0.1 the simplified
+// Newton with J at the step's start contracts (θ < 1) but too slowly to reach round-off within
+// newton_max_iter = 20, and the message says so with the rate.
+TEST(GaussNewton, FailureNamesTheReason) {
+  auto sys = model("van_der_pol");
+  FixedStepOptions opt;
+  opt.t_end = 2.0;
+  opt.h = 0.1;
+  auto integ = make("gauss4");
+  const RunResult r = run_fixed_step(*sys, *integ, opt);
+  ASSERT_EQ(r.stats.status, Status::newton_failed);
+  EXPECT_EQ(r.stats.newton_conv_failures, 1);
+  EXPECT_NE(r.stats.message.find("gauss4: simplified Newton failed"), std::string::npos);
+  EXPECT_NE(r.stats.message.find("too slow (theta = "), std::string::npos) << r.stats.message;
+}
+
 }  // namespace
 }  // namespace stiffbench
