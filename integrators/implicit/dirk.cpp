@@ -193,9 +193,10 @@ std::vector<ParamSpec> esdirk_param_specs() {
   for (ParamSpec& s : specs)
     if (s.key == "newton_tol")
       s.help =
-          "fixed-step mode: Newton tolerance on residual or update (weighted max-norm), each step "
-          "may carry an error of this order; adaptive mode uses 0.01 of the controller's "
-          "scale min_i (atol + rtol |y_i|)/(1 + |y_i|), at least 1e-14";
+          "fixed-step mode: Newton stops when its predicted error theta/(1-theta) |dz| is below "
+          "this (weighted max-norm) or an update is at round-off, the default iterates to "
+          "round-off; adaptive mode uses 0.01 of the controller's scale min_i (atol + rtol "
+          "|y_i|)/(1 + |y_i|), at least 1e-14";
   for (ParamSpec& s : controller_param_specs()) specs.push_back(std::move(s));
   specs.push_back({"error_filter",
                    ParamType::text,

@@ -29,8 +29,9 @@
 // (recovered from the last stage equation, see above) is f(t + h, y⁺) up to the Newton
 // residual, and the next step takes it as its k_1 (FSAL): a fixed-step run evaluates f(t0, y0)
 // once, an adaptive run once at the start (plus one for the starting-step heuristic), and a
-// rejected trial keeps k_1. Each implicit stage costs (its Newton iterations + 1) evaluations
-// (ImplicitCore), plus finite-difference Jacobian columns. In fixed-step mode k_1 is reused only
+// rejected trial keeps k_1. Each implicit stage costs one evaluation per Newton iteration (the
+// accepted iterate z_k + Δ_k is not evaluated again; ImplicitCore), plus finite-difference
+// Jacobian columns. In fixed-step mode k_1 is reused only
 // when step() continues where the last one ended (same t and storage; on constrained systems
 // also the same values), as the explicit FSAL pairs do.
 //
@@ -48,7 +49,8 @@
 // ImplicitCore's norm, relative to 1 + |z_i|) is max(0.01 min_i (atol + rtol |y_i|)/(1 + |y_i|),
 // 1e-14), in place of newton_tol: the Newton error stays two orders below the error the
 // controller allows in every component (else the estimate measures Newton noise and the steps
-// collapse), and loose tolerances do not pay for Newton iterations to 1e-12.
+// collapse), and loose tolerances do not pay for Newton iterations to round-off. Fixed-step
+// mode uses newton_tol (default 1e-15: to round-off) with ImplicitCore's contraction-aware test.
 //
 // bdf2: y_{n+1} - 4/3 y_n + 1/3 y_{n-1} = 2/3 h f(t_{n+1}, y_{n+1}), order 2, L-stable
 //   (A-stable with R(∞) = 0). Start-up: the first step (and any step after h changes or after
@@ -117,7 +119,7 @@ class DirkIntegrator final : public Integrator {
   DirkStepper stepper_;
   ImplicitCore core_;
   bool adaptive_ = false, fsal_ = false, filter_ = true;
-  double newton_tol_ = 1e-12;  // the user's (core_ gets a per-trial value in adaptive mode)
+  double newton_tol_ = 1e-15;  // the user's (core_ gets a per-trial value in adaptive mode)
   ControllerOptions control_;
   StepController ctrl_;
   Vec ynew_, err_, work_, work2_;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 
 #include "integrators/method_entry.hpp"
@@ -11,8 +12,6 @@
 namespace stiffbench {
 
 namespace {
-
-constexpr double kEps = std::numeric_limits<double>::epsilon();
 
 ButcherTableau build_tableau(int s) {
   ButcherTableau t;
@@ -226,21 +225,26 @@ void GaussCollocation::starting_values(double h) {
   }
 }
 
-bool GaussCollocation::solve_stages(const OdeSystem& sys, double t, CVecRef y, double h,
-                                    SolveStats& stats) {
+NewtonAttempt GaussCollocation::solve_stages(const OdeSystem& sys, double t, CVecRef y, double h,
+                                             SolveStats& stats) {
   const Vec& c = tableau_.c;
   scale_ = 1.0 + y.array().abs();
   starting_values(h);
   combine_columns(z_, k_.t_inv, w_);
   const std::size_t nr = k_.real.size();
-  double norm_old = 0.0;
+  double norm_old = std::numeric_limits<double>::infinity();
+  NewtonAttempt res;
   for (int it = 0; it < opt_.newton_max_iter; ++it) {
     for (int i = 0; i < s_; ++i) {
       tmp_ = y + z_.col(i);
       sys.rhs(t + c[i] * h, tmp_, f_.col(i));
     }
-    if (!f_.allFinite()) return false;
+    if (!f_.allFinite()) {
+      res.outcome = NewtonOutcome::non_finite;
+      return res;
+    }
     ++stats.newton_iters;
+    res.iters = it + 1;
     double sum = 0.0;
     // Real blocks: (γ/h I - J) ΔW_j = (T⁻¹F)_j - (γ/h) W_j.
     for (std::size_t r = 0; r < nr; ++r) {
@@ -271,23 +275,15 @@ bool GaussCollocation::solve_stages(const OdeSystem& sys, double t, CVecRef y, d
     }
     combine_columns(w_, k_.t, z_);
     const double norm = std::sqrt(sum / static_cast<double>(s_ * n_));
-    if (!std::isfinite(norm)) return false;
-    if (norm == 0.0) return true;
-    if (it > 0) {
-      const double theta = norm / norm_old;
-      if (theta >= 0.99) {
-        // No contraction: rounding noise (updates at a few hundred ulps of Z, or below the
-        // tolerance) ends the iteration as converged; anything larger is divergence.
-        double zsum = 0.0;
-        for (int i = 0; i < s_; ++i) zsum += (z_.col(i).array() / scale_.array()).square().sum();
-        const double znorm = std::sqrt(zsum / static_cast<double>(s_ * n_));
-        return norm <= std::max(opt_.newton_tol, 100.0 * kEps * znorm);
-      }
-      if (theta / (1.0 - theta) * norm <= opt_.newton_tol) return true;
-    }
+    res.dnorm = norm;
+    if (newton_update_converged(norm, norm_old, it > 0, opt_.newton_tol, it + 1,
+                                opt_.newton_max_iter, true, &res.outcome, &res.theta))
+      return res;
     norm_old = norm;
   }
-  return false;
+  res.outcome =
+      res.dnorm <= kNewtonNoise ? NewtonOutcome::converged : NewtonOutcome::iteration_limit;
+  return res;
 }
 
 Status GaussCollocation::step(const OdeSystem& sys, double t, VecRef y, double h,
@@ -313,12 +309,14 @@ Status GaussCollocation::step(const OdeSystem& sys, double t, VecRef y, double h
     stats.message = info().name + ": singular iteration matrix at t = " + std::to_string(t);
     return Status::solver_error;
   }
-  if (!solve_stages(sys, t, y, h, stats)) {
+  if (const NewtonAttempt a = solve_stages(sys, t, y, h, stats);
+      a.outcome != NewtonOutcome::converged) {
     ++stats.newton_conv_failures;
     have_prev_ = false;
-    stats.message = info().name +
-                    ": simplified Newton did not converge at t = " + std::to_string(t) +
-                    " (h = " + std::to_string(h) + ")";
+    std::ostringstream msg;
+    msg << info().name << ": simplified Newton failed at t = " << t << " (h = " << h
+        << "): " << describe_newton_failure(a, opt_.newton_tol);
+    stats.message = msg.str();
     return Status::newton_failed;
   }
   for (int j = 0; j < s_; ++j) y += k_.d[j] * z_.col(j);

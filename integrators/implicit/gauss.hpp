@@ -26,14 +26,16 @@
 // the pattern of J otherwise or with linear_solver=sparse_lu.
 //
 // Newton: starting values from the previous step's collocation polynomial when the step
-// continues the last one (zero otherwise); θ_k = ‖ΔW_k‖/‖ΔW_{k-1}‖, η_k = θ_k/(1 - θ_k), RMS
-// norm scaled by 1 + |y_n,i|. Converged after at least one iteration when η_k ‖ΔW_k‖ ≤
-// newton_tol, or when contraction has stopped (θ ≥ 0.99) with ‖ΔW_k‖ ≤ max(newton_tol,
-// 100 ε ‖Z‖): the update is rounding noise. The default newton_tol = 1e-15 iterates to round-off,
-// so that the step is the symplectic map itself and the energy error of long runs stays bounded
-// without drift (GNI §VIII.6); a looser tolerance adds a non-symplectic perturbation of that size
-// each step. Failure (θ ≥ 0.99 above tolerance, non-finite values, newton_max_iter iterations) ends
-// the run with newton_failed.
+// continues the last one (zero otherwise); θ_k = ‖ΔW_k‖/‖ΔW_{k-1}‖, RMS norm scaled by
+// 1 + |y_n,i|, and the stopping test of every implicit method (integrators/implicit/
+// implicit_core.hpp): converged when θ_k/(1 - θ_k) ‖ΔW_k‖ ≤ newton_tol, or ‖ΔW_k‖ at round-off
+// (4ε; 100ε once contraction has stopped); diverging when θ_k ≥ 1 above that; too slow when
+// θ_k^(newton_max_iter - k)/(1 - θ_k) ‖ΔW_k‖ > newton_tol. The default newton_tol = 1e-15
+// iterates to round-off, so that the step is the symplectic map itself and the energy error of
+// long runs stays bounded without drift (GNI §VIII.6); a looser tolerance adds a non-symplectic
+// perturbation of that size each step. A failure (diverging, too slow, non-finite values,
+// newton_max_iter iterations) ends the run with newton_failed and the reason and θ in the
+// message.
 //
 // Counting: s f evaluations per Newton iteration; linear_setups +1 per factorisation (real or
 // complex), lin_solves +1 per system solved; J at every step (analytic, or finite differences
@@ -85,7 +87,8 @@ class GaussCollocation final : public Integrator {
   }
 
  private:
-  bool solve_stages(const OdeSystem& sys, double t, CVecRef y, double h, SolveStats& stats);
+  NewtonAttempt solve_stages(const OdeSystem& sys, double t, CVecRef y, double h,
+                             SolveStats& stats);
   void starting_values(double h);
 
   int s_;

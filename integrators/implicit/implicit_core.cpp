@@ -31,9 +31,10 @@ std::vector<ParamSpec> implicit_param_specs(bool with_newton) {
                      "Jacobian reuse in Newton: full (every iterate), modified (once per step), "
                      "frozen (across steps until a failure)",
                      {"full", "modified", "frozen"}});
-    specs.push_back({"newton_tol", P::real, "1e-12",
-                     "Newton tolerance on residual or update (weighted max-norm); each step may "
-                     "carry an error of this order",
+    specs.push_back({"newton_tol", P::real, "1e-15",
+                     "Newton stops when its predicted error theta/(1-theta) |dz| is below this "
+                     "(weighted max-norm, relative to 1 + |z|; theta the measured contraction "
+                     "rate), or when an update is at round-off; the default iterates to round-off",
                      B::positive()});
     specs.push_back(
         {"newton_max_iter", P::integer, "10", "Newton iterations per stage", B::at_least(1)});
@@ -469,78 +470,178 @@ Status ImplicitCore::linear_failure(double t, SolveStats& stats) {
   return Status::solver_error;
 }
 
+namespace {
+
+const char* outcome_name(NewtonOutcome o) {
+  switch (o) {
+    case NewtonOutcome::converged:
+      return "converged";
+    case NewtonOutcome::diverging:
+      return "diverging";
+    case NewtonOutcome::too_slow:
+      return "too slow";
+    case NewtonOutcome::iteration_limit:
+      return "iteration limit";
+    case NewtonOutcome::non_finite:
+      return "non-finite iterate";
+    case NewtonOutcome::linear_failed:
+      return "linear solver failed";
+  }
+  return "?";
+}
+
+}  // namespace
+
+bool newton_update_converged(double dnorm, double prev_dnorm, bool have_rate, double tol,
+                             int iters_done, int max_iter, bool slow_test, NewtonOutcome* outcome,
+                             double* theta) {
+  *outcome = NewtonOutcome::converged;
+  if (!std::isfinite(dnorm)) {
+    *outcome = NewtonOutcome::non_finite;
+    return true;
+  }
+  if (dnorm <= kNewtonRoundoff) return true;  // at round-off: no rate needed
+  if (!have_rate) return false;
+  *theta = dnorm / prev_dnorm;
+  if (*theta >= 1.0) {
+    // No contraction: an update at the level of rounding noise means the iterate has converged
+    // as far as it can; anything larger is divergence.
+    if (dnorm > kNewtonNoise) *outcome = NewtonOutcome::diverging;
+    return true;
+  }
+  if (*theta / (1.0 - *theta) * dnorm <= tol) return true;
+  // Predicted error after the remaining iterations (Hairer–Wanner IV.8, (8.13)).
+  if (slow_test && dnorm > kNewtonNoise &&
+      std::pow(*theta, max_iter - iters_done) / (1.0 - *theta) * dnorm > tol) {
+    *outcome = NewtonOutcome::too_slow;
+    return true;
+  }
+  return false;
+}
+
+std::string describe_newton_failure(const NewtonAttempt& a, double tol) {
+  std::ostringstream m;
+  m << outcome_name(a.outcome);
+  switch (a.outcome) {
+    case NewtonOutcome::diverging:
+      m << " (theta = " << a.theta << " >= 1 at iteration " << a.iters << ", |dz| = " << a.dnorm
+        << ")";
+      break;
+    case NewtonOutcome::too_slow:
+      m << " (theta = " << a.theta << " at iteration " << a.iters << ", |dz| = " << a.dnorm
+        << ": predicted above tol " << tol << " within the iteration limit)";
+      break;
+    case NewtonOutcome::iteration_limit:
+      m << " (" << a.iters << " iterations, |dz| = " << a.dnorm << ", tol " << tol << ")";
+      break;
+    case NewtonOutcome::non_finite:
+      m << " at iteration " << a.iters;
+      break;
+    default:
+      break;
+  }
+  return m.str();
+}
+
+NewtonAttempt ImplicitCore::newton_attempt(const OdeSystem& sys, double t, CVecRef psi, double hg,
+                                           VecRef z, VecRef fz, SolveStats& stats,
+                                           JacobianUse use) {
+  const bool forcing = opt_.eisenstat_walker && is_krylov_run();
+  const int kmax = opt_.newton_max_iter;
+  NewtonAttempt a;
+  double prev_dnorm = std::numeric_limits<double>::infinity();
+  double prev_gnorm = 0.0, eta = 0.0;
+  for (int k = 0; k < kmax; ++k) {
+    sys.rhs(t, z, fz);
+    g_ = z - psi - hg * fz;
+    if (!g_.allFinite()) {
+      a.outcome = NewtonOutcome::non_finite;
+      a.iters = k;
+      return a;
+    }
+    const bool need_j = use == JacobianUse::full || !have_jac_ ||
+                        (use == JacobianUse::fresh && k == 0) ||
+                        (opt_.newton == NewtonMode::modified && !jac_fresh_in_step_);
+    if (need_j) {
+      update_jacobian(sys, t, z, fz, stats);
+      a.fresh_jacobian = true;
+    }
+    if (!prepare(hg, stats)) {
+      a.outcome = NewtonOutcome::linear_failed;
+      return a;
+    }
+    if (forcing) {
+      // Eisenstat–Walker forcing term (choice 2, γ = 0.9, α = 2; see the header comment).
+      const double gnorm = g_.norm();
+      double next = 1e-2;
+      if (k > 0 && prev_gnorm > 0) {
+        const double ratio = gnorm / prev_gnorm;
+        next = 0.9 * ratio * ratio;
+        if (0.9 * eta * eta > 0.1) next = std::max(next, 0.9 * eta * eta);
+      }
+      const double floor =
+          std::max(opt_.linear.krylov_tol, gnorm > 0 ? 0.1 * opt_.newton_tol / gnorm : 0.0);
+      eta = std::max(std::min(next, 0.1), floor);
+      prev_gnorm = gnorm;
+      set_krylov_tolerance(eta);
+    }
+    delta_.setZero();
+    g_ = -g_;  // in place: passing the expression -g_ would allocate a temporary
+    if (!solve(g_, delta_, stats)) {
+      a.outcome = NewtonOutcome::linear_failed;
+      return a;
+    }
+    z += delta_;
+    ++stats.newton_iters;
+    a.iters = k + 1;
+    a.dnorm = weighted_norm(delta_, z);
+    // The linear-rate prediction of the too-slow test does not hold for full Newton (J at every
+    // iterate converges faster than linearly): there only divergence and the limit end it.
+    if (newton_update_converged(a.dnorm, prev_dnorm, k > 0, opt_.newton_tol, a.iters, kmax,
+                                use != JacobianUse::full, &a.outcome, &a.theta))
+      return a;
+    prev_dnorm = a.dnorm;
+  }
+  a.outcome = a.dnorm <= kNewtonNoise ? NewtonOutcome::converged : NewtonOutcome::iteration_limit;
+  return a;
+}
+
 Status ImplicitCore::solve_stage(const OdeSystem& sys, double t, CVecRef psi, double hg, VecRef z,
                                  VecRef fz, SolveStats& stats) {
   z0_ = z;
-  const bool forcing = opt_.eisenstat_walker && is_krylov_run();
-  bool linear_failed = false;
-  // Attempt 0 uses the configured Jacobian reuse; when it fails, attempt 1 starts again from
-  // the predictor with full Newton (J at every iterate): the fixed-step driver cannot shrink
-  // the step, so this is the only remedy before reporting newton_failed.
-  for (int attempt = 0; attempt < 2; ++attempt) {
-    const bool full =
-        attempt == 1 || opt_.newton == NewtonMode::full || source_ == JacobianSource::matrix_free;
-    if (attempt == 1) {
-      if (opt_.newton == NewtonMode::full || source_ == JacobianSource::matrix_free) break;
-      z = z0_;
-    }
-    linear_failed = false;
-    double prev_dnorm = std::numeric_limits<double>::infinity();
-    double dnorm = prev_dnorm;
-    double prev_gnorm = 0.0, eta = 0.0;
-    bool refresh = false;  // slow contraction with a reused J: re-evaluate it at the iterate
-    for (int it = 0; it <= opt_.newton_max_iter; ++it) {
-      sys.rhs(t, z, fz);
-      g_ = z - psi - hg * fz;
-      if (!g_.allFinite()) break;
-      // At least one iteration: a predictor whose residual is already below tol can still be
-      // off by ‖W⁻¹‖·tol, and fixed-step studies accumulate such errors over every step.
-      if (it > 0 && (weighted_norm(g_, z) <= opt_.newton_tol || dnorm <= opt_.newton_tol))
-        return Status::ok;
-      if (it == opt_.newton_max_iter) break;
-      const bool need_j = full || refresh || !have_jac_ ||
-                          (opt_.newton == NewtonMode::modified && !jac_fresh_in_step_);
-      if (need_j) update_jacobian(sys, t, z, fz, stats);
-      refresh = false;
-      if (!prepare(hg, stats)) {
-        linear_failed = true;
-        break;
-      }
-      if (forcing) {
-        // Eisenstat–Walker forcing term (choice 2, γ = 0.9, α = 2; see the header comment).
-        const double gnorm = g_.norm();
-        double next = 1e-2;
-        if (it > 0 && prev_gnorm > 0) {
-          const double ratio = gnorm / prev_gnorm;
-          next = 0.9 * ratio * ratio;
-          if (0.9 * eta * eta > 0.1) next = std::max(next, 0.9 * eta * eta);
-        }
-        const double floor =
-            std::max(opt_.linear.krylov_tol, gnorm > 0 ? 0.1 * opt_.newton_tol / gnorm : 0.0);
-        eta = std::max(std::min(next, 0.1), floor);
-        prev_gnorm = gnorm;
-        set_krylov_tolerance(eta);
-      }
-      delta_.setZero();
-      g_ = -g_;  // in place: passing the expression -g_ would allocate a temporary
-      if (!solve(g_, delta_, stats)) {
-        linear_failed = true;
-        break;
-      }
-      z += delta_;
-      ++stats.newton_iters;
-      dnorm = weighted_norm(delta_, z);
-      const double theta = dnorm / prev_dnorm;  // contraction estimate (Hairer–Wanner IV.8)
-      if (it >= 1 && theta > 2.0) break;        // diverging
-      if (it >= 1 && theta > 0.5) refresh = true;
-      prev_dnorm = dnorm;
-    }
+  const bool always_full =
+      opt_.newton == NewtonMode::full || source_ == JacobianSource::matrix_free;
+  // Attempt 1 uses the configured Jacobian reuse. A failure with a J evaluated before this solve
+  // (an earlier stage or step) is retried with J fresh at the solve's start; a failure with a
+  // fresh J, with full Newton (J at every iterate). The fixed-step driver cannot shrink the step,
+  // so these are the only remedies before reporting newton_failed. Every failed attempt counts
+  // in newton_conv_failures.
+  JacobianUse use = always_full ? JacobianUse::full : JacobianUse::configured;
+  std::string reasons;
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    const NewtonAttempt a = newton_attempt(sys, t, psi, hg, z, fz, stats, use);
+    if (a.outcome == NewtonOutcome::converged) return Status::ok;
+    if (a.outcome == NewtonOutcome::linear_failed) return linear_failure(t, stats);
+    ++stats.newton_conv_failures;
+    if (!reasons.empty()) reasons += "; then ";
+    reasons += describe_newton_failure(a, opt_.newton_tol);
+    reasons += use == JacobianUse::full    ? " with full Newton"
+               : use == JacobianUse::fresh ? " with J fresh at the start"
+               : a.fresh_jacobian          ? " with J of this solve"
+                                           : " with J of an earlier stage or step";
+    // A slow or capped iteration continues from where it got to; a diverging one restarts.
+    const bool keep =
+        a.outcome == NewtonOutcome::too_slow || a.outcome == NewtonOutcome::iteration_limit;
+    if (!keep) z = z0_;
+    if (use == JacobianUse::configured && !a.fresh_jacobian)
+      use = JacobianUse::fresh;
+    else if (use != JacobianUse::full)
+      use = JacobianUse::full;
+    else
+      break;
   }
-  if (linear_failed) return linear_failure(t, stats);
-  ++stats.newton_conv_failures;
   std::ostringstream msg;
-  msg << "Newton did not converge at t = " << t << " (hγ = " << hg << ", " << opt_.newton_max_iter
-      << " iterations max, tol " << opt_.newton_tol << ")";
+  msg << "Newton failed at t = " << t << " (hγ = " << hg << "): " << reasons;
   stats.message = msg.str();
   return Status::newton_failed;
 }

@@ -7,13 +7,25 @@
 //   full      J re-evaluated and W refactored at every iterate;
 //   modified  J evaluated once per step (at the first iterate of the step), reused by all stages;
 //   frozen    J kept across steps, re-evaluated only when Newton fails with a stale J.
-// With a stale J a failed solve is retried once from the same start with a fresh J; a second
-// failure returns Status::newton_failed (the step is never silently accepted).
-// Convergence: after at least one iteration, ‖G(z)‖ ≤ tol or ‖Δz‖ ≤ tol in the norm
-// max_i |·_i| / (1 + |z_i|), where G(z) = z - ψ - hγ f(t, z). Each step can carry an error of
-// order tol, so a fixed-step run has an error floor of about N·tol: tighten newton_tol for
-// convergence studies at very small h. A linear problem with an exact J converges after one
-// iteration (one linear solve), confirmed by the residual at the next iterate.
+// Stopping rule (Hairer & Wanner, Solving ODEs II, §IV.8): after update k, with
+// ‖·‖ = max_i |·_i| / (1 + |z_i|) and the contraction rate θ_k = ‖Δ_k‖/‖Δ_{k-1}‖,
+//   converged  when θ_k/(1 - θ_k) ‖Δ_k‖ ≤ newton_tol (the predicted distance to the solution),
+//              or ‖Δ_k‖ ≤ 4ε (round-off; the only way to stop after one update, which has no
+//              rate), or θ_k ≥ 1 with ‖Δ_k‖ ≤ 100ε (the update is rounding noise);
+//   diverging  when θ_k ≥ 1 above that;
+//   too slow   when θ_k^(newton_max_iter - k)/(1 - θ_k) ‖Δ_k‖ > newton_tol (the limit would be
+//              reached first; not tested with full Newton, whose convergence is not linear);
+//   iteration limit after newton_max_iter updates.
+// The default newton_tol = 1e-15 (a few unit round-offs) iterates to round-off, so that the
+// Newton error of a fixed-step run stays at its round-off floor (about N·ε·|y| after N steps)
+// and never sets the error at small h; a looser newton_tol lets each step carry an error up to
+// newton_tol. The accepted iterate is z_k + Δ_k (no further f evaluation): a linear problem with
+// an exact J takes two updates per stage, the second at round-off.
+// A failed attempt is retried: with J from an earlier stage or step (modified, frozen), once
+// with J fresh at the solve's start; with a fresh J, once with full Newton; a diverging attempt
+// restarts from the predictor, a slow one continues from its iterate. Each failed attempt counts
+// in stats.newton_conv_failures; after the last, Status::newton_failed with a message naming
+// each attempt's reason and θ (the step is never silently accepted).
 //
 // Mechanical systems (system_form=auto or velocity): on a MechanicalSystem with force Jacobians K
 // and D every linear system W k = r is solved in velocity form
@@ -25,8 +37,8 @@
 // stops at the relative residual η_k = 0.9 (‖G_k‖/‖G_{k-1}‖)² (Eisenstat & Walker 1996, choice
 // 2, with their safeguard η_k ≥ 0.9 η_{k-1}² when that is above 0.1), η_0 = 0.01, capped at 0.1
 // and floored at max(krylov_tol, 0.1 newton_tol / ‖G_k‖₂) (no accuracy beyond what the Newton
-// test asks for). The Newton convergence test evaluates the true residual, so inexact solves
-// cost iterations, never accuracy. krylov_forcing=fixed uses krylov_tol for every solve.
+// test asks for). An inexact solve slows the contraction, which θ measures, so it costs
+// iterations, not accuracy. krylov_forcing=fixed uses krylov_tol for every solve.
 //
 // A linear solver that fails (refuses a non-symmetric matrix, meets non-positive curvature,
 // a singular factorisation, no Krylov convergence) ends the step with Status::solver_error and
@@ -55,7 +67,7 @@ enum class SystemForm { automatic, velocity, first_order };
 
 struct ImplicitOptions {
   NewtonMode newton = NewtonMode::modified;
-  double newton_tol = 1e-12;
+  double newton_tol = 1e-15;
   int newton_max_iter = 10;
   JacobianSource jacobian = JacobianSource::automatic;
   LinearSolverOptions linear;
@@ -63,6 +75,41 @@ struct ImplicitOptions {
   SystemForm form = SystemForm::automatic;
   bool eisenstat_walker = true;  // Krylov tolerances follow Newton (see the header comment)
 };
+
+// The outcome of one Newton iteration sequence (one attempt of a solve).
+enum class NewtonOutcome {
+  converged,
+  diverging,
+  too_slow,
+  iteration_limit,
+  non_finite,
+  linear_failed
+};
+struct NewtonAttempt {
+  NewtonOutcome outcome = NewtonOutcome::iteration_limit;
+  int iters = 0;       // updates made
+  double theta = 0.0;  // last contraction estimate ‖Δ_k‖/‖Δ_{k-1}‖ (0 before the second)
+  double dnorm = 0.0;  // ‖Δ_k‖ of the last update
+  bool fresh_jacobian = false;  // J was evaluated during this attempt
+};
+
+// Round-off levels of an update, in norms relative to 1 + |z_i|: an update at most
+// kNewtonRoundoff (4 unit round-offs) is accepted without a rate; one at most kNewtonNoise (100
+// unit round-offs) that no longer contracts is rounding noise (converged, not diverging).
+inline constexpr double kNewtonRoundoff = 4 * 2.220446049250313e-16;
+inline constexpr double kNewtonNoise = 100 * 2.220446049250313e-16;
+
+// The stopping test shared by every Newton iteration of the implicit methods, after an update
+// of norm dnorm (the previous one prev_dnorm; have_rate once there are two). True when the
+// iteration ends, with *outcome converged, diverging, too_slow or non_finite and *theta the rate:
+//   converged   dnorm ≤ kNewtonRoundoff; or θ/(1-θ) dnorm ≤ tol; or θ ≥ 1 with dnorm ≤ kNewtonNoise
+//   diverging   θ ≥ 1 above the noise level
+//   too_slow    (slow_test) θ^(max_iter - iters_done)/(1-θ) dnorm > tol above the noise level
+bool newton_update_converged(double dnorm, double prev_dnorm, bool have_rate, double tol,
+                             int iters_done, int max_iter, bool slow_test, NewtonOutcome* outcome,
+                             double* theta);
+// "diverging (theta = 3.1 >= 1 at iteration 2, |dz| = 0.4)", "too slow (...)", ...
+std::string describe_newton_failure(const NewtonAttempt& a, double tol);
 
 // Parameters of the implicit family (with_newton: also the Newton keys).
 std::vector<ParamSpec> implicit_param_specs(bool with_newton);
@@ -102,7 +149,8 @@ class ImplicitCore {
   // Newton tolerance of the following solves (adaptive DIRK pairs set it per trial).
   void set_newton_tol(double tol) { opt_.newton_tol = tol; }
 
-  // Newton on z = ψ + hγ f(t, z). z holds the initial guess; on success fz = f(t, z).
+  // Newton on z = ψ + hγ f(t, z). z holds the initial guess; fz is work space (f at the last
+  // iterate but one on success).
   Status solve_stage(const OdeSystem& sys, double t, CVecRef psi, double hg, VecRef z, VecRef fz,
                      SolveStats& stats);
 
@@ -132,6 +180,11 @@ class ImplicitCore {
   void rebuild_w_pattern();
   bool is_krylov_run() const;
   Status linear_failure(double t, SolveStats& stats);
+  // One Newton iteration sequence from z: J as configured (configured), evaluated at the start
+  // and then reused (fresh), or at every iterate (full).
+  enum class JacobianUse { configured, fresh, full };
+  NewtonAttempt newton_attempt(const OdeSystem& sys, double t, CVecRef psi, double hg, VecRef z,
+                               VecRef fz, SolveStats& stats, JacobianUse use);
 
   ImplicitOptions opt_;
   // The linear-solver options as the user gave them: every reset() resolves `automatic` choices

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 #include "integrators/method_entry.hpp"
 
@@ -151,11 +152,20 @@ std::vector<ParamSpec> radau5_param_specs() {
   using P = ParamType;
   using B = Bounds;
   std::vector<ParamSpec> s = controller_param_specs();
-  s.push_back({"newton_tol", P::real, "1e-12",
-               "fixed-step mode: Newton stops when its predicted error is below newton_tol "
-               "(1 + |y|) in the RMS norm (adaptive mode uses RADAU5's rule from rtol)",
+  s.push_back({"newton_tol", P::real, "1e-15",
+               "fixed-step mode: Newton stops when its predicted error theta/(1-theta) |dW| is "
+               "below newton_tol (1 + |y|) in the RMS norm, or an update is at round-off; the "
+               "default iterates to round-off (adaptive mode uses RADAU5's rule from rtol)",
                B::positive()});
-  s.push_back({"newton_max_iter", P::integer, "7", "Newton iterations per step (RADAU5: 7)",
+  s.push_back({"newton",
+               P::text,
+               "modified",
+               "Jacobian reuse: modified (J at every step's start), frozen (J kept across steps "
+               "until a Newton failure, then re-evaluated)",
+               {"modified", "frozen"}});
+  s.push_back({"newton_max_iter", P::integer, "20",
+               "Newton iterations per step (RADAU5 uses 7 with its loose adaptive tolerance; "
+               "iterating to round-off in fixed-step mode needs more at large steps)",
                B::at_least(1)});
   s.push_back({"jacobian",
                P::text,
@@ -179,6 +189,7 @@ Radau5Options read_radau5_options(const Params& p) {
   require_input(o.newton_tol > 0, "parameter 'newton_tol' must be > 0");
   o.newton_max_iter = static_cast<int>(p.integer("newton_max_iter"));
   require_input(o.newton_max_iter >= 1, "parameter 'newton_max_iter' must be >= 1");
+  o.frozen = p.text("newton") == "frozen";
   const std::string& j = p.text("jacobian");
   o.jacobian = j == "analytic"     ? JacobianSource::analytic
                : j == "fd_dense"   ? JacobianSource::fd_dense
@@ -236,6 +247,7 @@ void Radau5::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   r2_.setZero(n_);
   x2_.setZero(n_);
   eta_old_ = 1.0;
+  jac_point_ = JacPoint::start;
   fact_h_ = 0.0;
   fact_valid_ = jac_valid_ = f0_valid_ = have_prev_ = false;
   h_prev_ = 0.0;
@@ -258,6 +270,7 @@ void Radau5::ensure_jacobian(const OdeSystem& sys, double t, CVecRef y, SolveSta
   core_.new_step();
   core_.update_jacobian(sys, t, y, f0_, stats);
   jac_valid_ = true;
+  jac_point_ = JacPoint::start;
   fact_valid_ = false;
 }
 
@@ -293,8 +306,8 @@ void Radau5::starting_values(double h) {
   }
 }
 
-bool Radau5::solve_stages(const OdeSystem& sys, double t, CVecRef y, double h, bool adaptive,
-                          SolveStats& stats) {
+NewtonAttempt Radau5::solve_stages(const OdeSystem& sys, double t, CVecRef y, double h,
+                                   bool adaptive, bool warm_start, SolveStats& stats) {
   const Radau5Constants& k = radau5_constants();
   const Vec& c = radau5_tableau().c;
   const double eps = std::numeric_limits<double>::epsilon();
@@ -304,20 +317,25 @@ bool Radau5::solve_stages(const OdeSystem& sys, double t, CVecRef y, double h, b
     scale_ = o.atol + o.rtol * y.array().abs();
     kappa = std::max(10 * eps / o.rtol, std::min(0.03, std::sqrt(o.rtol)));
   } else {
-    scale_ = opt_.newton_tol * (1.0 + y.array().abs());
+    scale_ = 1.0 + y.array().abs();
   }
-  starting_values(h);
+  if (!warm_start) starting_values(h);
   w_.noalias() = z_ * k.t_inv.transpose();
   double eta = std::pow(std::max(eta_old_, eps), 0.8);
-  double norm_old = 0.0;
+  double norm_old = std::numeric_limits<double>::infinity();
   const int kmax = opt_.newton_max_iter;
+  NewtonAttempt a;
   for (int it = 0; it < kmax; ++it) {
     for (int i = 0; i < 3; ++i) {
       tmp_ = y + z_.col(i);
       sys.rhs(t + c[i] * h, tmp_, f_.col(i));
     }
-    if (!f_.allFinite()) return false;
+    if (!f_.allFinite()) {
+      a.outcome = NewtonOutcome::non_finite;
+      return a;
+    }
     ++stats.newton_iters;
+    a.iters = it + 1;
     // Right-hand sides (T⁻¹ ⊗ I) F - h⁻¹ (Λ ⊗ I) W of the three transformed blocks.
     r1_ = k.t_inv(0, 0) * f_.col(0) + k.t_inv(0, 1) * f_.col(1) + k.t_inv(0, 2) * f_.col(2) -
           (k.gamma_hat / h) * w_.col(0);
@@ -337,27 +355,47 @@ bool Radau5::solve_stages(const OdeSystem& sys, double t, CVecRef y, double h, b
       sum += q1 * q1 + q2 * q2 + q3 * q3;
     }
     const double norm = std::sqrt(sum / static_cast<double>(3 * n_));
-    if (!std::isfinite(norm)) return false;
-    if (it > 0) {
-      const double theta = norm / norm_old;
-      if (theta >= 0.99) return false;
-      eta = theta / (1.0 - theta);
-      // Convergence too slow to meet κ within the remaining iterations (RADAU5).
-      if (std::pow(theta, kmax - 1 - it) / (1.0 - theta) * norm > kappa) return false;
+    a.dnorm = norm;
+    if (!std::isfinite(norm)) {
+      a.outcome = NewtonOutcome::non_finite;
+      return a;
+    }
+    if (adaptive) {
+      // RADAU5's rule: θ ≥ 0.99 fails; too slow to meet κ within the remaining iterations
+      // fails; the first iteration may stop on η carried over from the previous step.
+      if (it > 0) {
+        const double theta = norm / norm_old;
+        a.theta = theta;
+        if (theta >= 0.99) {
+          a.outcome = NewtonOutcome::diverging;
+          return a;
+        }
+        eta = theta / (1.0 - theta);
+        if (std::pow(theta, kmax - 1 - it) / (1.0 - theta) * norm > kappa) {
+          a.outcome = NewtonOutcome::too_slow;
+          return a;
+        }
+      }
     }
     w_.col(0) += x1_;
     w_.col(1) += x2_.real();
     w_.col(2) += x2_.imag();
     z_.noalias() = w_ * k.t.transpose();
-    // Adaptive mode may stop after one iteration on η from the previous step (RADAU5); fixed-step
-    // mode waits for a measured contraction, so that its error floor is newton_tol.
-    if ((eta * norm <= kappa && (adaptive || it > 0)) || norm == 0.0) {
-      eta_old_ = eta;
-      return true;
+    if (adaptive) {
+      if (eta * norm <= kappa || norm == 0.0) {
+        eta_old_ = eta;
+        a.outcome = NewtonOutcome::converged;
+        return a;
+      }
+    } else if (newton_update_converged(norm, norm_old, it > 0, opt_.newton_tol, it + 1, kmax, true,
+                                       &a.outcome, &a.theta)) {
+      return a;
     }
     norm_old = norm;
   }
-  return false;
+  a.outcome = !adaptive && a.dnorm <= kNewtonNoise ? NewtonOutcome::converged
+                                                   : NewtonOutcome::iteration_limit;
+  return a;
 }
 
 double Radau5::estimate_error(const OdeSystem& sys, double t, CVecRef y, double h, bool refine,
@@ -385,8 +423,12 @@ void Radau5::accept_stages(double h) {
   z_prev_ = z_;
   h_prev_ = h;
   have_prev_ = true;
-  jac_valid_ = false;
   f0_valid_ = false;
+  if (opt_.frozen && jac_point_ != JacPoint::end) {
+    jac_point_ = JacPoint::earlier_step;  // kept for the next step (refreshed on a failure)
+  } else {
+    jac_valid_ = false;
+  }
 }
 
 Status Radau5::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) {
@@ -398,20 +440,55 @@ Status Radau5::step(const OdeSystem& sys, double t, VecRef y, double h, SolveSta
     f0_valid_ = false;
   }
   ensure_jacobian(sys, t, y, stats);
-  if (!ensure_factors(h, stats)) {
-    stats.message = "radau5: singular iteration matrix at t = " + std::to_string(t);
-    return Status::solver_error;
-  }
-  if (!solve_stages(sys, t, y, h, false, stats)) {
+  std::string reasons;
+  // Attempt 1: J as configured (this step's (t, y), or frozen from an earlier step). A failure
+  // with a J from an earlier step is retried with J fresh at (t, y); a failure with that J, with
+  // J at the last finite iterate's end point (t + h, y + Z_3), from that iterate (the
+  // linearisation where the stiff solution has moved to within the step). Each retry refactors.
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    if (!ensure_factors(h, stats)) {
+      stats.message = "radau5: singular iteration matrix at t = " + std::to_string(t) +
+                      (reasons.empty() ? "" : " (after Newton failed: " + reasons + ")");
+      return Status::solver_error;
+    }
+    const bool warm = attempt > 0 && jac_point_ == JacPoint::end;
+    const NewtonAttempt a = solve_stages(sys, t, y, h, false, warm, stats);
+    if (a.outcome == NewtonOutcome::converged) {
+      y += z_.col(2);
+      accept_stages(h);
+      cached_y_ = y.data();
+      cached_t_ = t + h;
+      return Status::ok;
+    }
     ++stats.newton_conv_failures;
-    have_prev_ = false;
-    return Status::newton_failed;
+    if (!reasons.empty()) reasons += "; then ";
+    reasons += describe_newton_failure(a, opt_.newton_tol);
+    reasons += jac_point_ == JacPoint::earlier_step ? " with J of an earlier step"
+               : jac_point_ == JacPoint::start      ? " with J at the step's start"
+                                                    : " with J at the step's end";
+    if (jac_point_ == JacPoint::earlier_step) {
+      jac_valid_ = false;  // fresh at (t, y)
+      ensure_jacobian(sys, t, y, stats);
+    } else if (jac_point_ == JacPoint::start) {
+      // From a diverged iterate, the starting values' end point instead.
+      if (a.outcome == NewtonOutcome::diverging || !z_.allFinite()) starting_values(h);
+      if (!z_.allFinite() || z_.col(2).isZero(0.0)) break;  // no point other than (t, y)
+      tmp_ = y + z_.col(2);
+      if (core_.jacobian_source() != JacobianSource::analytic) sys.rhs(t + h, tmp_, tmp2_);
+      core_.new_step();
+      core_.update_jacobian(sys, t + h, tmp_, tmp2_, stats);
+      jac_point_ = JacPoint::end;
+      fact_valid_ = false;
+    } else {
+      break;
+    }
   }
-  y += z_.col(2);
-  accept_stages(h);
-  cached_y_ = y.data();
-  cached_t_ = t + h;
-  return Status::ok;
+  have_prev_ = false;
+  jac_valid_ = false;  // the J of the step's end is not the next step's (t, y)
+  std::ostringstream msg;
+  msg << "radau5: Newton failed at t = " << t << " (h = " << h << "): " << reasons;
+  stats.message = msg.str();
+  return Status::newton_failed;
 }
 
 Status Radau5::advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) {
@@ -434,8 +511,10 @@ Status Radau5::advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveSta
     }
     ensure_jacobian(sys, t, y, stats);
     if (!ensure_factors(h, stats)) return TrialResult{0.0, 0.5};
-    if (!solve_stages(sys, t, y, h, true, stats)) {
+    if (solve_stages(sys, t, y, h, true, false, stats).outcome != NewtonOutcome::converged) {
       ++stats.newton_conv_failures;
+      // RADAU5: a failure with a J from an earlier step gets a fresh one; the step is halved.
+      if (jac_point_ == JacPoint::earlier_step) jac_valid_ = false;
       return TrialResult{0.0, 0.5};
     }
     ynew_ = y + z_.col(2);

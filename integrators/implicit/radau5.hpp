@@ -17,13 +17,27 @@
 // first-order form of mechanical systems).
 //
 // Newton: starting values from the previous step's collocation polynomial (zero at the start),
-// θ_k = ‖ΔW_k‖/‖ΔW_{k-1}‖, η_k = θ_k/(1 - θ_k) (η_0 = max(η_old, ε)^0.8), converged when
-// η_k ‖ΔW_k‖ ≤ κ, failed when θ_k ≥ 1 or after newton_max_iter iterations (HW IV.8,
-// "stopping criterion"). Norms are weighted RMS with scale
-//   adaptive:   atol + rtol |y_n,i| and κ = max(10 ε/rtol, min(0.03, rtol^½)) (RADAU5's FNEWT);
-//   fixed step: newton_tol (1 + |y_n,i|) and κ = 1, after at least two iterations.
-// A Newton failure ends a fixed-step run with newton_failed; the adaptive run retries with h/2
-// (counted as a rejected step and a Newton failure).
+// θ_k = ‖ΔW_k‖/‖ΔW_{k-1}‖ in a weighted RMS norm.
+//   adaptive:   RADAU5's rule (HW IV.8, "stopping criterion"): scale atol + rtol |y_n,i|,
+//               η_k = θ_k/(1 - θ_k) (η_0 = max(η_old, ε)^0.8, the rate carried over from the last
+//               step), converged when η_k ‖ΔW_k‖ ≤ κ = max(10 ε/rtol, min(0.03, rtol^½)) (FNEWT),
+//               failed when θ_k ≥ 0.99 or when θ_k^(newton_max_iter-1-k)/(1 - θ_k) ‖ΔW_k‖ > κ;
+//               the trial is retried with h/2 (a rejected step and a Newton failure), with a fresh
+//               J when the failed one was from an earlier step (newton=frozen).
+//   fixed step: scale 1 + |y_n,i| and the stopping test of every implicit method
+//               (integrators/implicit/implicit_core.hpp): converged when θ_k/(1 - θ_k) ‖ΔW_k‖ ≤
+//               newton_tol (default 1e-15: round-off) or the update is at round-off; diverging,
+//               too slow or iteration limit otherwise. A failed step is retried with a fresh J
+//               and refactorised matrices: J from an earlier step (newton=frozen) is
+//               re-evaluated at (t_n, y_n); a failure with that J is retried once more with J at
+//               the end point (t_n + h, y_n + Z_3) of the last iterate (where a stiff solution
+//               has moved to within the step), continuing from that iterate. After the last
+//               failure the run ends with newton_failed and a message naming every attempt's
+//               reason and θ; each failed attempt counts in newton_conv_failures.
+// Jacobian reuse (newton): modified (default) evaluates J at every step's (t_n, y_n); frozen
+// keeps it across steps (refactorising only when h changes) until a Newton failure.
+// newton_max_iter defaults to 20 (RADAU5: 7 with its loose adaptive tolerance; iterating to
+// round-off in fixed-step mode needs more at large steps).
 //
 // Error estimate (HW IV.8, eq. (8.19)–(8.20)): an embedded method of order 3 with
 // b̂_0 = γ_0 = 1/γ̂ on f(t_n, y_n) gives
@@ -34,9 +48,10 @@
 // estimate is O(h⁴), so the shared controller (integrators/adaptive/controller.hpp) uses k = 4.
 //
 // Counting: f evaluations at the system boundary (3 per Newton iteration, f(t_n, y_n) once per
-// new point, finite-difference Jacobian columns); newton_iters; linear_setups +2 per factorisation
-// pair; lin_solves +2 per Newton iteration (+1 per error estimate); steps and error_test_failures.
-// The dense path allocates nothing per step; Eigen's SparseLU allocates in factorize().
+// new point, finite-difference Jacobian columns); jac_evals; newton_iters; newton_conv_failures;
+// linear_setups +2 per factorisation pair; lin_solves +2 per Newton iteration (+1 per error
+// estimate); steps and error_test_failures. The dense path allocates nothing per step; Eigen's
+// SparseLU allocates in factorize().
 #pragma once
 
 #include <Eigen/LU>
@@ -55,8 +70,9 @@ const ButcherTableau& radau5_tableau();
 
 struct Radau5Options {
   ControllerOptions control;
-  double newton_tol = 1e-12;  // fixed-step mode (see above)
-  int newton_max_iter = 7;
+  double newton_tol = 1e-15;  // fixed-step mode (see above)
+  int newton_max_iter = 20;
+  bool frozen = false;  // newton=frozen: J kept across steps until a Newton failure
   JacobianSource jacobian = JacobianSource::automatic;
   LinearSolverKind linear = LinearSolverKind::automatic;
 };
@@ -109,9 +125,10 @@ class Radau5 final : public Integrator {
   }
 
  private:
-  // Newton for the stages of a step of size h from (t, y); false when it fails.
-  bool solve_stages(const OdeSystem& sys, double t, CVecRef y, double h, bool adaptive,
-                    SolveStats& stats);
+  // Newton for the stages of a step of size h from (t, y), from the starting values (or, warm,
+  // from the stages in z_).
+  NewtonAttempt solve_stages(const OdeSystem& sys, double t, CVecRef y, double h, bool adaptive,
+                             bool warm_start, SolveStats& stats);
   void ensure_jacobian(const OdeSystem& sys, double t, CVecRef y, SolveStats& stats);
   bool ensure_factors(double h, SolveStats& stats);
   // Scaled error of the accepted-candidate in z_ (adaptive mode).
@@ -131,6 +148,10 @@ class Radau5 final : public Integrator {
   Vec r1_, x1_;
   Eigen::VectorXcd r2_, x2_;
   double eta_old_ = 1.0;
+  // Where the current J was evaluated: this step's (t_n, y_n), an earlier step's (newton=frozen),
+  // or the end point of a failed attempt's iterate (fixed-step retry).
+  enum class JacPoint { start, earlier_step, end };
+  JacPoint jac_point_ = JacPoint::start;
   double fact_h_ = 0.0;
   bool fact_valid_ = false, jac_valid_ = false, f0_valid_ = false, have_prev_ = false;
   double h_prev_ = 0.0;

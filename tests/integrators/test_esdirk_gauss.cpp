@@ -261,9 +261,9 @@ double error_vs_exact(const OdeSystem& sys, const RunResult& r) {
 }
 
 // f-evaluation counts with the FSAL reuse of the stiffly accurate last stage (dirk.hpp): with an
-// analytic Jacobian every evaluation is a Newton residual (iterations + 1 per implicit stage) or
-// the one f(t0, y0). Fixed step, N steps: 1 + newton_iters + N (s - 1). Adaptive with the
-// starting-step heuristic: 2 + newton_iters + (A + R)(s - 1). Van der Pol μ = 1 (non-stiff;
+// analytic Jacobian every evaluation is a Newton residual (one per iteration: the accepted
+// iterate z_k + Δ_k is not evaluated) or the one f(t0, y0). Fixed step: 1 + newton_iters.
+// Adaptive with the starting-step heuristic: 2 + newton_iters. Van der Pol μ = 1 (non-stiff;
 // no Newton failures, which would add evaluations).
 TEST(Esdirk, EvaluationCountsWithFsalReuse) {
   auto sys = model("van_der_pol", {"form=mu", "mu=1"});
@@ -277,7 +277,8 @@ TEST(Esdirk, EvaluationCountsWithFsalReuse) {
     const RunResult rf = run_fixed_step(*sys, *fixed, fo);
     ASSERT_EQ(rf.stats.status, Status::ok);
     EXPECT_EQ(rf.stats.newton_conv_failures, 0);
-    EXPECT_EQ(rf.stats.f_evals, 1 + rf.stats.newton_iters + 100 * (s - 1));
+    EXPECT_EQ(rf.stats.f_evals, 1 + rf.stats.newton_iters);
+    EXPECT_GE(rf.stats.newton_iters, 2 * 100 * (s - 1));  // at least two per implicit stage
     auto adaptive = make(t.name, {"rtol=1e-6", "atol=1e-8"});
     AdaptiveOptions ao;
     ao.t_end = 2.0;
@@ -286,8 +287,7 @@ TEST(Esdirk, EvaluationCountsWithFsalReuse) {
     ASSERT_EQ(ra.stats.status, Status::ok) << ra.stats.message;
     EXPECT_EQ(ra.stats.newton_conv_failures, 0);
     EXPECT_GT(ra.stats.steps, 5);
-    EXPECT_EQ(ra.stats.f_evals,
-              2 + ra.stats.newton_iters + (ra.stats.steps + ra.stats.error_test_failures) * (s - 1));
+    EXPECT_EQ(ra.stats.f_evals, 2 + ra.stats.newton_iters);
   }
 }
 
@@ -379,8 +379,8 @@ TEST(Esdirk, VanDerPolMatchesPublishedReference) {
 }
 
 // Stiff van der Pol started with h0 = 0.1 over its initial layer (width ~ε): the estimate
-// rejects the too-large trials (or Newton fails), counted in error_test_failures, and the run ends ok
-// and agrees with a tight run of the same method.
+// rejects the too-large trials (or Newton fails), counted in error_test_failures, and the run ends
+// ok and agrees with a tight run of the same method.
 TEST(Esdirk, RejectionsCountedOnStiffVanDerPol) {
   auto sys = model("van_der_pol");
   for (const auto& t : esdirk_tableaux()) {
