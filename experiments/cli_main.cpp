@@ -10,6 +10,7 @@
 
 #include "core/driver.hpp"
 #include "core/run_control.hpp"
+#include "experiments/audit.hpp"
 #include "experiments/catalog.hpp"
 #include "experiments/cli.hpp"
 #include "experiments/commands.hpp"
@@ -161,6 +162,12 @@ int cli_main(int argc, char** argv) {
   if (const long faults = fault_count(); faults > 0) {
     std::cerr << "stiffbench: " << faults << " run" << (faults == 1 ? "" : "s")
               << " ended with status error or timeout (see the status and message columns)\n";
+    return kExitRowsFailed;
+  }
+  // `stiffbench audit`: a claim that does not hold (status fail) fails the command.
+  if (const long failed = audit_failed_checks(); failed > 0) {
+    std::cerr << "stiffbench: " << failed << " audit check" << (failed == 1 ? "" : "s")
+              << " failed (status fail in audit.csv; the reason column says why)\n";
     return kExitRowsFailed;
   }
   return 0;
