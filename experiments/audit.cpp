@@ -342,7 +342,17 @@ void count_checks(std::vector<AuditRow>& rows, const std::string& name) {
   const MethodInfo& info = probe->info();
   const bool per_step =
       (info.family == Family::explicit_rk || info.family == Family::symplectic) && info.stages > 0;
-  for (const CountSystem& cs : count_systems()) {
+  std::vector<CountSystem> systems = count_systems();
+  if (info.requires_.constraints) {
+    // Methods that enforce holonomic constraints (rattle) run on none of the three: their counts
+    // are checked on a constrained pendulum chain of 3 bobs instead.
+    Params chain;
+    chain.set("n", "3");
+    chain.set("constrained", "true");
+    systems.push_back(
+        {"pendulum_chain(n=3,constrained)", model_registry().create("pendulum_chain", chain), 0.1});
+  }
+  for (const CountSystem& cs : systems) {
     if (const std::string why = incompatibility(*probe, *cs.sys); !why.empty()) {
       rows.push_back(skip(name, "f_evals", cs.label, why));
       continue;
