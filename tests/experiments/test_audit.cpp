@@ -8,12 +8,14 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <sstream>
 
 #include "core/driver.hpp"
 #include "experiments/audit.hpp"
 #include "experiments/catalog.hpp"
+#include "experiments/cli_main.hpp"
 #include "experiments/convergence.hpp"
 #include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/explicit/tableaux.hpp"
@@ -293,6 +295,43 @@ TEST(Audit, BuiltInMethodsPass) {
   EXPECT_TRUE(std::filesystem::exists(dir / "audit.csv"));
   EXPECT_TRUE(std::filesystem::exists(dir / "audit.md"));
   EXPECT_TRUE(std::filesystem::exists(dir / "audit.json"));
+  std::filesystem::remove_all(dir);
+}
+
+int cli(std::vector<std::string> args) {
+  args.insert(args.begin(), "stiffbench");
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  return cli_main(static_cast<int>(argv.size()), argv.data());
+}
+
+// The command's exit codes: 0 when every check holds, 3 when one fails (the files are written
+// first), 2 for an unknown integrator. The failing method is heun registered with a claimed
+// order of 3 (its tableau_order and local_error_slope checks fail, as above).
+TEST(Audit, CommandExitsThreeOnAFailedCheck) {
+  if (!integrator_registry().find("test_cli_overclaimed")) {
+    ButcherTableau over = explicit_tableau("heun");
+    over.order = 3;
+    IntegratorRegistry::Entry e;
+    e.info = MethodInfo{"test_cli_overclaimed", Family::explicit_rk, 3, 2, {}, "heun claiming 3"};
+    e.make = [over](const Params&) {
+      return std::make_unique<UncheckedRk>("test_cli_overclaimed", over, 3);
+    };
+    register_integrator(std::move(e));
+  }
+  const auto dir = scratch("cli");
+  EXPECT_EQ(cli({"audit", "--integrators", "rk4", "--out", dir.string()}), 0);
+  EXPECT_EQ(
+      cli({"audit", "--integrators", "rk4,test_cli_overclaimed", "--out", dir.string(), "--force"}),
+      3);
+  const std::string csv = [&] {
+    std::ifstream in(dir / "audit.csv");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  }();
+  EXPECT_NE(csv.find("test_cli_overclaimed,tableau_order,heun,3,2,fail"), std::string::npos) << csv;
+  EXPECT_EQ(cli({"audit", "--integrators", "rk5", "--out", dir.string(), "--force"}), 2);
   std::filesystem::remove_all(dir);
 }
 
