@@ -383,7 +383,8 @@ void count_checks(std::vector<AuditRow>& rows, const std::string& name) {
   else if (!per_step)
     rows.push_back(skip(name, "f_per_step", "-",
                         info.stages > 0
-                            ? "f evaluations per step vary with the Newton or linear iterations"
+                            ? "f evaluations per step are not fixed: they follow the Newton "
+                              "iterations or the Jacobian's source (finite differences)"
                             : "the method states no fixed number of evaluations per step"));
 }
 
