@@ -64,6 +64,14 @@ class Integrator {
 
   const MethodInfo& info() const { return info_; }
 
+  // The name the method was created under: the registry's create() sets the registered name
+  // (core/registry.hpp), so two registrations of one tableau are two rows of every study.
+  void set_name(std::string name) { info_.name = std::move(name); }
+
+  // The Butcher tableau of a Runge–Kutta method (its coefficients, for `stiffbench audit`);
+  // nullptr for methods that are not defined by one.
+  virtual const ButcherTableau* butcher_tableau() const { return nullptr; }
+
   // Starts a run at (t0, y0) on `sys`; checks compatibility, allocates workspaces, clears
   // history. The same system must be passed to the following step() calls.
   virtual void reset(const OdeSystem& sys, double t0, CVecRef y0) = 0;

@@ -77,6 +77,10 @@ class Registry {
     const Entry& e = at(name);
     const Params effective = resolve_params(e.params, user, consumed, kind_ + " '" + name + "'");
     auto product = e.make(effective);
+    // The product carries the name it was created under, not its coefficients' name (one
+    // tableau registered twice with different parameters is two methods).
+    if constexpr (requires(Product & p) { p.set_name(name); })
+      if (product) product->set_name(name);
     for (const auto& spec : e.params) {
       if (!effective.read_keys().count(spec.key)) {
         throw std::logic_error(kind_ + " '" + name + "' declares parameter '" + spec.key +

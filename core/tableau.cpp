@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 #include <cmath>
 #include <functional>
+#include <sstream>
 #include <stdexcept>
 
 namespace stiffbench {
@@ -89,6 +90,100 @@ int ButcherTableau::satisfied_order(double tol, int max_order) const {
   int p = 0;
   while (p < max_order && order_defect(p + 1) <= tol) ++p;
   return p;
+}
+
+int ButcherTableau::satisfied_order(const Vec& weights, double tol, int max_order) const {
+  int p = 0;
+  while (p < max_order && order_defect(weights, p + 1) <= tol) ++p;
+  return p;
+}
+
+int ButcherTableau::satisfied_stage_order(double tol) const {
+  const Index s = stages();
+  int q = 0;
+  // C(k): Σ_j a_ij c_j^(k-1) = c_i^k / k for every stage i.
+  for (int k = 1; k <= s; ++k) {
+    const Vec lhs = a * c.array().pow(k - 1).matrix();
+    const Vec rhs = c.array().pow(k) / static_cast<double>(k);
+    if ((lhs - rhs).cwiseAbs().maxCoeff() > tol) break;
+    q = k;
+  }
+  return q;
+}
+
+bool ButcherTableau::coefficients_fsal() const {
+  const Index s = stages();
+  if (s < 1 || a.rows() != s || a.cols() != s) return false;
+  return (a.row(s - 1).transpose() - b).cwiseAbs().maxCoeff() <= 1e-12;
+}
+
+namespace {
+
+std::string num(double x) {
+  std::ostringstream os;
+  os.precision(3);
+  os << x;
+  return os.str();
+}
+
+}  // namespace
+
+std::string ButcherTableau::defect(Shape shape) const {
+  const Index s = stages();
+  const auto n = [](Index k) { return std::to_string(k); };
+  if (s < 1) return "b is empty (no stages)";
+  if (a.rows() != s || a.cols() != s)
+    return "A is " + n(a.rows()) + "x" + n(a.cols()) + ", b has " + n(s) + " entries (need A " +
+           n(s) + "x" + n(s) + ")";
+  if (c.size() != s) return "c has " + n(c.size()) + " entries, b has " + n(s);
+  if (b_embedded.size() != 0 && b_embedded.size() != s)
+    return "b_embedded has " + n(b_embedded.size()) + " entries, b has " + n(s);
+  if (!a.allFinite() || !b.allFinite() || !c.allFinite() || !b_embedded.allFinite())
+    return "a coefficient is not finite";
+  for (Index i = 0; i < s; ++i) {
+    const double sum = a.row(i).sum();
+    if (std::abs(c[i] - sum) > 1e-12 * std::max(1.0, std::abs(sum)))
+      return "c[" + n(i) + "] = " + num(c[i]) + " is not the row sum of A (" + num(sum) + ")";
+  }
+  if (shape != Shape::any)
+    for (Index i = 0; i < s; ++i)
+      for (Index j = shape == Shape::explicit_rk ? i : i + 1; j < s; ++j)
+        if (a(i, j) != 0.0)
+          return std::string(shape == Shape::explicit_rk ? "an explicit"
+                                                         : "a diagonally implicit") +
+                 " method needs A strictly lower triangular" +
+                 (shape == Shape::explicit_rk ? "" : " up to the diagonal") + ": a(" + n(i) + "," +
+                 n(j) + ") = " + num(a(i, j));
+  if (order < 1) return "claims no order (order = " + std::to_string(order) + ")";
+  for (int p = 1; p <= std::min(order, 6); ++p)
+    if (const double d = order_defect(b, p); !(d <= 1e-12))
+      return "claims order " + std::to_string(order) + " but an order-" + std::to_string(p) +
+             " condition fails by " + num(d) +
+             (p == 1 ? " (the weights b sum to " + num(b.sum()) + ")" : "");
+  if (b_embedded.size() != 0) {
+    if (embedded_order < 1) return "has embedded weights but claims no embedded order";
+    for (int p = 1; p <= std::min(embedded_order, 6); ++p)
+      if (const double d = order_defect(b_embedded, p); !(d <= 1e-12))
+        return "claims embedded order " + std::to_string(embedded_order) + " but an order-" +
+               std::to_string(p) + " condition of b_embedded fails by " + num(d) +
+               (p == 1 ? " (the embedded weights sum to " + num(b_embedded.sum()) + ")" : "");
+  } else if (embedded_order != 0) {
+    return "claims embedded order " + std::to_string(embedded_order) + " without embedded weights";
+  }
+  if (stage_order > 0 && satisfied_stage_order() < stage_order)
+    return "claims stage order " + std::to_string(stage_order) +
+           " but C(q) holds only for q = " + std::to_string(satisfied_stage_order());
+  if (fsal && !coefficients_fsal())
+    return "claims first same as last (fsal) but the last row of A is not b";
+  return {};
+}
+
+void ButcherTableau::validate(Shape shape) {
+  const std::string who = "tableau '" + (name.empty() ? std::string("(unnamed)") : name) + "': ";
+  if (c.size() == 0 && a.rows() == a.cols() && a.rows() == b.size() && b.size() > 0)
+    c = a.rowwise().sum();
+  const std::string d = defect(shape);
+  if (!d.empty()) throw BadInput(who + d);
 }
 
 int KickDriftCoefficients::evaluations_per_step() const {

@@ -22,6 +22,8 @@ struct ButcherTableau {
   // First same as last: the last stage is evaluated at the new solution (c_s = 1 and the last
   // row of A equals b), so an explicit method reuses it as the next step's first stage.
   bool fsal = false;
+  // Claimed stage order q (C(q): Σ_j a_ij c_j^(k-1) = c_i^k / k for k <= q); 0: not claimed.
+  int stage_order = 0;
 
   int stages() const { return static_cast<int>(b.size()); }
   bool is_explicit() const;  // strictly lower triangular A
@@ -39,6 +41,36 @@ struct ButcherTableau {
 
   // Largest p <= max_order with every condition of order <= p met to tol.
   int satisfied_order(double tol = 1e-12, int max_order = 6) const;
+  int satisfied_order(const Vec& weights, double tol = 1e-12, int max_order = 6) const;
+
+  // Largest q <= stages() with the simplifying condition C(q) met to tol (0 when the nodes are
+  // not the row sums).
+  int satisfied_stage_order(double tol = 1e-12) const;
+
+  // Whether the coefficients are first same as last: the last row of A equals b to 1e-12 (and
+  // so c_s = 1 when the row sums are 1); for an explicit tableau this includes b_s = 0, so the
+  // last stage is f at the new solution.
+  bool coefficients_fsal() const;
+
+  // What a tableau must satisfy, checked when a stepper is built from it.
+  enum class Shape { any, explicit_rk, diagonally_implicit };
+
+  // Checks the tableau against what it claims and completes it; BadInput naming the tableau and
+  // the first defect found:
+  //   sizes: b has s >= 1 entries, A is s×s, c has s entries, b_embedded 0 or s; all finite;
+  //   c: when empty it is completed from the row sums (c = A·1), otherwise it must equal them
+  //     to 1e-12;
+  //   shape: explicit_rk needs A strictly lower triangular, diagonally_implicit lower
+  //     triangular;
+  //   order >= 1 is claimed and every order condition up to min(order, 6) holds to 1e-12 (the
+  //     rooted trees of order_defect; a claim above 6 is checked up to 6); likewise the
+  //     embedded weights up to min(embedded_order, 6), and embedded_order >= 1 with them;
+  //   stage_order (when claimed) holds (C(q) to 1e-12);
+  //   fsal (when claimed): coefficients_fsal().
+  void validate(Shape shape = Shape::any);
+  // The same checks without completing c (which must then be given): the first defect as a
+  // sentence, empty when there is none.
+  std::string defect(Shape shape = Shape::any) const;
 };
 
 // Kick/drift splitting for x' = v, v' = a(t, x, v). One step of size h is, for j = 1..s:

@@ -10,6 +10,7 @@
 
 #include "core/driver.hpp"
 #include "core/run_control.hpp"
+#include "experiments/audit.hpp"
 #include "experiments/catalog.hpp"
 #include "experiments/cli.hpp"
 #include "experiments/commands.hpp"
@@ -90,13 +91,16 @@ int interrupted_exit(int sig) {
 
 int cli_main(int argc, char** argv) {
   set_command_line(argc, argv);
+  // Failed audit checks of this call only (a program may call cli_main more than once).
+  const long audit_failures_before = audit_failed_checks();
   const struct ForgetCommandLine {
     ~ForgetCommandLine() { clear_command_line(); }
   } forget;
   CLI::App app{
       "stiffbench: a testbed comparing time integrators on stiff ODEs from physically based "
       "simulation.\nExit codes: 0 success, 2 bad input, 3 a row ended with status error or timeout "
-      "(its table is written), 130/143 interrupted by SIGINT/SIGTERM, 1 other errors."};
+      "or an audit check failed (its table is written), 130/143 interrupted by SIGINT/SIGTERM, 1 "
+      "other errors."};
   app.require_subcommand(1);
 
   add_list_commands(app);
@@ -161,6 +165,12 @@ int cli_main(int argc, char** argv) {
   if (const long faults = fault_count(); faults > 0) {
     std::cerr << "stiffbench: " << faults << " run" << (faults == 1 ? "" : "s")
               << " ended with status error or timeout (see the status and message columns)\n";
+    return kExitRowsFailed;
+  }
+  // `stiffbench audit`: a claim that does not hold (status fail) fails the command.
+  if (const long failed = audit_failed_checks() - audit_failures_before; failed > 0) {
+    std::cerr << "stiffbench: " << failed << " audit check" << (failed == 1 ? "" : "s")
+              << " failed (status fail in audit.csv; the reason column says why)\n";
     return kExitRowsFailed;
   }
   return 0;

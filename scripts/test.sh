@@ -10,6 +10,16 @@ jobs="$(nproc 2>/dev/null || echo 2)"
 echo "== Release build and tests"
 "$root/scripts/build.sh" "$root/build"
 (cd "$root/build" && ctest --output-on-failure -j "$jobs")
+echo "== stiffbench audit: every built-in method's claims (counts, orders, tableaux; exit 3 on a failed check)"
+rm -rf "$root/build/audit"
+start=$(date +%s)
+if ! "$root/build/experiments/stiffbench" audit --out "$root/build/audit" \
+    >"$root/build/audit.log" 2>&1; then
+  tail -n 40 "$root/build/audit.log" >&2
+  grep ',fail,' "$root/build/audit/audit.csv" >&2 || true
+  exit 1
+fi
+echo "audit took $(( $(date +%s) - start )) s"
 echo "== Function lengths: none in experiments/ over 120 lines (the five longest)"
 python3 "$root/scripts/function_lengths.py" -n 5 --max 120 "$root"/experiments/*.cpp
 echo "== Install check (cmake --install, examples/user_system with find_package, add_subdirectory)"

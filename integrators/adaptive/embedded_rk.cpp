@@ -17,10 +17,13 @@ EmbeddedRungeKutta::EmbeddedRungeKutta(ButcherTableau tableau, std::string descr
       tableau_(std::move(tableau)),
       opt_(opt),
       ctrl_(opt, std::min(tableau_.order, tableau_.embedded_order) + 1) {
-  if (!tableau_.is_explicit())
-    throw std::logic_error("tableau '" + tableau_.name + "' is not explicit");
-  if (tableau_.b_embedded.size() != tableau_.b.size())
-    throw std::logic_error("tableau '" + tableau_.name + "' has no embedded weights");
+  // BadInput naming the defect (sizes, nodes, claimed orders, shape, FSAL); completes an
+  // empty c.
+  tableau_.validate(ButcherTableau::Shape::explicit_rk);
+  require_input(tableau_.b_embedded.size() == tableau_.b.size(),
+                "tableau '" + tableau_.name +
+                    "' has no embedded weights (an embedded pair needs "
+                    "b_embedded)");
   d_ = tableau_.b - tableau_.b_embedded;
 }
 

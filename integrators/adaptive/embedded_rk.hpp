@@ -33,6 +33,7 @@ class EmbeddedRungeKutta final : public Integrator {
   EmbeddedRungeKutta(ButcherTableau tableau, std::string description, ControllerOptions opt);
 
   const ButcherTableau& tableau() const { return tableau_; }
+  const ButcherTableau* butcher_tableau() const override { return &tableau_; }
   bool supports_adaptive() const override { return true; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;

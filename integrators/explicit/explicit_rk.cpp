@@ -56,8 +56,8 @@ ExplicitRungeKutta::ExplicitRungeKutta(ButcherTableau tableau, std::string descr
                   {},
                   std::move(description)}),
       tableau_(std::move(tableau)) {
-  if (!tableau_.is_explicit())
-    throw std::logic_error("tableau '" + tableau_.name + "' is not explicit");
+  // BadInput naming the defect (sizes, nodes, claimed order, shape); completes an empty c.
+  tableau_.validate(ButcherTableau::Shape::explicit_rk);
   const int s = tableau_.stages();
   terms_.resize(static_cast<std::size_t>(s) + 1);
   coefs_.resize(static_cast<std::size_t>(s) + 1);

@@ -25,6 +25,7 @@ class ExplicitRungeKutta final : public Integrator {
   ExplicitRungeKutta(ButcherTableau tableau, std::string description);
 
   const ButcherTableau& tableau() const { return tableau_; }
+  const ButcherTableau* butcher_tableau() const override { return &tableau_; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   std::optional<LinearStability> linear_stability() const override {

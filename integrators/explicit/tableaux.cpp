@@ -20,6 +20,8 @@ ButcherTableau make(std::string name, int order, std::vector<std::vector<double>
   }
   // Nodes are the row sums (c = A·1): stated once, not typed twice.
   t.c = t.a.rowwise().sum();
+  // An explicit method's stage order is 1 (C(1) is c = A·1; C(2) fails at the second stage).
+  t.stage_order = 1;
   return t;
 }
 

@@ -7,8 +7,12 @@
 
 #include "core/driver.hpp"
 #include "experiments/catalog.hpp"
+#include "integrators/adaptive/embedded_rk.hpp"
 #include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/explicit/tableaux.hpp"
+#include "integrators/implicit/dirk.hpp"
+#include "integrators/implicit/gauss.hpp"
+#include "integrators/implicit/radau5.hpp"
 #include "integrators/symplectic/kick_drift.hpp"
 #include "models/problems/dahlquist.hpp"
 
@@ -103,6 +107,156 @@ TEST_P(SplittingTest, OrderConditions) {
 
 INSTANTIATE_TEST_SUITE_P(Symplectic, SplittingTest, ::testing::ValuesIn(kick_drift_coefficients()),
                          [](const auto& param_info) { return param_info.param.name; });
+
+// ---- Checks at construction (ButcherTableau::validate) ----------------------------------------
+
+const ButcherTableau& named(const std::string& name) {
+  for (const auto* list : {&explicit_tableaux(), &embedded_tableaux()})
+    for (const auto& t : *list)
+      if (t.name == name) return t;
+  throw std::logic_error("no tableau " + name);
+}
+
+// The message of the BadInput `f` throws (empty when it does not throw).
+template <class F>
+std::string refusal(F f) {
+  try {
+    f();
+  } catch (const BadInput& e) {
+    return e.what();
+  }
+  return {};
+}
+
+bool contains(const std::string& s, const std::string& part) {
+  return s.find(part) != std::string::npos;
+}
+
+// Every built-in tableau passes the checks its stepper applies (explicit, embedded, DIRK and
+// ESDIRK with their shape; Gauss and Radau IIA as full tableaux).
+TEST(TableauValidation, EveryBuiltInTableauPasses) {
+  for (const auto* list : {&explicit_tableaux(), &embedded_tableaux()})
+    for (ButcherTableau t : *list) {
+      EXPECT_EQ(t.defect(ButcherTableau::Shape::explicit_rk), "") << t.name;
+      EXPECT_EQ(t.satisfied_stage_order(), 1) << t.name;  // explicit: C(1) only
+    }
+  for (const auto* list : {&implicit_tableaux(), &esdirk_tableaux()})
+    for (const ButcherTableau& t : *list)
+      EXPECT_EQ(t.defect(ButcherTableau::Shape::diagonally_implicit), "") << t.name;
+  EXPECT_EQ(gauss_tableau(2).defect(), "");
+  EXPECT_EQ(gauss_tableau(3).defect(), "");
+  EXPECT_EQ(radau5_tableau().defect(), "");
+  // Collocation methods of s stages have stage order s (Hairer–Wanner II, §IV.5).
+  EXPECT_EQ(gauss_tableau(3).satisfied_stage_order(), 3);
+  EXPECT_EQ(radau5_tableau().satisfied_stage_order(), 3);
+  EXPECT_TRUE(named("dopri5").coefficients_fsal());
+  EXPECT_TRUE(named("bs3").coefficients_fsal());
+  EXPECT_FALSE(named("rkf45").coefficients_fsal());
+}
+
+// An empty c is completed from the row sums (it used to crash the stepper): the completed rk4
+// gives the same step, bit for bit, as the one with c typed in.
+TEST(TableauValidation, EmptyNodesAreCompletedFromRowSums) {
+  ButcherTableau t = named("rk4");
+  t.c = Vec();
+  t.name = "rk4_without_c";
+  ExplicitRungeKutta completed(t, "");
+  ExplicitRungeKutta original(named("rk4"), "");
+  ASSERT_EQ(completed.tableau().c.size(), 4);
+  EXPECT_EQ(completed.tableau().c, named("rk4").c);
+  Dahlquist sys({-1.0, 2.0}, {1.0, 0.5});
+  Vec y1 = sys.initial_state(), y2 = y1;
+  SolveStats stats;
+  completed.reset(sys, 0.0, y1);
+  original.reset(sys, 0.0, y2);
+  completed.step(sys, 0.0, y1, 0.1, stats);
+  original.step(sys, 0.0, y2, 0.1, stats);
+  EXPECT_EQ(y1, y2);
+}
+
+TEST(TableauValidation, EachDefectIsRefusedByName) {
+  using Shape = ButcherTableau::Shape;
+  // c given but not the row sums (heun's c2 = 1 typed as 0.9).
+  ButcherTableau t = named("heun");
+  t.c[1] = 0.9;
+  std::string m = refusal([&] { ExplicitRungeKutta(t, ""); });
+  EXPECT_TRUE(contains(m, "tableau 'heun'") && contains(m, "c[1] = 0.9")) << m;
+  // Sizes: A 2x2 with three weights; c of the wrong length; b_embedded of the wrong length.
+  t = named("heun");
+  t.b = Vec::Constant(3, 1.0 / 3.0);
+  m = refusal([&] { t.validate(); });
+  EXPECT_TRUE(contains(m, "A is 2x2, b has 3 entries")) << m;
+  t = named("heun");
+  t.c = Vec::Zero(3);
+  m = refusal([&] { t.validate(); });
+  EXPECT_TRUE(contains(m, "c has 3 entries, b has 2")) << m;
+  t = named("dopri5");
+  t.b_embedded = Vec::Zero(6);
+  m = refusal([&] { EmbeddedRungeKutta(t, "", {}); });
+  EXPECT_TRUE(contains(m, "b_embedded has 6 entries, b has 7")) << m;
+  // Claimed order not met: heun claiming 3 (bᵀc² = 1/2, not 1/3: the defect is 1/6).
+  t = named("heun");
+  t.order = 3;
+  m = refusal([&] { ExplicitRungeKutta(t, ""); });
+  EXPECT_TRUE(contains(m, "claims order 3 but an order-3 condition fails by 0.167")) << m;
+  // Weights that do not sum to 1 (order 1 fails).
+  t = named("rk4");
+  t.b[0] = 0.2;
+  m = refusal([&] { ExplicitRungeKutta(t, ""); });
+  EXPECT_TRUE(contains(m, "order-1 condition") && contains(m, "sum to 1.03")) << m;
+  // Embedded weights that do not sum to 1 (dopri5's b̂_1 raised by 0.01).
+  t = named("dopri5");
+  t.b_embedded[0] += 0.01;
+  m = refusal([&] { EmbeddedRungeKutta(t, "", {}); });
+  EXPECT_TRUE(contains(m, "embedded order 4") && contains(m, "embedded weights sum to 1.01")) << m;
+  // An embedded pair without embedded weights.
+  t = named("rk4");
+  m = refusal([&] { EmbeddedRungeKutta(t, "", {}); });
+  EXPECT_TRUE(contains(m, "no embedded weights")) << m;
+  // Not explicit: a diagonal entry in an explicit stepper; above the diagonal for a DIRK.
+  t = named("heun");
+  t.a(0, 0) = 0.5;
+  t.a(1, 0) = 0.5;  // keep the row sums equal to c
+  t.c << 0.5, 0.5;
+  t.order = 1;
+  m = refusal([&] { ExplicitRungeKutta(t, ""); });
+  EXPECT_TRUE(contains(m, "strictly lower triangular: a(0,0) = 0.5")) << m;
+  EXPECT_EQ(t.defect(Shape::diagonally_implicit), "");
+  t.a(0, 1) = 0.1;
+  t.c[0] = 0.6;
+  EXPECT_TRUE(contains(t.defect(Shape::diagonally_implicit), "a(0,1) = 0.1")) << t.defect();
+  // FSAL claimed where the last row of A is not b (rk4).
+  t = named("rk4");
+  t.fsal = true;
+  m = refusal([&] { ExplicitRungeKutta(t, ""); });
+  EXPECT_TRUE(contains(m, "fsal")) << m;
+  // A stage order above what C(q) gives (rk4 claims 2; C(2) fails at stage 2: a21 c1 = 0 while
+  // c2^2/2 = 1/8).
+  t = named("rk4");
+  t.stage_order = 2;
+  m = refusal([&] { ExplicitRungeKutta(t, ""); });
+  EXPECT_TRUE(contains(m, "claims stage order 2 but C(q) holds only for q = 1")) << m;
+  // No order claimed at all.
+  t = named("rk4");
+  t.order = 0;
+  m = refusal([&] { t.validate(); });
+  EXPECT_TRUE(contains(m, "claims no order")) << m;
+  // Not finite.
+  t = named("rk4");
+  t.b[3] = std::nan("");
+  m = refusal([&] { t.validate(); });
+  EXPECT_TRUE(contains(m, "not finite")) << m;
+}
+
+// A claim above order 6 is checked up to 6 (the rooted trees are generated to order 6).
+TEST(TableauValidation, OrdersAboveSixAreCheckedToSix) {
+  ButcherTableau t = gauss_tableau(3);
+  EXPECT_EQ(t.defect(), "");
+  t.order = 8;
+  EXPECT_EQ(t.defect(), "");
+  t.b[0] += 1e-9;
+  EXPECT_TRUE(contains(t.defect(), "order-1 condition")) << t.defect();
+}
 
 }  // namespace
 }  // namespace stiffbench
