@@ -145,10 +145,11 @@ Vec reference_at_end(const StepStudySpec& spec, const OdeSystem& sys, double t_e
 constexpr double kUnitRoundoff = 0x1p-53;
 constexpr double kFloorFactor = 10;          // a row within this factor of a floor has status floor
 constexpr double kOrderAgreement = 0.2;      // max − min of the pairwise orders in a fit window
+constexpr double kOrderTolerance = 0.1;      // a fit further from the expected slope gets a reason
 constexpr double kReferenceTightening = 10;  // the second reference run: tolerances / 10, h / 2
 constexpr double kLadderTop = 1e-2;          // per-method ladder: coarsest error ≈ 1e-2·s
 constexpr double kLadderFloorMargin = 100;   // predicted finest error ≥ 100 × floor
-constexpr int kProbeRuns = 6;                // at most this many probe runs per integrator
+constexpr int kProbeRuns = 8;                // at most this many probe runs per integrator
 
 struct ConvergenceRow {
   std::string model, integrator;
@@ -173,7 +174,9 @@ struct OrderFit {
   std::optional<double> fitted, fitted_se;  // slope of log(error) against log(h) and its SE
   double h_min = 0, h_max = 0;              // the window's steps (0: no fit)
   int levels_used = 0;
-  std::string reason;  // why there is no fit (empty when there is one)
+  // Why there is no fit, or why the fit is more than kOrderTolerance from the expected slope
+  // (what the pairwise orders show); empty otherwise.
+  std::string reason;
 };
 
 // The fit over the asymptotic window of the rows of `integrator` (in ladder order; their
