@@ -134,6 +134,13 @@ std::string g17(double x) {
   return buf;
 }
 
+// %g: the documented constants in sentences (10, 0.2, 0.01).
+std::string g_short(double x) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
+
 ReferencePlan plan_reference(const ConvergenceSpec& spec, const OdeSystem& sys, double h_finest) {
   ReferencePlan plan;
   const bool tol_given = spec.reference_rtol.has_value() || spec.reference_atol.has_value();
@@ -881,7 +888,7 @@ OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& i
       const auto& finest = *rs[best_a + best_len - 1];
       if (finest.error <=
           kLadderFloorMargin * std::max(finest.roundoff_floor, finest.reference_floor))
-        fit.reason += "; the floors (within " + format_short(kLadderFloorMargin) +
+        fit.reason += "; the floors (within " + g_short(kLadderFloorMargin) +
                       "x of the finest level) stop the ladder before the orders settle";
     }
     return fit;
@@ -890,7 +897,7 @@ OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& i
   const std::string levels = n_usable == 1 ? " level" : " levels";
   if (n_usable >= 3) {
     fit.reason = "pairwise orders do not settle (no 3 consecutive levels agree within " +
-                 format_short(kOrderAgreement) + "): add --levels";
+                 g_short(kOrderAgreement) + "): add --levels";
   } else if (n_roundoff > 0) {
     fit.reason = "only " + k + levels +
                  " above the round-off floor: use a larger --h (or --ladder per-method)";
@@ -1005,7 +1012,7 @@ Table fits_markdown_table(const ConvergenceResult& res, bool local) {
 // The floors, in words, for the Markdown and the report.
 std::string floors_sentence(const ConvergenceResult& res, bool local) {
   std::ostringstream os;
-  os << "Rows with status `floor` have an error within " << format_short(kFloorFactor)
+  os << "Rows with status `floor` have an error within " << g_short(kFloorFactor)
      << "× the round-off floor (" << (local ? "u·s" : "N·u·s")
      << ", u = 2^-53, s = max(1, ‖y0‖∞, ‖y_ref‖∞))";
   if (res.reference_accuracy)
@@ -1014,10 +1021,12 @@ std::string floors_sentence(const ConvergenceResult& res, bool local) {
        << ")";
   os << "; fits leave them out. The fitted order is the least-squares slope over the longest run "
         "of consecutive levels above the floors whose pairwise orders agree within "
-     << format_short(kOrderAgreement) << ".";
+     << g_short(kOrderAgreement) << ".";
   if (res.ladder == "per-method")
-    os << " Per-method ladders: each method's coarsest step was probed for an error of about "
-       << format_short(kLadderTop) << "·s.";
+    os << " Per-method ladders: each method's steps come from a probe (coarsest error at most "
+          "about "
+       << g_short(kLadderTop) << "·s, finest about " << g_short(kLadderFloorMargin)
+       << "× the floors where the ladder's length allows).";
   return os.str();
 }
 
