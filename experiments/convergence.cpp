@@ -865,20 +865,32 @@ OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& i
       for (std::size_t b = 1; b < n; ++b)
         if (usable[b] && usable[b - 1])
           all += (all.empty() ? "" : " ") + format_fixed(pair_order(b), 2);
-      // Coarser levels closer to the expected slope: the error stops following h^p; coarser
-      // levels all further from it and the window's orders moving towards it: pre-asymptotic.
-      bool coarser_closer = false;
+      // A coarser pair near the expected slope (within 0.3): the method showed its order there
+      // and something else sets the error in the window. A steady window (orders within 0.1):
+      // the method's order on this problem. The window's orders moving towards the expected
+      // slope: pre-asymptotic.
+      bool coarser_near = false;
+      double w_lo = q_first, w_hi = q_first;
       for (std::size_t b = 1; b <= best_a; ++b)
-        if (usable[b] && usable[b - 1] &&
-            std::abs(pair_order(b) - expected) < std::abs(slope - expected) - kOrderTolerance)
-          coarser_closer = true;
-      if (coarser_closer && slope < expected)
-        fit.reason = "the error stops falling like h^" + std::to_string(fit.expected_slope) +
+        if (usable[b] && usable[b - 1] && std::abs(pair_order(b) - expected) <= 0.3)
+          coarser_near = true;
+      for (std::size_t b = best_a + 1; b < best_a + best_len; ++b) {
+        w_lo = std::min(w_lo, pair_order(b));
+        w_hi = std::max(w_hi, pair_order(b));
+      }
+      if (coarser_near)
+        fit.reason = "the error stops following h^" + std::to_string(fit.expected_slope) +
                      " below h = " + format_short(rs[best_a]->h) +
                      ": something other than the truncation error sets it there (a solver "
                      "tolerance, order reduction or the reference); pairwise orders " +
                      all;
-      else if (!coarser_closer && std::abs(q_last - expected) < std::abs(q_first - expected))
+      else if (w_hi - w_lo <= kOrderTolerance)
+        fit.reason = "a steady order of " + format_fixed(slope, 2) + ", not " +
+                     std::to_string(fit.expected_slope) +
+                     ", on this problem (e.g. order reduction to the stage order on a stiff "
+                     "problem, or structure that changes the order); pairwise orders " +
+                     all;
+      else if (std::abs(q_last - expected) < std::abs(q_first - expected))
         fit.reason = "pre-asymptotic: the pairwise orders approach " +
                      std::to_string(fit.expected_slope) + " only slowly (" + all +
                      ") down to the finest level above the floors";
@@ -907,7 +919,7 @@ OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& i
                  "accurate --reference";
   } else if (n_failed > 0) {
     fit.reason = "only " + k + levels + " ran ok (the others ended " + failed_status +
-                 "): use a smaller --h (or --ladder per-method)";
+                 "): use a smaller --h";
   } else {
     fit.reason = "only " + k + levels + " with a positive error: add --levels";
   }
