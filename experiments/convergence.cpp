@@ -529,8 +529,10 @@ double probe_ladder(const ConvergenceSpec& spec, double t_span, bool local, doub
     const double e = probe(h);
     double next;
     if (!std::isfinite(e) || e > target) {
-      h_above = h;
-      e_above = std::isfinite(e) ? e : 0;
+      if (!(h_above > 0) || h < h_above) {
+        h_above = h;
+        e_above = std::isfinite(e) ? e : 0;
+      }
       if (h <= lo) break;
       next = std::max(lo, h / 4);
     } else if (e <= kFloorFactor * floor_at(h)) {
@@ -564,8 +566,11 @@ double probe_ladder(const ConvergenceSpec& spec, double t_span, bool local, doub
   for (const auto& [gh, ge] : good)
     if (ge <= target) h_top = std::max(h_top, gh);
   if (!(h_top > 0)) h_top = std::clamp(h_below > 0 ? h_below : lo, lo, hi);
-  if (e_below > 0 && e_below < target / 3)
-    h_top = std::min(hi, std::max(h_top, h_below * std::pow(target / e_below, 1.0 / q)));
+  if (e_below > 0 && e_below < target / 3) {
+    const double predicted = h_below * std::pow(target / e_below, 1.0 / q);
+    // Never at or beyond a step whose run failed or overshot the target.
+    if (!(h_above > 0) || predicted < h_above) h_top = std::min(hi, std::max(h_top, predicted));
+  }
   // Stage 2: the ladder moves down (at most by its own length h0/h_finest, not below lo) until
   // its finest error is about kLadderFloorMargin times the floors: the most asymptotic levels.
   const double h0_min = std::max(lo, h_top / span);
@@ -871,6 +876,20 @@ OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& i
     fit.levels_used = static_cast<int>(best_len);
     // A fit away from the expected slope says what the pairwise orders show.
     const double expected = fit.expected_slope;
+    // Levels finer than the window, above the floors, that do not agree with it: named even when
+    // the fit is close to the expected slope (e.g. a solver tolerance that sets the error at fine
+    // h must not disappear behind a clean fit over the coarse levels).
+    {
+      std::string finer;
+      for (std::size_t b = best_a + best_len; b < n; ++b)
+        if (usable[b] && usable[b - 1])
+          finer += (finer.empty() ? "" : " ") + format_fixed(pair_order(b), 2);
+      if (!finer.empty())
+        fit.reason = "levels finer than the window (h < " + format_short(fit.h_min) +
+                     ") are above the floors but do not follow it (pairwise orders " + finer +
+                     "): a solver tolerance, order reduction or the reference sets their error, "
+                     "or they are still pre-asymptotic";
+    }
     if (std::abs(slope - expected) > kOrderTolerance) {
       const double q_first = pair_order(best_a + 1), q_last = pair_order(best_a + best_len - 1);
       std::string all;
@@ -909,11 +928,15 @@ OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& i
       else
         fit.reason = "fitted order differs from the classical one by " +
                      format_fixed(slope - expected, 2) + "; pairwise orders " + all;
-      const auto& finest = *rs[best_a + best_len - 1];
+      // The finest usable level of the integrator (not only of the window) near the floors.
+      std::size_t last_usable = best_a + best_len - 1;
+      for (std::size_t b = last_usable; b < n; ++b)
+        if (usable[b]) last_usable = b;
+      const auto& finest = *rs[last_usable];
       if (finest.error <=
           kLadderFloorMargin * std::max(finest.roundoff_floor, finest.reference_floor))
         fit.reason += "; the floors (within " + g_short(kLadderFloorMargin) +
-                      "x of the finest level) stop the ladder before the orders settle";
+                      "x of the finest level above them) stop the ladder before the orders settle";
     }
     return fit;
   }

@@ -104,6 +104,28 @@ TEST(OrderFit, TooFewLevelsAboveTheFloorNamesTheFix) {
   EXPECT_NE(g.reason.find("add --levels"), std::string::npos) << g.reason;
 }
 
+// A solver defect is not a floor: errors h^4 plus a Newton-tolerance term N·1e-12 (N = 100·2^k
+// steps, the defect issue 24 describes) rise when h halves from h = 0.1/16 on. The round-off
+// floor N·u is 10⁴ times smaller, so those rows stay ok; the fit over the levels where the
+// pairwise orders agree (h = 0.1 to 0.1/8: 4.00, 4.00, 3.95) is 4, and its reason names the finer
+// levels that leave it (pairwise orders 3.0, -0.08, -0.96).
+TEST(OrderFit, ANewtonToleranceFloorIsNotHidden) {
+  std::vector<ConvergenceRow> rows;
+  for (int k = 0; k < 7; ++k) {
+    const double h = 0.1 / std::pow(2.0, k);
+    const double steps = 100 * std::pow(2.0, k);
+    rows.push_back(synthetic({std::pow(h, 4) + steps * 1e-12}, steps * kUnitRoundoff)[0]);
+    rows.back().h = h;
+  }
+  for (const auto& r : rows) EXPECT_FALSE(r.at_floor) << r.h;
+  const OrderFit f = fit_order(rows, "m", false);
+  ASSERT_TRUE(f.fitted.has_value());
+  EXPECT_EQ(f.levels_used, 4);
+  EXPECT_NEAR(*f.fitted, 4.0, 0.1);
+  EXPECT_NE(f.reason.find("levels finer than the window"), std::string::npos) << f.reason;
+  EXPECT_NE(f.reason.find("-0.96"), std::string::npos) << f.reason;
+}
+
 // A real run: rk4 on the undamped oscillator (t_end = 10, N = 100·2^k steps). Its global error
 // is about t_end h^4/120 (the phase error of R(ih) = 1 - h^2/2 + h^4/24 - i(h - h^3/6) against
 // e^{ih}): 6.5e-12 at h = 0.1/32, below the documented floor 10·N·u = 3.6e-12 only from
