@@ -48,18 +48,24 @@
 // all lie within kOrderAgreement (0.2) of each other (max − min); among equally long runs the
 // finest. The fitted order is the least-squares slope of log(error) against log(h) over the
 // window, with its standard error; with fewer than three levels in the window there is no fit
-// and the reason says what to change. For a local error the fitted slope is order + 1.
+// and the reason says what to change. A fit more than kOrderTolerance from the expected slope, or
+// with finer levels above the floors that leave the window, gets a reason read from the pairwise
+// orders. For a local error the fitted slope is order + 1.
 //
 // Ladders (--ladder): `common` runs every integrator on h_k = h/refine^k. `per-method` gives
 // each integrator its own coarsest step h0 (then h0/refine^k, same levels and refine), found by
-// a probe of at most kProbeRuns cheap runs: starting at h, a run whose error is not finite or
-// above 10× the target divides h by 4, one at its floor multiplies h by 4, otherwise h moves to
-// the step the classical order predicts for the target error 1e-2·s (e ∝ h^p, p + 1 for the
-// local error), until an error is within a factor 3 of the target. Then h0 is raised, if needed
-// and by at most the factor that brings the coarsest error to 1e-1·s, until the predicted finest
-// error is 100 times above the round-off floor and the reference's accuracy. h0 stays within
-// [h/64, 16·h] and, for the global error, at most (t_end − t0)/4. A fixed-step reference runs at
-// (finest h of the common ladder)/16 in both modes.
+// a probe of at most kProbeRuns cheap runs (p: the classical order, p + 1 for the local error).
+// Stage 1, the coarsest step allowed: starting at h, a run whose error is not finite or above
+// the target 1e-2·s divides h by 4, one at its floor multiplies h by 4, otherwise h moves to the
+// step e ∝ h^p predicts for the target (log-log interpolation once bracketed), until an error is
+// within a factor 3 below the target; h_top is that step (or the prediction from the last usable
+// probe, never at or past a probe that failed or overshot). Stage 2: the ladder moves down, by at
+// most its own length (h0 ≥ h_top·refine^-(levels-1)), until its predicted finest error is about
+// kLadderFloorMargin (100) times the larger floor, checked by one or two runs at that finest step
+// (within a factor 3): the most asymptotic levels that stay well above the floors. h0 stays
+// within [h/64, 16·h], for the global error at most (t_end − t0)/4 and with its finest level
+// within the driver's step limit. A fixed-step reference runs at (finest h of the common
+// ladder)/16 in both modes (for the local error at most (t − t0)/16 at each reference time t).
 #pragma once
 
 #include <iosfwd>
@@ -147,7 +153,7 @@ constexpr double kFloorFactor = 10;          // a row within this factor of a fl
 constexpr double kOrderAgreement = 0.2;      // max − min of the pairwise orders in a fit window
 constexpr double kOrderTolerance = 0.1;      // a fit further from the expected slope gets a reason
 constexpr double kReferenceTightening = 10;  // the second reference run: tolerances / 10, h / 2
-constexpr double kLadderTop = 1e-2;          // per-method ladder: coarsest error ≈ 1e-2·s
+constexpr double kLadderTop = 1e-2;          // per-method ladder: coarsest error ≤ about 1e-2·s
 constexpr double kLadderFloorMargin = 100;   // predicted finest error ≥ 100 × floor
 constexpr int kProbeRuns = 8;                // at most this many probe runs per integrator
 
