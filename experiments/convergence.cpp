@@ -524,10 +524,16 @@ double probe_ladder(const ConvergenceSpec& spec, double t_span, bool local, doub
   double h_below = 0, h_above = 0;  // bracket: error below / above the target
   double e_below = 0, e_above = 0;
   bool floor_hit = false;
+  double h_hint = 0;  // set when a probe lands just above the target
   const int stage1_runs = kProbeRuns - 2;
   while (runs < stage1_runs) {
     const double e = probe(h);
     double next;
+    if (std::isfinite(e) && e > target && e <= 2 * target && e > kFloorFactor * floor_at(h)) {
+      // Within a factor 2 above the target: close enough; the step e ∝ h^p gives the target.
+      h_hint = h * std::pow(target / e, 1.0 / q);
+      break;
+    }
     if (!std::isfinite(e) || e > target) {
       if (!(h_above > 0) || h < h_above) {
         h_above = h;
@@ -557,7 +563,7 @@ double probe_ladder(const ConvergenceSpec& spec, double t_span, bool local, doub
         next = std::sqrt(h_below * h_above);
       next = std::clamp(next, std::min(h_below, h_above), std::max(h_below, h_above));
     }
-    if (next == h) break;
+    if (std::abs(next - h) <= 0.02 * h) break;  // no progress (e.g. the same step count)
     h = next;
   }
   if (good.empty()) return floor_hit ? hi : lo;
@@ -566,7 +572,8 @@ double probe_ladder(const ConvergenceSpec& spec, double t_span, bool local, doub
   for (const auto& [gh, ge] : good)
     if (ge <= target) h_top = std::max(h_top, gh);
   if (!(h_top > 0)) h_top = std::clamp(h_below > 0 ? h_below : lo, lo, hi);
-  if (e_below > 0 && e_below < target / 3) {
+  if (h_hint > 0) h_top = std::clamp(std::max(h_top, h_hint), lo, hi);
+  if (h_hint == 0 && e_below > 0 && e_below < target / 3) {
     const double predicted = h_below * std::pow(target / e_below, 1.0 / q);
     // Never at or beyond a step whose run failed or overshot the target.
     if (!(h_above > 0) || predicted < h_above) h_top = std::min(hi, std::max(h_top, predicted));
