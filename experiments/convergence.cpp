@@ -8,8 +8,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <limits>
 #include <ostream>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/driver.hpp"
 #include "experiments/build_info.hpp"
@@ -96,9 +99,15 @@ void ConvergenceSpec::validate() const {
                 "--t-end must be > 0 (got " + format_full(t_end) + ")");
   require_input(std::isnan(h) || h > 0, "--h must be > 0 (got " + format_full(h) + ")");
   validate_step_study();
+  require_input(ladder == "common" || ladder == "per-method",
+                "--ladder must be common or per-method (got '" + ladder + "')");
 }
 
-nlohmann::json ConvergenceSpec::to_json() const { return step_study_json(); }
+nlohmann::json ConvergenceSpec::to_json() const {
+  nlohmann::json j = step_study_json();
+  j["ladder"] = ladder;
+  return j;
+}
 
 namespace {
 
@@ -123,6 +132,13 @@ bool declares(const std::vector<ParamSpec>& specs, const std::string& key) {
 std::string g17(double x) {
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.17g", x);
+  return buf;
+}
+
+// %g: the documented constants in sentences (10, 0.2, 0.01).
+std::string g_short(double x) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%g", x);
   return buf;
 }
 
@@ -224,7 +240,9 @@ std::vector<Vec> compute_reference(const ReferencePlan& plan, const OdeSystem& s
   for (double t : times) {
     FixedStepOptions opt;
     opt.t_end = t;
-    opt.h = plan.h;
+    // At most (t - t0)/16, so a per-method local ladder finer than the common one still gets a
+    // reference 16 times finer than its step (the common ladder's times are unaffected).
+    opt.h = std::min(plan.h, (t - sys.initial_time()) / 16.0);
     const RunResult r = run_fixed_step(sys, *integ, opt);
     check(r);
     out.push_back(r.y);
@@ -450,6 +468,139 @@ Params setup_params(const ConvergenceSpec& spec) {
   return out;
 }
 
+// The second reference run: tolerances / kReferenceTightening for an adaptive reference, half
+// the step for a fixed-step one.
+ReferencePlan tighter_plan(const ReferencePlan& plan) {
+  ReferencePlan t = plan;
+  if (plan.kind == RefKind::adaptive) {
+    const double rtol = plan.params.real("rtol") / kReferenceTightening;
+    const double atol = plan.params.real("atol") / kReferenceTightening;
+    t.params.set("rtol", format_full(rtol));
+    t.params.set("atol", format_full(atol));
+    t.description =
+        plan.method + " adaptive, rtol = " + format_full(rtol) + ", atol = " + format_full(atol);
+  } else if (plan.kind == RefKind::fixed_step) {
+    t.h = plan.h / 2;
+    t.description = plan.method + " with h = " + format_full(t.h);
+  }
+  return t;
+}
+
+double inf_norm(CVecRef y) { return y.size() ? y.cwiseAbs().maxCoeff() : 0.0; }
+
+// The per-method probe (see the header): the coarsest step of one integrator's ladder.
+// error_at(h): the error of a run at h (NaN when it failed); floor_at(h): the larger floor of a
+// run at h; q: the expected slope.
+double probe_ladder(const ConvergenceSpec& spec, double t_span, bool local, double s, int q,
+                    const std::function<double(double)>& error_at,
+                    const std::function<double(double)>& floor_at,
+                    ConvergenceResult::Ladder& record) {
+  const double target = kLadderTop * s;
+  // Not below h/64, nor so small that the finest level would exceed the driver's step limit.
+  const double span = std::pow(spec.refine, spec.levels - 1);  // h0 / h_finest
+  const double lo = std::max(
+      spec.h / 64, local ? 0.0 : t_span * span / static_cast<double>(FixedStepOptions{}.max_steps));
+  const double hi = std::max(lo, local ? 16 * spec.h : std::min(16 * spec.h, t_span / 4));
+  int runs = 0;
+  // The usable probes (finite, above the floors): (h, error).
+  std::vector<std::pair<double, double>> good;
+  auto probe = [&](double h) {
+    ++runs;
+    const double e = error_at(h);
+    record.probes.emplace_back(h, e);
+    const bool usable = std::isfinite(e) && e > kFloorFactor * floor_at(h);
+    if (usable) good.emplace_back(h, e);
+    return e;
+  };
+  // The error model through the usable probe nearest to h (in log h): e ∝ h^q.
+  auto predict = [&](double h) {
+    const auto* best = &good.front();
+    for (const auto& g : good)
+      if (std::abs(std::log(g.first / h)) < std::abs(std::log(best->first / h))) best = &g;
+    return best->second * std::pow(h / best->first, q);
+  };
+  // Stage 1: the coarsest step allowed, h_top, where the error is about 1e-2·s.
+  double h = std::clamp(spec.h, lo, hi);
+  double h_below = 0, h_above = 0;  // bracket: error below / above the target
+  double e_below = 0, e_above = 0;
+  bool floor_hit = false;
+  double h_hint = 0;  // set when a probe lands just above the target
+  const int stage1_runs = kProbeRuns - 2;
+  while (runs < stage1_runs) {
+    const double e = probe(h);
+    double next;
+    if (std::isfinite(e) && e > target && e <= 2 * target && e > kFloorFactor * floor_at(h)) {
+      // Within a factor 2 above the target: close enough; the step e ∝ h^p gives the target.
+      h_hint = h * std::pow(target / e, 1.0 / q);
+      break;
+    }
+    if (!std::isfinite(e) || e > target) {
+      if (!(h_above > 0) || h < h_above) {
+        h_above = h;
+        e_above = std::isfinite(e) ? e : 0;
+      }
+      if (h <= lo) break;
+      next = std::max(lo, h / 4);
+    } else if (e <= kFloorFactor * floor_at(h)) {
+      floor_hit = true;
+      h_below = std::max(h_below, h);
+      e_below = 0;
+      if (h >= hi) break;
+      next = std::min(hi, h * 4);
+    } else {
+      h_below = h;
+      e_below = e;
+      if (e > target / 3) break;  // within a factor 3 below the target: close enough
+      if (h >= hi) break;
+      next = std::min(hi, h * std::pow(target / e, 1.0 / q));
+    }
+    // Inside a bracket: interpolate in log-log when both ends have errors, else bisect.
+    if (h_below > 0 && h_above > 0) {
+      if (e_below > 0 && e_above > 0)
+        next = h_below * std::exp(std::log(h_above / h_below) * std::log(target / e_below) /
+                                  std::log(e_above / e_below));
+      else
+        next = std::sqrt(h_below * h_above);
+      next = std::clamp(next, std::min(h_below, h_above), std::max(h_below, h_above));
+    }
+    if (std::abs(next - h) <= 0.02 * h) break;  // no progress (e.g. the same step count)
+    h = next;
+  }
+  if (good.empty()) return floor_hit ? hi : lo;
+  // h_top: the largest usable probe at or below the target, else the model's prediction.
+  double h_top = 0;
+  for (const auto& [gh, ge] : good)
+    if (ge <= target) h_top = std::max(h_top, gh);
+  if (!(h_top > 0)) h_top = std::clamp(h_below > 0 ? h_below : lo, lo, hi);
+  if (h_hint > 0) h_top = std::clamp(std::max(h_top, h_hint), lo, hi);
+  if (h_hint == 0 && e_below > 0 && e_below < target / 3) {
+    const double predicted = h_below * std::pow(target / e_below, 1.0 / q);
+    // Never at or beyond a step whose run failed or overshot the target.
+    if (!(h_above > 0) || predicted < h_above) h_top = std::min(hi, std::max(h_top, predicted));
+  }
+  // Stage 2: the ladder moves down (at most by its own length h0/h_finest, not below lo) until
+  // its finest error is about kLadderFloorMargin times the floors: the most asymptotic levels.
+  const double h0_min = std::max(lo, h_top / span);
+  const double fine_lo = h0_min / span, fine_hi = h_top / span;
+  double h_fine = fine_hi;
+  auto fine_target = [&](double hf) { return kLadderFloorMargin * floor_at(hf); };
+  if (predict(h_fine) <= fine_target(h_fine)) return h_top;  // already reaches the floor region
+  for (int it = 0; it < 3; ++it)
+    h_fine = std::clamp(h_fine * std::pow(fine_target(h_fine) / predict(h_fine), 1.0 / q), fine_lo,
+                        fine_hi);
+  while (runs < kProbeRuns) {
+    const double e = probe(h_fine);
+    if (!std::isfinite(e)) break;
+    const double ratio = fine_target(h_fine) / std::max(e, 1e-300);
+    if (std::abs(std::log(ratio)) <= std::log(3.0)) break;
+    const double next =
+        std::clamp(h_fine * std::clamp(std::pow(ratio, 1.0 / q), 1.0 / 16, 16.0), fine_lo, fine_hi);
+    if (next == h_fine) break;
+    h_fine = next;
+  }
+  return std::clamp(h_fine * span, h0_min, h_top);
+}
+
 ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress, bool local) {
   given.validate();
   Setup setup = make_setup(given.model, given.integrators, setup_params(given));
@@ -476,46 +627,141 @@ ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress
 
   const ReferencePlan plan = plan_reference(spec, sys, hs.back());
   if (!spec.cache_dir.empty() && plan.kind != RefKind::exact) require_output_dir(spec.cache_dir);
+  const bool numerical_ref = plan.kind != RefKind::exact;
+  const ReferencePlan plan2 = tighter_plan(plan);
   ConvergenceResult result;
   result.reference_description = plan.description;
   result.h = spec.h;
   result.h_source = h_source;
+  result.ladder = spec.ladder;
+  if (numerical_ref) result.reference_check_description = plan2.description;
 
-  // Per level for local, one value for global.
-  std::vector<double> ref_times;
-  if (local) {
-    for (double h : hs) ref_times.push_back(t0 + h);
-  } else {
-    ref_times.push_back(spec.t_end);
-  }
-  ReferenceValues ref = reference_values(spec, sys, plan, ref_times, progress);
-  result.reference_cache = ref.cache;
-  result.reference_from_cache = ref.from_cache;
-  const std::vector<Vec>& ref_values = ref.values;
-
-  const std::size_t total = setup.integrators.size() * hs.size();
-  std::size_t done = 0;
   const Vec y0 = sys.initial_state();
-  for (auto& integ : setup.integrators) {
-    for (std::size_t k = 0; k < hs.size(); ++k) {
+  const double y0_norm = inf_norm(y0);
+  const bool per_method = spec.ladder == "per-method";
+
+  // The global study's reference at t_end (and its check) come first: the probes need it.
+  Vec ref_end, ref2_end;
+  double ref_acc_end = 0;
+  if (!local) {
+    ReferenceValues ref = reference_values(spec, sys, plan, {spec.t_end}, progress);
+    result.reference_cache = ref.cache;
+    result.reference_from_cache = ref.from_cache;
+    ref_end = ref.values[0];
+    if (numerical_ref) {
+      try {
+        ReferenceValues ref2 = reference_values(spec, sys, plan2, {spec.t_end}, progress);
+        result.reference_check_cache = ref2.cache;
+        ref_acc_end = max_abs_diff(ref_end, ref2.values[0]);
+        result.reference_accuracy = ref_acc_end;
+      } catch (const std::runtime_error& e) {
+        // The check run failed (e.g. a tolerance the reference cannot meet): no reference floor.
+        result.reference_check_description += " (failed: " + std::string(e.what()) + ")";
+        if (progress) *progress << "reference check: " << e.what() << "\n";
+      }
+    }
+  }
+  const double s_end = std::max({1.0, y0_norm, local ? 0.0 : inf_norm(ref_end)});
+
+  auto run_at = [&](Integrator& integ, double h) {
+    FixedStepOptions opt;
+    opt.t_end = local ? t0 + h : spec.t_end;
+    opt.h = h;
+    return run_fixed_step_from(sys, integ, t0, y0, opt);
+  };
+
+  // Each integrator's ladder.
+  std::vector<std::vector<double>> ladders(setup.integrators.size(), hs);
+  if (per_method) {
+    for (std::size_t i = 0; i < setup.integrators.size(); ++i) {
+      auto& integ = *setup.integrators[i];
+      ConvergenceResult::Ladder rec;
+      rec.integrator = integ.info().name;
+      const int q = std::max(1, integ.info().order + (local ? 1 : 0));
+      auto error_at = [&](double h) {
+        const RunResult r = run_at(integ, h);
+        if (r.stats.status != Status::ok) return std::numeric_limits<double>::quiet_NaN();
+        if (!local) return max_abs_diff(r.y, ref_end);
+        // The probe's local reference is computed directly (uncached): one short run.
+        return max_abs_diff(r.y, compute_reference(plan, sys, {t0 + h})[0]);
+      };
+      auto floor_at = [&](double h) {
+        if (local) return kUnitRoundoff * std::max(1.0, y0_norm);
+        const double n =
+            static_cast<double>(fixed_step_count(t0, spec.t_end, h, FixedStepOptions{}.max_steps));
+        return std::max(n * kUnitRoundoff * s_end, ref_acc_end);
+      };
+      rec.h0 = probe_ladder(spec, spec.t_end - t0, local, local ? std::max(1.0, y0_norm) : s_end, q,
+                            error_at, floor_at, rec);
+      ladders[i] = spec.step_ladder(rec.h0);
+      for (double h : ladders[i]) fixed_step_count(t0, spec.t_end, h, FixedStepOptions{}.max_steps);
+      if (progress)
+        *progress << "ladder: " << rec.integrator << " h0 = " << format_short(rec.h0) << " after "
+                  << rec.probes.size() << " probe run(s)\n";
+      result.ladders.push_back(std::move(rec));
+    }
+  }
+
+  // The local study's reference (and its check) at every t0 + h of every ladder.
+  std::vector<Vec> ref_local, ref2_local;
+  if (local) {
+    std::vector<double> ref_times;
+    for (const auto& ladder : ladders)
+      for (double h : ladder) ref_times.push_back(t0 + h);
+    ReferenceValues ref = reference_values(spec, sys, plan, ref_times, progress);
+    result.reference_cache = ref.cache;
+    result.reference_from_cache = ref.from_cache;
+    ref_local = std::move(ref.values);
+    if (numerical_ref) {
+      try {
+        ReferenceValues ref2 = reference_values(spec, sys, plan2, ref_times, progress);
+        result.reference_check_cache = ref2.cache;
+        ref2_local = std::move(ref2.values);
+        double worst = 0;
+        for (std::size_t k = 0; k < ref_local.size(); ++k)
+          worst = std::max(worst, max_abs_diff(ref_local[k], ref2_local[k]));
+        result.reference_accuracy = worst;
+      } catch (const std::runtime_error& e) {
+        result.reference_check_description += " (failed: " + std::string(e.what()) + ")";
+        if (progress) *progress << "reference check: " << e.what() << "\n";
+      }
+    }
+  }
+
+  std::size_t total = 0;
+  for (const auto& ladder : ladders) total += ladder.size();
+  std::size_t done = 0, ref_index = 0;
+  for (std::size_t i = 0; i < setup.integrators.size(); ++i) {
+    auto& integ = setup.integrators[i];
+    for (double h : ladders[i]) {
       ConvergenceRow row;
       row.model = spec.model;
       row.integrator = integ->info().name;
       row.order = integ->info().order;
-      FixedStepOptions opt;
-      opt.t_end = local ? t0 + hs[k] : spec.t_end;
-      opt.h = hs[k];
-      const RunResult r = run_fixed_step_from(sys, *integ, t0, y0, opt);
+      const RunResult r = run_at(*integ, h);
       row.h = r.h;
       row.steps = r.stats.steps;  // the steps taken: N unless the run ended early
       row.stats = r.stats;
-      row.error = r.stats.status == Status::ok ? max_abs_diff(r.y, ref_values[local ? k : 0])
+      const Vec& yref = local ? ref_local[ref_index] : ref_end;
+      row.error = r.stats.status == Status::ok ? max_abs_diff(r.y, yref)
                                                : std::numeric_limits<double>::quiet_NaN();
+      const double s = std::max({1.0, y0_norm, inf_norm(yref)});
+      row.roundoff_floor =
+          (local ? 1.0 : static_cast<double>(std::max(1L, row.steps))) * kUnitRoundoff * s;
+      if (numerical_ref && result.reference_accuracy)
+        row.reference_floor =
+            local ? max_abs_diff(ref_local[ref_index], ref2_local[ref_index]) : ref_acc_end;
+      row.at_floor = r.stats.status == Status::ok &&
+                     (row.error <= kFloorFactor * row.roundoff_floor ||
+                      (numerical_ref && row.error <= kFloorFactor * row.reference_floor));
+      ++ref_index;
       result.rows.push_back(row);
       if (progress) *progress << progress_line(++done, total, row) << std::flush;
     }
   }
   add_observed_orders(result.rows);
+  for (const auto& integ : setup.integrators)
+    result.fits.push_back(fit_order(result.rows, integ->info().name, local));
   return result;
 }
 
@@ -552,30 +798,293 @@ std::optional<double> last_observed_order(const std::vector<ConvergenceRow>& row
   return last;
 }
 
+std::string ConvergenceRow::status_text() const {
+  return at_floor ? "floor" : to_string(stats.status);
+}
+
+OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& integrator,
+                   bool local) {
+  OrderFit fit;
+  fit.integrator = integrator;
+  std::vector<const ConvergenceRow*> rs;
+  for (const auto& r : rows)
+    if (r.integrator == integrator) rs.push_back(&r);
+  if (rs.empty()) {
+    fit.reason = "no rows";
+    return fit;
+  }
+  fit.order = rs.front()->order;
+  fit.expected_slope = fit.order + (local ? 1 : 0);
+  const std::size_t n = rs.size();
+  std::vector<bool> usable(n);
+  int n_usable = 0, n_roundoff = 0, n_reference = 0, n_failed = 0;
+  std::string failed_status;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& r = *rs[i];
+    usable[i] = r.stats.status == Status::ok && !r.at_floor && std::isfinite(r.error) &&
+                r.error > 0 && r.h > 0;
+    n_usable += usable[i] ? 1 : 0;
+    if (r.stats.status != Status::ok) {
+      ++n_failed;
+      failed_status = to_string(r.stats.status);
+    } else if (r.at_floor) {
+      ++(r.error <= kFloorFactor * r.roundoff_floor ? n_roundoff : n_reference);
+    }
+  }
+  auto pair_order = [&](std::size_t b) {
+    return std::log(rs[b - 1]->error / rs[b]->error) / std::log(rs[b - 1]->h / rs[b]->h);
+  };
+  // The longest run of consecutive usable levels whose pairwise orders agree; the finest of
+  // equally long runs.
+  std::size_t best_a = 0, best_len = 0;
+  for (std::size_t a = 0; a < n; ++a) {
+    if (!usable[a]) continue;
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    std::size_t len = 1;
+    for (std::size_t b = a + 1; b < n && usable[b]; ++b) {
+      const double q = pair_order(b);
+      lo = std::min(lo, q);
+      hi = std::max(hi, q);
+      if (!(hi - lo <= kOrderAgreement)) break;
+      len = b - a + 1;
+    }
+    if (len >= best_len) {
+      best_len = len;
+      best_a = a;
+    }
+  }
+  if (best_len >= 3) {
+    std::vector<double> x, y;
+    for (std::size_t i = best_a; i < best_a + best_len; ++i) {
+      x.push_back(std::log(rs[i]->h));
+      y.push_back(std::log(rs[i]->error));
+    }
+    const double m = static_cast<double>(x.size());
+    double mx = 0, my = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      mx += x[i] / m;
+      my += y[i] / m;
+    }
+    double sxx = 0, sxy = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      sxx += (x[i] - mx) * (x[i] - mx);
+      sxy += (x[i] - mx) * (y[i] - my);
+    }
+    const double slope = sxy / sxx;
+    double ssr = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const double res = y[i] - (my + slope * (x[i] - mx));
+      ssr += res * res;
+    }
+    fit.fitted = slope;
+    fit.fitted_se = std::sqrt(ssr / (m - 2) / sxx);
+    fit.h_max = rs[best_a]->h;
+    fit.h_min = rs[best_a + best_len - 1]->h;
+    fit.levels_used = static_cast<int>(best_len);
+    // A fit away from the expected slope says what the pairwise orders show.
+    const double expected = fit.expected_slope;
+    // Levels finer than the window, above the floors, that do not agree with it: named even when
+    // the fit is close to the expected slope (e.g. a solver tolerance that sets the error at fine
+    // h must not disappear behind a clean fit over the coarse levels).
+    {
+      std::string finer;
+      for (std::size_t b = best_a + best_len; b < n; ++b)
+        if (usable[b] && usable[b - 1])
+          finer += (finer.empty() ? "" : " ") + format_fixed(pair_order(b), 2);
+      if (!finer.empty())
+        fit.reason = "levels finer than the window (h < " + format_short(fit.h_min) +
+                     ") are above the floors but do not follow it (pairwise orders " + finer +
+                     "): a solver tolerance, order reduction or the reference sets their error, "
+                     "or they are still pre-asymptotic";
+    }
+    if (std::abs(slope - expected) > kOrderTolerance) {
+      const double q_first = pair_order(best_a + 1), q_last = pair_order(best_a + best_len - 1);
+      std::string all;
+      for (std::size_t b = 1; b < n; ++b)
+        if (usable[b] && usable[b - 1])
+          all += (all.empty() ? "" : " ") + format_fixed(pair_order(b), 2);
+      // A coarser pair near the expected slope (within 0.3): the method showed its order there
+      // and something else sets the error in the window. A steady window (orders within 0.1):
+      // the method's order on this problem. The window's orders moving towards the expected
+      // slope: pre-asymptotic.
+      bool coarser_near = false;
+      double w_lo = q_first, w_hi = q_first;
+      for (std::size_t b = 1; b <= best_a; ++b)
+        if (usable[b] && usable[b - 1] && std::abs(pair_order(b) - expected) <= 0.3)
+          coarser_near = true;
+      for (std::size_t b = best_a + 1; b < best_a + best_len; ++b) {
+        w_lo = std::min(w_lo, pair_order(b));
+        w_hi = std::max(w_hi, pair_order(b));
+      }
+      if (coarser_near)
+        fit.reason = "the error stops following h^" + std::to_string(fit.expected_slope) +
+                     " below h = " + format_short(rs[best_a]->h) +
+                     ": something other than the truncation error sets it there (a solver "
+                     "tolerance, order reduction or the reference); pairwise orders " +
+                     all;
+      else if (w_hi - w_lo <= kOrderTolerance)
+        fit.reason = "a steady order of " + format_fixed(slope, 2) + ", not " +
+                     std::to_string(fit.expected_slope) +
+                     ", on this problem (e.g. order reduction to the stage order on a stiff "
+                     "problem, or structure that changes the order); pairwise orders " +
+                     all;
+      else if (std::abs(q_last - expected) < std::abs(q_first - expected))
+        fit.reason = "pre-asymptotic: the pairwise orders approach " +
+                     std::to_string(fit.expected_slope) + " only slowly (" + all +
+                     ") down to the finest level above the floors";
+      else
+        fit.reason = "fitted order differs from the classical one by " +
+                     format_fixed(slope - expected, 2) + "; pairwise orders " + all;
+      // The finest usable level of the integrator (not only of the window) near the floors.
+      std::size_t last_usable = best_a + best_len - 1;
+      for (std::size_t b = last_usable; b < n; ++b)
+        if (usable[b]) last_usable = b;
+      const auto& finest = *rs[last_usable];
+      if (finest.error <=
+          kLadderFloorMargin * std::max(finest.roundoff_floor, finest.reference_floor))
+        fit.reason += "; the floors (within " + g_short(kLadderFloorMargin) +
+                      "x of the finest level above them) stop the ladder before the orders settle";
+    }
+    return fit;
+  }
+  const std::string k = std::to_string(n_usable);
+  const std::string levels = n_usable == 1 ? " level" : " levels";
+  if (n_usable >= 3) {
+    fit.reason = "pairwise orders do not settle (no 3 consecutive levels agree within " +
+                 g_short(kOrderAgreement) + "): add --levels";
+  } else if (n_roundoff > 0) {
+    fit.reason = "only " + k + levels +
+                 " above the round-off floor: use a larger --h (or --ladder per-method)";
+  } else if (n_reference > 0) {
+    fit.reason = "only " + k + levels +
+                 " above the reference's accuracy: tighten --reference-rtol or use a more "
+                 "accurate --reference";
+  } else if (n_failed > 0) {
+    fit.reason = "only " + k + levels + " ran ok (the others ended " + failed_status +
+                 "): use a smaller --h";
+  } else {
+    fit.reason = "only " + k + levels + " with a positive error: add --levels";
+  }
+  return fit;
+}
+
+namespace {
+
+// The columns every row of both tables ends with, after the existing ones.
+void add_trailing_columns(Table& t) {
+  for (const auto& c : SolveStats::counter_names()) t.columns.push_back(c);
+  t.columns.push_back("roundoff_floor");
+  t.columns.push_back("reference_floor");
+}
+
+void add_trailing_values(std::vector<std::string>& row, const ConvergenceRow& r) {
+  for (const auto& v : r.stats.counter_values()) row.push_back(v);
+  row.push_back(format_full(r.roundoff_floor));
+  row.push_back(format_full(r.reference_floor));
+}
+
+}  // namespace
+
 Table convergence_table(const ConvergenceResult& res) {
   Table t{{"model", "integrator", "order", "h", "steps", "error", "observed_order", "f_evals",
            "jac_evals", "lin_solves", "wall_s", "status"},
           {}};
+  add_trailing_columns(t);
   for (const auto& r : res.rows) {
-    t.rows.push_back({r.model, r.integrator, std::to_string(r.order), format_full(r.h),
-                      std::to_string(r.steps),
-                      r.stats.status == Status::ok ? format_full(r.error) : "",
-                      optional_full(r.observed_order), std::to_string(r.stats.f_evals),
-                      std::to_string(r.stats.jac_evals), std::to_string(r.stats.lin_solves),
-                      format_full(r.stats.wall_s), to_string(r.stats.status)});
+    std::vector<std::string> row = {r.model,
+                                    r.integrator,
+                                    std::to_string(r.order),
+                                    format_full(r.h),
+                                    std::to_string(r.steps),
+                                    r.stats.status == Status::ok ? format_full(r.error) : "",
+                                    optional_full(r.observed_order),
+                                    std::to_string(r.stats.f_evals),
+                                    std::to_string(r.stats.jac_evals),
+                                    std::to_string(r.stats.lin_solves),
+                                    format_full(r.stats.wall_s),
+                                    r.status_text()};
+    add_trailing_values(row, r);
+    t.rows.push_back(std::move(row));
   }
   return t;
 }
 
 Table local_error_table(const ConvergenceResult& res) {
-  Table t{{"model", "integrator", "order", "h", "local_error", "observed_order"}, {}};
+  Table t{{"model", "integrator", "order", "h", "local_error", "observed_order", "status",
+           "f_evals", "jac_evals", "lin_solves"},
+          {}};
+  add_trailing_columns(t);
   for (const auto& r : res.rows) {
-    t.rows.push_back({r.model, r.integrator, std::to_string(r.order), format_full(r.h),
-                      r.stats.status == Status::ok ? format_full(r.error) : "",
-                      optional_full(r.observed_order)});
+    std::vector<std::string> row = {r.model,
+                                    r.integrator,
+                                    std::to_string(r.order),
+                                    format_full(r.h),
+                                    r.stats.status == Status::ok ? format_full(r.error) : "",
+                                    optional_full(r.observed_order),
+                                    r.status_text(),
+                                    std::to_string(r.stats.f_evals),
+                                    std::to_string(r.stats.jac_evals),
+                                    std::to_string(r.stats.lin_solves)};
+    add_trailing_values(row, r);
+    t.rows.push_back(std::move(row));
   }
   return t;
 }
+
+Table orders_table(const ConvergenceResult& res) {
+  Table t{{"integrator", "order", "fitted_order", "fitted_order_se", "h_min", "h_max",
+           "levels_used", "reason"},
+          {}};
+  for (const auto& f : res.fits)
+    t.rows.push_back({f.integrator, std::to_string(f.order), optional_full(f.fitted),
+                      optional_full(f.fitted_se), f.fitted ? format_full(f.h_min) : "",
+                      f.fitted ? format_full(f.h_max) : "", std::to_string(f.levels_used),
+                      f.reason});
+  return t;
+}
+
+namespace {
+
+// The summary of the fits: the fitted order with its window; the verdict uses the fitted order.
+Table fits_markdown_table(const ConvergenceResult& res, bool local) {
+  Table t{{"integrator", local ? "expected slope (order+1)" : "order", "fitted", "± SE", "window h",
+           "levels", "within 0.1", "reason"},
+          {}};
+  for (const auto& f : res.fits) {
+    const bool fitted = f.fitted.has_value();
+    t.rows.push_back(
+        {f.integrator, std::to_string(f.expected_slope), fitted ? format_fixed(*f.fitted) : "-",
+         fitted ? format_fixed(*f.fitted_se) : "",
+         fitted ? format_short(f.h_min) + " – " + format_short(f.h_max) : "",
+         std::to_string(f.levels_used),
+         fitted ? (std::abs(*f.fitted - f.expected_slope) <= kOrderTolerance ? "yes" : "no") : "-",
+         f.reason});
+  }
+  return t;
+}
+
+// The floors, in words, for the Markdown and the report.
+std::string floors_sentence(const ConvergenceResult& res, bool local) {
+  std::ostringstream os;
+  os << "Rows with status `floor` have an error within " << g_short(kFloorFactor)
+     << "× the round-off floor (" << (local ? "u·s" : "N·u·s")
+     << ", u = 2^-53, s = max(1, ‖y0‖∞, ‖y_ref‖∞))";
+  if (res.reference_accuracy)
+    os << " or the reference's accuracy (≈ " << format_short(*res.reference_accuracy)
+       << (local ? " at worst" : "") << ", from a second run: " << res.reference_check_description
+       << ")";
+  os << "; fits leave them out. The fitted order is the least-squares slope over the longest run "
+        "of consecutive levels above the floors whose pairwise orders agree within "
+     << g_short(kOrderAgreement) << ".";
+  if (res.ladder == "per-method")
+    os << " Per-method ladders: each method's steps come from a probe (coarsest error at most "
+          "about "
+       << g_short(kLadderTop) << "·s, finest about " << g_short(kLadderFloorMargin)
+       << "× the floors where the ladder's length allows).";
+  return os.str();
+}
+
+}  // namespace
 
 namespace {
 
@@ -598,28 +1107,15 @@ std::string markdown_report(const std::string& name, const ConvergenceSpec& spec
     os << ".";
   }
   os << "\n\n";
-  // Summary: expected vs observed order per integrator.
-  Table summary{{"integrator", local ? "expected slope (order+1)" : "order", "last observed",
-                 "least-squares (last 3)", "within 0.2"},
-                {}};
-  std::vector<std::string> seen;
-  for (const auto& r : res.rows) {
-    if (!seen.empty() && seen.back() == r.integrator) continue;
-    seen.push_back(r.integrator);
-    const int expected = r.order + (local ? 1 : 0);
-    const auto last = last_observed_order(res.rows, r.integrator);
-    const auto fit = fitted_order(res.rows, r.integrator);
-    summary.rows.push_back({r.integrator, std::to_string(expected),
-                            last ? format_fixed(*last) : "-", fit ? format_fixed(*fit) : "-",
-                            last ? (std::abs(*last - expected) <= 0.2 ? "yes" : "no") : "-"});
-  }
-  os << summary.to_markdown() << "\n";
+  os << floors_sentence(res, local) << "\n\n";
+  os << fits_markdown_table(res, local).to_markdown() << "\n";
   Table detail = local ? local_error_table(res) : convergence_table(res);
   // Shorter numbers in the Markdown copy; the CSV keeps full precision.
   for (auto& row : detail.rows)
     for (std::size_t c = 0; c < detail.columns.size(); ++c) {
       const auto& col = detail.columns[c];
-      if ((col == "h" || col == "error" || col == "local_error" || col == "wall_s") &&
+      if ((col == "h" || col == "error" || col == "local_error" || col == "wall_s" ||
+           col == "roundoff_floor" || col == "reference_floor") &&
           !row[c].empty())
         row[c] = format_short(std::stod(row[c]), col == "wall_s" ? 2 : 3);
       if (col == "observed_order" && !row[c].empty()) row[c] = format_fixed(std::stod(row[c]));
@@ -629,7 +1125,8 @@ std::string markdown_report(const std::string& name, const ConvergenceSpec& spec
   for (const auto& r : res.rows)
     notes.push_back({r.integrator + ", h = " + format_short(r.h), &r.stats});
   os << failed_runs_markdown(notes);
-  os << "\nFull-precision values: `" << name << ".csv`; metadata: `" << name << ".json`.\n";
+  os << "\nFull-precision values: `" << name << ".csv`; order fits: `" << name
+     << "_orders.csv`; metadata: `" << name << ".json`.\n";
   return os.str();
 }
 
@@ -641,6 +1138,7 @@ void write_convergence_outputs(const std::string& dir, const std::string& name,
   const std::filesystem::path d(dir);
   const Table t = local ? local_error_table(res) : convergence_table(res);
   write_file_atomic(d / (name + ".csv"), t.to_csv());
+  write_file_atomic(d / (name + "_orders.csv"), orders_table(res).to_csv());
   write_file_atomic(d / (name + ".md"), markdown_report(name, spec, res, local));
   // "spec" is the spec as given (what check_study_output compares before a run); the step it
   // resolved to is recorded beside it.
@@ -651,6 +1149,30 @@ void write_convergence_outputs(const std::string& dir, const std::string& name,
     meta["reference_from_cache"] = res.reference_from_cache;
   }
   meta["error_norm"] = "max-norm of the absolute error";
+  meta["floor_factor"] = kFloorFactor;
+  meta["unit_roundoff"] = kUnitRoundoff;
+  meta["roundoff_floor"] =
+      local ? "u*s, s = max(1, |y0|inf, |y_ref|inf)" : "N*u*s, s = max(1, |y0|inf, |y_ref|inf)";
+  meta["order_agreement"] = kOrderAgreement;
+  if (res.reference_accuracy) {
+    meta["reference_check"] = res.reference_check_description;
+    meta["reference_accuracy"] = *res.reference_accuracy;
+    if (!res.reference_check_cache.empty())
+      meta["reference_check_cache"] = res.reference_check_cache;
+  }
+  if (!res.reference_accuracy && !res.reference_check_description.empty())
+    meta["reference_check"] = res.reference_check_description;
+  meta["ladder"] = res.ladder;
+  if (!res.ladders.empty()) {
+    nlohmann::json lad = nlohmann::json::array();
+    for (const auto& l : res.ladders) {
+      nlohmann::json probes = nlohmann::json::array();
+      for (const auto& [h, e] : l.probes)
+        probes.push_back({{"h", h}, {"error", std::isfinite(e) ? nlohmann::json(e) : nullptr}});
+      lad.push_back({{"integrator", l.integrator}, {"h0", l.h0}, {"probes", probes}});
+    }
+    meta["ladders"] = lad;
+  }
   write_file_atomic(d / (name + ".json"), meta.dump(2) + "\n");
 }
 
@@ -716,23 +1238,9 @@ class ConvergenceJob : public StudyJob {
   void print_summary(std::ostream& out) const override { out << unit_table().to_markdown(); }
   std::string report_markdown(const std::string& note) const override {
     std::ostringstream md;
-    md << note << " Reference: " << result_.reference_description << ".\n\n";
-    Table summary{{"integrator", local_ ? "expected slope" : "order", "last observed order",
-                   "status of finest run"},
-                  {}};
-    for (const auto& integ : spec_.integrators) {
-      const auto last = last_observed_order(result_.rows, integ);
-      std::string status;
-      int order = 0;
-      for (const auto& r : result_.rows)
-        if (r.integrator == integ) {
-          status = to_string(r.stats.status);
-          order = r.order + (local_ ? 1 : 0);
-        }
-      summary.rows.push_back(
-          {integ, std::to_string(order), last ? format_fixed(*last) : "-", status});
-    }
-    md << summary.to_markdown() << "\n";
+    md << note << " Reference: " << result_.reference_description << ". "
+       << floors_sentence(result_, local_) << "\n\n";
+    md << fits_markdown_table(result_, local_).to_markdown() << "\n";
     return md.str();
   }
   std::string default_title() const override {
@@ -766,6 +1274,15 @@ StudyKind step_size_kind(bool local) {
       "and reused by a run of the same build with the same model, parameters, reference and "
       "times";
   k.options = step_study_options(d);
+  k.options.push_back(
+      {"ladder",
+       ParamType::text,
+       "common",
+       "common: every integrator on h/refine^k; per-method: each integrator's coarsest step "
+       "found by a short probe so its errors run from about 1e-2 of the solution's size down to "
+       "well above its floor",
+       {"common", "per-method"}});
+  k.extra_files = {std::string(local ? "local_error" : "convergence") + "_orders.csv"};
   for (auto& o : k.options) {
     if (o.key == "reference_rtol") o.help += " (default 1e-12)";
     if (o.key == "reference_atol") o.help += " (default rtol/100)";
@@ -780,6 +1297,7 @@ StudyKind step_size_kind(bool local) {
     spec.params = t.params;
     spec.integrators = t.integrators;
     read_step_study_options(o, spec);
+    spec.ladder = o.text("ladder");
     spec.cache_dir = ctx.cache_dir;
     return std::make_unique<ConvergenceJob>(std::move(spec), local);
   };

@@ -30,6 +30,42 @@
 // study's times) are not in the key: adding an integrator reuses the reference. observed_order
 // between consecutive rows of one integrator is log(e_k/e_{k+1})/log(h_k/h_{k+1}) using the steps
 // actually taken; a global error should give the method's order p, a local error p + 1.
+//
+// Floors. Every row is checked against two floors below which its error says nothing about the
+// method:
+//  - the round-off floor: kFloorRoundoff = N·u·s for a global error after N steps and u·s for a
+//    local error (one step), with u = 2^-53 the unit round-off and s = max(1, ‖y0‖∞, ‖y_ref‖∞)
+//    the solution's size (y_ref at t_end, or at t0 + h for the local error);
+//  - for a numerical reference, the reference's own accuracy: ‖y_ref − y_ref2‖∞ at the same
+//    time, where y_ref2 is a second reference run, tighter by a factor 10 (rtol/10 and atol/10
+//    for an adaptive reference; half the step for a fixed-step one); it is cached like the first
+//    (another key). An exact reference has no such floor (0).
+// A row whose error is at most kFloorFactor (10) times either floor has status `floor` (its error
+// stays in the table) and is left out of order fits.
+//
+// Orders (fit_order): over the rows of one integrator, the asymptotic window is the longest run
+// of consecutive levels that ran ok, are above both floors, and whose pairwise observed orders
+// all lie within kOrderAgreement (0.2) of each other (max − min); among equally long runs the
+// finest. The fitted order is the least-squares slope of log(error) against log(h) over the
+// window, with its standard error; with fewer than three levels in the window there is no fit
+// and the reason says what to change. A fit more than kOrderTolerance from the expected slope, or
+// with finer levels above the floors that leave the window, gets a reason read from the pairwise
+// orders. For a local error the fitted slope is order + 1.
+//
+// Ladders (--ladder): `common` runs every integrator on h_k = h/refine^k. `per-method` gives
+// each integrator its own coarsest step h0 (then h0/refine^k, same levels and refine), found by
+// a probe of at most kProbeRuns cheap runs (p: the classical order, p + 1 for the local error).
+// Stage 1, the coarsest step allowed: starting at h, a run whose error is not finite or above
+// the target 1e-2·s divides h by 4, one at its floor multiplies h by 4, otherwise h moves to the
+// step e ∝ h^p predicts for the target (log-log interpolation once bracketed), until an error is
+// within a factor 3 below the target; h_top is that step (or the prediction from the last usable
+// probe, never at or past a probe that failed or overshot). Stage 2: the ladder moves down, by at
+// most its own length (h0 ≥ h_top·refine^-(levels-1)), until its predicted finest error is about
+// kLadderFloorMargin (100) times the larger floor, checked by one or two runs at that finest step
+// (within a factor 3): the most asymptotic levels that stay well above the floors. h0 stays
+// within [h/64, 16·h], for the global error at most (t_end − t0)/4 and with its finest level
+// within the driver's step limit. A fixed-step reference runs at (finest h of the common
+// ladder)/16 in both modes (for the local error at most (t − t0)/16 at each reference time t).
 #pragma once
 
 #include <iosfwd>
@@ -94,6 +130,8 @@ void add_step_study_metadata(nlohmann::json& meta, double h_used, const std::str
 
 struct ConvergenceSpec : StepStudySpec {
   static constexpr double kDefaultReferenceRtol = 1e-12;
+  // "common" (every integrator on h/refine^k) or "per-method" (a probe per integrator).
+  std::string ladder = "common";
   static constexpr double kReferenceAtolDivisor = 100;  // default atol = rtol / 100
   // Folder holding the reference cache (DIR/reference/); empty: no cache. Not part of the spec's
   // JSON (it is where the outputs go).
@@ -109,6 +147,16 @@ struct ConvergenceSpec : StepStudySpec {
 Vec reference_at_end(const StepStudySpec& spec, const OdeSystem& sys, double t_end, double h_fine,
                      std::string* description);
 
+// The floor check's constants (see the top of this file).
+constexpr double kUnitRoundoff = 0x1p-53;
+constexpr double kFloorFactor = 10;          // a row within this factor of a floor has status floor
+constexpr double kOrderAgreement = 0.2;      // max − min of the pairwise orders in a fit window
+constexpr double kOrderTolerance = 0.1;      // a fit further from the expected slope gets a reason
+constexpr double kReferenceTightening = 10;  // the second reference run: tolerances / 10, h / 2
+constexpr double kLadderTop = 1e-2;          // per-method ladder: coarsest error ≤ about 1e-2·s
+constexpr double kLadderFloorMargin = 100;   // predicted finest error ≥ 100 × floor
+constexpr int kProbeRuns = 8;                // at most this many probe runs per integrator
+
 struct ConvergenceRow {
   std::string model, integrator;
   int order = 0;
@@ -117,7 +165,30 @@ struct ConvergenceRow {
   double error = 0;
   std::optional<double> observed_order;
   SolveStats stats;
+  double roundoff_floor = 0;   // N·u·s (global) or u·s (local)
+  double reference_floor = 0;  // the reference's estimated accuracy (0: exact reference)
+  bool at_floor = false;       // ok and error <= kFloorFactor × one of the floors
+  // "floor" for a row at a floor, else the run's status.
+  std::string status_text() const;
 };
+
+// The order fit of one integrator (a row of NAME_orders.csv).
+struct OrderFit {
+  std::string integrator;
+  int order = 0;                            // the method's classical (claimed) order
+  int expected_slope = 0;                   // order, or order + 1 for the local error
+  std::optional<double> fitted, fitted_se;  // slope of log(error) against log(h) and its SE
+  double h_min = 0, h_max = 0;              // the window's steps (0: no fit)
+  int levels_used = 0;
+  // Why there is no fit, or why the fit is more than kOrderTolerance from the expected slope
+  // (what the pairwise orders show); empty otherwise.
+  std::string reason;
+};
+
+// The fit over the asymptotic window of the rows of `integrator` (in ladder order; their
+// at_floor and status must be set). `local`: the expected slope is order + 1.
+OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& integrator,
+                   bool local);
 
 struct ConvergenceResult {
   std::vector<ConvergenceRow> rows;
@@ -127,6 +198,20 @@ struct ConvergenceResult {
   bool reference_from_cache = false;  // true: read from reference_cache, not recomputed
   double h = 0;                       // the coarsest step requested (spec.h, or the suggested step)
   std::string h_source;               // "--h" or "suggested step: <the model's rule>"
+  // The second reference run (empty for an exact reference): its description and, for the
+  // global error, the estimated accuracy of the reference at t_end (the largest over the
+  // reference times for the local error).
+  std::string reference_check_description, reference_check_cache;
+  std::optional<double> reference_accuracy;
+  std::string ladder = "common";
+  // Per-method ladders: each integrator's coarsest step and its probe runs ("h=... error=...").
+  struct Ladder {
+    std::string integrator;
+    double h0 = 0;
+    std::vector<std::pair<double, double>> probes;  // (h, error; NaN when the run failed)
+  };
+  std::vector<Ladder> ladders;
+  std::vector<OrderFit> fits;  // one per integrator, in run order
 };
 
 // Progress lines go to `progress` when non-null.
@@ -154,9 +239,11 @@ std::optional<double> last_observed_order(const std::vector<ConvergenceRow>& row
 
 Table convergence_table(const ConvergenceResult& r);  // the convergence.csv contract
 Table local_error_table(const ConvergenceResult& r);  // the local_error.csv contract
+// NAME_orders.csv: integrator,order,fitted_order,fitted_order_se,h_min,h_max,levels_used,reason.
+Table orders_table(const ConvergenceResult& r);
 
-// Writes DIR/NAME.csv, DIR/NAME.md and DIR/NAME.json (NAME = convergence or local_error; its
-// "spec" is spec.to_json(), the step used is h_used with h_source beside it);
+// Writes DIR/NAME.csv, DIR/NAME_orders.csv, DIR/NAME.md and DIR/NAME.json (NAME = convergence or
+// local_error; its "spec" is spec.to_json(), the step used is h_used with h_source beside it);
 // `local` selects the local-error expectation (order + 1) in the Markdown summary.
 void write_convergence_outputs(const std::string& dir, const std::string& name,
                                const ConvergenceSpec& spec, const ConvergenceResult& r, bool local);

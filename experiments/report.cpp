@@ -116,7 +116,10 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
         "(spec, versions, compiler, flags, date); its spec file reproduces it with `stiffbench "
         "run`.\n\n";
   md << "Errors are max-norms against the exact solution or the named reference; 'observed order' "
-        "is log(e_k/e_{k+1})/log(h_k/h_{k+1}) between consecutive step sizes.\n\n";
+        "is log(e_k/e_{k+1})/log(h_k/h_{k+1}) between consecutive step sizes. A convergence "
+        "section's order is a least-squares fit over its asymptotic window (consecutive levels "
+        "above the round-off floor and the reference's accuracy whose observed orders agree), "
+        "shown with its standard error and h range; rows at a floor have status `floor`.\n\n";
   for (std::size_t i = 0; i < sections.size(); ++i) {
     const ReportSection& s = sections[i];
     err << "== [" << i + 1 << "/" << sections.size() << "] " << s.name << "\n";

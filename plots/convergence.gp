@@ -1,8 +1,8 @@
 # Error against step size on log-log axes from a convergence.csv or local_error.csv written by
 # stiffbench; one panel per integrator family, one line per integrator. The dashed line of the
 # same colour has the method's expected slope (order, or order + 1 for the local error) through
-# its finest point: where the measured line runs parallel to it, the method is in its
-# asymptotic range.
+# its finest point above the floors (status not `floor`): where the measured line runs parallel
+# to it, the method is in its asymptotic range.
 #
 #   gnuplot -e "csvfile='DIR/convergence.csv'; outfile='DIR/convergence.png'; npanels='1'; \
 #               pmethods1='euler rk4'; ptitle1='explicit'; ttl='title'; ycolumn='6'; \
@@ -12,6 +12,9 @@
 # local_error.csv); slope_offset 1 for the local error.
 ycol = exists("ycolumn") ? int(ycolumn) : 6
 soff = exists("slope_offset") ? int(slope_offset) : 0
+# The status column (12 in convergence.csv, 7 in local_error.csv): rows at a floor do not anchor
+# the expected-slope line.
+scol = exists("statuscolumn") ? int(statuscolumn) : (ycol == 6 ? 12 : 7)
 if (!exists("ylab")) ylab = "error (max-norm)"
 load plotdir."/common.gp"
 set logscale xy
@@ -29,7 +32,7 @@ do for [K=1:np] {
   array P[n > 0 ? n : 1]
   do for [j=1:n] {
     H0[j] = NaN; E0[j] = NaN; P[j] = 0
-    stats csvfile every ::1 using (strcol(2) eq word(m, j) && column(ycol) > 0 ? $4 : NaN) nooutput
+    stats csvfile every ::1 using (strcol(2) eq word(m, j) && column(ycol) > 0 && strcol(scol) ne "floor" ? $4 : NaN) nooutput
     if (exists("STATS_min")) { H0[j] = STATS_min }
     undefine STATS_*
     stats csvfile every ::1 using (strcol(2) eq word(m, j) && $4 == H0[j] ? column(ycol) : NaN) nooutput

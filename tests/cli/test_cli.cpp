@@ -197,14 +197,17 @@ TEST(Cli, ConvergenceWritesContractFiles) {
   std::ifstream f(dir / "convergence.csv");
   std::string header;
   std::getline(f, header);
+  // The contract columns first; the solver counters and the floors after them (issue 24).
   EXPECT_EQ(header,
             "model,integrator,order,h,steps,error,observed_order,f_evals,jac_evals,lin_solves,wall_"
-            "s,status");
+            "s,status,newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_"
+            "iters,roundoff_floor,reference_floor");
   int rows = 0;
   for (std::string line; std::getline(f, line);) ++rows;
   EXPECT_EQ(rows, 6);
   EXPECT_TRUE(std::filesystem::exists(dir / "convergence.md"));
   EXPECT_TRUE(std::filesystem::exists(dir / "convergence.json"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "convergence_orders.csv"));
   EXPECT_FALSE(std::filesystem::exists(dir / "convergence.csv.tmp"));
   const Outcome l =
       run("local-error --model harmonic_oscillator --integrators heun --h 0.1 --levels 2 --out " +
@@ -212,7 +215,11 @@ TEST(Cli, ConvergenceWritesContractFiles) {
   ASSERT_EQ(l.code, 0) << l.err;
   std::ifstream g(dir / "local_error.csv");
   std::getline(g, header);
-  EXPECT_EQ(header, "model,integrator,order,h,local_error,observed_order");
+  EXPECT_EQ(header,
+            "model,integrator,order,h,local_error,observed_order,status,f_evals,jac_evals,lin_"
+            "solves,newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_"
+            "iters,roundoff_floor,reference_floor");
+  EXPECT_TRUE(std::filesystem::exists(dir / "local_error_orders.csv"));
   std::filesystem::remove_all(dir);
 }
 
@@ -251,7 +258,8 @@ TEST(Cli, ConvergenceRowsOfImplicitMethodsCountJacobiansAndSolves) {
   for (std::size_t r = 1; r < table.size(); ++r) {
     const auto& cells = table[r];
     const std::string line = join_cells(cells);
-    ASSERT_EQ(cells.size(), 12u) << line;
+    // 12 contract columns, the 5 solver counters and the 2 floors.
+    ASSERT_EQ(cells.size(), 19u) << line;
     EXPECT_GT(std::stol(cells[8]), 0) << line;  // jac_evals
     EXPECT_GT(std::stol(cells[9]), 0) << line;  // lin_solves
     ++rows;

@@ -184,7 +184,10 @@ TEST(RunControlCli, MaxWallWritesATimeoutRowAndExitsThree) {
   while (std::getline(csv, line)) rows.push_back(line);
   ASSERT_EQ(rows.size(), 3u);
   EXPECT_NE(rows[0].find(",ok"), std::string::npos) << rows[0];
-  EXPECT_NE(rows[1].find(",ok"), std::string::npos) << rows[1];
+  // 3·10⁵ rk4 steps reach the round-off floor: a real result with status floor (issue 24).
+  EXPECT_TRUE(rows[1].find(",ok") != std::string::npos ||
+              rows[1].find(",floor") != std::string::npos)
+      << rows[1];
   EXPECT_NE(rows[2].find(",timeout"), std::string::npos) << rows[2];
   fs::remove_all(d);
 }
