@@ -505,7 +505,8 @@ TEST(Cli, StabilityWritesContractFiles) {
   const auto rows = read_csv(dir / "stability.csv");
   ASSERT_EQ(rows.size(), 3u);
   EXPECT_EQ(join_cells(rows[0]),
-            "model,integrator,param,value,h_max_measured,h_max_predicted,ratio,status");
+            "model,integrator,param,value,h_max_measured,h_max_predicted,ratio,status,"
+            "newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_iters");
   EXPECT_EQ(rows[1][1], "symplectic_euler");
   EXPECT_NEAR(std::stod(rows[1][6]), 1.0, 0.02);
   EXPECT_EQ(rows[2][1], "euler");
