@@ -432,7 +432,9 @@ TEST(Cli, RegionWritesContractFiles) {
   const auto rows = read_csv(dir / "region.csv");
   ASSERT_GT(rows.size(), 100u);
   EXPECT_EQ(join_cells(rows.front()), "integrator,re,im");
-  EXPECT_NE(o.out.find("| rk4 | explicit Runge-Kutta | -2.7853 | 2.8284 |"), std::string::npos)
+  // rk4: real root of x³ − 4x² + 12x − 24 (R(−x) = 1) and 2√2, to the 10 decimals printed.
+  EXPECT_NE(o.out.find("| rk4 | explicit Runge-Kutta | -2.7852935634 | 2.8284271247 |"),
+            std::string::npos)
       << o.out;
   EXPECT_TRUE(std::filesystem::exists(dir / "region_limits.csv"));
   EXPECT_TRUE(std::filesystem::exists(dir / "region.md"));
