@@ -587,6 +587,23 @@ std::vector<std::vector<std::complex<double>>> region_boundary(const LinearStabi
   return lines;
 }
 
+std::optional<bool> a_stable_exact(const LinearStability& s) {
+  if (!s.rational) return std::nullopt;
+  if (!rational_ray_limit(*s.rational, cd(0.0, 1.0), kInf).unbounded) return false;
+  const Polynomial& q = s.rational->q;
+  const Index n = static_cast<Index>(q.size()) - 1;
+  if (n < 1) return s.rational->p.size() <= 1;  // R a polynomial: A-stable only if constant
+  Mat comp = Mat::Zero(n, n);
+  for (Index j = 0; j < n; ++j) {
+    comp(0, j) = -q[static_cast<std::size_t>(n - 1 - j)] / q[static_cast<std::size_t>(n)];
+    if (j + 1 < n) comp(j + 1, j) = 1.0;
+  }
+  const Eigen::EigenSolver<Mat> es(comp, false);
+  for (Index j = 0; j < n; ++j)
+    if (!(es.eigenvalues()(j).real() > 0.0)) return false;
+  return true;
+}
+
 bool a_stable_on_samples(const LinearStability& s, double r, int n) {
   if (!s.amplification) return false;
   auto ok = [&](cd z) { return s.amplification(z) <= 1.0 + stability_tolerance; };

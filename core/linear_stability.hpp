@@ -144,5 +144,9 @@ std::vector<std::vector<std::complex<double>>> region_boundary(const LinearStabi
 // True when amplification <= 1 + stability_tolerance on every sample of the left half-plane
 // box [−r, 0] × [−r, r] (n×n grid plus the imaginary axis).
 bool a_stable_on_samples(const LinearStability& s, double r = 1e3, int n = 201);
+// Exact A-stability of R = P/Q (Hairer–Wanner II, IV.3): |R(iy)| <= 1 for every real y
+// (|P(iy)|² − |Q(iy)|² never turns positive) and every pole (root of Q) in Re z > 0, so that by
+// the maximum principle |R| <= 1 on the closed left half-plane. Empty without a rational form.
+std::optional<bool> a_stable_exact(const LinearStability& s);
 
 }  // namespace stiffbench

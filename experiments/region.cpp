@@ -169,7 +169,8 @@ RegionResult run_region(const RegionSpec& spec) {
       m.boundary = region_boundary(s, b.re_min, b.re_max, b.im_min, b.im_max, spec.resolution);
       m.real_axis = real_axis_limit(s);
       m.imaginary_axis = imaginary_axis_limit(s);
-      m.a_stable = a_stable_on_samples(s);
+      const std::optional<bool> exact = a_stable_exact(s);
+      m.a_stable = exact ? *exact : a_stable_on_samples(s);
     }
     m.oscillator = oscillator_limit(s);
   }

@@ -13,11 +13,11 @@
 // unstable, as that negative number; −inf when stable on the whole negative axis), the
 // imaginary-axis limit (the first z = i·r; 0 when unstable arbitrarily close to 0, as explicit
 // Euler, heun, cash_karp and rkf45; inf when stable on the whole axis), the oscillator limit on
-// hω (inf: unconditionally stable), and A-stability checked on samples of the left half-plane
-// (a_stable_on_samples). The limits are exact for every method with R = P/Q (the roots of
-// |P|² − |Q|² along the axis, core/linear_stability.hpp) and for the splittings' oscillator
-// limit (their half-trace polynomial); BDF2's are from the sampled search. Column `limits` says
-// which (exact | sampled).
+// hω (inf: unconditionally stable), and A-stability (exact for R = P/Q, a_stable_exact; BDF2 on
+// samples of the left half-plane, a_stable_on_samples). The limits are exact for every method with
+// R = P/Q (the roots of |P|² − |Q|² along the axis, core/linear_stability.hpp) and for the
+// splittings' oscillator limit (their half-trace polynomial); BDF2's are from the sampled search.
+// Column `limits` says which (exact | sampled).
 //
 // The default box (no --box) is fitted to the chosen methods: their boundaries are traced on a
 // coarse grid of [−12, 12]², every closed (bounded) boundary and the finite axis limits are

@@ -280,12 +280,21 @@ TEST(LinearStability, ExactLimitsOfRationalImplicitMethods) {
     const auto s = tableau_stability(t);
     ASSERT_TRUE(s.rational);
     EXPECT_NEAR(real_axis_limit(s).limit, 2.0 / (1.0 - 2.0 * theta), 1e-12);
+    EXPECT_EQ(a_stable_exact(s), std::optional<bool>(false));
     EXPECT_EQ(imaginary_axis_limit(s).limit, 0.0);
     // R = P/Q itself: P = 1 + (1 − θ)z, Q = 1 − θz.
     EXPECT_NEAR(s.rational->p.at(1), 1.0 - theta, 1e-15);
     if (theta > 0) {
       EXPECT_NEAR(s.rational->q.at(1), -theta, 1e-15);
     }
+  }
+  // θ >= 1/2: A-stable (pole 1/θ > 0, |R(iy)|² − 1 = (1 − 2θ)y²/|Q|² <= 0).
+  for (const double theta : {0.5, 0.75, 1.0}) {
+    ButcherTableau t;
+    t.a = Mat{{0.0, 0.0}, {1.0 - theta, theta}};
+    t.b = Vec{{1.0 - theta, theta}};
+    t.c = Vec{{0.0, 1.0}};
+    EXPECT_EQ(a_stable_exact(tableau_stability(t)), std::optional<bool>(true)) << theta;
   }
   // A-stable methods: no finite limit on either axis (|R(iy)| < 1, or = 1 for the symmetric
   // Gauss methods and the trapezoidal rule, where every coefficient of |P|² − |Q|² vanishes).
@@ -297,6 +306,13 @@ TEST(LinearStability, ExactLimitsOfRationalImplicitMethods) {
     EXPECT_TRUE(real_axis_limit(s).unbounded);
     EXPECT_TRUE(imaginary_axis_limit(s).unbounded);
     EXPECT_TRUE(imaginary_axis_limit(s).exact);
+    EXPECT_EQ(a_stable_exact(s), std::optional<bool>(true));
+  }
+  // The exact test agrees with the sampled one on every registered method with R = P/Q.
+  for (const auto& e : integrator_registry().entries()) {
+    const auto s = make(e.info.name)->linear_stability();
+    if (!s || !s->rational) continue;
+    EXPECT_EQ(a_stable_exact(*s), std::optional<bool>(a_stable_on_samples(*s))) << e.info.name;
   }
   // Radau IIA (3 stages): R = P/Q with deg P = 2, deg Q = 3 (L-stable).
   const auto radau = stability_of("radau5");
