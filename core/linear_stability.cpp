@@ -66,6 +66,139 @@ AxisLimit first_crossing(const G& g, double cap) {
   return {lo, false};
 }
 
+using ld = long double;
+using cld = std::complex<long double>;
+
+ld horner_ld(const std::vector<ld>& c, ld x) {
+  ld v = 0.0L;
+  for (std::size_t k = c.size(); k-- > 0;) v = v * x + c[k];
+  return v;
+}
+
+// Drops trailing coefficients at round-off level of the largest (a degree the exact method
+// does not have, e.g. an FSAL stage with b = 0).
+Polynomial trimmed(std::vector<ld> c) {
+  ld big = 0.0L;
+  for (ld x : c) big = std::max(big, std::abs(x));
+  while (c.size() > 1 && std::abs(c.back()) <= 1e-14L * big) c.pop_back();
+  return Polynomial(c.begin(), c.end());
+}
+
+// det(I − zM) = Σ c_k z^k: c_k are the coefficients of the characteristic polynomial
+// det(λI − M) = Σ c_k λ^{s−k}, from the Faddeev–LeVerrier recursion in long double.
+std::vector<ld> det_i_minus_zm(const Mat& m) {
+  const Index s = m.rows();
+  using MatL = Eigen::Matrix<ld, Eigen::Dynamic, Eigen::Dynamic>;
+  const MatL ml = m.cast<ld>();
+  MatL mk = MatL::Zero(s, s);
+  std::vector<ld> c = {1.0L};
+  for (Index k = 1; k <= s; ++k) {
+    mk = ml * mk + c.back() * MatL::Identity(s, s);
+    c.push_back(-(ml * mk).trace() / static_cast<ld>(k));
+  }
+  return c;
+}
+
+// The sign-change search of F (coefficients in ascending powers of t, F(0) = 0) on t > 0,
+// described in the header. Returns the first t where F turns positive, 0 when F > 0 right
+// after 0, and nullopt when F <= 0 on the whole half-line.
+std::optional<ld> first_positive_crossing(std::vector<ld> f, const std::vector<ld>& bound) {
+  // Coefficients within round-off of the terms that formed them are zero: the tableau's
+  // coefficients are doubles, so the order conditions hold to ~1e-16 only.
+  for (std::size_t k = 0; k < f.size(); ++k)
+    if (std::abs(f[k]) <= 1e-11L * bound[k]) f[k] = 0.0L;
+  std::size_t k0 = 0;
+  while (k0 < f.size() && f[k0] == 0.0L) ++k0;
+  if (k0 == f.size()) return std::nullopt;  // |R| = 1 on the whole ray
+  if (f[k0] > 0.0L) return ld{0.0L};        // growth of order t^k0 next to 0
+  // G(t) = F(t)/t^k0, G(0) < 0.
+  std::vector<ld> g(f.begin() + static_cast<std::ptrdiff_t>(k0), f.end());
+  while (g.size() > 1 && g.back() == 0.0L) g.pop_back();
+  std::vector<ld> roots;
+  const Index n = static_cast<Index>(g.size()) - 1;
+  if (n >= 1) {
+    Mat comp = Mat::Zero(n, n);
+    for (Index j = 0; j < n; ++j) {
+      comp(0, j) = static_cast<double>(-g[static_cast<std::size_t>(n - 1 - j)] /
+                                       g[static_cast<std::size_t>(n)]);
+      if (j + 1 < n) comp(j + 1, j) = 1.0;
+    }
+    const Eigen::EigenSolver<Mat> es(comp, false);
+    for (Index j = 0; j < n; ++j) {
+      const cd r = es.eigenvalues()(j);
+      // Generous: a spurious candidate only adds one sign test.
+      if (r.real() > 0.0 && std::abs(r.imag()) <= 1e-3 * std::abs(r))
+        roots.push_back(static_cast<ld>(r.real()));
+    }
+  }
+  std::sort(roots.begin(), roots.end());
+  // Sign of G between consecutive candidates (at their midpoints) and beyond the last one.
+  ld prev_mid = 0.0L;  // a point with G <= 0 (G(0) < 0)
+  for (std::size_t i = 0; i < roots.size(); ++i) {
+    const ld mid = i + 1 < roots.size() ? 0.5L * (roots[i] + roots[i + 1]) : 2.0L * roots[i] + 1.0L;
+    if (horner_ld(g, mid) > 0.0L) {
+      ld lo = prev_mid, hi = mid;  // G(lo) <= 0 < G(hi)
+      for (int it = 0; it < 200 && hi - lo > 4 * std::numeric_limits<ld>::epsilon() * hi; ++it) {
+        const ld m = 0.5L * (lo + hi);
+        (horner_ld(g, m) > 0.0L ? hi : lo) = m;
+      }
+      return 0.5L * (lo + hi);
+    }
+    prev_mid = mid;
+  }
+  return std::nullopt;
+}
+
+// F(t) = |P(tu)|² − |Q(tu)|² and the sums of the magnitudes of its terms, per power of t.
+void ray_polynomial(const RationalForm& r, cd unit, std::vector<ld>& f, std::vector<ld>& bound) {
+  const cld u(unit.real(), unit.imag());
+  auto powers = [&](const Polynomial& c) {
+    std::vector<cld> out;
+    cld up = 1.0L;
+    for (double x : c) {
+      out.push_back(static_cast<ld>(x) * up);
+      up *= u;
+    }
+    return out;
+  };
+  const std::vector<cld> cp = powers(r.p), cq = powers(r.q);
+  const std::size_t deg = 2 * (std::max(cp.size(), cq.size()) - 1);
+  f.assign(deg + 1, 0.0L);
+  bound.assign(deg + 1, 0.0L);
+  auto add = [&](const std::vector<cld>& c, ld sign) {
+    for (std::size_t j = 0; j < c.size(); ++j)
+      for (std::size_t k = 0; k < c.size(); ++k) {
+        f[j + k] += sign * (c[j] * std::conj(c[k])).real();
+        bound[j + k] += std::abs(c[j]) * std::abs(c[k]);
+      }
+  };
+  add(cp, 1.0L);
+  add(cq, -1.0L);
+}
+
+// The limit from a polynomial in t = r^power (power 1 or 2).
+AxisLimit limit_from_crossing(const std::optional<ld>& t, int power, double cap) {
+  if (!t) return {cap, true, true};
+  const double r = static_cast<double>(power == 2 ? std::sqrt(*t) : *t);
+  if (r > cap) return {cap, true, true};
+  return {r, false, true};
+}
+
+// Exact limit on the undamped oscillator of a kick/drift splitting: T(−w)² − 1 in w = (hω)².
+AxisLimit half_trace_limit(const Polynomial& t, double cap) {
+  std::vector<ld> tw(t.size());
+  for (std::size_t k = 0; k < t.size(); ++k) tw[k] = (k % 2 ? -1.0L : 1.0L) * static_cast<ld>(t[k]);
+  std::vector<ld> f(2 * t.size() - 1, 0.0L), bound(f.size(), 0.0L);
+  for (std::size_t j = 0; j < tw.size(); ++j)
+    for (std::size_t k = 0; k < tw.size(); ++k) {
+      f[j + k] += tw[j] * tw[k];
+      bound[j + k] += std::abs(tw[j] * tw[k]);
+    }
+  f[0] -= 1.0L;
+  bound[0] += 1.0L;
+  return limit_from_crossing(first_positive_crossing(f, bound), 2, cap);
+}
+
 // Eigenvalues with Im >= 0 only (the methods have real coefficients, so the amplification is
 // symmetric under conjugation), sorted by decreasing modulus, near-duplicates removed.
 std::vector<cd> distinct_upper(const std::vector<cd>& eigenvalues) {
@@ -81,7 +214,8 @@ std::vector<cd> distinct_upper(const std::vector<cd>& eigenvalues) {
   for (const cd& l : eigenvalues)
     if (std::isfinite(l.real()) && std::isfinite(l.imag()) && std::abs(l) > 1e-6 * largest &&
         l.real() <= kGrowingModeTolerance * largest)
-      out.emplace_back(l.real(), std::abs(l.imag()));
+      out.emplace_back(std::abs(l.real()) <= kGrowingModeTolerance * largest ? 0.0 : l.real(),
+                       std::abs(l.imag()));
   std::sort(out.begin(), out.end(), [](const cd& a, const cd& b) {
     if (std::abs(a) != std::abs(b)) return std::abs(a) > std::abs(b);
     return a.real() < b.real();
@@ -108,6 +242,7 @@ LinearStability tableau_stability(const ButcherTableau& t) {
   LinearStability s;
   s.kind = t.is_explicit() ? "explicit Runge-Kutta" : "implicit Runge-Kutta";
   s.amplification = [a = t.a, b = t.b](cd z) { return rk_amplification(a, b, z); };
+  s.rational = runge_kutta_rational_form(t.a, t.b);
   return with_mechanical_from_scalar(std::move(s));
 }
 
@@ -117,6 +252,7 @@ LinearStability rosenbrock_stability(const Mat& alpha, const Mat& gamma, const V
   LinearStability s;
   s.kind = "Rosenbrock";
   s.amplification = [a = Mat(alpha + gamma), b](cd z) { return rk_amplification(a, b, z); };
+  s.rational = runge_kutta_rational_form(alpha + gamma, b);
   return with_mechanical_from_scalar(std::move(s));
 }
 
@@ -173,6 +309,26 @@ LinearStability kick_drift_stability(const KickDriftCoefficients& c) {
     }
     return spectral_radius_2x2(m00, m01, m10, m11);
   };
+  // The same product with polynomial entries in x = h²a at hb = 0, for the half-trace.
+  using P = std::vector<ld>;
+  auto mul_add = [](const P& a, const P& b, ld scale, int shift) {  // a + scale·x^shift·b
+    P out = a;
+    if (out.size() < b.size() + static_cast<std::size_t>(shift))
+      out.resize(b.size() + static_cast<std::size_t>(shift), 0.0L);
+    for (std::size_t k = 0; k < b.size(); ++k)
+      out[k + static_cast<std::size_t>(shift)] += scale * b[k];
+    return out;
+  };
+  P p00 = {1.0L}, p01 = {0.0L}, p10 = {0.0L}, p11 = {1.0L};
+  for (std::size_t j = 0; j < c.kick.size(); ++j) {
+    p10 = mul_add(p10, p00, c.kick[j], 1);  // kick: row 1 += k x · row 0
+    p11 = mul_add(p11, p01, c.kick[j], 1);
+    p00 = mul_add(p00, p10, c.drift[j], 0);  // drift: row 0 += d · row 1
+    p01 = mul_add(p01, p11, c.drift[j], 0);
+  }
+  std::vector<ld> half = mul_add(p00, p11, 1.0L, 0);
+  for (ld& x : half) x *= 0.5L;
+  s.oscillator_half_trace = trimmed(half);
   return s;
 }
 
@@ -186,17 +342,78 @@ LinearStability with_mechanical_from_scalar(LinearStability s) {
   return s;
 }
 
+RationalForm runge_kutta_rational_form(const Mat& a, const Vec& b) {
+  const Index s = b.size();
+  require_input(a.rows() == s && a.cols() == s,
+                "runge_kutta_rational_form: A must be s x s with s = size of b");
+  bool explicit_method = true;
+  for (Index i = 0; i < s; ++i)
+    for (Index j = i; j < s; ++j) explicit_method = explicit_method && a(i, j) == 0.0;
+  RationalForm r;
+  if (explicit_method) {
+    // R(z) = 1 + Σ_k z^k bᵀA^{k−1}1 (A nilpotent): exact products, no recursion.
+    using VecL = Eigen::Matrix<ld, Eigen::Dynamic, 1>;
+    const auto al = a.cast<ld>();
+    const VecL bl = b.cast<ld>();
+    VecL v = VecL::Ones(s);
+    std::vector<ld> p = {1.0L};
+    for (Index k = 1; k <= s; ++k) {
+      p.push_back(bl.dot(v));
+      v = al * v;
+    }
+    r.p = trimmed(p);
+    r.q = {1.0};
+    return r;
+  }
+  // R = det(I − zA + z1bᵀ)/det(I − zA) (Hairer–Wanner II, Prop. IV.3.2).
+  const Mat m = a - Vec::Ones(s) * b.transpose();
+  r.p = trimmed(det_i_minus_zm(m));
+  r.q = trimmed(det_i_minus_zm(a));
+  return r;
+}
+
+Polynomial imaginary_axis_polynomial(const RationalForm& r) {
+  std::vector<ld> f, bound;
+  ray_polynomial(r, cd(0.0, 1.0), f, bound);
+  Polynomial w;  // odd powers of y vanish: keep the even ones as powers of w = y²
+  for (std::size_t k = 0; k < f.size(); k += 2)
+    w.push_back(std::abs(f[k]) <= 1e-11L * bound[k] ? 0.0 : static_cast<double>(f[k]));
+  return w;
+}
+
+AxisLimit rational_ray_limit(const RationalForm& r, std::complex<double> unit, double cap) {
+  std::vector<ld> f, bound;
+  ray_polynomial(r, unit, f, bound);
+  // On the imaginary axis F is even in r: solve in w = r² (half the degree).
+  bool even = true;
+  for (std::size_t k = 1; k < f.size(); k += 2) even = even && std::abs(f[k]) <= 1e-11L * bound[k];
+  if (even) {
+    std::vector<ld> fw, bw;
+    for (std::size_t k = 0; k < f.size(); k += 2) {
+      fw.push_back(f[k]);
+      bw.push_back(bound[k]);
+    }
+    return limit_from_crossing(first_positive_crossing(fw, bw), 2, cap);
+  }
+  return limit_from_crossing(first_positive_crossing(f, bound), 1, cap);
+}
+
 AxisLimit real_axis_limit(const LinearStability& s, double cap) {
+  if (s.rational) return rational_ray_limit(*s.rational, cd(-1.0, 0.0), cap);
   if (!s.amplification) return {};
   return first_crossing([&](double r) { return s.amplification(cd(-r, 0.0)); }, cap);
 }
 
 AxisLimit imaginary_axis_limit(const LinearStability& s, double cap) {
+  if (s.rational) return rational_ray_limit(*s.rational, cd(0.0, 1.0), cap);
   if (!s.amplification) return {};
   return first_crossing([&](double r) { return s.amplification(cd(0.0, r)); }, cap);
 }
 
 AxisLimit oscillator_limit(const LinearStability& s, double cap) {
+  // The oscillator's eigenvalues are ±iω: for a one-step method the imaginary-axis limit.
+  if (s.rational) return rational_ray_limit(*s.rational, cd(0.0, 1.0), cap);
+  if (!s.oscillator_half_trace.empty()) return half_trace_limit(s.oscillator_half_trace, cap);
   if (!s.mechanical_amplification) return {};
   return first_crossing([&](double r) { return s.mechanical_amplification(-r * r, 0.0); }, cap);
 }
@@ -223,9 +440,20 @@ StepLimit predicted_step_limit(const LinearStability& s,
     const double m = std::abs(l);
     if (m == 0.0) continue;
     const cd unit = l / m;
-    const AxisLimit lim = first_crossing(
-        [&](double r) { return amplification_on_ray(s, unit, r, mechanical); }, best.h * m);
-    if (!lim.unbounded) best = {lim.limit / m, false};
+    // Exact where the method has a polynomial form: R = P/Q on the ray of λ (a mechanical
+    // pair λ, λ̄ is the oscillator whose roots are hλ, hλ̄: the same ray), the half-trace on an
+    // undamped oscillator; otherwise the sampled search.
+    AxisLimit lim;
+    if (s.rational) {
+      lim = rational_ray_limit(*s.rational, unit, best.h * m);
+    } else if (mechanical && l.real() == 0.0 && !s.oscillator_half_trace.empty()) {
+      lim = half_trace_limit(s.oscillator_half_trace, best.h * m);
+    } else {
+      lim = first_crossing([&](double r) { return amplification_on_ray(s, unit, r, mechanical); },
+                           best.h * m);
+      best.exact = false;
+    }
+    if (!lim.unbounded) best = {lim.limit / m, false, best.exact};
     if (best.h == 0.0) break;
   }
   (void)rel_tol;  // first_crossing bisects to ~1e-12 relative, finer than any rel_tol asked
@@ -357,6 +585,23 @@ std::vector<std::vector<std::complex<double>>> region_boundary(const LinearStabi
     lines.push_back(std::move(line));
   }
   return lines;
+}
+
+std::optional<bool> a_stable_exact(const LinearStability& s) {
+  if (!s.rational) return std::nullopt;
+  if (!rational_ray_limit(*s.rational, cd(0.0, 1.0), kInf).unbounded) return false;
+  const Polynomial& q = s.rational->q;
+  const Index n = static_cast<Index>(q.size()) - 1;
+  if (n < 1) return s.rational->p.size() <= 1;  // R a polynomial: A-stable only if constant
+  Mat comp = Mat::Zero(n, n);
+  for (Index j = 0; j < n; ++j) {
+    comp(0, j) = -q[static_cast<std::size_t>(n - 1 - j)] / q[static_cast<std::size_t>(n)];
+    if (j + 1 < n) comp(j + 1, j) = 1.0;
+  }
+  const Eigen::EigenSolver<Mat> es(comp, false);
+  for (Index j = 0; j < n; ++j)
+    if (!(es.eigenvalues()(j).real() > 0.0)) return false;
+  return true;
 }
 
 bool a_stable_on_samples(const LinearStability& s, double r, int n) {

@@ -11,9 +11,25 @@
 //     For an eigenvalue pair λ, λ̄ of a mechanical first-order system the matching oscillator is
 //     a = −|λ|², b = 2 Re λ (exact for undamped and for proportionally damped systems).
 //
-// A step is stable on a mode when its amplification is <= 1 (+ stability_tolerance, so that
-// |R| = 1 exactly on the imaginary axis — implicit midpoint, symplectic methods — counts as
-// stable).
+// A step is stable on a mode when its amplification is <= 1.
+//
+// Exact limits. A one-step method's R is rational, R = P/Q (explicit Runge–Kutta: Q = 1,
+// P_k = bᵀA^{k−1}1; implicit: P(z) = det(I − zA + z1bᵀ), Q(z) = det(I − zA), Hairer–Wanner II,
+// Prop. IV.3.2). Along a ray z = r·u (|u| = 1) the step is stable while
+// F(r) = |P(ru)|² − |Q(ru)|² <= 0, a real polynomial in r (in w = r² on the imaginary axis, u = i,
+// degree <= s; on the real axis F = (P − Q)(P + Q), whose roots are those of R = ±1). The limit is
+// the first r > 0 at which F changes sign to positive: its coefficients are formed in long
+// double, the lowest-order non-zero one decides the behaviour next to 0 (positive: unstable
+// arbitrarily close to 0, limit 0; every coefficient zero: |R| = 1 on the whole ray), the
+// positive real roots come from the companion matrix and the crossing is then bisected on F in
+// long double to the double's precision (better than 1e-12 relative). Kick/drift splittings on
+// the undamped oscillator x'' = −ω²x have a step map of determinant 1 whose half-trace T is a
+// polynomial in x = −(hω)²: stable while T² − 1 <= 0, the same computation.
+// Methods without such a form (linear multistep: the largest root modulus of the characteristic
+// polynomial; splittings on a damped oscillator) keep a sampled search (scan outward, then
+// bisection) that accepts an amplification up to 1 + stability_tolerance, so that |R| = 1 on
+// the imaginary axis from round-off does not count as growth; such limits are marked
+// AxisLimit::exact = false.
 #pragma once
 
 #include <complex>
@@ -29,6 +45,13 @@ namespace stiffbench {
 
 inline constexpr double stability_tolerance = 1e-9;
 
+// A real polynomial by its coefficients in ascending powers.
+using Polynomial = std::vector<double>;
+// R(z) = P(z)/Q(z), P(0) = Q(0) = 1.
+struct RationalForm {
+  Polynomial p, q;
+};
+
 struct LinearStability {
   std::string kind;  // "Runge-Kutta", "Rosenbrock", "linear multistep", "splitting", ...
   // Spectral radius of the step map on y' = λy at z = hλ. Empty for methods defined only for
@@ -41,7 +64,15 @@ struct LinearStability {
   // For multistep methods: the boundary locus z(θ) = ρ(e^{iθ})/σ(e^{iθ}), θ ∈ [0, 2π). Empty
   // for one-step methods (their boundary is traced as the contour |R(z)| = 1).
   std::function<std::complex<double>(double theta)> boundary_locus;
+  // One-step methods: R = P/Q (exact limits). Empty for multistep and mechanical-only methods.
+  std::optional<RationalForm> rational;
+  // Kick/drift splittings: half-trace T(x) of the step map on x'' = −ω²x, x = −(hω)² (its
+  // determinant is 1). Empty otherwise.
+  Polynomial oscillator_half_trace;
 };
+
+// R = P/Q of a Runge–Kutta stage matrix and weights (Rosenbrock: A = α + Γ).
+RationalForm runge_kutta_rational_form(const Mat& a, const Vec& b);
 
 // Constructors from coefficients.
 LinearStability tableau_stability(const ButcherTableau& t);
@@ -62,17 +93,28 @@ struct AxisLimit {
   // arbitrarily close to the origin (explicit Euler on the imaginary axis).
   double limit = 0.0;
   bool unbounded = false;  // stable along the whole ray up to the searched cap (A-stable on it)
+  bool exact = false;      // from the polynomial roots (true) or the sampled search (false)
 };
+// |P(iy)|² − |Q(iy)|² as a polynomial in w = y² (coefficients in ascending powers, those at
+// round-off level of their terms set to 0); F(0) = 0. Its lowest-order non-zero coefficient is
+// positive exactly when the method is unstable arbitrarily close to 0 on the imaginary axis.
+Polynomial imaginary_axis_polynomial(const RationalForm& r);
+// The exact limit along the ray z = r·unit (|unit| = 1) from R = P/Q, as described above.
+AxisLimit rational_ray_limit(const RationalForm& r, std::complex<double> unit, double cap = 1e6);
 AxisLimit real_axis_limit(const LinearStability& s, double cap = 1e6);       // z = −r
 AxisLimit imaginary_axis_limit(const LinearStability& s, double cap = 1e6);  // z = i·r
-// Undamped oscillator x'' = −ω²x: limit on hω (via mechanical_amplification(−(hω)², 0)).
+// Undamped oscillator x'' = −ω²x: limit on hω (exact from R = P/Q on the imaginary axis or from
+// the splitting's half-trace; else sampled on mechanical_amplification(−(hω)², 0)).
 AxisLimit oscillator_limit(const LinearStability& s, double cap = 1e6);
 
 // The two functions below ignore eigenvalues of modulus below 1e-6 × the largest (numerical
 // noise of the eigensolver on zero modes, e.g. pinned dofs' Jordan blocks) and eigenvalues with
 // Re λ > kGrowingModeTolerance × the largest modulus: modes the system itself lets grow (a
 // compressed spring's buckling, a negative concentration) are unstable for every method and
-// say nothing about the step limit. Undamped modes (Re λ at round-off level) are kept.
+// say nothing about the step limit. Undamped modes (|Re λ| <= kGrowingModeTolerance × the
+// largest modulus, i.e. the eigensolver's round-off on an undamped spectrum) are kept and put on
+// the imaginary axis (Re λ = 0), so that a method with imaginary-axis limit 0 is predicted
+// unstable for every h on them rather than given a limit set by round-off damping.
 inline constexpr double kGrowingModeTolerance = 1e-6;
 // Largest amplification over a set of eigenvalues of a first-order system at step h.
 // `mechanical`: the system is mechanical and only the mechanical test applies (pairs mapped to
@@ -83,8 +125,9 @@ double max_amplification(const LinearStability& s, double h,
 // The largest step h stable on every eigenvalue, searched outward from h = 0 (first crossing,
 // then bisection to relative tolerance `rel_tol`). unbounded when stable up to h_cap.
 struct StepLimit {
-  double h = 0.0;
+  double h = 0.0;  // 0: unstable for every h > 0 (an undamped mode and imaginary-axis limit 0)
   bool unbounded = false;
+  bool exact = true;  // every eigenvalue's limit came from polynomial roots (see above)
 };
 StepLimit predicted_step_limit(const LinearStability& s,
                                const std::vector<std::complex<double>>& eigenvalues,
@@ -101,5 +144,9 @@ std::vector<std::vector<std::complex<double>>> region_boundary(const LinearStabi
 // True when amplification <= 1 + stability_tolerance on every sample of the left half-plane
 // box [−r, 0] × [−r, r] (n×n grid plus the imaginary axis).
 bool a_stable_on_samples(const LinearStability& s, double r = 1e3, int n = 201);
+// Exact A-stability of R = P/Q (Hairer–Wanner II, IV.3): |R(iy)| <= 1 for every real y
+// (|P(iy)|² − |Q(iy)|² never turns positive) and every pole (root of Q) in Re z > 0, so that by
+// the maximum principle |R| <= 1 on the closed left half-plane. Empty without a rational form.
+std::optional<bool> a_stable_exact(const LinearStability& s);
 
 }  // namespace stiffbench

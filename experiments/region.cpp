@@ -169,7 +169,8 @@ RegionResult run_region(const RegionSpec& spec) {
       m.boundary = region_boundary(s, b.re_min, b.re_max, b.im_min, b.im_max, spec.resolution);
       m.real_axis = real_axis_limit(s);
       m.imaginary_axis = imaginary_axis_limit(s);
-      m.a_stable = a_stable_on_samples(s);
+      const std::optional<bool> exact = a_stable_exact(s);
+      m.a_stable = exact ? *exact : a_stable_on_samples(s);
     }
     m.oscillator = oscillator_limit(s);
   }
@@ -216,8 +217,20 @@ std::string limit_md(const std::optional<AxisLimit>& a, double sign) {
   if (!a) return "-";
   if (a->unbounded) return std::string(sign < 0 ? "-inf" : "inf") + " (unbounded)";
   if (a->limit == 0.0) return "0 (unstable near 0)";
-  return format_fixed(sign * a->limit, 4);
+  return format_fixed(sign * a->limit, 10);
 }
+
+}  // namespace
+
+// "exact" when every limit of the row came from polynomial roots, else "sampled".
+std::string limits_how(const RegionMethod& m) {
+  bool exact = m.oscillator.exact;
+  if (m.real_axis) exact = exact && m.real_axis->exact;
+  if (m.imaginary_axis) exact = exact && m.imaginary_axis->exact;
+  return exact ? "exact" : "sampled";
+}
+
+namespace {
 
 std::string kind_md(const RegionMethod& m) {
   return m.has_region ? m.kind : m.kind + " (mechanical systems only: no region)";
@@ -227,26 +240,26 @@ std::string kind_md(const RegionMethod& m) {
 
 Table region_limits_table(const RegionResult& r) {
   Table t{{"integrator", "family", "kind", "real_axis_limit", "imaginary_axis_limit",
-           "oscillator_limit", "a_stable"},
+           "oscillator_limit", "a_stable", "limits"},
           {}};
   for (const auto& m : r.methods) {
     t.rows.push_back({m.integrator, m.family, m.kind,
                       m.real_axis ? format_full(signed_limit(*m.real_axis, -1.0)) : "",
                       m.imaginary_axis ? format_full(signed_limit(*m.imaginary_axis, 1.0)) : "",
                       format_full(signed_limit(m.oscillator, 1.0)),
-                      m.a_stable ? (*m.a_stable ? "yes" : "no") : ""});
+                      m.a_stable ? (*m.a_stable ? "yes" : "no") : "", limits_how(m)});
   }
   return t;
 }
 
 Table region_limits_markdown_table(const RegionResult& r) {
   Table t{{"integrator", "kind", "real-axis limit", "imaginary-axis limit",
-           "oscillator limit h*omega", "A-stable"},
+           "oscillator limit h*omega", "A-stable", "limits"},
           {}};
   for (const auto& m : r.methods) {
     t.rows.push_back({m.integrator, kind_md(m), limit_md(m.real_axis, -1.0),
                       limit_md(m.imaginary_axis, 1.0), limit_md(m.oscillator, 1.0),
-                      m.a_stable ? (*m.a_stable ? "yes" : "no") : "-"});
+                      m.a_stable ? (*m.a_stable ? "yes" : "no") : "-", limits_how(m)});
   }
   return t;
 }

@@ -12,8 +12,12 @@
 // Limits per integrator: the real-axis limit (the first z = −r where the method becomes
 // unstable, as that negative number; −inf when stable on the whole negative axis), the
 // imaginary-axis limit (the first z = i·r; 0 when unstable arbitrarily close to 0, as explicit
-// Euler; inf when stable on the whole axis), the oscillator limit on hω (inf: unconditionally
-// stable), and A-stability checked on samples of the left half-plane (a_stable_on_samples).
+// Euler, heun, cash_karp and rkf45; inf when stable on the whole axis), the oscillator limit on
+// hω (inf: unconditionally stable), and A-stability (exact for R = P/Q, a_stable_exact; BDF2 on
+// samples of the left half-plane, a_stable_on_samples). The limits are exact for every method with
+// R = P/Q (the roots of |P|² − |Q|² along the axis, core/linear_stability.hpp) and for the
+// splittings' oscillator limit (their half-trace polynomial); BDF2's are from the sampled search.
+// Column `limits` says which (exact | sampled).
 //
 // The default box (no --box) is fitted to the chosen methods: their boundaries are traced on a
 // coarse grid of [−12, 12]², every closed (bounded) boundary and the finite axis limits are
@@ -101,11 +105,14 @@ RegionBox fitted_region_box(const std::vector<LinearStability>& methods);
 // methods have no rows.
 Table region_table(const RegionResult& r);
 // region_limits.csv: integrator, family, kind, real_axis_limit, imaginary_axis_limit,
-// oscillator_limit, a_stable. Limits at full precision; -inf / inf when unbounded; empty where
-// not applicable (mechanical-only methods have only the oscillator limit); a_stable yes/no.
+// oscillator_limit, a_stable, limits. Limits at full precision; -inf / inf when unbounded; empty
+// where not applicable (mechanical-only methods have only the oscillator limit); a_stable yes/no;
+// limits exact (every limit of the row from polynomial roots) or sampled.
 Table region_limits_table(const RegionResult& r);
+// "exact" or "sampled", as in the limits column above.
+std::string limits_how(const RegionMethod& m);
 // The Markdown limits table printed by the command: integrator, kind, real-axis limit,
-// imaginary-axis limit, oscillator limit hω, A-stable.
+// imaginary-axis limit, oscillator limit hω (10 decimals), A-stable, limits.
 Table region_limits_markdown_table(const RegionResult& r);
 
 // Writes DIR/region.csv, DIR/region_limits.csv, DIR/region.md and DIR/region.json.

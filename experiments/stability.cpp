@@ -131,6 +131,7 @@ struct Probe {
   bool stable = false;
   Status status = Status::ok;
   std::string message;
+  SolveStats stats;                         // the run's counters
   std::optional<double> growth_per_period;  // when unstable with enough samples
 };
 
@@ -182,6 +183,7 @@ Probe probe(const OdeSystem& sys, Integrator& integ, double t0, const Vec& y0, d
     p.status = r.stats.status;
     p.message = r.stats.message;
   }
+  p.stats = r.stats;
   p.stable = p.status == Status::ok;
   if (p.status == Status::unstable && period > 0) {
     // Growth rate from a least-squares fit of log deviation against t over the last half of
@@ -219,7 +221,7 @@ void predict(const Integrator& integ, const Spectrum& spec_sys, bool mechanical,
     if (lim.unbounded)
       row.predicted_unbounded = true;
     else
-      row.h_predicted = lim.h;
+      row.h_predicted = lim.h;  // 0: unstable for every h (see predicted_unstable_for_all_h)
   }
 }
 
@@ -259,6 +261,29 @@ StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& sp
                      "at h = " + num(h) + ": " + p.message};
     return p;
   };
+  // A probe that ended in the Newton iteration or the linear solver (newton_failed,
+  // solver_error) is not stable, so the bisection brackets it like an unstable one, but it is
+  // not growth: the upper end of the bracket remembers which it was, and a bracket whose upper
+  // end is a solver failure makes the row solver_limit instead of ok.
+  const auto solver_failure = [](const Probe& p) {
+    return p.status == Status::newton_failed || p.status == Status::solver_error;
+  };
+  bool hi_solver = false;  // the current upper end failed in the solver
+  std::string hi_message;
+  SolveStats lo_stats;  // counters of the run at the current lower end (largest stable step)
+  auto set_hi = [&](const Probe& p, double h) {
+    hi_solver = solver_failure(p);
+    hi_message = hi_solver ? to_string(p.status) + " at h = " + num(h) + ": " + p.message : "";
+  };
+  auto solver_limit = [&](double lo) {
+    row.status = "solver_limit";
+    if (lo > 0) {
+      row.h_measured = lo;
+      row.counters = lo_stats;
+      row.horizon = std::max(horizon, static_cast<double>(spec.min_steps) * lo);
+    }
+    row.message = hi_message;
+  };
   auto all_unstable = [&](const Probe& p, double h) {
     row.status = "unstable_for_all_h";
     row.growth_per_period = p.growth_per_period;
@@ -271,34 +296,46 @@ StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& sp
     Probe first = run(h0, 1);
     if (first.stable) {
       lo = h0;
+      lo_stats = first.stats;
       while (hi == 0 && lo < h_cap) {
         const double h = std::min(2.0 * lo, h_cap);
-        if (run(h, 1).stable)
+        Probe p = run(h, 1);
+        if (p.stable) {
           lo = h;
-        else
+          lo_stats = p.stats;
+        } else {
           hi = h;
+          set_hi(p, h);
+        }
       }
       if (hi == 0) {
         row.status = "stable_up_to";
         row.h_measured = lo;
+        row.counters = lo_stats;
         row.horizon = std::max(horizon, static_cast<double>(spec.min_steps) * lo);
         return row;
       }
     } else {
       hi = h0;
+      set_hi(first, h0);
       Probe last = first;
       double h_last = h0;
       while (lo == 0) {
         const double h = 0.5 * hi;
         if (h < h_floor) {
-          all_unstable(last, h_last);
+          if (hi_solver)
+            solver_limit(0.0);  // the solver fails at every step tried
+          else
+            all_unstable(last, h_last);
           return row;
         }
         Probe p = run(h, 1);
         if (p.stable) {
           lo = h;
+          lo_stats = p.stats;
         } else {
           hi = h;
+          set_hi(p, h);
           last = std::move(p);
           h_last = h;
         }
@@ -306,7 +343,19 @@ StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& sp
     }
     while (hi - lo > spec.rel_tol * lo) {
       const double mid = std::sqrt(lo * hi);
-      (run(mid, 1).stable ? lo : hi) = mid;
+      Probe p = run(mid, 1);
+      if (p.stable) {
+        lo = mid;
+        lo_stats = p.stats;
+      } else {
+        hi = mid;
+        set_hi(p, mid);
+      }
+    }
+    if (hi_solver) {
+      // The largest stable step is bounded by the solver, not by growth: no stability limit.
+      solver_limit(lo);
+      return row;
     }
     // A method with a real stability interval is stable at 0.75 h_max on any horizon (linear
     // theory); one whose limit only reflects the finite horizon is not.
@@ -318,6 +367,7 @@ StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& sp
     }
     row.status = "ok";
     row.h_measured = lo;
+    row.counters = lo_stats;
     row.horizon = std::max(horizon, static_cast<double>(spec.min_steps) * lo);
   } catch (const RowEnded& e) {
     row.status = e.status;
@@ -500,6 +550,7 @@ Table stability_table(const StabilityResult& r) {
   Table t;
   t.columns = {"model",          "integrator",      "param", "value",
                "h_max_measured", "h_max_predicted", "ratio", "status"};
+  for (const std::string& c : SolveStats::counter_names()) t.columns.push_back(c);
   // Grouped by integrator (in the order of the runs), so a plot draws each one as one line.
   std::vector<const StabilityRow*> order;
   for (const auto& row : r.rows) order.push_back(&row);
@@ -516,10 +567,19 @@ Table stability_table(const StabilityResult& r) {
     std::optional<double> ratio;
     if (row.status == "ok" && row.h_measured && row.h_predicted && *row.h_predicted > 0)
       ratio = *row.h_measured / *row.h_predicted;
-    t.rows.push_back({row.model, row.integrator, row.param,
-                      row.param.empty() ? "" : format_full(row.value), cell(row.h_measured),
-                      row.predicted_unbounded ? "inf" : cell(row.h_predicted), cell(ratio),
-                      row.status});
+    std::vector<std::string> cells = {row.model,
+                                      row.integrator,
+                                      row.param,
+                                      row.param.empty() ? "" : format_full(row.value),
+                                      cell(row.h_measured),
+                                      row.predicted_unbounded ? "inf" : cell(row.h_predicted),
+                                      cell(ratio),
+                                      row.status};
+    const std::vector<std::string> counters =
+        row.counters ? row.counters->counter_values()
+                     : std::vector<std::string>(SolveStats::counter_names().size());
+    cells.insert(cells.end(), counters.begin(), counters.end());
+    t.rows.push_back(std::move(cells));
   }
   return t;
 }
@@ -548,7 +608,10 @@ std::string markdown_report(const StabilitySpec& spec, const StabilityResult& r)
      << ", scaled into each method's stability region. A ratio near 1 means linear theory "
         "predicts the limit; `unstable_for_all_h` marks methods whose measured limit shrinks "
         "with the horizon (no stable step), `stable_up_to` methods stable up to the largest step "
-        "tried.\n\n";
+        "tried, `solver_limit` rows whose larger steps failed in the Newton iteration or the "
+        "linear solver (not growth: h_max measured is the largest step that ran, the note says "
+        "why the next one failed). A predicted 0 means unstable for every h (an undamped mode and "
+        "an imaginary-axis limit of 0).\n\n";
   Table t;
   t.columns = {"integrator", "param", "h_max measured", "h_max predicted", "ratio",
                "status",     "note"};
@@ -558,7 +621,7 @@ std::string markdown_report(const StabilitySpec& spec, const StabilityResult& r)
       note = row.growth_per_period ? "growth x" + num(*row.growth_per_period) +
                                          " per period at h = " + num(row.growth_h)
                                    : "unstable at every step down to h = " + num(row.growth_h);
-    } else if (row.status == "failed") {
+    } else if (row.status == "failed" || row.status == "solver_limit") {
       note = row.message;
     } else {
       note = std::to_string(row.probes) + " runs";
@@ -566,11 +629,14 @@ std::string markdown_report(const StabilitySpec& spec, const StabilityResult& r)
     std::string ratio;
     if (row.status == "ok" && row.h_measured && row.h_predicted && *row.h_predicted > 0)
       ratio = format_fixed(*row.h_measured / *row.h_predicted, 4);
-    t.rows.push_back(
-        {row.integrator, row.param.empty() ? "" : row.param + " = " + num(row.value),
-         row.h_measured ? num(*row.h_measured) : "",
-         row.predicted_unbounded ? "unbounded" : (row.h_predicted ? num(*row.h_predicted) : ""),
-         ratio, row.status, note});
+    t.rows.push_back({row.integrator, row.param.empty() ? "" : row.param + " = " + num(row.value),
+                      row.h_measured ? num(*row.h_measured) : "",
+                      row.predicted_unbounded ? "unbounded"
+                      : row.h_predicted
+                          ? (*row.h_predicted == 0 ? std::string("0 (unstable for all h)")
+                                                   : num(*row.h_predicted))
+                          : "",
+                      ratio, row.status, note});
   }
   md << t.to_markdown();
   if (!r.fits.empty()) {
@@ -600,13 +666,18 @@ void write_stability_outputs(const std::filesystem::path& dir, const StabilitySp
       "stable: status ok, finite, max-norm <= norm_growth * max(1, |y0|) and (mechanical "
       "systems with an energy invariant) E <= E0 + (growth - 1) |E0| at every step of the "
       "horizon; "
-      "unstable_for_all_h: unstable at 0.75 h_max over 8x the horizon";
+      "unstable_for_all_h: unstable at 0.75 h_max over 8x the horizon; "
+      "solver_limit: the smallest failing step ended in newton_failed or solver_error";
   for (const auto& row : r.rows) {
     nlohmann::json j;
     j["integrator"] = row.integrator;
     if (!row.param.empty()) j[row.param] = row.value;
     j["status"] = row.status;
     j["probes"] = row.probes;
+    if (row.counters)
+      for (std::size_t c = 0; c < SolveStats::counter_names().size(); ++c)
+        j["counters"][SolveStats::counter_names()[c]] =
+            std::stol(row.counters->counter_values()[c]);
     j["horizon"] = row.horizon;
     if (row.growth_per_period) {
       j["growth_per_period"] = *row.growth_per_period;

@@ -20,9 +20,15 @@
 // mechanical systems are not perturbed (pinned points stay pinned).
 //
 // Statuses (stability.csv):
-//   ok                  h_max measured to rel_tol;
+//   ok                  h_max measured to rel_tol: the bisection's upper end grew (norm or
+//                       energy criterion);
 //   stable_up_to        no instability up to the largest step tried (h_cap; A-stable methods):
 //                       h_max_measured is that step;
+//   solver_limit        the bisection's upper end ended in the Newton iteration or the linear
+//                       solver (newton_failed, solver_error), not in growth: h_max_measured is
+//                       the largest step that ran stably (empty when none did down to h_floor)
+//                       and the message names the failing step and the solver's reason. Not a
+//                       stability limit: A-stable methods report stable_up_to or solver_limit;
 //   unstable_for_all_h  the largest stable step shrinks with the horizon: a run at 0.75·h_max
 //                       over 8× the horizon is unstable (a method with a real stability
 //                       interval is stable there on a linear problem), or no step down to
@@ -40,6 +46,13 @@
 // Jacobian (dimension <= dense_limit) — scaled into the method's region
 // (predicted_step_limit of core/linear_stability.hpp; mechanical systems through the oscillator
 // test, which is what kick/drift methods need). Empty where the method has no stability data.
+// The limits are exact (polynomial roots of |P|² − |Q|² for R = P/Q, the half-trace of a
+// splitting; core/linear_stability.hpp) except for multistep methods and splittings on damped
+// modes (sampled). A prediction of 0 means unstable for every h > 0: an undamped (imaginary)
+// eigenvalue and a method whose imaginary-axis limit is 0 (euler, heun, cash_karp, rkf45).
+//
+// Counters: the solver counters (SolveStats::counter_names()) of the run at h_max_measured are
+// columns of stability.csv after status; empty where no step ran stably.
 //
 // Sweep: `sweep_param` = values repeats everything per value (a fresh model each time) and fits
 // the log–log slope of h_max against |value| per integrator over the rows with status ok
@@ -99,12 +112,14 @@ struct StabilityRow {
   std::optional<double> h_measured;      // empty for unstable_for_all_h / failed
   std::optional<double> h_predicted;     // empty without stability data or spectrum
   bool predicted_unbounded = false;      // linear theory: stable for every h (A-stable)
-  std::string status;  // ok | stable_up_to | unstable_for_all_h | failed | timeout
+  // ok | stable_up_to | solver_limit | unstable_for_all_h | failed | timeout
+  std::string status;
+  std::optional<SolveStats> counters;       // of the run at h_measured
   std::optional<double> growth_per_period;  // unstable_for_all_h: at the last unstable probe
   double growth_h = 0;                      // the step of that probe
   int probes = 0;                           // runs made
   double horizon = 0;                       // time horizon used at h_max
-  std::string message;                      // failed: why
+  std::string message;                      // failed, solver_limit: why
 };
 
 struct StabilityResult {

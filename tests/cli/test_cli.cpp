@@ -452,7 +452,9 @@ TEST(Cli, RegionWritesContractFiles) {
   const auto rows = read_csv(dir / "region.csv");
   ASSERT_GT(rows.size(), 100u);
   EXPECT_EQ(join_cells(rows.front()), "integrator,re,im");
-  EXPECT_NE(o.out.find("| rk4 | explicit Runge-Kutta | -2.7853 | 2.8284 |"), std::string::npos)
+  // rk4: real root of x³ − 4x² + 12x − 24 (R(−x) = 1) and 2√2, to the 10 decimals printed.
+  EXPECT_NE(o.out.find("| rk4 | explicit Runge-Kutta | -2.7852935634 | 2.8284271247 |"),
+            std::string::npos)
       << o.out;
   EXPECT_TRUE(std::filesystem::exists(dir / "region_limits.csv"));
   EXPECT_TRUE(std::filesystem::exists(dir / "region.md"));
@@ -525,7 +527,8 @@ TEST(Cli, StabilityWritesContractFiles) {
   const auto rows = read_csv(dir / "stability.csv");
   ASSERT_EQ(rows.size(), 3u);
   EXPECT_EQ(join_cells(rows[0]),
-            "model,integrator,param,value,h_max_measured,h_max_predicted,ratio,status");
+            "model,integrator,param,value,h_max_measured,h_max_predicted,ratio,status,"
+            "newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_iters");
   EXPECT_EQ(rows[1][1], "symplectic_euler");
   EXPECT_NEAR(std::stod(rows[1][6]), 1.0, 0.02);
   EXPECT_EQ(rows[2][1], "euler");

@@ -211,5 +211,166 @@ TEST(LinearStability, PredictedStepOnTheFixedChainSpectrum) {
               2.0 * std::sqrt(2.0) / wmax, 1e-8);
 }
 
+// Exact limits from R = P/Q (polynomial roots, not sampling). Independent values:
+//   rk4: |R(iy)|² − 1 = −y⁶/72 + y⁸/576 → y = 2√2; R(−x) = 1 ⇔ x³ − 4x² + 12x − 24 = 0, whose
+//     real root 2.785293563405281623... was bisected in exact rational arithmetic (Python
+//     fractions, 120 halvings of [2, 3]);
+//   kutta3: y = √3; heun: |R(iy)|² = 1 + y⁴/4, euler: 1 + y² → 0; euler R(−2) = −1 → 2.
+//   dopri5, cash_karp, rkf45: P from bᵀA^{k−1}1 in exact rationals (Python fractions, the
+//     tableaux as published by Dormand & Prince 1980, Cash & Karp 1990, Fehlberg 1969):
+//     dopri5 P = Σ_{k<=5} z^k/k! + z⁶/600, |P(iy)|² − 1 = −w³/1800 + w⁴/1600 − w⁵/14400 +
+//     w⁶/360000 (w = y²), first positive root bisected in rationals: y = 0.997189008632529915...
+//     (the figure 0.9972 of Hairer, Nørsett & Wanner I, Sect. II.4, rounds it); cash_karp
+//     P = ... + z⁶/800, |P|² − 1 = +w³/3600 + ...; rkf45 (fourth-order solution) P = ... +
+//     z⁵/104, |P|² − 1 = +5w³/936 + ...: a positive lowest-order coefficient, |R(iy)| > 1 for
+//     every small y > 0, limit 0.
+TEST(LinearStability, ExactAxisLimitsFromPolynomialRoots) {
+  const double rk4_real = 2.785293563405281623;
+  const auto rk4 = stability_of("rk4");
+  ASSERT_TRUE(rk4.rational);
+  EXPECT_TRUE(imaginary_axis_limit(rk4).exact);
+  EXPECT_NEAR(imaginary_axis_limit(rk4).limit, 2.0 * std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(real_axis_limit(rk4).limit, rk4_real, 1e-12);
+  EXPECT_NEAR(imaginary_axis_limit(stability_of("kutta3")).limit, std::sqrt(3.0), 1e-12);
+  EXPECT_EQ(imaginary_axis_limit(stability_of("heun")).limit, 0.0);
+  const auto euler = stability_of("euler");
+  EXPECT_EQ(imaginary_axis_limit(euler).limit, 0.0);
+  EXPECT_NEAR(real_axis_limit(euler).limit, 2.0, 1e-13);  // the sampled search gave 2 + 1e-9
+
+  const AxisLimit dopri5 = imaginary_axis_limit(stability_of("dopri5"));
+  EXPECT_TRUE(dopri5.exact);
+  EXPECT_FALSE(dopri5.unbounded);
+  EXPECT_NEAR(dopri5.limit, 0.997189008632529915, 1e-12);
+  for (const char* name : {"cash_karp", "rkf45"}) {
+    SCOPED_TRACE(name);
+    const auto s = stability_of(name);
+    EXPECT_EQ(imaginary_axis_limit(s).limit, 0.0);
+    EXPECT_FALSE(imaginary_axis_limit(s).unbounded);
+    EXPECT_EQ(oscillator_limit(s).limit, 0.0);
+  }
+  // The sign of the lowest-order coefficient of |P(iy)|² − 1 in w = y² decides it.
+  const Polynomial ck = imaginary_axis_polynomial(*stability_of("cash_karp").rational);
+  const Polynomial fehlberg = imaginary_axis_polynomial(*stability_of("rkf45").rational);
+  const Polynomial dp = imaginary_axis_polynomial(*stability_of("dopri5").rational);
+  ASSERT_GE(ck.size(), 4u);
+  ASSERT_GE(fehlberg.size(), 4u);
+  ASSERT_GE(dp.size(), 4u);
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(ck[k], 0.0);
+    EXPECT_EQ(fehlberg[k], 0.0);
+    EXPECT_EQ(dp[k], 0.0);
+  }
+  EXPECT_NEAR(ck[3], 1.0 / 3600.0, 1e-15);
+  EXPECT_NEAR(fehlberg[3], 5.0 / 936.0, 1e-15);
+  EXPECT_NEAR(dp[3], -1.0 / 1800.0, 1e-15);
+}
+
+TEST(LinearStability, ExactLimitsOfRationalImplicitMethods) {
+  // θ-method as a two-stage tableau A = [[0, 0], [1 − θ, θ]], b = (1 − θ, θ):
+  // R = (1 + (1 − θ)z)/(1 − θz). R(−x) = −1 ⇔ x = 2/(1 − 2θ) for θ < 1/2; on the imaginary
+  // axis |P|² − |Q|² = ((1 − θ)² − θ²) y² > 0, so the limit is 0 (Hairer–Wanner II, IV.3).
+  for (const double theta : {0.0, 0.25, 0.4}) {
+    SCOPED_TRACE(theta);
+    ButcherTableau t;
+    t.name = "theta";
+    t.a = Mat{{0.0, 0.0}, {1.0 - theta, theta}};
+    t.b = Vec{{1.0 - theta, theta}};
+    t.c = Vec{{0.0, 1.0}};
+    t.order = 1;
+    const auto s = tableau_stability(t);
+    ASSERT_TRUE(s.rational);
+    EXPECT_NEAR(real_axis_limit(s).limit, 2.0 / (1.0 - 2.0 * theta), 1e-12);
+    EXPECT_EQ(a_stable_exact(s), std::optional<bool>(false));
+    EXPECT_EQ(imaginary_axis_limit(s).limit, 0.0);
+    // R = P/Q itself: P = 1 + (1 − θ)z, Q = 1 − θz.
+    EXPECT_NEAR(s.rational->p.at(1), 1.0 - theta, 1e-15);
+    if (theta > 0) {
+      EXPECT_NEAR(s.rational->q.at(1), -theta, 1e-15);
+    }
+  }
+  // θ >= 1/2: A-stable (pole 1/θ > 0, |R(iy)|² − 1 = (1 − 2θ)y²/|Q|² <= 0).
+  for (const double theta : {0.5, 0.75, 1.0}) {
+    ButcherTableau t;
+    t.a = Mat{{0.0, 0.0}, {1.0 - theta, theta}};
+    t.b = Vec{{1.0 - theta, theta}};
+    t.c = Vec{{0.0, 1.0}};
+    EXPECT_EQ(a_stable_exact(tableau_stability(t)), std::optional<bool>(true)) << theta;
+  }
+  // A-stable methods: no finite limit on either axis (|R(iy)| < 1, or = 1 for the symmetric
+  // Gauss methods and the trapezoidal rule, where every coefficient of |P|² − |Q|² vanishes).
+  for (const char* name : {"backward_euler", "trapezoidal", "implicit_midpoint", "sdirk2", "sdirk3",
+                           "radau5", "gauss4", "gauss6", "esdirk43", "rosenbrock2"}) {
+    SCOPED_TRACE(name);
+    const auto s = stability_of(name);
+    ASSERT_TRUE(s.rational);
+    EXPECT_TRUE(real_axis_limit(s).unbounded);
+    EXPECT_TRUE(imaginary_axis_limit(s).unbounded);
+    EXPECT_TRUE(imaginary_axis_limit(s).exact);
+    EXPECT_EQ(a_stable_exact(s), std::optional<bool>(true));
+  }
+  // The exact test agrees with the sampled one on every registered method with R = P/Q.
+  for (const auto& e : integrator_registry().entries()) {
+    const auto s = make(e.info.name)->linear_stability();
+    if (!s || !s->rational) continue;
+    EXPECT_EQ(a_stable_exact(*s), std::optional<bool>(a_stable_on_samples(*s))) << e.info.name;
+  }
+  // Radau IIA (3 stages): R = P/Q with deg P = 2, deg Q = 3 (L-stable).
+  const auto radau = stability_of("radau5");
+  EXPECT_EQ(radau.rational->p.size(), 3u);
+  EXPECT_EQ(radau.rational->q.size(), 4u);
+  // P/Q agrees with the amplification from (I − zA)⁻¹ anywhere off the poles.
+  for (const std::complex<double> z :
+       {std::complex<double>(-3.0, 2.0), {0.5, -4.0}, {-20.0, 0.1}}) {
+    std::complex<double> p = 0.0, q = 0.0, zk = 1.0;
+    for (std::size_t k = 0; k < std::max(radau.rational->p.size(), radau.rational->q.size());
+         ++k, zk *= z) {
+      if (k < radau.rational->p.size()) p += radau.rational->p[k] * zk;
+      if (k < radau.rational->q.size()) q += radau.rational->q[k] * zk;
+    }
+    EXPECT_NEAR(std::abs(p / q), radau.amplification(z), 1e-12);
+  }
+  // Multistep methods keep the sampled search, marked as such.
+  EXPECT_FALSE(stability_of("bdf2").rational);
+  EXPECT_FALSE(real_axis_limit(stability_of("bdf2")).exact);
+}
+
+TEST(LinearStability, SplittingOscillatorLimitFromHalfTrace) {
+  // Störmer–Verlet: half-trace T = 1 − (hω)²/2, |T| <= 1 ⇔ hω <= 2 (Hairer–Lubich–Wanner I.5).
+  for (const char* name : {"velocity_verlet", "symplectic_euler", "leapfrog"}) {
+    SCOPED_TRACE(name);
+    const AxisLimit lim = oscillator_limit(stability_of(name));
+    EXPECT_TRUE(lim.exact);
+    EXPECT_NEAR(lim.limit, 2.0, 1e-13);
+  }
+}
+
+TEST(LinearStability, UndampedSpectrumWithRoundOffDampingIsOnTheImaginaryAxis) {
+  // An eigensolver returns an undamped spectrum with Re λ ~ 1e-15·|λ|; methods with
+  // imaginary-axis limit 0 are unstable for every h on it (prediction 0), not given a limit set
+  // by the round-off damping; rk4 keeps 2√2/ω.
+  std::vector<std::complex<double>> eig;
+  for (int j = 1; j <= 6; ++j) {
+    const double w = 2.0 * std::sin(j * std::numbers::pi / 14.0);
+    eig.emplace_back(-3e-15 * j, w);
+    eig.emplace_back(-3e-15 * j, -w);
+  }
+  const double wmax = 2.0 * std::sin(6 * std::numbers::pi / 14.0);
+  for (const bool mechanical : {true, false}) {
+    SCOPED_TRACE(mechanical);
+    for (const char* name : {"cash_karp", "rkf45", "euler", "heun"}) {
+      const StepLimit lim = predicted_step_limit(stability_of(name), eig, mechanical, 100.0);
+      EXPECT_EQ(lim.h, 0.0) << name;
+      EXPECT_FALSE(lim.unbounded) << name;
+      EXPECT_TRUE(lim.exact) << name;
+    }
+    EXPECT_NEAR(predicted_step_limit(stability_of("rk4"), eig, mechanical, 100.0).h,
+                2.0 * std::sqrt(2.0) / wmax, 1e-12);
+    EXPECT_NEAR(predicted_step_limit(stability_of("dopri5"), eig, mechanical, 100.0).h,
+                0.997189008632529915 / wmax, 1e-12);
+    EXPECT_TRUE(
+        predicted_step_limit(stability_of("trapezoidal"), eig, mechanical, 100.0).unbounded);
+  }
+}
+
 }  // namespace
 }  // namespace stiffbench

@@ -66,14 +66,40 @@ TEST(RegionExperiment, LimitsMatchPublishedValues) {
 
   // The limits table in the contract order, with the signed numbers.
   const Table t = region_limits_table(r);
-  EXPECT_EQ(t.columns,
-            (std::vector<std::string>{"integrator", "family", "kind", "real_axis_limit",
-                                      "imaginary_axis_limit", "oscillator_limit", "a_stable"}));
+  EXPECT_EQ(t.columns, (std::vector<std::string>{"integrator", "family", "kind", "real_axis_limit",
+                                                 "imaginary_axis_limit", "oscillator_limit",
+                                                 "a_stable", "limits"}));
+  EXPECT_EQ(t.rows[0][7], "exact");
   EXPECT_EQ(t.rows[0][0], "rk4");
   EXPECT_NEAR(std::stod(t.rows[0][3]), -2.7853, 1e-3);
   EXPECT_EQ(t.rows[3][3], "-inf");
   EXPECT_EQ(t.rows[3][4], "inf");
   EXPECT_EQ(t.rows[3][6], "yes");
+}
+
+// Issue 24: the imaginary-axis limits of the embedded pairs from the roots of |P(iy)|² − 1
+// (exact rational arithmetic, Python fractions, on the published tableaux): cash_karp
+// |P(iy)|² − 1 = +y⁶/3600 + ..., rkf45 +5y⁶/936 + ... (both 0: unstable next to 0; the sampled
+// search reported 0.1386 and 0.0849), dopri5 −y⁶/1800 + y⁸/1600 − y¹⁰/14400 + y¹²/360000, whose
+// first positive root is y = 0.997189008632529915... (bisected in rationals). bdf2 (no R = P/Q)
+// is marked sampled.
+TEST(RegionExperiment, EmbeddedPairsImaginaryLimitsAreExact) {
+  RegionSpec spec;
+  spec.integrators = {"cash_karp", "rkf45", "dopri5", "bdf2"};
+  spec.resolution = 40;
+  const RegionResult r = run_region(spec);
+  EXPECT_EQ(method(r, "cash_karp").imaginary_axis->limit, 0.0);
+  EXPECT_EQ(method(r, "rkf45").imaginary_axis->limit, 0.0);
+  EXPECT_EQ(method(r, "cash_karp").oscillator.limit, 0.0);
+  EXPECT_NEAR(method(r, "dopri5").imaginary_axis->limit, 0.997189008632529915, 1e-12);
+  EXPECT_NEAR(method(r, "dopri5").oscillator.limit, 0.997189008632529915, 1e-12);
+  const Table t = region_limits_table(r);
+  ASSERT_EQ(t.rows.size(), 4u);
+  EXPECT_EQ(t.rows[0][4], "0");
+  EXPECT_EQ(t.rows[1][4], "0");
+  EXPECT_NEAR(std::stod(t.rows[2][4]), 0.997189008632529915, 1e-12);
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(t.rows[static_cast<std::size_t>(k)][7], "exact");
+  EXPECT_EQ(t.rows[3][7], "sampled");
 }
 
 std::vector<std::vector<std::string>> read_csv(const std::filesystem::path& file) {

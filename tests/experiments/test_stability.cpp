@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/ode_system.hpp"
 #include "core/types.hpp"
 #include "experiments/stability.hpp"
 
@@ -58,7 +59,85 @@ TEST(Stability, SpringChainLimitsMatchLinearTheory) {
   const Table t = stability_table(r);
   EXPECT_EQ(t.columns,
             (std::vector<std::string>{"model", "integrator", "param", "value", "h_max_measured",
-                                      "h_max_predicted", "ratio", "status"}));
+                                      "h_max_predicted", "ratio", "status", "newton_iters",
+                                      "newton_conv_failures", "error_test_failures",
+                                      "linear_setups", "linear_iters"}));
+  // Counters of the largest stable run: backward Euler on a linear chain takes one Newton
+  // update per step at least (the run has >= min_steps = 200 steps); euler none (no row).
+  ASSERT_TRUE(be.counters);
+  EXPECT_GE(be.counters->newton_iters, 200);
+  EXPECT_FALSE(euler.counters);
+  ASSERT_TRUE(rk4.counters);
+  EXPECT_EQ(rk4.counters->newton_iters, 0);
+}
+
+TEST(Stability, ImaginaryLimitZeroIsPredictedUnstableForAllH) {
+  // cash_karp and rkf45 have |R(iy)|² − 1 = c·y⁶ + ... with c > 0 (1/3600 and 5/936, see
+  // tests/core/test_linear_stability.cpp): on the undamped chain no step is stable, predicted
+  // (h_max_predicted 0) and measured alike; the trapezoidal rule is A-stable.
+  StabilitySpec spec;
+  spec.model = "spring_chain";
+  spec.integrators = {"cash_karp", "rkf45", "trapezoidal"};
+  const StabilityResult r = run_stability(spec, nullptr);
+  for (const char* name : {"cash_karp", "rkf45"}) {
+    SCOPED_TRACE(name);
+    const auto& row = row_of(r, name);
+    EXPECT_EQ(row.status, "unstable_for_all_h");
+    ASSERT_TRUE(row.h_predicted);
+    EXPECT_EQ(*row.h_predicted, 0.0);
+  }
+  EXPECT_EQ(row_of(r, "trapezoidal").status, "stable_up_to");
+  EXPECT_TRUE(row_of(r, "trapezoidal").predicted_unbounded);
+}
+
+// A user's stiff nonlinear scalar problem y' = −k y³ (k = 1000, y0 = 1): its solution decays
+// for every method that is stable on it, but Newton for backward Euler / the trapezoidal rule
+// on z + c·h·k z³ = rhs starting from z = y converges only linearly (factor about 2/3 per update)
+// until z is near the root (y/(chk))^(1/3): with hk in the thousands that takes more than the
+// default 10 iterations, so large steps end in newton_failed, not in growth (measured:
+// backward Euler fails at h ≈ 1.41, hk ≈ 1400; with newton_max_iter = 200 it runs up to the cap).
+class CubicDecay final : public OdeSystem {
+ public:
+  std::string name() const override { return "cubic_decay"; }
+  Index dimension() const override { return 1; }
+  Vec initial_state() const override { return Vec::Ones(1); }
+  void eval_rhs(double, CVecRef y, VecRef f) const override { f[0] = -1000.0 * y[0] * y[0] * y[0]; }
+  bool has_jacobian() const override { return true; }
+  void eval_jacobian(double, CVecRef y, SparseMat& jac) const override {
+    jac.resize(1, 1);
+    jac.coeffRef(0, 0) = -3000.0 * y[0] * y[0];
+  }
+};
+
+TEST(Stability, NewtonFailureIsSolverLimitNotInstability) {
+  StabilitySpec spec;
+  spec.integrators = {"backward_euler", "trapezoidal"};
+  spec.h_cap_factor = 1e5;  // steps up to 1e5 · 2/ω, ω = 3k·y0² = 3000: hk up to ~7e4
+  spec.periods = 50;
+  const StabilityResult r =
+      run_stability(spec, StudyObjects{[] { return std::make_unique<CubicDecay>(); }, {}}, nullptr);
+  for (const char* name : {"backward_euler", "trapezoidal"}) {
+    SCOPED_TRACE(name);
+    const auto& row = row_of(r, name);
+    // A-stable (predicted unbounded): the row is solver_limit, never ok.
+    EXPECT_TRUE(row.predicted_unbounded);
+    EXPECT_EQ(row.status, "solver_limit") << row.message;
+    EXPECT_NE(row.message.find("newton_failed at h = "), std::string::npos) << row.message;
+    ASSERT_TRUE(row.h_measured) << row.message;
+    ASSERT_TRUE(row.counters);
+    EXPECT_GT(row.counters->newton_iters, 0);
+  }
+  // The same method with enough Newton iterations runs at the step where the default failed: it
+  // was the solver, not the method's stability.
+  const double h_fail = *row_of(r, "backward_euler").h_measured * (1.0 + 2.0 * spec.rel_tol);
+  StabilitySpec more = spec;
+  more.integrators = {"backward_euler"};
+  more.params.set("newton_max_iter", "200");
+  const StabilityResult r2 =
+      run_stability(more, StudyObjects{[] { return std::make_unique<CubicDecay>(); }, {}}, nullptr);
+  const auto& row2 = row_of(r2, "backward_euler");
+  ASSERT_TRUE(row2.h_measured);
+  EXPECT_GT(*row2.h_measured, h_fail);
 }
 
 TEST(Stability, SweepOverSpringStiffnessHasSlopeMinusOneHalf) {
