@@ -243,15 +243,10 @@ std::unique_ptr<Integrator> create(const std::string& name) {
   return integrator_registry().create(name, Params{});
 }
 
-// The Butcher tableau of a method: its own butcher_tableau(), else (until the implicit steppers
-// override it) the DIRK, Gauss and Radau IIA tableaux by their classes.
+// The Butcher tableau of a method: its own butcher_tableau() (explicit, embedded and DIRK
+// steppers), else the Gauss and Radau IIA tableaux by their classes.
 const ButcherTableau* tableau_of(const Integrator& integ) {
   if (const ButcherTableau* t = integ.butcher_tableau()) return t;
-  if (dynamic_cast<const DirkIntegrator*>(&integ)) {
-    for (const auto* list : {&implicit_tableaux(), &esdirk_tableaux()})
-      for (const ButcherTableau& t : *list)
-        if (t.name == integ.info().name) return &t;
-  }
   if (dynamic_cast<const GaussCollocation*>(&integ)) return &gauss_tableau(integ.info().stages);
   if (dynamic_cast<const Radau5*>(&integ)) return &radau5_tableau();
   return nullptr;

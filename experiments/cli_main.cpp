@@ -92,7 +92,10 @@ int interrupted_exit(int sig) {
 int cli_main(int argc, char** argv) {
   set_command_line(argc, argv);
   // Failed audit checks of this call only (a program may call cli_main more than once).
+  // The process-wide counters as this command found them: a program (or a test) that calls
+  // cli_main several times judges each call by its own runs only.
   const long audit_failures_before = audit_failed_checks();
+  const long faults_before = fault_count();
   const struct ForgetCommandLine {
     ~ForgetCommandLine() { clear_command_line(); }
   } forget;
@@ -162,7 +165,7 @@ int cli_main(int argc, char** argv) {
   if (const int sig = interrupt_requested()) return interrupted_exit(sig);
   // A run that ended with status error (the model or the integrator threw mid-run) is a failed
   // row: its table was written, and the exit code says so (README).
-  if (const long faults = fault_count(); faults > 0) {
+  if (const long faults = fault_count() - faults_before; faults > 0) {
     std::cerr << "stiffbench: " << faults << " run" << (faults == 1 ? "" : "s")
               << " ended with status error or timeout (see the status and message columns)\n";
     return kExitRowsFailed;

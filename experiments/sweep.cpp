@@ -488,7 +488,8 @@ void run_units(const SpecFile& spec, const Expansion& ex, const std::vector<long
         const std::string st = static_cast<std::size_t>(status_col) < n_study
                                    ? r[static_cast<std::size_t>(status_col)]
                                    : "ok";
-        if (st != "ok" && st != "floor" && st != "stable_up_to" && st != "unstable_for_all_h") {
+        if (st != "ok" && st != "floor" && st != "stable_up_to" && st != "solver_limit" &&
+            st != "unstable_for_all_h") {
           unit_status = "failed";
           message = "a row has status " + st;
         }

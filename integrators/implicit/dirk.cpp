@@ -209,6 +209,16 @@ std::vector<ParamSpec> esdirk_param_specs() {
 
 bool read_error_filter(const Params& p) { return p.text("error_filter") == "on"; }
 
+namespace {
+// The tableau checked against its claims (sizes, c completed from the row sums or checked,
+// diagonally implicit shape, claimed order) before the stepper is built: BadInput naming the
+// defect instead of a crash in the stepper.
+ButcherTableau validated_dirk(ButcherTableau t) {
+  t.validate(ButcherTableau::Shape::diagonally_implicit);
+  return t;
+}
+}  // namespace
+
 DirkIntegrator::DirkIntegrator(ButcherTableau tableau, std::string description, ImplicitOptions opt,
                                ControllerOptions control, bool error_filter)
     : Integrator({tableau.name,
@@ -217,7 +227,7 @@ DirkIntegrator::DirkIntegrator(ButcherTableau tableau, std::string description, 
                   tableau.stages() - (tableau.fsal ? 1 : 0),
                   {},
                   std::move(description)}),
-      stepper_(std::move(tableau)),
+      stepper_(validated_dirk(std::move(tableau))),
       core_(opt),
       filter_(error_filter),
       newton_tol_(opt.newton_tol),

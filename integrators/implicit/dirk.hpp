@@ -113,6 +113,7 @@ class DirkIntegrator final : public Integrator {
   std::optional<LinearStability> linear_stability() const override {
     return tableau_stability(stepper_.tableau());
   }
+  const ButcherTableau* butcher_tableau() const override { return &stepper_.tableau(); }
   const ImplicitCore& core() const { return core_; }
 
  private:

@@ -2,6 +2,7 @@
 // registered with one call and run from the command line and from a spec file, studies on a
 // user's objects without registering them by name.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -205,7 +206,9 @@ int cli(std::vector<std::string> args) {
 }
 
 fs::path fresh(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("stiffbench_study_" + name);
+  // Per process: helpers or parallel test runs on one machine must not share the folder.
+  const fs::path d = fs::temp_directory_path() /
+                     ("stiffbench_study_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   return d;
 }
