@@ -601,6 +601,147 @@ double probe_ladder(const ConvergenceSpec& spec, double t_span, bool local, doub
   return std::clamp(h_fine * span, h0_min, h_top);
 }
 
+// One convergence or local-error study in progress: the system, its initial state, the reference
+// plan and its check, and the reference values once computed. run_study's steps share it.
+struct StudyState {
+  const ConvergenceSpec& spec;
+  const OdeSystem& sys;
+  bool local;
+  std::ostream* progress;
+  double t0 = 0;
+  Vec y0;
+  double y0_norm = 0;
+  ReferencePlan plan, plan2;
+  bool numerical_ref = false;
+  Vec ref_end;                             // global: the reference at t_end
+  double ref_acc_end = 0;                  // global: its accuracy from the check run (0: none)
+  double s_end = 1;                        // the solution's size for the round-off floor
+  std::vector<Vec> ref_local, ref2_local;  // local: references at every t0 + h, and the check's
+
+  StudyState(const ConvergenceSpec& s, const OdeSystem& system, bool is_local, std::ostream* out)
+      : spec(s), sys(system), local(is_local), progress(out) {}
+
+  RunResult run_at(Integrator& integ, double h) const {
+    FixedStepOptions opt;
+    opt.t_end = local ? t0 + h : spec.t_end;
+    opt.h = h;
+    return run_fixed_step_from(sys, integ, t0, y0, opt);
+  }
+};
+
+// The reference check run (plan2) at `times`; empty when it fails (a tolerance the reference
+// cannot meet), which leaves the study without a reference floor and says so.
+std::optional<ReferenceValues> reference_check(StudyState& st, const std::vector<double>& times,
+                                               ConvergenceResult& result) {
+  try {
+    ReferenceValues ref2 = reference_values(st.spec, st.sys, st.plan2, times, st.progress);
+    result.reference_check_cache = ref2.cache;
+    return ref2;
+  } catch (const std::runtime_error& e) {
+    result.reference_check_description += " (failed: " + std::string(e.what()) + ")";
+    if (st.progress) *st.progress << "reference check: " << e.what() << "\n";
+    return std::nullopt;
+  }
+}
+
+// The global study's reference at t_end and its check (the probes need them first).
+void global_reference(StudyState& st, ConvergenceResult& result) {
+  ReferenceValues ref = reference_values(st.spec, st.sys, st.plan, {st.spec.t_end}, st.progress);
+  result.reference_cache = ref.cache;
+  result.reference_from_cache = ref.from_cache;
+  st.ref_end = ref.values[0];
+  if (!st.numerical_ref) return;
+  if (const auto ref2 = reference_check(st, {st.spec.t_end}, result)) {
+    st.ref_acc_end = max_abs_diff(st.ref_end, ref2->values[0]);
+    result.reference_accuracy = st.ref_acc_end;
+  }
+}
+
+// The local study's reference (and its check) at every t0 + h of every ladder.
+void local_references(StudyState& st, const std::vector<std::vector<double>>& ladders,
+                      ConvergenceResult& result) {
+  std::vector<double> ref_times;
+  for (const auto& ladder : ladders)
+    for (double h : ladder) ref_times.push_back(st.t0 + h);
+  ReferenceValues ref = reference_values(st.spec, st.sys, st.plan, ref_times, st.progress);
+  result.reference_cache = ref.cache;
+  result.reference_from_cache = ref.from_cache;
+  st.ref_local = std::move(ref.values);
+  if (!st.numerical_ref) return;
+  if (auto ref2 = reference_check(st, ref_times, result)) {
+    st.ref2_local = std::move(ref2->values);
+    double worst = 0;
+    for (std::size_t k = 0; k < st.ref_local.size(); ++k)
+      worst = std::max(worst, max_abs_diff(st.ref_local[k], st.ref2_local[k]));
+    result.reference_accuracy = worst;
+  }
+}
+
+// Per-method ladders: each integrator's h0 from a short probe (probe_ladder), recorded in
+// result.ladders.
+std::vector<std::vector<double>> per_method_ladders(const StudyState& st, Setup& setup,
+                                                    ConvergenceResult& result) {
+  const ConvergenceSpec& spec = st.spec;
+  const bool local = st.local;
+  std::vector<std::vector<double>> ladders;
+  for (auto& integ_ptr : setup.integrators) {
+    Integrator& integ = *integ_ptr;
+    ConvergenceResult::Ladder rec;
+    rec.integrator = integ.info().name;
+    const int q = std::max(1, integ.info().order + (local ? 1 : 0));
+    auto error_at = [&](double h) {
+      const RunResult r = st.run_at(integ, h);
+      if (r.stats.status != Status::ok) return std::numeric_limits<double>::quiet_NaN();
+      if (!local) return max_abs_diff(r.y, st.ref_end);
+      // The probe's local reference is computed directly (uncached): one short run.
+      return max_abs_diff(r.y, compute_reference(st.plan, st.sys, {st.t0 + h})[0]);
+    };
+    auto floor_at = [&](double h) {
+      if (local) return kUnitRoundoff * std::max(1.0, st.y0_norm);
+      const double n =
+          static_cast<double>(fixed_step_count(st.t0, spec.t_end, h, FixedStepOptions{}.max_steps));
+      return std::max(n * kUnitRoundoff * st.s_end, st.ref_acc_end);
+    };
+    rec.h0 = probe_ladder(spec, spec.t_end - st.t0, local,
+                          local ? std::max(1.0, st.y0_norm) : st.s_end, q, error_at, floor_at, rec);
+    ladders.push_back(spec.step_ladder(rec.h0));
+    for (double h : ladders.back())
+      fixed_step_count(st.t0, spec.t_end, h, FixedStepOptions{}.max_steps);
+    if (st.progress)
+      *st.progress << "ladder: " << rec.integrator << " h0 = " << format_short(rec.h0) << " after "
+                   << rec.probes.size() << " probe run(s)\n";
+    result.ladders.push_back(std::move(rec));
+  }
+  return ladders;
+}
+
+// One row: the run at h, its error against the reference (index ref_index of the local ones)
+// and its floors.
+ConvergenceRow measure_row(const StudyState& st, Integrator& integ, double h, std::size_t ref_index,
+                           const ConvergenceResult& result) {
+  ConvergenceRow row;
+  row.model = st.spec.model;
+  row.integrator = integ.info().name;
+  row.order = integ.info().order;
+  const RunResult r = st.run_at(integ, h);
+  row.h = r.h;
+  row.steps = r.stats.steps;  // the steps taken: N unless the run ended early
+  row.stats = r.stats;
+  const Vec& yref = st.local ? st.ref_local[ref_index] : st.ref_end;
+  row.error = r.stats.status == Status::ok ? max_abs_diff(r.y, yref)
+                                           : std::numeric_limits<double>::quiet_NaN();
+  const double s = std::max({1.0, st.y0_norm, inf_norm(yref)});
+  row.roundoff_floor =
+      (st.local ? 1.0 : static_cast<double>(std::max(1L, row.steps))) * kUnitRoundoff * s;
+  if (st.numerical_ref && result.reference_accuracy)
+    row.reference_floor =
+        st.local ? max_abs_diff(st.ref_local[ref_index], st.ref2_local[ref_index]) : st.ref_acc_end;
+  row.at_floor = r.stats.status == Status::ok &&
+                 (row.error <= kFloorFactor * row.roundoff_floor ||
+                  (st.numerical_ref && row.error <= kFloorFactor * row.reference_floor));
+  return row;
+}
+
 ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress, bool local) {
   given.validate();
   Setup setup = make_setup(given.model, given.integrators, setup_params(given));
@@ -608,12 +749,12 @@ ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress
   ConvergenceSpec spec = given;
   const Resolved h0 = resolve_step(sys, spec.h, spec.model);
   spec.h = h0.value;
-  const std::string h_source = h0.source;
   if (progress && h0.source != "--h")
     *progress << "no --h given: starting from the model's suggested step h = "
               << format_full(spec.h) << " (" << h0.source.substr(16) << ")\n";
-  const double t0 = sys.initial_time();
-  require_input(spec.t_end > t0, "--t-end must be > the model's initial time");
+  StudyState st(spec, sys, local, progress);
+  st.t0 = sys.initial_time();
+  require_input(spec.t_end > st.t0, "--t-end must be > the model's initial time");
   for (const auto& integ : setup.integrators)
     require_input(
         integ->supports_fixed_step(),
@@ -623,140 +764,36 @@ ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress
   // Actual step sizes are fixed by the driver's N = round(T/h) rule (global study); the local
   // study uses h_k exactly.
   const std::vector<double> hs = spec.step_ladder(spec.h);
-  for (double h : hs) fixed_step_count(t0, spec.t_end, h, FixedStepOptions{}.max_steps);
+  for (double h : hs) fixed_step_count(st.t0, spec.t_end, h, FixedStepOptions{}.max_steps);
 
-  const ReferencePlan plan = plan_reference(spec, sys, hs.back());
-  if (!spec.cache_dir.empty() && plan.kind != RefKind::exact) require_output_dir(spec.cache_dir);
-  const bool numerical_ref = plan.kind != RefKind::exact;
-  const ReferencePlan plan2 = tighter_plan(plan);
+  st.plan = plan_reference(spec, sys, hs.back());
+  if (!spec.cache_dir.empty() && st.plan.kind != RefKind::exact) require_output_dir(spec.cache_dir);
+  st.numerical_ref = st.plan.kind != RefKind::exact;
+  st.plan2 = tighter_plan(st.plan);
   ConvergenceResult result;
-  result.reference_description = plan.description;
+  result.reference_description = st.plan.description;
   result.h = spec.h;
-  result.h_source = h_source;
+  result.h_source = h0.source;
   result.ladder = spec.ladder;
-  if (numerical_ref) result.reference_check_description = plan2.description;
+  if (st.numerical_ref) result.reference_check_description = st.plan2.description;
 
-  const Vec y0 = sys.initial_state();
-  const double y0_norm = inf_norm(y0);
-  const bool per_method = spec.ladder == "per-method";
+  st.y0 = sys.initial_state();
+  st.y0_norm = inf_norm(st.y0);
+  if (!local) global_reference(st, result);
+  st.s_end = std::max({1.0, st.y0_norm, local ? 0.0 : inf_norm(st.ref_end)});
 
-  // The global study's reference at t_end (and its check) come first: the probes need it.
-  Vec ref_end, ref2_end;
-  double ref_acc_end = 0;
-  if (!local) {
-    ReferenceValues ref = reference_values(spec, sys, plan, {spec.t_end}, progress);
-    result.reference_cache = ref.cache;
-    result.reference_from_cache = ref.from_cache;
-    ref_end = ref.values[0];
-    if (numerical_ref) {
-      try {
-        ReferenceValues ref2 = reference_values(spec, sys, plan2, {spec.t_end}, progress);
-        result.reference_check_cache = ref2.cache;
-        ref_acc_end = max_abs_diff(ref_end, ref2.values[0]);
-        result.reference_accuracy = ref_acc_end;
-      } catch (const std::runtime_error& e) {
-        // The check run failed (e.g. a tolerance the reference cannot meet): no reference floor.
-        result.reference_check_description += " (failed: " + std::string(e.what()) + ")";
-        if (progress) *progress << "reference check: " << e.what() << "\n";
-      }
-    }
-  }
-  const double s_end = std::max({1.0, y0_norm, local ? 0.0 : inf_norm(ref_end)});
-
-  auto run_at = [&](Integrator& integ, double h) {
-    FixedStepOptions opt;
-    opt.t_end = local ? t0 + h : spec.t_end;
-    opt.h = h;
-    return run_fixed_step_from(sys, integ, t0, y0, opt);
-  };
-
-  // Each integrator's ladder.
-  std::vector<std::vector<double>> ladders(setup.integrators.size(), hs);
-  if (per_method) {
-    for (std::size_t i = 0; i < setup.integrators.size(); ++i) {
-      auto& integ = *setup.integrators[i];
-      ConvergenceResult::Ladder rec;
-      rec.integrator = integ.info().name;
-      const int q = std::max(1, integ.info().order + (local ? 1 : 0));
-      auto error_at = [&](double h) {
-        const RunResult r = run_at(integ, h);
-        if (r.stats.status != Status::ok) return std::numeric_limits<double>::quiet_NaN();
-        if (!local) return max_abs_diff(r.y, ref_end);
-        // The probe's local reference is computed directly (uncached): one short run.
-        return max_abs_diff(r.y, compute_reference(plan, sys, {t0 + h})[0]);
-      };
-      auto floor_at = [&](double h) {
-        if (local) return kUnitRoundoff * std::max(1.0, y0_norm);
-        const double n =
-            static_cast<double>(fixed_step_count(t0, spec.t_end, h, FixedStepOptions{}.max_steps));
-        return std::max(n * kUnitRoundoff * s_end, ref_acc_end);
-      };
-      rec.h0 = probe_ladder(spec, spec.t_end - t0, local, local ? std::max(1.0, y0_norm) : s_end, q,
-                            error_at, floor_at, rec);
-      ladders[i] = spec.step_ladder(rec.h0);
-      for (double h : ladders[i]) fixed_step_count(t0, spec.t_end, h, FixedStepOptions{}.max_steps);
-      if (progress)
-        *progress << "ladder: " << rec.integrator << " h0 = " << format_short(rec.h0) << " after "
-                  << rec.probes.size() << " probe run(s)\n";
-      result.ladders.push_back(std::move(rec));
-    }
-  }
-
-  // The local study's reference (and its check) at every t0 + h of every ladder.
-  std::vector<Vec> ref_local, ref2_local;
-  if (local) {
-    std::vector<double> ref_times;
-    for (const auto& ladder : ladders)
-      for (double h : ladder) ref_times.push_back(t0 + h);
-    ReferenceValues ref = reference_values(spec, sys, plan, ref_times, progress);
-    result.reference_cache = ref.cache;
-    result.reference_from_cache = ref.from_cache;
-    ref_local = std::move(ref.values);
-    if (numerical_ref) {
-      try {
-        ReferenceValues ref2 = reference_values(spec, sys, plan2, ref_times, progress);
-        result.reference_check_cache = ref2.cache;
-        ref2_local = std::move(ref2.values);
-        double worst = 0;
-        for (std::size_t k = 0; k < ref_local.size(); ++k)
-          worst = std::max(worst, max_abs_diff(ref_local[k], ref2_local[k]));
-        result.reference_accuracy = worst;
-      } catch (const std::runtime_error& e) {
-        result.reference_check_description += " (failed: " + std::string(e.what()) + ")";
-        if (progress) *progress << "reference check: " << e.what() << "\n";
-      }
-    }
-  }
+  const std::vector<std::vector<double>> ladders =
+      spec.ladder == "per-method" ? per_method_ladders(st, setup, result)
+                                  : std::vector<std::vector<double>>(setup.integrators.size(), hs);
+  if (local) local_references(st, ladders, result);
 
   std::size_t total = 0;
   for (const auto& ladder : ladders) total += ladder.size();
   std::size_t done = 0, ref_index = 0;
   for (std::size_t i = 0; i < setup.integrators.size(); ++i) {
-    auto& integ = setup.integrators[i];
     for (double h : ladders[i]) {
-      ConvergenceRow row;
-      row.model = spec.model;
-      row.integrator = integ->info().name;
-      row.order = integ->info().order;
-      const RunResult r = run_at(*integ, h);
-      row.h = r.h;
-      row.steps = r.stats.steps;  // the steps taken: N unless the run ended early
-      row.stats = r.stats;
-      const Vec& yref = local ? ref_local[ref_index] : ref_end;
-      row.error = r.stats.status == Status::ok ? max_abs_diff(r.y, yref)
-                                               : std::numeric_limits<double>::quiet_NaN();
-      const double s = std::max({1.0, y0_norm, inf_norm(yref)});
-      row.roundoff_floor =
-          (local ? 1.0 : static_cast<double>(std::max(1L, row.steps))) * kUnitRoundoff * s;
-      if (numerical_ref && result.reference_accuracy)
-        row.reference_floor =
-            local ? max_abs_diff(ref_local[ref_index], ref2_local[ref_index]) : ref_acc_end;
-      row.at_floor = r.stats.status == Status::ok &&
-                     (row.error <= kFloorFactor * row.roundoff_floor ||
-                      (numerical_ref && row.error <= kFloorFactor * row.reference_floor));
-      ++ref_index;
-      result.rows.push_back(row);
-      if (progress) *progress << progress_line(++done, total, row) << std::flush;
+      result.rows.push_back(measure_row(st, *setup.integrators[i], h, ref_index++, result));
+      if (progress) *progress << progress_line(++done, total, result.rows.back()) << std::flush;
     }
   }
   add_observed_orders(result.rows);
@@ -802,47 +839,36 @@ std::string ConvergenceRow::status_text() const {
   return at_floor ? "floor" : to_string(stats.status);
 }
 
-OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& integrator,
-                   bool local) {
-  OrderFit fit;
-  fit.integrator = integrator;
+namespace {
+
+// One integrator's rows in ladder order, which of them can enter a fit (ran ok, above the
+// floors, positive error) and the pairwise observed order between level b-1 and b.
+struct FitLevels {
   std::vector<const ConvergenceRow*> rs;
-  for (const auto& r : rows)
-    if (r.integrator == integrator) rs.push_back(&r);
-  if (rs.empty()) {
-    fit.reason = "no rows";
-    return fit;
-  }
-  fit.order = rs.front()->order;
-  fit.expected_slope = fit.order + (local ? 1 : 0);
-  const std::size_t n = rs.size();
-  std::vector<bool> usable(n);
-  int n_usable = 0, n_roundoff = 0, n_reference = 0, n_failed = 0;
-  std::string failed_status;
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto& r = *rs[i];
-    usable[i] = r.stats.status == Status::ok && !r.at_floor && std::isfinite(r.error) &&
-                r.error > 0 && r.h > 0;
-    n_usable += usable[i] ? 1 : 0;
-    if (r.stats.status != Status::ok) {
-      ++n_failed;
-      failed_status = to_string(r.stats.status);
-    } else if (r.at_floor) {
-      ++(r.error <= kFloorFactor * r.roundoff_floor ? n_roundoff : n_reference);
-    }
-  }
-  auto pair_order = [&](std::size_t b) {
+  std::vector<bool> usable;
+  double pair_order(std::size_t b) const {
     return std::log(rs[b - 1]->error / rs[b]->error) / std::log(rs[b - 1]->h / rs[b]->h);
-  };
-  // The longest run of consecutive usable levels whose pairwise orders agree; the finest of
-  // equally long runs.
+  }
+  // The pairwise orders of consecutive usable levels b in [from, to), as "q q q".
+  std::string pair_orders(std::size_t from, std::size_t to) const {
+    std::string s;
+    for (std::size_t b = std::max<std::size_t>(from, 1); b < to; ++b)
+      if (usable[b] && usable[b - 1]) s += (s.empty() ? "" : " ") + format_fixed(pair_order(b), 2);
+    return s;
+  }
+};
+
+// The longest run of consecutive usable levels whose pairwise orders agree within
+// kOrderAgreement; the finest of equally long runs. {first level, length}.
+std::pair<std::size_t, std::size_t> asymptotic_window(const FitLevels& lv) {
+  const std::size_t n = lv.rs.size();
   std::size_t best_a = 0, best_len = 0;
   for (std::size_t a = 0; a < n; ++a) {
-    if (!usable[a]) continue;
+    if (!lv.usable[a]) continue;
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
     std::size_t len = 1;
-    for (std::size_t b = a + 1; b < n && usable[b]; ++b) {
-      const double q = pair_order(b);
+    for (std::size_t b = a + 1; b < n && lv.usable[b]; ++b) {
+      const double q = lv.pair_order(b);
       lo = std::min(lo, q);
       hi = std::max(hi, q);
       if (!(hi - lo <= kOrderAgreement)) break;
@@ -853,98 +879,138 @@ OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& i
       best_a = a;
     }
   }
+  return {best_a, best_len};
+}
+
+// Least-squares slope of log error against log h over levels [a, a + len) (len >= 3) and its
+// standard error sqrt(SSR / (m - 2) / Sxx).
+std::pair<double, double> slope_and_se(const FitLevels& lv, std::size_t a, std::size_t len) {
+  std::vector<double> x, y;
+  for (std::size_t i = a; i < a + len; ++i) {
+    x.push_back(std::log(lv.rs[i]->h));
+    y.push_back(std::log(lv.rs[i]->error));
+  }
+  const double m = static_cast<double>(x.size());
+  double mx = 0, my = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    mx += x[i] / m;
+    my += y[i] / m;
+  }
+  double sxx = 0, sxy = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    sxx += (x[i] - mx) * (x[i] - mx);
+    sxy += (x[i] - mx) * (y[i] - my);
+  }
+  const double slope = sxy / sxx;
+  double ssr = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const double res = y[i] - (my + slope * (x[i] - mx));
+    ssr += res * res;
+  }
+  return {slope, std::sqrt(ssr / (m - 2) / sxx)};
+}
+
+// Why a fit over the window [a, a + len) is more than kOrderTolerance from the expected slope,
+// read from the pairwise orders.
+std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, double slope,
+                           int expected_slope) {
+  const std::size_t n = lv.rs.size();
+  const double expected = expected_slope;
+  const double q_first = lv.pair_order(a + 1), q_last = lv.pair_order(a + len - 1);
+  const std::string all = lv.pair_orders(1, n);
+  // A coarser pair near the expected slope (within 0.3): the method showed its order there
+  // and something else sets the error in the window. A steady window (orders within 0.1):
+  // the method's order on this problem. The window's orders moving towards the expected
+  // slope: pre-asymptotic.
+  bool coarser_near = false;
+  double w_lo = q_first, w_hi = q_first;
+  for (std::size_t b = 1; b <= a; ++b)
+    if (lv.usable[b] && lv.usable[b - 1] && std::abs(lv.pair_order(b) - expected) <= 0.3)
+      coarser_near = true;
+  for (std::size_t b = a + 1; b < a + len; ++b) {
+    w_lo = std::min(w_lo, lv.pair_order(b));
+    w_hi = std::max(w_hi, lv.pair_order(b));
+  }
+  std::string reason;
+  if (coarser_near)
+    reason = "the error stops following h^" + std::to_string(expected_slope) +
+             " below h = " + format_short(lv.rs[a]->h) +
+             ": something other than the truncation error sets it there (a solver "
+             "tolerance, order reduction or the reference); pairwise orders " +
+             all;
+  else if (w_hi - w_lo <= kOrderTolerance)
+    reason = "a steady order of " + format_fixed(slope, 2) + ", not " +
+             std::to_string(expected_slope) +
+             ", on this problem (e.g. order reduction to the stage order on a stiff "
+             "problem, or structure that changes the order); pairwise orders " +
+             all;
+  else if (std::abs(q_last - expected) < std::abs(q_first - expected))
+    reason = "pre-asymptotic: the pairwise orders approach " + std::to_string(expected_slope) +
+             " only slowly (" + all + ") down to the finest level above the floors";
+  else
+    reason = "fitted order differs from the classical one by " + format_fixed(slope - expected, 2) +
+             "; pairwise orders " + all;
+  // The finest usable level of the integrator (not only of the window) near the floors.
+  std::size_t last_usable = a + len - 1;
+  for (std::size_t b = last_usable; b < n; ++b)
+    if (lv.usable[b]) last_usable = b;
+  const auto& finest = *lv.rs[last_usable];
+  if (finest.error <= kLadderFloorMargin * std::max(finest.roundoff_floor, finest.reference_floor))
+    reason += "; the floors (within " + g_short(kLadderFloorMargin) +
+              "x of the finest level above them) stop the ladder before the orders settle";
+  return reason;
+}
+
+}  // namespace
+
+OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& integrator,
+                   bool local) {
+  OrderFit fit;
+  fit.integrator = integrator;
+  FitLevels lv;
+  for (const auto& r : rows)
+    if (r.integrator == integrator) lv.rs.push_back(&r);
+  if (lv.rs.empty()) {
+    fit.reason = "no rows";
+    return fit;
+  }
+  fit.order = lv.rs.front()->order;
+  fit.expected_slope = fit.order + (local ? 1 : 0);
+  const std::size_t n = lv.rs.size();
+  lv.usable.assign(n, false);
+  int n_usable = 0, n_roundoff = 0, n_reference = 0, n_failed = 0;
+  std::string failed_status;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& r = *lv.rs[i];
+    lv.usable[i] = r.stats.status == Status::ok && !r.at_floor && std::isfinite(r.error) &&
+                   r.error > 0 && r.h > 0;
+    n_usable += lv.usable[i] ? 1 : 0;
+    if (r.stats.status != Status::ok) {
+      ++n_failed;
+      failed_status = to_string(r.stats.status);
+    } else if (r.at_floor) {
+      ++(r.error <= kFloorFactor * r.roundoff_floor ? n_roundoff : n_reference);
+    }
+  }
+  const auto [best_a, best_len] = asymptotic_window(lv);
   if (best_len >= 3) {
-    std::vector<double> x, y;
-    for (std::size_t i = best_a; i < best_a + best_len; ++i) {
-      x.push_back(std::log(rs[i]->h));
-      y.push_back(std::log(rs[i]->error));
-    }
-    const double m = static_cast<double>(x.size());
-    double mx = 0, my = 0;
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      mx += x[i] / m;
-      my += y[i] / m;
-    }
-    double sxx = 0, sxy = 0;
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      sxx += (x[i] - mx) * (x[i] - mx);
-      sxy += (x[i] - mx) * (y[i] - my);
-    }
-    const double slope = sxy / sxx;
-    double ssr = 0;
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      const double res = y[i] - (my + slope * (x[i] - mx));
-      ssr += res * res;
-    }
+    const auto [slope, se] = slope_and_se(lv, best_a, best_len);
     fit.fitted = slope;
-    fit.fitted_se = std::sqrt(ssr / (m - 2) / sxx);
-    fit.h_max = rs[best_a]->h;
-    fit.h_min = rs[best_a + best_len - 1]->h;
+    fit.fitted_se = se;
+    fit.h_max = lv.rs[best_a]->h;
+    fit.h_min = lv.rs[best_a + best_len - 1]->h;
     fit.levels_used = static_cast<int>(best_len);
-    // A fit away from the expected slope says what the pairwise orders show.
-    const double expected = fit.expected_slope;
     // Levels finer than the window, above the floors, that do not agree with it: named even when
     // the fit is close to the expected slope (e.g. a solver tolerance that sets the error at fine
     // h must not disappear behind a clean fit over the coarse levels).
-    {
-      std::string finer;
-      for (std::size_t b = best_a + best_len; b < n; ++b)
-        if (usable[b] && usable[b - 1])
-          finer += (finer.empty() ? "" : " ") + format_fixed(pair_order(b), 2);
-      if (!finer.empty())
-        fit.reason = "levels finer than the window (h < " + format_short(fit.h_min) +
-                     ") are above the floors but do not follow it (pairwise orders " + finer +
-                     "): a solver tolerance, order reduction or the reference sets their error, "
-                     "or they are still pre-asymptotic";
-    }
-    if (std::abs(slope - expected) > kOrderTolerance) {
-      const double q_first = pair_order(best_a + 1), q_last = pair_order(best_a + best_len - 1);
-      std::string all;
-      for (std::size_t b = 1; b < n; ++b)
-        if (usable[b] && usable[b - 1])
-          all += (all.empty() ? "" : " ") + format_fixed(pair_order(b), 2);
-      // A coarser pair near the expected slope (within 0.3): the method showed its order there
-      // and something else sets the error in the window. A steady window (orders within 0.1):
-      // the method's order on this problem. The window's orders moving towards the expected
-      // slope: pre-asymptotic.
-      bool coarser_near = false;
-      double w_lo = q_first, w_hi = q_first;
-      for (std::size_t b = 1; b <= best_a; ++b)
-        if (usable[b] && usable[b - 1] && std::abs(pair_order(b) - expected) <= 0.3)
-          coarser_near = true;
-      for (std::size_t b = best_a + 1; b < best_a + best_len; ++b) {
-        w_lo = std::min(w_lo, pair_order(b));
-        w_hi = std::max(w_hi, pair_order(b));
-      }
-      if (coarser_near)
-        fit.reason = "the error stops following h^" + std::to_string(fit.expected_slope) +
-                     " below h = " + format_short(rs[best_a]->h) +
-                     ": something other than the truncation error sets it there (a solver "
-                     "tolerance, order reduction or the reference); pairwise orders " +
-                     all;
-      else if (w_hi - w_lo <= kOrderTolerance)
-        fit.reason = "a steady order of " + format_fixed(slope, 2) + ", not " +
-                     std::to_string(fit.expected_slope) +
-                     ", on this problem (e.g. order reduction to the stage order on a stiff "
-                     "problem, or structure that changes the order); pairwise orders " +
-                     all;
-      else if (std::abs(q_last - expected) < std::abs(q_first - expected))
-        fit.reason = "pre-asymptotic: the pairwise orders approach " +
-                     std::to_string(fit.expected_slope) + " only slowly (" + all +
-                     ") down to the finest level above the floors";
-      else
-        fit.reason = "fitted order differs from the classical one by " +
-                     format_fixed(slope - expected, 2) + "; pairwise orders " + all;
-      // The finest usable level of the integrator (not only of the window) near the floors.
-      std::size_t last_usable = best_a + best_len - 1;
-      for (std::size_t b = last_usable; b < n; ++b)
-        if (usable[b]) last_usable = b;
-      const auto& finest = *rs[last_usable];
-      if (finest.error <=
-          kLadderFloorMargin * std::max(finest.roundoff_floor, finest.reference_floor))
-        fit.reason += "; the floors (within " + g_short(kLadderFloorMargin) +
-                      "x of the finest level above them) stop the ladder before the orders settle";
-    }
+    const std::string finer = lv.pair_orders(best_a + best_len, n);
+    if (!finer.empty())
+      fit.reason = "levels finer than the window (h < " + format_short(fit.h_min) +
+                   ") are above the floors but do not follow it (pairwise orders " + finer +
+                   "): a solver tolerance, order reduction or the reference sets their error, "
+                   "or they are still pre-asymptotic";
+    if (std::abs(slope - fit.expected_slope) > kOrderTolerance)
+      fit.reason = off_fit_reason(lv, best_a, best_len, slope, fit.expected_slope);
     return fit;
   }
   const std::string k = std::to_string(n_usable);

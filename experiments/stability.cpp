@@ -225,150 +225,223 @@ void predict(const Integrator& integ, const Spectrum& spec_sys, bool mechanical,
   }
 }
 
-StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& spec_sys,
-                     const Vec& y0, const StabilitySpec& spec) {
-  StabilityRow row;
-  row.model = spec.model;
-  row.integrator = integ.info().name;
-  const double t0 = sys.initial_time();
-  const bool mechanical = sys.as_mechanical() != nullptr;
+// The time scales of one row: period of the fastest mode, horizon of a run, reference step 2/ω
+// and largest step tried.
+struct StepScales {
+  double period = 0, horizon = 0, h_ref = 0, h_cap = 0;
+};
+
+// The time scales from the spectrum's largest modulus ω (or --horizon when ω is unknown).
+StepScales step_scales(const Spectrum& spec_sys, const StabilitySpec& spec) {
+  StepScales s;
   const double omega = spec_sys.omega;
-  const double period = omega > 0 ? 2.0 * std::numbers::pi / omega : 0.0;
-  const double horizon = spec.horizon ? *spec.horizon : spec.periods * period;
-  const double h_ref =
-      omega > 0 ? 2.0 / omega : (spec.horizon ? *spec.horizon / spec.min_steps : 0.0);
-  const double h_cap = spec.h_cap_factor * h_ref;
+  s.period = omega > 0 ? 2.0 * std::numbers::pi / omega : 0.0;
+  s.horizon = spec.horizon ? *spec.horizon : spec.periods * s.period;
+  s.h_ref = omega > 0 ? 2.0 / omega : (spec.horizon ? *spec.horizon / spec.min_steps : 0.0);
+  s.h_cap = spec.h_cap_factor * s.h_ref;
+  return s;
+}
 
-  predict(integ, spec_sys, mechanical, h_cap, row);
-
-  // First guess: 0.8 × the prediction (not the prediction itself, so the bracket never starts
-  // on the predicted value), else the model's suggested step, else 2/ω.
+// First guess: 0.8 × the prediction (not the prediction itself, so the bracket never starts
+// on the predicted value), else the model's suggested step, else 2/ω.
+double first_step(const OdeSystem& sys, const StabilityRow& row, double h_ref) {
   double h0 = h_ref;
   if (row.h_predicted && *row.h_predicted > 0)
     h0 = 0.8 * *row.h_predicted;
   else if (auto sug = sys.suggested_step(); sug && !row.predicted_unbounded)
     h0 = sug->h;
-  const double h_floor = 1e-3 * std::min(h0, h_ref);
+  return h0;
+}
 
-  const std::function<double(double, CVecRef)> energy = energy_criterion(sys, spec);
+// The search for h_max of one row (doubling or halving to a bracket, then bisection); fills in
+// the row's status, measured step and counters.
+class LimitSearch {
+ public:
+  LimitSearch(const OdeSystem& sys, Integrator& integ, const Vec& y0, const StabilitySpec& spec,
+              const StepScales& sc, const std::function<double(double, CVecRef)>& energy,
+              StabilityRow& row)
+      : sys_(sys),
+        integ_(integ),
+        t0_(sys.initial_time()),
+        y0_(y0),
+        spec_(spec),
+        sc_(sc),
+        energy_(energy),
+        row_(row) {}
+
+  // Runs the whole search from h0 (throws RowEnded when a probe times out or fails).
+  void search(double h0, double h_floor) {
+    Probe first = run(h0, 1);
+    if (first.stable ? grow(first, h0) : shrink(std::move(first), h0, h_floor)) return;
+    bisect();
+    finish();
+  }
+
+ private:
   // A probe that timed out or threw says nothing about stability: the row ends there with
   // status timeout or failed (treating it as unstable would bias h_max low silently).
-  auto run = [&](double h, int mult) {
-    ++row.probes;
-    Probe p = probe(sys, integ, t0, y0, h, horizon, period, mult, spec, energy);
+  Probe run(double h, int mult) {
+    ++row_.probes;
+    Probe p = probe(sys_, integ_, t0_, y0_, h, sc_.horizon, sc_.period, mult, spec_, energy_);
     if (p.status == Status::timeout || p.status == Status::error)
       throw RowEnded{p.status == Status::timeout ? "timeout" : "failed",
                      "at h = " + num(h) + ": " + p.message};
     return p;
-  };
+  }
+
   // A probe that ended in the Newton iteration or the linear solver (newton_failed,
   // solver_error) is not stable, so the bisection brackets it like an unstable one, but it is
   // not growth: the upper end of the bracket remembers which it was, and a bracket whose upper
   // end is a solver failure makes the row solver_limit instead of ok.
-  const auto solver_failure = [](const Probe& p) {
+  static bool solver_failure(const Probe& p) {
     return p.status == Status::newton_failed || p.status == Status::solver_error;
-  };
-  bool hi_solver = false;  // the current upper end failed in the solver
-  std::string hi_message;
-  SolveStats lo_stats;  // counters of the run at the current lower end (largest stable step)
-  auto set_hi = [&](const Probe& p, double h) {
-    hi_solver = solver_failure(p);
-    hi_message = hi_solver ? to_string(p.status) + " at h = " + num(h) + ": " + p.message : "";
-  };
-  auto solver_limit = [&](double lo) {
-    row.status = "solver_limit";
-    if (lo > 0) {
-      row.h_measured = lo;
-      row.counters = lo_stats;
-      row.horizon = std::max(horizon, static_cast<double>(spec.min_steps) * lo);
-    }
-    row.message = hi_message;
-  };
-  auto all_unstable = [&](const Probe& p, double h) {
-    row.status = "unstable_for_all_h";
-    row.growth_per_period = p.growth_per_period;
-    row.growth_h = h;
-    row.message = p.message;
-  };
+  }
 
-  try {
-    double lo = 0, hi = 0;
-    Probe first = run(h0, 1);
-    if (first.stable) {
-      lo = h0;
-      lo_stats = first.stats;
-      while (hi == 0 && lo < h_cap) {
-        const double h = std::min(2.0 * lo, h_cap);
-        Probe p = run(h, 1);
-        if (p.stable) {
-          lo = h;
-          lo_stats = p.stats;
-        } else {
-          hi = h;
-          set_hi(p, h);
-        }
-      }
-      if (hi == 0) {
-        row.status = "stable_up_to";
-        row.h_measured = lo;
-        row.counters = lo_stats;
-        row.horizon = std::max(horizon, static_cast<double>(spec.min_steps) * lo);
-        return row;
-      }
-    } else {
-      hi = h0;
-      set_hi(first, h0);
-      Probe last = first;
-      double h_last = h0;
-      while (lo == 0) {
-        const double h = 0.5 * hi;
-        if (h < h_floor) {
-          if (hi_solver)
-            solver_limit(0.0);  // the solver fails at every step tried
-          else
-            all_unstable(last, h_last);
-          return row;
-        }
-        Probe p = run(h, 1);
-        if (p.stable) {
-          lo = h;
-          lo_stats = p.stats;
-        } else {
-          hi = h;
-          set_hi(p, h);
-          last = std::move(p);
-          h_last = h;
-        }
-      }
+  // Moves the lower end of the bracket to the stable step h.
+  void set_lo(const Probe& p, double h) {
+    lo_ = h;
+    lo_stats_ = p.stats;
+  }
+
+  // Moves the upper end of the bracket to the step h that was not stable.
+  void set_hi(const Probe& p, double h) {
+    hi_ = h;
+    hi_solver_ = solver_failure(p);
+    hi_message_ = hi_solver_ ? to_string(p.status) + " at h = " + num(h) + ": " + p.message : "";
+  }
+
+  // Fills in the row measured at the lower end of the bracket with the given status.
+  void measured(const std::string& status) {
+    row_.status = status;
+    row_.h_measured = lo_;
+    row_.counters = lo_stats_;
+    row_.horizon = std::max(sc_.horizon, static_cast<double>(spec_.min_steps) * lo_);
+  }
+
+  // Ends the row as solver_limit, measured at lo when a step ran (lo > 0).
+  void solver_limit(double lo) {
+    row_.status = "solver_limit";
+    if (lo > 0) {
+      row_.h_measured = lo;
+      row_.counters = lo_stats_;
+      row_.horizon = std::max(sc_.horizon, static_cast<double>(spec_.min_steps) * lo);
     }
-    while (hi - lo > spec.rel_tol * lo) {
-      const double mid = std::sqrt(lo * hi);
-      Probe p = run(mid, 1);
+    row_.message = hi_message_;
+  }
+
+  // Ends the row as unstable_for_all_h with the growth of the probe p at step h.
+  void all_unstable(const Probe& p, double h) {
+    row_.status = "unstable_for_all_h";
+    row_.growth_per_period = p.growth_per_period;
+    row_.growth_h = h;
+    row_.message = p.message;
+  }
+
+  // Doubles the stable first step h0 up to the cap; true when the row ended stable_up_to.
+  bool grow(const Probe& first, double h0) {
+    set_lo(first, h0);
+    while (hi_ == 0 && lo_ < sc_.h_cap) {
+      const double h = std::min(2.0 * lo_, sc_.h_cap);
+      Probe p = run(h, 1);
+      if (p.stable)
+        set_lo(p, h);
+      else
+        set_hi(p, h);
+    }
+    if (hi_ == 0) {
+      measured("stable_up_to");
+      return true;
+    }
+    return false;
+  }
+
+  // Halves the unstable first step h0 down to h_floor; true when the row ended there.
+  bool shrink(Probe first, double h0, double h_floor) {
+    set_hi(first, h0);
+    Probe last = std::move(first);
+    double h_last = h0;
+    while (lo_ == 0) {
+      const double h = 0.5 * hi_;
+      if (h < h_floor) {
+        if (hi_solver_)
+          solver_limit(0.0);  // the solver fails at every step tried
+        else
+          all_unstable(last, h_last);
+        return true;
+      }
+      Probe p = run(h, 1);
       if (p.stable) {
-        lo = mid;
-        lo_stats = p.stats;
+        set_lo(p, h);
       } else {
-        hi = mid;
-        set_hi(p, mid);
+        set_hi(p, h);
+        last = std::move(p);
+        h_last = h;
       }
     }
-    if (hi_solver) {
+    return false;
+  }
+
+  // Bisects the bracket [lo, hi] geometrically down to the relative tolerance.
+  void bisect() {
+    while (hi_ - lo_ > spec_.rel_tol * lo_) {
+      const double mid = std::sqrt(lo_ * hi_);
+      Probe p = run(mid, 1);
+      if (p.stable)
+        set_lo(p, mid);
+      else
+        set_hi(p, mid);
+    }
+  }
+
+  // Classifies the bisected limit: solver_limit, unstable_for_all_h or ok.
+  void finish() {
+    if (hi_solver_) {
       // The largest stable step is bounded by the solver, not by growth: no stability limit.
-      solver_limit(lo);
-      return row;
+      solver_limit(lo_);
+      return;
     }
     // A method with a real stability interval is stable at 0.75 h_max on any horizon (linear
     // theory); one whose limit only reflects the finite horizon is not.
-    const double h_check = 0.75 * lo;
+    const double h_check = 0.75 * lo_;
     Probe check = run(h_check, 8);
     if (!check.stable && check.status == Status::unstable) {
       all_unstable(check, h_check);
-      return row;
+      return;
     }
-    row.status = "ok";
-    row.h_measured = lo;
-    row.counters = lo_stats;
-    row.horizon = std::max(horizon, static_cast<double>(spec.min_steps) * lo);
+    measured("ok");
+  }
+
+  const OdeSystem& sys_;
+  Integrator& integ_;
+  const double t0_;
+  const Vec& y0_;
+  const StabilitySpec& spec_;
+  const StepScales sc_;
+  const std::function<double(double, CVecRef)>& energy_;
+  StabilityRow& row_;
+  double lo_ = 0, hi_ = 0;  // the bracket (0: end not found yet)
+  bool hi_solver_ = false;  // the current upper end failed in the solver
+  std::string hi_message_;
+  SolveStats lo_stats_;  // counters of the run at the current lower end (largest stable step)
+};
+
+// The measured and predicted stability limit of one integrator on the system.
+StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& spec_sys,
+                     const Vec& y0, const StabilitySpec& spec) {
+  StabilityRow row;
+  row.model = spec.model;
+  row.integrator = integ.info().name;
+  const bool mechanical = sys.as_mechanical() != nullptr;
+  const StepScales sc = step_scales(spec_sys, spec);
+
+  predict(integ, spec_sys, mechanical, sc.h_cap, row);
+
+  const double h0 = first_step(sys, row, sc.h_ref);
+  const double h_floor = 1e-3 * std::min(h0, sc.h_ref);
+
+  const std::function<double(double, CVecRef)> energy = energy_criterion(sys, spec);
+  try {
+    LimitSearch(sys, integ, y0, spec, sc, energy, row).search(h0, h_floor);
   } catch (const RowEnded& e) {
     row.status = e.status;
     row.message = e.message;

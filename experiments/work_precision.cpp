@@ -137,6 +137,162 @@ double mescd(CVecRef y, CVecRef ref, double ratio) {
 
 }  // namespace
 
+namespace {
+
+// One row's point: its integrator and ladder index, its first run and the wall times so far.
+struct WorkPrecisionPoint {
+  std::size_t integ, k;
+  bool adaptive;
+  RunResult first;
+  std::vector<double> walls;
+  bool stopped = false;
+  std::string mismatch;
+};
+
+// What every point of one run shares: the resolved spec, the model, the ladders, the reference.
+struct WorkPrecisionContext {
+  const WorkPrecisionSpec& spec;
+  const OdeSystem& sys;
+  const Setup& setup;
+  const std::vector<double>& tols;
+  const std::vector<double>& hs;
+  const Vec& ref;
+  std::ostream* progress;
+};
+
+// An adaptive method runs over the tolerance ladder, so it must take rtol and atol (a user's
+// integrator object without them would run at its own tolerance in every row).
+void require_tolerance_params(const Setup& setup) {
+  for (const auto& integ : setup.integrators) {
+    if (!integ->supports_adaptive()) continue;
+    const auto& entry = integrator_registry().at(integ->info().name);
+    bool tolerances = false;
+    for (const auto& p : entry.params) tolerances = tolerances || p.key == "rtol";
+    require_input(tolerances, "integrator '" + integ->info().name +
+                                  "' is adaptive but takes no rtol/atol parameters: "
+                                  "work-precision cannot run it over a tolerance ladder "
+                                  "(register it with rtol and atol, or give it a fixed-step mode)");
+  }
+}
+
+// The points in the rows' order: per integrator, its tolerance ladder or its step ladder.
+std::vector<WorkPrecisionPoint> work_precision_points(const WorkPrecisionContext& c) {
+  std::vector<WorkPrecisionPoint> points;
+  for (std::size_t i = 0; i < c.setup.integrators.size(); ++i) {
+    const bool adaptive = c.setup.integrators[i]->supports_adaptive();
+    for (std::size_t k = 0; k < (adaptive ? c.tols.size() : c.hs.size()); ++k)
+      points.push_back(WorkPrecisionPoint{i, k, adaptive, {}, {}, false, {}});
+  }
+  return points;
+}
+
+// One run of a point: an adaptive method at its tolerance, a fixed-step method at its step.
+RunResult run_point(const WorkPrecisionContext& c, const WorkPrecisionPoint& p) {
+  const std::string& name = c.spec.integrators[p.integ];
+  if (p.adaptive) {
+    Params prm = c.spec.params;
+    prm.set("rtol", format_full(c.tols[p.k]));
+    prm.set("atol", format_full(c.tols[p.k] * c.spec.atol_factor));
+    auto integ = integrator_registry().create(name, prm);
+    return run_adaptive(c.sys, *integ, {c.spec.t_end, 0});
+  }
+  FixedStepOptions opt;
+  opt.t_end = c.spec.t_end;
+  opt.h = c.hs[p.k];
+  return run_fixed_step(c.sys, *c.setup.integrators[p.integ], opt);
+}
+
+// Whether a point runs again in a later round (see kRepeatBudget in the header).
+bool repeats_more(const WorkPrecisionContext& c, const WorkPrecisionPoint& p) {
+  double total = 0;
+  for (double w : p.walls) total += w;
+  return !p.stopped && static_cast<int>(p.walls.size()) < c.spec.repeats &&
+         p.walls.front() < kRepeatLongRun && total < kRepeatBudget;
+}
+
+// Records a point's first run and reports it as run `done` of `total`.
+void record_first_run(const WorkPrecisionContext& c, WorkPrecisionPoint& p, RunResult r,
+                      std::size_t done, std::size_t total) {
+  p.walls.push_back(r.stats.wall_s);
+  p.stopped = r.stats.status != Status::ok;  // a failed run is not repeated
+  p.first = std::move(r);
+  if (c.progress) {
+    const RunResult& f = p.first;
+    const bool ok = f.stats.status == Status::ok;
+    *c.progress << "[" << done << "/" << total << "] " << c.spec.integrators[p.integ] << " "
+                << (p.adaptive ? "rtol=" + format_short(c.tols[p.k], 0) : "h=" + format_full(f.h))
+                << " error="
+                << (ok ? format_short(max_abs_diff(f.y, c.ref)) : to_string(f.stats.status))
+                << " f_evals=" << f.stats.f_evals << " (" << format_short(f.stats.wall_s, 2)
+                << " s)\n"
+                << std::flush;
+  }
+}
+
+// Records a repeat: its wall time, or a stop on a timeout or on a result differing from run 1.
+void record_repeat(WorkPrecisionPoint& p, const RunResult& r) {
+  if (r.stats.status == Status::timeout) {
+    p.stopped = true;  // over --max-wall: the runs so far stand
+    return;
+  }
+  p.mismatch = repeat_mismatch(p.first, r);
+  if (!p.mismatch.empty()) {
+    p.mismatch = "not deterministic: run " + std::to_string(p.walls.size() + 1) +
+                 " differs from run 1 in " + p.mismatch;
+    p.stopped = true;
+  } else {
+    p.walls.push_back(r.stats.wall_s);
+  }
+}
+
+// Runs the points in rounds, each shuffled with the seed, until no point repeats any more.
+void run_rounds(const WorkPrecisionContext& c, std::vector<WorkPrecisionPoint>& points) {
+  std::size_t done = 0;
+  for (int round = 1; round <= c.spec.repeats; ++round) {
+    std::size_t ran = 0;
+    double spent = 0;
+    for (const std::size_t idx : run_order(points.size(), c.spec.seed, round)) {
+      WorkPrecisionPoint& p = points[idx];
+      if (round > 1 && !repeats_more(c, p)) continue;
+      RunResult r = run_point(c, p);
+      ++ran;
+      spent += r.stats.wall_s;
+      if (round == 1)
+        record_first_run(c, p, std::move(r), ++done, points.size());
+      else
+        record_repeat(p, r);
+    }
+    if (c.progress && round > 1 && ran > 0)
+      *c.progress << "repeat round " << round << "/" << c.spec.repeats << ": " << ran << " runs ("
+                  << format_short(spent, 2) << " s)\n"
+                  << std::flush;
+    if (ran == 0) break;
+  }
+}
+
+// The row of point `idx`: its first run's counters, the timing spread, the errors.
+WorkPrecisionRow work_precision_row(const WorkPrecisionContext& c, const WorkPrecisionPoint& p,
+                                    std::size_t idx) {
+  WorkPrecisionRow row;
+  row.model = c.spec.model;
+  row.integrator = c.spec.integrators[p.integ];
+  row.setting = p.adaptive ? "rtol=" + format_short(c.tols[p.k], 0) : "h=" + format_full(p.first.h);
+  row.stats = p.first.stats;
+  row.wall = timing_spread(p.walls, c.spec.seed, idx);
+  row.stats.wall_s = row.wall.median;
+  if (!p.mismatch.empty()) {
+    row.stats.status = Status::error;
+    row.stats.message = p.mismatch;
+  }
+  const bool ok = row.stats.status == Status::ok;
+  row.error = ok ? max_abs_diff(p.first.y, c.ref) : std::numeric_limits<double>::quiet_NaN();
+  row.mescd =
+      ok ? mescd(p.first.y, c.ref, c.spec.atol_factor) : std::numeric_limits<double>::quiet_NaN();
+  return row;
+}
+
+}  // namespace
+
 WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream* progress) {
   WorkPrecisionSpec spec = s;
   spec.validate_step_study();
@@ -162,19 +318,8 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
   const std::vector<double> hs = spec.step_ladder(spec.h);
   for (int k = 0; k < spec.tol_levels; ++k) tols.push_back(spec.rtol_max / std::pow(10.0, k));
   for (double h : hs) fixed_step_count(t0, spec.t_end, h, FixedStepOptions{}.max_steps);
+  require_tolerance_params(setup);
 
-  // An adaptive method runs over the tolerance ladder, so it must take rtol and atol (a user's
-  // integrator object without them would run at its own tolerance in every row).
-  for (const auto& integ : setup.integrators) {
-    if (!integ->supports_adaptive()) continue;
-    const auto& entry = integrator_registry().at(integ->info().name);
-    bool tolerances = false;
-    for (const auto& p : entry.params) tolerances = tolerances || p.key == "rtol";
-    require_input(tolerances, "integrator '" + integ->info().name +
-                                  "' is adaptive but takes no rtol/atol parameters: "
-                                  "work-precision cannot run it over a tolerance ladder "
-                                  "(register it with rtol and atol, or give it a fixed-step mode)");
-  }
   WorkPrecisionResult res;
   res.t_end = spec.t_end;
   res.h = spec.h;
@@ -183,106 +328,11 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
   if (progress) *progress << "reference: " << res.reference_description << "\n";
 
   // The points in the rows' order; run in rounds (see kRepeatBudget in the header).
-  struct Point {
-    std::size_t integ, k;
-    bool adaptive;
-    RunResult first;
-    std::vector<double> walls;
-    bool stopped = false;
-    std::string mismatch;
-  };
-  std::vector<Point> points;
-  for (std::size_t i = 0; i < setup.integrators.size(); ++i) {
-    const bool adaptive = setup.integrators[i]->supports_adaptive();
-    for (std::size_t k = 0; k < (adaptive ? tols.size() : hs.size()); ++k)
-      points.push_back(Point{i, k, adaptive, {}, {}, false, {}});
-  }
-  const auto run_point = [&](const Point& p) {
-    const std::string& name = spec.integrators[p.integ];
-    if (p.adaptive) {
-      Params prm = spec.params;
-      prm.set("rtol", format_full(tols[p.k]));
-      prm.set("atol", format_full(tols[p.k] * spec.atol_factor));
-      auto integ = integrator_registry().create(name, prm);
-      return run_adaptive(sys, *integ, {spec.t_end, 0});
-    }
-    FixedStepOptions opt;
-    opt.t_end = spec.t_end;
-    opt.h = hs[p.k];
-    return run_fixed_step(sys, *setup.integrators[p.integ], opt);
-  };
-  const auto repeats_more = [&](const Point& p) {
-    double total = 0;
-    for (double w : p.walls) total += w;
-    return !p.stopped && static_cast<int>(p.walls.size()) < spec.repeats &&
-           p.walls.front() < kRepeatLongRun && total < kRepeatBudget;
-  };
-
-  std::size_t done = 0;
-  for (int round = 1; round <= spec.repeats; ++round) {
-    std::size_t ran = 0;
-    double spent = 0;
-    for (const std::size_t idx : run_order(points.size(), spec.seed, round)) {
-      Point& p = points[idx];
-      if (round > 1 && !repeats_more(p)) continue;
-      RunResult r = run_point(p);
-      ++ran;
-      spent += r.stats.wall_s;
-      if (round == 1) {
-        p.walls.push_back(r.stats.wall_s);
-        p.stopped = r.stats.status != Status::ok;  // a failed run is not repeated
-        p.first = std::move(r);
-        if (progress) {
-          const RunResult& f = p.first;
-          const bool ok = f.stats.status == Status::ok;
-          *progress << "[" << ++done << "/" << points.size() << "] " << spec.integrators[p.integ]
-                    << " "
-                    << (p.adaptive ? "rtol=" + format_short(tols[p.k], 0) : "h=" + format_full(f.h))
-                    << " error="
-                    << (ok ? format_short(max_abs_diff(f.y, ref)) : to_string(f.stats.status))
-                    << " f_evals=" << f.stats.f_evals << " (" << format_short(f.stats.wall_s, 2)
-                    << " s)\n"
-                    << std::flush;
-        }
-      } else if (r.stats.status == Status::timeout) {
-        p.stopped = true;  // over --max-wall: the runs so far stand
-      } else {
-        p.mismatch = repeat_mismatch(p.first, r);
-        if (!p.mismatch.empty()) {
-          p.mismatch = "not deterministic: run " + std::to_string(p.walls.size() + 1) +
-                       " differs from run 1 in " + p.mismatch;
-          p.stopped = true;
-        } else {
-          p.walls.push_back(r.stats.wall_s);
-        }
-      }
-    }
-    if (progress && round > 1 && ran > 0)
-      *progress << "repeat round " << round << "/" << spec.repeats << ": " << ran << " runs ("
-                << format_short(spent, 2) << " s)\n"
-                << std::flush;
-    if (ran == 0) break;
-  }
-
-  for (std::size_t idx = 0; idx < points.size(); ++idx) {
-    const Point& p = points[idx];
-    WorkPrecisionRow row;
-    row.model = spec.model;
-    row.integrator = spec.integrators[p.integ];
-    row.setting = p.adaptive ? "rtol=" + format_short(tols[p.k], 0) : "h=" + format_full(p.first.h);
-    row.stats = p.first.stats;
-    row.wall = timing_spread(p.walls, spec.seed, idx);
-    row.stats.wall_s = row.wall.median;
-    if (!p.mismatch.empty()) {
-      row.stats.status = Status::error;
-      row.stats.message = p.mismatch;
-    }
-    const bool ok = row.stats.status == Status::ok;
-    row.error = ok ? max_abs_diff(p.first.y, ref) : std::numeric_limits<double>::quiet_NaN();
-    row.mescd =
-        ok ? mescd(p.first.y, ref, spec.atol_factor) : std::numeric_limits<double>::quiet_NaN();
-    res.rows.push_back(std::move(row));
-  }
+  const WorkPrecisionContext c{spec, sys, setup, tols, hs, ref, progress};
+  std::vector<WorkPrecisionPoint> points = work_precision_points(c);
+  run_rounds(c, points);
+  for (std::size_t idx = 0; idx < points.size(); ++idx)
+    res.rows.push_back(work_precision_row(c, points[idx], idx));
   return res;
 }
 
