@@ -300,7 +300,10 @@ Table analyze_summary_table(const AnalyzeResult& r) {
       t.rows.push_back({m.integrator, kNotCoefficientDefined, "-", "-", "-", "-",
                         m.a_stable ? (*m.a_stable ? "A" : "no") : "-",
                         m.real_axis ? limit_text(m.real_axis) : "-",
-                        m.imaginary_axis ? limit_text(m.imaginary_axis) : "-", "-"});
+                        m.imaginary_axis ? limit_text(m.imaginary_axis)
+                        : m.oscillator   ? "oscillator h*omega < " + limit_text(m.oscillator)
+                                         : "-",
+                        "-"});
       continue;
     }
     const bool rf = has_stability_function(m);
