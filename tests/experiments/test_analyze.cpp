@@ -236,6 +236,32 @@ TEST(AnalyzeStudy, MethodsWithoutCoefficientsGetARow) {
   for (const auto& row : d.rows) EXPECT_EQ(row[0], "heun");
 }
 
+// Rosenbrock and kick/drift methods are read through their own coefficients: rodas4 (Hairer &
+// Wanner II, §IV.7: order 4, embedded 3, stiffly accurate, so R(∞) = 0 and L-stable) and
+// velocity Verlet (order 2; on x'' = −ω²x its step map has half-trace 1 − (hω)²/2, stable while
+// |1 − (hω)²/2| <= 1, i.e. hω <= 2).
+TEST(AnalyzeStudy, RosenbrockAndSplittingRows) {
+  AnalyzeSpec spec;
+  spec.integrators = {"rodas4", "velocity_verlet"};
+  const Table t = analyze_table(run_analyze(spec));
+  ASSERT_EQ(t.rows.size(), 2u);
+  std::map<std::string, std::string> ros, vv;
+  for (std::size_t i = 0; i < t.columns.size(); ++i) {
+    ros[t.columns[i]] = t.rows[0][i];
+    vv[t.columns[i]] = t.rows[1][i];
+  }
+  EXPECT_EQ(ros.at("kind"), "rosenbrock");
+  EXPECT_EQ(ros.at("order"), "4");
+  EXPECT_EQ(ros.at("embedded_order"), "3");
+  EXPECT_EQ(ros.at("stage_order"), "");  // not defined for Rosenbrock methods
+  EXPECT_EQ(ros.at("r_infinity"), "0");
+  EXPECT_EQ(ros.at("l_stable"), "yes");
+  EXPECT_EQ(vv.at("kind"), "splitting");
+  EXPECT_EQ(vv.at("order"), "2");
+  EXPECT_NEAR(std::stod(vv.at("oscillator_limit")), 2.0, 1e-12);
+  EXPECT_EQ(vv.at("p_coefficients"), "");  // no scalar R(z)
+}
+
 // The default set: every integrator with coefficients or stability data, without the library
 // references.
 TEST(AnalyzeStudy, DefaultSetHasTheCoefficientMethods) {
