@@ -17,6 +17,7 @@ void add_study_command(CLI::App& app, const StudyKind& kind) {
   struct State {
     CommonFlags flags;
     std::map<std::string, std::string> values;  // option key -> text as given
+    std::vector<std::string> positional;        // integrators given without --integrators
   };
   auto st = std::make_shared<State>();
   auto* cmd = app.add_subcommand(kind.name, kind.summary);
@@ -27,6 +28,9 @@ void add_study_command(CLI::App& app, const StudyKind& kind) {
     cmd->get_option("--integrators")
         ->description(
             "comma-separated integrator names (default: every integrator the study applies to)");
+  if (kind.positional_integrators)
+    cmd->add_option("methods", st->positional,
+                    "integrator names, comma- or space-separated (as --integrators)");
   std::vector<std::pair<std::string, CLI::Option*>> given;
   for (const auto& o : kind.options) {
     std::string help = o.help;
@@ -50,6 +54,9 @@ void add_study_command(CLI::App& app, const StudyKind& kind) {
     target.params = Params::from_assignments(st->flags.params);
     if (!st->flags.integrators.empty())
       target.integrators = split_list(st->flags.integrators, "--integrators");
+    for (const auto& item : st->positional)
+      for (auto& method : split_list(item, "integrators"))
+        target.integrators.push_back(std::move(method));
     StudyContext ctx;
     ctx.force = force_output();
     ctx.plot = st->flags.plot;

@@ -66,6 +66,11 @@ Table experiments_table() {
   t.rows.push_back({"region", "region.{csv,md,json,png}, region_limits.csv",
                     "stability region boundaries (amplification 1) from the coefficients, axis and "
                     "oscillator limits, A-stability"});
+  t.rows.push_back({"analyze",
+                    "analyze.{csv,md,json,png}, analyze_conditions.csv, analyze_dispersion.csv",
+                    "what the coefficients say, nothing run: order conditions to order 8, stage "
+                    "and embedded order, error norms, R = P/Q, A-/L-stability, exact axis limits, "
+                    "internal stability, SSP coefficient, dissipation and dispersion"});
   t.rows.push_back({"energy", "energy.{csv,md,json,png}, energy_summary.csv",
                     "relative invariant error at every step, sampled; max, final, drift rate, "
                     "growth ratio"});

@@ -1,5 +1,6 @@
 #include "experiments/plotting.hpp"
 
+#include "experiments/analyze.hpp"
 #include "experiments/energy.hpp"
 #include "experiments/region.hpp"
 #include "experiments/stability.hpp"
@@ -215,6 +216,7 @@ const std::map<std::string, std::pair<std::string, Replotter>>& replotters() {
       {"stability.csv", {"Stability limit", plot_stability}},
       {"energy.csv", {"Energy drift", plot_energy}},
       {"region.csv", {"Stability regions", plot_region}},
+      {"analyze_dispersion.csv", {"Dissipation and dispersion", plot_analyze}},
   };
   return table;
 }
@@ -258,6 +260,8 @@ int replot_directory(const fs::path& dir, const PlotOptions& opt, std::ostream& 
     if (draw(csv, replot_title(csv, prefix), opt, err)) {
       fs::path png = csv;
       png.replace_extension(".png");
+      // analyze's curves are in analyze_dispersion.csv, its plot is analyze.png.
+      if (csv.filename() == "analyze_dispersion.csv") png = csv.parent_path() / "analyze.png";
       out << "plot: " << png.string() << "\n";
       ++drawn;
     }

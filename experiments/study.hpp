@@ -93,6 +93,9 @@ struct StudyKind {
   bool integrators_required = true;  // region: default every method with stability data
   // `run`: one unit per integrator; false: one unit per point with every integrator (region).
   bool unit_per_integrator = true;
+  // The command also takes the integrators as positional arguments (`analyze rk4,dopri5 gauss6`),
+  // joined with --integrators.
+  bool positional_integrators = false;
   std::vector<ParamSpec> options;         // the study's own options, declared once
   std::vector<std::string> required;      // options that must be given
   std::vector<std::string> extra_files;   // besides STEM.{csv,md,json}, e.g. energy_summary.csv

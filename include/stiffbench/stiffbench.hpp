@@ -19,7 +19,7 @@
 //                                           objects, nothing registered), StudyContext, run_study
 //   experiments/convergence.hpp, local error (same header), experiments/work_precision.hpp,
 //   experiments/stability.hpp, experiments/energy.hpp, experiments/region.hpp,
-//   experiments/audit.hpp
+//   experiments/audit.hpp, experiments/analyze.hpp
 //                                           the studies: spec in, records out, CSV/Markdown/JSON
 //                                           writers
 //   experiments/output.hpp, experiments/plotting.hpp
@@ -38,6 +38,7 @@
 #include "core/run_control.hpp"
 #include "core/solve_stats.hpp"
 #include "core/types.hpp"
+#include "experiments/analyze.hpp"
 #include "experiments/audit.hpp"
 #include "experiments/catalog.hpp"
 #include "experiments/cli_main.hpp"
