@@ -2,13 +2,13 @@
 // coefficient-defined method, its coefficients and step modes), side by side.
 //
 // Coefficient-defined methods: each family keeps one table of MethodEntry
-// (integrators/explicit/tableaux.cpp, implicit/dirk.cpp, implicit/linearly_implicit.cpp,
-// symplectic/kick_drift.cpp, symplectic/composition.cpp); registration (integrators/register.cpp),
-// the MethodInfo kind and reference, and the tableau lookups the tests use are all derived from
-// those tables.
+// (integrators/explicit/tableaux.cpp, implicit/dirk.cpp, implicit/gauss.cpp,
+// implicit/linearly_implicit.cpp, symplectic/kick_drift.cpp, symplectic/composition.cpp);
+// registration (integrators/register.cpp), the MethodInfo kind and reference, and the tableau
+// lookups the tests use are all derived from those tables.
 //
 // Methods implemented as classes (verlet, leapfrog, rattle, bdf2, semi_implicit_euler, radau5,
-// gauss4/6, baraff_witkin, xpbd, projective_dynamics, stable_fluids, the library references):
+// baraff_witkin, xpbd, projective_dynamics, stable_fluids, the library references):
 // a MethodText sits next to the constructor (or the registration) that builds the method's
 // MethodInfo with method_info(), which takes it as an argument. add_built_in_integrator()
 // refuses, naming the method, a registration without a description, kind or reference.

@@ -142,10 +142,14 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
   }
   add_class(reg, Radau5({}), radau5_param_specs(),
             [](const Params& p) { return std::make_unique<Radau5>(read_radau5_options(p)); });
-  for (const int s : {2, 3}) {
-    add_class(reg, GaussCollocation(s, {}), gauss_param_specs(), [s](const Params& p) {
-      return std::make_unique<GaussCollocation>(s, read_gauss_options(p));
-    });
+  // Fully implicit RK from a tableau (gauss.hpp): Gauss-Legendre collocation, fixed step.
+  for (const GaussMethod& m : gauss_methods()) {
+    const ButcherTableau& t = *m.coefficients;
+    const std::string desc = m.text.description.str();
+    auto make = [t, desc](const Params& p) {
+      return std::make_unique<ImplicitRungeKutta>(t, desc, read_gauss_options(p));
+    };
+    add_method(reg, m, ImplicitRungeKutta(t, desc, {}), gauss_param_specs(), make);
   }
   // Baraff–Witkin is velocity-form by construction (no `form`), and its single Krylov solve
   // defaults to a relative 1e-6 (baraff_witkin.hpp).

@@ -10,6 +10,7 @@
 #include "experiments/commands.hpp"
 #include "integrators/explicit/tableaux.hpp"
 #include "integrators/implicit/dirk.hpp"
+#include "integrators/implicit/gauss.hpp"
 #include "integrators/implicit/linearly_implicit.hpp"
 #include "integrators/method_entry.hpp"
 #include "integrators/symplectic/composition.hpp"
@@ -32,9 +33,9 @@ TEST(MethodNotes, EveryBuiltInIntegratorHasKindAndReference) {
 // and reference.
 TEST(MethodNotes, ClassMethodsCarryTheirTextInTheirMethodInfo) {
   for (const char* name :
-       {"verlet", "leapfrog", "rattle", "bdf2", "semi_implicit_euler", "radau5", "gauss4", "gauss6",
-        "baraff_witkin", "xpbd", "projective_dynamics", "stable_fluids", "cvode_bdf", "cvode_adams",
-        "arkode_erk", "arkode_dirk", "arkode_imex", "gsl_rk4", "gsl_msbdf"}) {
+       {"verlet", "leapfrog", "rattle", "bdf2", "semi_implicit_euler", "radau5", "baraff_witkin",
+        "xpbd", "projective_dynamics", "stable_fluids", "cvode_bdf", "cvode_adams", "arkode_erk",
+        "arkode_dirk", "arkode_imex", "gsl_rk4", "gsl_msbdf"}) {
     SCOPED_TRACE(name);
     const auto* e = integrator_registry().find(name);
     ASSERT_NE(e, nullptr);
@@ -88,6 +89,7 @@ void expect_registered_as_declared(const std::vector<Entry>& table) {
 TEST(MethodNotes, MethodTablesMatchTheRegisteredIntegrators) {
   expect_registered_as_declared(explicit_rk_methods());
   expect_registered_as_declared(dirk_methods());
+  expect_registered_as_declared(gauss_methods());
   expect_registered_as_declared(rosenbrock_methods());
   expect_registered_as_declared(kick_drift_methods());
   expect_registered_as_declared(composition_entries());
