@@ -11,6 +11,9 @@
 //                                           adaptive drivers
 //   core/run_control.hpp                    wall-clock limit per row (timeout status) and
 //                                           interrupt requests
+//   integrators/method_file.hpp            methods as files: load_method_file(path),
+//                                           parse_method_file, make_integrator(method),
+//                                           method_registry_entry (register_integrator)
 //   core/registry.hpp, core/registry_types.hpp, experiments/catalog.hpp
 //                                           the registries, make_setup, register_model and
 //                                           register_integrator for a user's own entries
@@ -49,3 +52,4 @@
 #include "experiments/stability.hpp"
 #include "experiments/study.hpp"
 #include "experiments/work_precision.hpp"
+#include "integrators/method_file.hpp"

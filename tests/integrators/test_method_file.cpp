@@ -1,0 +1,300 @@
+// Method files (integrators/method_file.hpp) and their coefficient expressions
+// (integrators/coefficient_expr.hpp): parsing, the checks a bad file meets (each naming the
+// file and the line), and the integrators they build.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "core/driver.hpp"
+#include "core/types.hpp"
+#include "integrators/coefficient_expr.hpp"
+#include "integrators/implicit/dirk.hpp"
+#include "integrators/implicit/linearly_implicit.hpp"
+#include "integrators/method_file.hpp"
+#include "integrators/symplectic/composition.hpp"
+#include "tests/test_support.hpp"
+
+namespace stiffbench {
+namespace {
+
+// The message of the BadInput `f` throws ("" when it throws none).
+template <class F>
+std::string bad_input(F f) {
+  try {
+    f();
+  } catch (const BadInput& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// ---- Expressions ------------------------------------------------------------------------------
+
+// The evaluator performs the same long double operations as these expressions, in the same
+// order, so the results are equal bit for bit.
+TEST(CoefficientExpr, EvaluatesInLongDouble) {
+  EXPECT_EQ(evaluate_coefficient("(3 - sqrt(3))/6"), (3.0L - std::sqrt(3.0L)) / 6.0L);
+  EXPECT_EQ(evaluate_coefficient("1/3"), 1.0L / 3.0L);
+  EXPECT_EQ(evaluate_coefficient("1 - 1/sqrt(2)"), 1.0L - 1.0L / std::sqrt(2.0L));
+  EXPECT_EQ(evaluate_coefficient(" 2.5e-1 * 4 "), 1.0L);
+  EXPECT_EQ(evaluate_coefficient("-2^2"), -4.0L);    // ^ binds tighter than unary minus
+  EXPECT_EQ(evaluate_coefficient("2^3^2"), 512.0L);  // right associative: 2^9
+  EXPECT_EQ(evaluate_coefficient("2^-2"), 0.25L);
+  EXPECT_EQ(evaluate_coefficient("1 - 2 - 3"), -4.0L);  // left associative
+  EXPECT_EQ(evaluate_coefficient("cbrt(2)"), std::cbrt(2.0L));
+  // A long double third differs from the double one in its extra bits (64-bit significand on
+  // x86), and rounds to the correctly rounded double.
+  EXPECT_EQ(static_cast<double>(evaluate_coefficient("1/3")), 1.0 / 3.0);
+  const CoefficientConstants k{{"g", 0.25L}, {"w", 2.0L}};
+  EXPECT_EQ(evaluate_coefficient("w*g + 1/w", k), 1.0L);
+}
+
+TEST(CoefficientExpr, BadExpressionsNameTheExpressionAndPosition) {
+  const std::string open = bad_input([] { evaluate_coefficient("(1 + 2"); });
+  EXPECT_NE(open.find("\"(1 + 2\""), std::string::npos) << open;
+  EXPECT_NE(open.find("position 7"), std::string::npos) << open;
+  EXPECT_NE(open.find("expected ')'"), std::string::npos) << open;
+  const std::string unknown = bad_input([] { evaluate_coefficient("1/sqr(2)"); });
+  EXPECT_NE(unknown.find("unknown name 'sqr'"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("position 3"), std::string::npos) << unknown;
+  EXPECT_NE(bad_input([] { evaluate_coefficient("1/(2-2)"); }).find("division by zero"),
+            std::string::npos);
+  EXPECT_NE(bad_input([] { evaluate_coefficient("sqrt(-1)"); }).find("negative"),
+            std::string::npos);
+  EXPECT_NE(bad_input([] { evaluate_coefficient("2^0.5"); }).find("integer"), std::string::npos);
+  EXPECT_NE(bad_input([] { evaluate_coefficient("1 2"); }).find("unexpected '2'"),
+            std::string::npos);
+  EXPECT_NE(bad_input([] { evaluate_coefficient(""); }).find("empty"), std::string::npos);
+}
+
+// ---- Files -------------------------------------------------------------------------------------
+
+const char* kHeun3 = R"toml(name = "heun3"
+kind = "explicit_rk"
+order = 3
+description = "Heun's third-order method"
+reference = "K. Heun, Z. Math. Phys. 45 (1900) 23-38"
+A = [[0, 0, 0], ["1/3", 0, 0], [0, "2/3", 0]]
+b = ["1/4", 0, "3/4"]
+c = [0, "1/3", "2/3"]
+)toml";
+
+// `s` with the first `from` replaced by `to`.
+std::string replaced(std::string s, const std::string& from, const std::string& to) {
+  const std::size_t at = s.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) s.replace(at, from.size(), to);
+  return s;
+}
+
+std::string with_order(int order) {
+  return replaced(kHeun3, "order = 3", "order = " + std::to_string(order));
+}
+
+TEST(MethodFile, Heun3Parses) {
+  const MethodDefinition m = parse_method_file(kHeun3, "heun3.toml");
+  EXPECT_EQ(m.name, "heun3");
+  EXPECT_EQ(m.kind, MethodKind::explicit_rk);
+  EXPECT_EQ(m.order, 3);
+  EXPECT_EQ(m.class_text, "explicit RK");
+  EXPECT_FALSE(m.adaptive());
+  EXPECT_EQ(m.tableau.a(1, 0), 1.0 / 3.0);
+  EXPECT_EQ(m.tableau.a(2, 1), 2.0 / 3.0);
+  EXPECT_EQ(m.tableau.b[0], 0.25);
+  EXPECT_EQ(m.tableau.b[2], 0.75);
+  EXPECT_EQ(m.tableau.c[2], 2.0 / 3.0);
+  // The order conditions of order 3 hold (bᵀ1 = 1, bᵀc = 1/2, bᵀc² = 1/3, bᵀAc = 1/6 by hand:
+  // 3/4·(2/3)² = 1/3, 3/4·2/3·1/3 = 1/6); of order 4 the worst is bᵀA²c = 0 against 1/24
+  // (A²c = 0: the only nonzero entry of Ac is the third, and A's third column is 0).
+  EXPECT_LE(m.tableau.order_defect(3), 1e-15);
+  EXPECT_NEAR(m.tableau.order_defect(4), 1.0 / 24.0, 1e-15);
+}
+
+// Global error at t = 2 on Prothero–Robinson with λ = -1 (smooth, non-stiff; exact y = φ(t)),
+// h = 0.1 and 0.05: a third-order method divides the error by 2³.
+TEST(MethodFile, Heun3ReachesOrderThree) {
+  const MethodDefinition m = parse_method_file(kHeun3, "heun3.toml");
+  double err[2];
+  for (int k = 0; k < 2; ++k) {
+    auto sys = testing_support::model("prothero_robinson", {"lambda=-1"});
+    auto integ = make_integrator(m);
+    FixedStepOptions opt;
+    opt.t_end = 2.0;
+    opt.h = 0.1 / (1 << k);
+    const RunResult r = run_fixed_step(*sys, *integ, opt);
+    ASSERT_EQ(r.stats.status, Status::ok);
+    Vec exact(sys->dimension());
+    sys->exact(r.t, exact);
+    err[k] = (r.y - exact).cwiseAbs().maxCoeff();
+  }
+  EXPECT_NEAR(std::log2(err[0] / err[1]), 3.0, 0.1) << err[0] << " " << err[1];
+}
+
+// The two-stage SDIRK of Alexander (γ = 1 - 1/√2) written with expressions gives the built-in
+// sdirk2's coefficients (computed in double there) to one ulp.
+TEST(MethodFile, Sdirk2MatchesTheBuiltInToOneUlp) {
+  const char* text = R"toml(name = "my_sdirk2"
+kind = "dirk"
+order = 2
+description = "two-stage SDIRK"
+[constants]
+g = "1 - 1/sqrt(2)"
+)toml";
+  // Keys after a table header belong to it: the coefficients go before [constants] in a real
+  // file; here they are added at the top.
+  const std::string file =
+      std::string("A = [[\"g\", 0], [\"1 - g\", \"g\"]]\nb = [\"1 - g\", \"g\"]\n") + text;
+  const MethodDefinition m = parse_method_file(file, "sdirk2.toml");
+  const ButcherTableau& ref = implicit_tableau("sdirk2");
+  ASSERT_EQ(m.tableau.stages(), 2);
+  for (Index i = 0; i < 2; ++i) {
+    for (Index j = 0; j < 2; ++j)
+      EXPECT_LE(std::abs(m.tableau.a(i, j) - ref.a(i, j)),
+                std::nextafter(std::abs(ref.a(i, j)), 1e300) - std::abs(ref.a(i, j)))
+          << i << j;
+    EXPECT_LE(std::abs(m.tableau.b[i] - ref.b[i]),
+              std::nextafter(std::abs(ref.b[i]), 1e300) - std::abs(ref.b[i]));
+    EXPECT_LE(std::abs(m.tableau.c[i] - ref.c[i]),
+              std::nextafter(std::abs(ref.c[i]), 1e300) - std::abs(ref.c[i]));
+  }
+  EXPECT_EQ(m.class_text, "SDIRK");
+  // The same parameters as the registered sdirk2 (Newton and linear solver).
+  std::vector<std::string> mine, theirs;
+  for (const ParamSpec& s : method_param_specs(m)) mine.push_back(s.key);
+  for (const ParamSpec& s : integrator_registry().at("sdirk2").params) theirs.push_back(s.key);
+  EXPECT_EQ(mine, theirs);
+  const IntegratorRegistry::Entry e = method_registry_entry(m);
+  EXPECT_EQ(e.info.name, "my_sdirk2");
+  EXPECT_EQ(e.info.kind, "SDIRK");
+  EXPECT_EQ(e.info.order, 2);
+  EXPECT_EQ(e.info.family, Family::implicit);
+  EXPECT_NE(e.make(resolve_params(e.params, Params::from_assignments({"linear_solver=cg"}), nullptr,
+                                  "t")),
+            nullptr);
+}
+
+TEST(MethodFile, OverclaimedOrderNamesFileLineAndCondition) {
+  const std::string msg = bad_input([] { parse_method_file(with_order(4), "heun3.toml"); });
+  EXPECT_NE(msg.find("heun3.toml:3:"), std::string::npos) << msg;  // line of `order`
+  EXPECT_NE(msg.find("order 4"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("order-4 condition"), std::string::npos) << msg;
+}
+
+TEST(MethodFile, BadFilesNameFileAndLine) {
+  // b has 2 entries, A 3 rows (line 6).
+  std::string s = replaced(kHeun3, "b = [\"1/4\", 0, \"3/4\"]", "b = [\"1/4\", \"3/4\"]");
+  std::string msg = bad_input([&] { parse_method_file(s, "m.toml"); });
+  EXPECT_NE(msg.find("m.toml:6: key 'A': 3 rows, need 2"), std::string::npos) << msg;
+
+  // An entry above the diagonal of an explicit A (line 6).
+  s = replaced(kHeun3, "[[0, 0, 0]", "[[0, 0, 1]");
+  msg = bad_input([&] { parse_method_file(s, "m.toml"); });
+  EXPECT_NE(msg.find("m.toml:6: key 'A'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("strictly lower triangular"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("row 1, column 3"), std::string::npos) << msg;
+
+  // An unknown key (line 9) names the known ones.
+  msg = bad_input([&] { parse_method_file(std::string(kHeun3) + "fsl = true\n", "m.toml"); });
+  EXPECT_NE(msg.find("m.toml:9: unknown key 'fsl'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("did you mean 'fsal'"), std::string::npos) << msg;
+
+  // A bad expression (line 7) names the expression.
+  s = replaced(kHeun3, "\"3/4\"]", "\"3/(4\"]");
+  msg = bad_input([&] { parse_method_file(s, "m.toml"); });
+  EXPECT_NE(msg.find("m.toml:7: key 'b'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("\"3/(4\""), std::string::npos) << msg;
+
+  // c that is not the row sums (line 8).
+  s = replaced(kHeun3, "c = [0, \"1/3\", \"2/3\"]", "c = [0, \"1/3\", \"1/2\"]");
+  msg = bad_input([&] { parse_method_file(s, "m.toml"); });
+  EXPECT_NE(msg.find("m.toml:8: key 'c': c[3]"), std::string::npos) << msg;
+
+  // A missing key, a TOML syntax error, a kind that does not exist.
+  msg = bad_input([] { parse_method_file("kind = \"explicit_rk\"\n", "m.toml"); });
+  EXPECT_NE(msg.find("m.toml: key 'name' missing"), std::string::npos) << msg;
+  msg = bad_input([] { parse_method_file("name = \n", "m.toml"); });
+  EXPECT_NE(msg.find("m.toml:1:"), std::string::npos) << msg;
+  msg = bad_input([] { parse_method_file("kind = \"explicit\"\n", "m.toml"); });
+  EXPECT_NE(msg.find("m.toml:1: key 'kind': unknown kind 'explicit'"), std::string::npos) << msg;
+  msg = bad_input([] { load_method_file("/nonexistent/x.toml"); });
+  EXPECT_NE(msg.find("/nonexistent/x.toml: cannot read"), std::string::npos) << msg;
+}
+
+TEST(MethodFile, DirkNeedsLowerTriangularA) {
+  const char* text = R"toml(name = "x"
+kind = "dirk"
+order = 1
+description = "d"
+A = [[1, "1/2"], [0, 1]]
+b = [0, 1]
+)toml";
+  const std::string msg = bad_input([&] { parse_method_file(text, "x.toml"); });
+  EXPECT_NE(msg.find("x.toml:5: key 'A': a dirk method needs A lower triangular"),
+            std::string::npos)
+      << msg;
+}
+
+// ROS2 of Verwer et al. (γ = 1 + 1/√2, α21 = 1, γ21 = -2γ, b = (½, ½)) equals the built-in
+// rosenbrock2; claimed order 3 is refused by its order-3 conditions.
+TEST(MethodFile, RosenbrockFile) {
+  const std::string text = R"toml(name = "my_ros2"
+kind = "rosenbrock"
+description = "ROS2"
+gamma = "1 + 1/sqrt(2)"
+alpha = [[0, 0], [1, 0]]
+gamma_offdiag = [[0, 0], ["-2*(1 + 1/sqrt(2))", 0]]
+b = ["1/2", "1/2"]
+)toml";
+  const MethodDefinition m = parse_method_file("order = 2\n" + text, "ros2.toml");
+  const RosenbrockTableau& ref = rosenbrock2_tableau();
+  EXPECT_NEAR(m.rosenbrock.gamma, ref.gamma, 1e-15);
+  EXPECT_NEAR((m.rosenbrock.gamma_lower - ref.gamma_lower).cwiseAbs().maxCoeff(), 0.0, 1e-15);
+  EXPECT_EQ(m.rosenbrock.alpha, ref.alpha);
+  EXPECT_EQ(m.rosenbrock.b, ref.b);
+  EXPECT_EQ(m.class_text, "Rosenbrock");
+  EXPECT_FALSE(m.adaptive());
+  const std::string msg = bad_input([&] { parse_method_file("order = 3\n" + text, "ros2.toml"); });
+  EXPECT_NE(msg.find("ros2.toml:1: key 'order'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("order-3 condition"), std::string::npos) << msg;
+}
+
+// Velocity Verlet as kick/drift coefficients, and yoshida4 as a composition γ = (c, 1 - 2c, c),
+// c = 1/(2 - 2^(1/3)) (Yoshida 1990), equal to the built-in kick/drift form.
+TEST(MethodFile, SplittingFiles) {
+  const MethodDefinition v = parse_method_file(R"toml(name = "vv"
+kind = "splitting"
+order = 2
+description = "velocity Verlet"
+kick = ["1/2", "1/2"]
+drift = [1, 0]
+)toml",
+                                               "vv.toml");
+  EXPECT_EQ(v.splitting.kick_drift.kick, (std::vector<double>{0.5, 0.5}));
+  EXPECT_TRUE(v.splitting.velocity_independent);
+  const MethodDefinition y = parse_method_file(R"toml(name = "y4"
+kind = "splitting"
+order = 4
+description = "triple jump"
+composition = ["1/(2 - cbrt(2))", "1 - 2/(2 - cbrt(2))", "1/(2 - cbrt(2))"]
+)toml",
+                                               "y4.toml");
+  const CompositionMethod& ref = composition_methods().front();
+  ASSERT_EQ(ref.name, "yoshida4");
+  ASSERT_EQ(y.splitting.kick_drift.kick.size(), ref.kick_drift.kick.size());
+  for (std::size_t i = 0; i < ref.kick_drift.kick.size(); ++i) {
+    EXPECT_NEAR(y.splitting.kick_drift.kick[i], ref.kick_drift.kick[i], 1e-15);
+    EXPECT_NEAR(y.splitting.kick_drift.drift[i], ref.kick_drift.drift[i], 1e-15);
+  }
+  // Kicks that do not sum to 1.
+  const std::string msg = bad_input([] {
+    parse_method_file(
+        "name = \"x\"\nkind = \"splitting\"\norder = 1\ndescription = \"x\"\n"
+        "kick = [\"1/2\", \"1/4\"]\ndrift = [1, 0]\n",
+        "x.toml");
+  });
+  EXPECT_NE(msg.find("x.toml:3: key 'order'"), std::string::npos) << msg;
+}
+
+}  // namespace
+}  // namespace stiffbench
