@@ -1,12 +1,18 @@
 #include "experiments/catalog.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <set>
 #include <sstream>
 
+#include "experiments/output.hpp"
+#include "integrators/method_file.hpp"
 #include "integrators/register.hpp"
 #include "models/register.hpp"
 
@@ -146,8 +152,10 @@ void register_integrator(IntegratorRegistry::Entry entry) {
   mutable_integrator_registry().add(std::move(entry));
 }
 
-Setup make_setup(const std::string& model, const std::vector<std::string>& integrators,
+Setup make_setup(const std::string& model, const std::vector<std::string>& given,
                  const Params& user) {
+  // Method files given by path are registered and replaced by their names.
+  const std::vector<std::string> integrators = resolve_integrator_tokens(given);
   Setup s;
   // Look the model up first so an unknown name is reported as such, then check the sizes
   // before anything is allocated.
@@ -327,6 +335,124 @@ void check_run_size(const std::string& model, const std::vector<std::string>& in
                                                               : std::string()) +
                                         "), more than the limit " + format_bytes(limit) + " (" +
                                         source + "); reduce " + m.model.driver);
+}
+
+// ---- Methods as files --------------------------------------------------------------------------
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct LoadedMethodFile {
+  std::string path;       // as loaded (relative to the working folder or absolute)
+  std::string canonical;  // weakly canonical, to recognise the same file
+  std::string text;
+};
+// The method files registered in this process, by method name.
+std::map<std::string, LoadedMethodFile>& loaded_method_files() {
+  static std::map<std::string, LoadedMethodFile> files;
+  return files;
+}
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw BadInput(path + ": cannot read the method file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return buffer.str();
+}
+
+}  // namespace
+
+bool is_method_file_token(const std::string& token) {
+  return token.find('/') != std::string::npos ||
+         (token.size() > 5 && token.compare(token.size() - 5, 5, ".toml") == 0);
+}
+
+std::string register_method_file(const std::string& given, const std::string& base) {
+  const fs::path p =
+      base.empty() || fs::path(given).is_absolute() ? fs::path(given) : fs::path(base) / given;
+  const std::string path = p.lexically_normal().string();
+  std::error_code ec;
+  if (fs::is_directory(p, ec))
+    throw BadInput(path + ": a folder, not a method file (give folders with --methods DIR)");
+  const std::string text = read_text(path);
+  const std::string canonical = fs::weakly_canonical(p, ec).string();
+  MethodDefinition m = parse_method_file(text, path);
+  auto& files = loaded_method_files();
+  if (const auto it = files.find(m.name); it != files.end()) {
+    // The same file (or one with the same text) again: registered once.
+    if (it->second.canonical == canonical || it->second.text == text) return m.name;
+    throw BadInput(path + ": method '" + m.name + "' is already defined by " + it->second.path +
+                   " (a different method); give one of them another name");
+  }
+  if (const auto* e = mutable_integrator_registry().find(m.name))
+    throw BadInput(path + ": method '" + m.name + "' is the name of " +
+                   (e->built_in ? "a built-in integrator (" + e->info.description + ")"
+                                : std::string("an integrator registered by the program")) +
+                   "; give the method in the file another name");
+  IntegratorRegistry::Entry entry = method_registry_entry(m);
+  entry.built_in = false;
+  mutable_integrator_registry().add(std::move(entry));
+  files[m.name] = {path, canonical, text};
+  return m.name;
+}
+
+std::vector<std::string> resolve_integrator_tokens(std::vector<std::string> tokens,
+                                                   const std::string& base) {
+  for (std::string& t : tokens)
+    if (is_method_file_token(t)) t = register_method_file(t, base);
+  return tokens;
+}
+
+void load_method_search_path(const std::vector<std::string>& dirs) {
+  std::vector<std::pair<std::string, std::string>> folders;  // folder, where it was given
+  if (const char* env = std::getenv("STIFFBENCH_METHOD_PATH")) {
+    std::stringstream ss(env);
+    std::string item;
+    while (std::getline(ss, item, ':'))
+      if (!item.empty()) folders.emplace_back(item, "STIFFBENCH_METHOD_PATH");
+  }
+  for (const auto& d : dirs) folders.emplace_back(d, "--methods");
+  for (const auto& [dir, origin] : folders) {
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec)) throw BadInput(origin + ": '" + dir + "' is not a folder");
+    std::vector<std::string> files;
+    for (const auto& e : fs::directory_iterator(dir, ec))
+      if (e.path().extension() == ".toml" && !fs::is_directory(e.path(), ec))
+        files.push_back(e.path().string());
+    if (ec) throw BadInput(origin + ": cannot list '" + dir + "': " + ec.message());
+    std::sort(files.begin(), files.end());
+    for (const auto& f : files) register_method_file(f);
+  }
+}
+
+std::string method_file_source(const std::string& name) {
+  const auto& files = loaded_method_files();
+  if (const auto it = files.find(name); it != files.end()) return it->second.path;
+  for (const MethodDefinition& m : built_in_methods())
+    if (m.name == name) return m.source;
+  return {};
+}
+
+nlohmann::json with_method_files(nlohmann::json spec) {
+  if (!spec.is_object()) return spec;
+  std::vector<std::string> names;
+  for (const char* key : {"integrators", "integrator"}) {
+    if (!spec.contains(key)) continue;
+    const nlohmann::json& v = spec[key];
+    if (v.is_string()) names.push_back(v.get<std::string>());
+    if (v.is_array())
+      for (const auto& x : v)
+        if (x.is_string()) names.push_back(x.get<std::string>());
+  }
+  nlohmann::json files = nlohmann::json::object();
+  const auto& loaded = loaded_method_files();
+  for (const auto& n : names)
+    if (const auto it = loaded.find(n); it != loaded.end())
+      files[n] = {{"file", it->second.path}, {"fnv1a64", hex16(fnv1a64(it->second.text))}};
+  if (!files.empty()) spec["method_files"] = files;
+  return spec;
 }
 
 std::vector<std::string> split_list(const std::string& s, const std::string& flag) {

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "core/registry_types.hpp"
 
 namespace stiffbench {
@@ -96,6 +98,34 @@ void set_memory_limit(double bytes);
 double memory_limit(std::string* source = nullptr);
 // "1.5 GiB" for messages.
 std::string format_bytes(double bytes);
+
+// ---- Methods as files (issue 25; integrators/method_file.hpp) ----------------------------------
+// Wherever an integrator name is taken (--integrators, solve --integrator, spec files, sweeps), a
+// token that ends in ".toml" or contains '/' is the path of a method file: it is loaded, checked,
+// registered process-wide under the file's `name` and replaced by that name before anything
+// runs. The same file given again (or a file with the same text) is registered once; a file whose
+// name is already taken by another method (built in, registered, or another file) is BadInput
+// naming both.
+bool is_method_file_token(const std::string& token);
+// Loads and registers `path` (relative paths from `base` when given, else from the working
+// folder); returns the method's name.
+std::string register_method_file(const std::string& path, const std::string& base = "");
+// `tokens` with every method-file token replaced by its method's name (registering the file);
+// names pass unchanged.
+std::vector<std::string> resolve_integrator_tokens(std::vector<std::string> tokens,
+                                                   const std::string& base = "");
+// The search path: every *.toml (sorted by name) in each folder of STIFFBENCH_METHOD_PATH
+// (colon-separated; empty entries skipped) and in each of `dirs` (--methods DIR), registered as
+// above. A folder that does not exist, or a bad file in one, is BadInput naming it.
+void load_method_search_path(const std::vector<std::string>& dirs = {});
+// The method file an integrator was registered from (its path as loaded; a built-in method's
+// "methods/<file>.toml (built in)"), "" for the others.
+std::string method_file_source(const std::string& name);
+// `spec` (a study's or a run's spec JSON) with "method_files": {name: {"file": path, "fnv1a64":
+// hash of its text}} for the integrators it names ("integrators" or "integrator") that came from
+// method files, so that results record the file and a changed file is a different spec; `spec`
+// unchanged when it names none.
+nlohmann::json with_method_files(nlohmann::json spec);
 
 // Splits "a,b,c" (empty items are BadInput naming the flag).
 std::vector<std::string> split_list(const std::string& s, const std::string& flag);

@@ -2,6 +2,7 @@
 #include <iostream>
 #include <memory>
 
+#include "experiments/catalog.hpp"
 #include "experiments/catalog_markdown.hpp"
 #include "experiments/cli.hpp"
 #include "experiments/commands.hpp"
@@ -29,6 +30,14 @@ void add_list_commands(CLI::App& app) {
       return;
     }
     cmd_list(ls->what, std::cout);
+    if (ls->what.empty() || ls->what == "integrators") {
+      // The methods loaded from files (the search path, --methods, paths given earlier).
+      std::vector<std::string> files;
+      for (const auto& e : integrator_registry().entries())
+        if (const std::string f = method_file_source(e.info.name); !e.built_in && !f.empty())
+          files.push_back(e.info.name + " (" + f + ")");
+      if (!files.empty()) std::cout << "\nfrom method files: " << join(files) << "\n";
+    }
   });
 
   auto name = std::make_shared<std::string>();
@@ -36,8 +45,12 @@ void add_list_commands(CLI::App& app) {
       "describe",
       "parameters, defaults and properties of a model, integrator or experiment; a study's "
       "options table");
-  describe->add_option("name", *name, "model, integrator or experiment name")->required();
-  describe->callback([name]() { cmd_describe(*name, std::cout); });
+  describe
+      ->add_option("name", *name,
+                   "model, integrator or experiment name, or the path of a method file")
+      ->required();
+  describe->callback(
+      [name]() { cmd_describe(resolve_integrator_tokens({*name}).front(), std::cout); });
 }
 
 }  // namespace stiffbench

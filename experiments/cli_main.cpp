@@ -7,6 +7,7 @@
 #include <csignal>
 #include <iostream>
 #include <limits>
+#include <memory>
 
 #include "core/driver.hpp"
 #include "core/run_control.hpp"
@@ -105,6 +106,16 @@ int cli_main(int argc, char** argv) {
       "or an audit check failed (its table is written), 130/143 interrupted by SIGINT/SIGTERM, 1 "
       "other errors."};
   app.require_subcommand(1);
+  // Method files: the search path (STIFFBENCH_METHOD_PATH and --methods DIR) is loaded once the
+  // command line is parsed, before the command runs (experiments/catalog.hpp).
+  auto method_dirs = std::make_shared<std::vector<std::string>>();
+  app.add_option("--methods", *method_dirs,
+                 "load every method file (*.toml) in DIR, like the folders of "
+                 "STIFFBENCH_METHOD_PATH (repeatable; give it before the command)")
+      ->type_name("DIR")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  app.parse_complete_callback([method_dirs] { load_method_search_path(*method_dirs); });
 
   add_list_commands(app);
   add_solve_command(app);

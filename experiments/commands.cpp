@@ -147,8 +147,10 @@ void cmd_describe(const std::string& name, std::ostream& out) {
     out << "integrator " << name << ": " << i.description << "\n";
     out << "family: " << to_string(i.family);
     if (!i.kind.empty()) out << " (" << i.kind << ")";
-    out << "\nreference: " << (i.reference.empty() ? "none given" : i.reference)
-        << "\nstep: " << step_modes(*e) << "\norder: " << count_or_variable(i.order)
+    out << "\nreference: " << (i.reference.empty() ? "none given" : i.reference);
+    if (const std::string file = method_file_source(name); !file.empty())
+      out << "\nsource: " << file;
+    out << "\nstep: " << step_modes(*e) << "\norder: " << count_or_variable(i.order)
         << "\nevaluations per step: " << count_or_variable(i.stages)
         << "\nrequires: " << describe_requirements(i.requires_) << "\n";
     print_params(e->params, out);

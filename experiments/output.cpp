@@ -331,7 +331,7 @@ nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json&
   std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", &tm);
   nlohmann::json j;
   j["experiment"] = experiment;
-  j["spec"] = spec;
+  j["spec"] = with_method_files(spec);  // the method files it names (catalog.hpp)
   j["stiffbench_version"] = STIFFBENCH_VERSION;
   j["git_revision"] = git_revision();
   j["compiler"] = std::string("g++ ") + __VERSION__;

@@ -465,9 +465,12 @@ nlohmann::json solve_spec(const SolveOptions& opt) {
           {"frame_format", opt.frame_format}};
 }
 
-void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err) {
-  require_input(!opt.model.empty(), "--model is required");
-  require_input(!opt.integrator.empty(), "--integrator is required");
+void cmd_solve(const SolveOptions& given, std::ostream& out, std::ostream& err) {
+  require_input(!given.model.empty(), "--model is required");
+  require_input(!given.integrator.empty(), "--integrator is required");
+  // A method file given by path is registered and named by its method (catalog.hpp).
+  SolveOptions opt = given;
+  opt.integrator = resolve_integrator_tokens({given.integrator}).front();
   require_input(opt.outputs >= 1,
                 "--outputs must be >= 1 (got " + std::to_string(opt.outputs) + ")");
   Setup setup = make_setup(opt.model, {opt.integrator}, opt.params);

@@ -144,7 +144,10 @@ std::unique_ptr<StudyJob> make_study(const StudyKind& kind, const StudyTarget& t
       "--param does not apply to " + kind.name + ": it depends only on the methods' coefficients");
   if (kind.integrators_required)
     require_input(!target.integrators.empty(), "--integrators: no integrator given");
-  return kind.make(target, resolve_study_options(kind, options, how), ctx);
+  // Method files given by path are registered and replaced by their names (catalog.hpp).
+  StudyTarget resolved = target;
+  resolved.integrators = resolve_integrator_tokens(target.integrators);
+  return kind.make(resolved, resolve_study_options(kind, options, how), ctx);
 }
 
 namespace {
@@ -160,6 +163,8 @@ std::unique_ptr<StudyJob> run_study(const std::string& kind_name, StudyTarget ta
                                     const Params& options, const std::filesystem::path& dir,
                                     StudyContext ctx) {
   const StudyKind& kind = study_kind(kind_name);
+  // Method files are registered process-wide before the scope copies the registries.
+  target.integrators = resolve_integrator_tokens(std::move(target.integrators));
   const ScopedStudyObjects scope(target.objects, target.model, target.integrators);
   if (ctx.use_output_cache && ctx.cache_dir.empty()) ctx.cache_dir = dir.string();
   auto job = make_study(kind, target, options, ctx, option_flag);
@@ -173,7 +178,8 @@ void run_study_job(const StudyKind& kind, StudyJob& job_ref, const std::filesyst
   NullStream null;
   std::ostream& err = ctx.err ? *ctx.err : null;
   require_output_dir(dir);
-  check_study_output(dir, kind.stem, job->spec_json(), ctx.force, ctx.err, kind.extra_files);
+  check_study_output(dir, kind.stem, with_method_files(job->spec_json()), ctx.force, ctx.err,
+                     kind.extra_files);
   job->run(ctx.progress);
   const bool plotted =
       job->write(dir, ctx.title.empty() ? job->default_title() : ctx.title, ctx.plot, err);

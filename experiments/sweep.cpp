@@ -213,7 +213,22 @@ std::string md_name(const std::string& kind) {
   return fs::path(csv_name(kind)).replace_extension(".md").string();
 }
 
-std::string spec_hash(const SpecFile& s) { return hex16(fnv1a64(s.to_json().dump())); }
+// The spec's hash; with the method files it names (so a changed file is a different spec).
+std::string spec_hash(const SpecFile& s) {
+  return hex16(fnv1a64(with_method_files(s.to_json()).dump()));
+}
+
+// `spec` with the method files among its integrators registered and replaced by their names;
+// relative paths are relative to the spec file's folder (catalog.hpp).
+SpecFile with_method_names(SpecFile spec) {
+  try {
+    spec.integrators = resolve_integrator_tokens(std::move(spec.integrators),
+                                                 fs::path(spec.file).parent_path().string());
+  } catch (const BadInput& e) {
+    throw BadInput(spec.integrators_where + ": key 'integrators': " + e.what());
+  }
+  return spec;
+}
 
 void write_all(const fs::path& path, const std::string& header,
                const std::map<long, UnitRows>& units) {
@@ -335,7 +350,8 @@ void write_slurm(const RunOptions& opt, const SpecFile& spec, const Expansion& e
 
 }  // namespace
 
-std::unique_ptr<StudyJob> make_spec_job(const SpecFile& spec, const std::string& cache_dir) {
+std::unique_ptr<StudyJob> make_spec_job(const SpecFile& given, const std::string& cache_dir) {
+  const SpecFile spec = with_method_names(given);
   const Expansion ex = expand(spec);
   if (ex.points.size() != 1)
     throw BadInput(spec.file + ": key '" + ex.dims.front()->path +
@@ -433,7 +449,7 @@ void write_run_json(const RunOptions& opt, const SpecFile& spec, const Expansion
   const std::string kind = spec.kind;
   const std::string shard = std::to_string(opt.shard_index) + "/" + std::to_string(opt.shard_count);
   nlohmann::json run;
-  run["spec"] = spec.to_json();
+  run["spec"] = with_method_files(spec.to_json());
   run["spec_file"] = fs::absolute(spec.file).string();
   run["spec_hash"] = hash;
   run["kind"] = kind;
@@ -541,7 +557,7 @@ void run_units(const SpecFile& spec, const Expansion& ex, const std::vector<long
 }  // namespace
 
 int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
-  const SpecFile spec = load_spec_file(opt.spec_file, opt.sets);
+  const SpecFile spec = with_method_names(load_spec_file(opt.spec_file, opt.sets));
   const Expansion ex = expand(spec);
   for (const auto& p : ex.points) validate_point(spec, p);
   if (opt.slurm_tasks < 0) throw BadInput("--slurm: expected a number of tasks >= 1");
