@@ -13,8 +13,6 @@
 #include "core/driver.hpp"
 #include "experiments/catalog.hpp"
 #include "integrators/implicit/dirk.hpp"
-#include "integrators/implicit/gauss.hpp"
-#include "integrators/implicit/radau5.hpp"
 
 namespace stiffbench {
 
@@ -243,14 +241,9 @@ std::unique_ptr<Integrator> create(const std::string& name) {
   return integrator_registry().create(name, Params{});
 }
 
-// The Butcher tableau of a method: its own butcher_tableau() (explicit, embedded and DIRK
-// steppers), else the Gauss and Radau IIA tableaux by their classes.
-const ButcherTableau* tableau_of(const Integrator& integ) {
-  if (const ButcherTableau* t = integ.butcher_tableau()) return t;
-  if (dynamic_cast<const GaussCollocation*>(&integ)) return &gauss_tableau(integ.info().stages);
-  if (dynamic_cast<const Radau5*>(&integ)) return &radau5_tableau();
-  return nullptr;
-}
+// The Butcher tableau of a method: its own butcher_tableau() (explicit, embedded, DIRK, fully
+// implicit and Radau IIA steppers).
+const ButcherTableau* tableau_of(const Integrator& integ) { return integ.butcher_tableau(); }
 
 // Why the method cannot run on `sys`, or empty.
 std::string incompatibility(const Integrator& integ, const OdeSystem& sys) {

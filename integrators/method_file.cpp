@@ -551,9 +551,8 @@ std::unique_ptr<Integrator> build(const MethodDefinition& m, const Params& p) {
       return std::make_unique<DirkIntegrator>(m.tableau, m.description,
                                               read_implicit_options(p, true));
     case MethodKind::irk:
-      // TODO(issue 25): ImplicitRungeKutta / Radau5 from a tableau (h25-irk).
-      throw BadInput("method '" + m.name + "' (" + m.source +
-                     "): kind 'irk' cannot be run yet (no generic implicit RK integrator)");
+      if (m.solver == "radau5") return std::make_unique<Radau5>(m.tableau, read_radau5_options(p));
+      return std::make_unique<ImplicitRungeKutta>(m.tableau, m.description, read_gauss_options(p));
     case MethodKind::rosenbrock:
       if (m.adaptive())
         return std::make_unique<Rosenbrock>(m.rosenbrock, m.description,
@@ -631,12 +630,10 @@ MethodDefinition parse_method_file(const std::string& text, const std::string& o
   }
   m.class_text = r.text("class", false, default_class(m));
   // The integrator's own checks (its constructor), reported against the file.
-  if (m.kind != MethodKind::irk) {
-    try {
-      (void)make_integrator(m);
-    } catch (const BadInput& e) {
-      throw BadInput(origin + ": " + e.what());
-    }
+  try {
+    (void)make_integrator(m);
+  } catch (const BadInput& e) {
+    throw BadInput(origin + ": " + e.what());
   }
   return m;
 }

@@ -8,9 +8,7 @@
 #include "integrators/graphics/xpbd.hpp"
 #include "integrators/implicit/baraff_witkin.hpp"
 #include "integrators/implicit/dirk.hpp"
-#include "integrators/implicit/gauss.hpp"
 #include "integrators/implicit/linearly_implicit.hpp"
-#include "integrators/implicit/radau5.hpp"
 #include "integrators/method_entry.hpp"
 #include "integrators/method_file.hpp"
 #include "integrators/reference/gsl.hpp"
@@ -73,13 +71,9 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
   // Rosenbrock methods from their files (linearly_implicit.hpp); the pairs with an embedded
   // estimate run fixed-step with --h or adaptively with rtol/atol.
   add_methods(reg, MethodKind::rosenbrock);
-  add_class(reg, Radau5({}), radau5_param_specs(),
-            [](const Params& p) { return std::make_unique<Radau5>(read_radau5_options(p)); });
-  for (const int s : {2, 3}) {
-    add_class(reg, GaussCollocation(s, {}), gauss_param_specs(), [s](const Params& p) {
-      return std::make_unique<GaussCollocation>(s, read_gauss_options(p));
-    });
-  }
+  // Fully implicit RK from their files: Gauss-Legendre collocation (ImplicitRungeKutta, fixed
+  // step, gauss.hpp) and Radau IIA run by RADAU5 (solver = "radau5", radau5.hpp).
+  add_methods(reg, MethodKind::irk);
   // Baraff–Witkin is velocity-form by construction (no `form`), and its single Krylov solve
   // defaults to a relative 1e-6 (baraff_witkin.hpp).
   std::vector<ParamSpec> bw_specs;

@@ -1,46 +1,59 @@
 #include "integrators/implicit/gauss.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
-#include "integrators/method_entry.hpp"
+#include "integrators/method_file.hpp"
 
 namespace stiffbench {
 
 namespace {
 
-ButcherTableau build_tableau(int s) {
-  ButcherTableau t;
-  if (s == 2) {
-    const double r = std::sqrt(3.0) / 6.0;
-    t.name = "gauss4";
-    t.order = 4;
-    t.a = Mat{{0.25, 0.25 - r}, {0.25 + r, 0.25}};
-    t.b = Vec{{0.5, 0.5}};
-  } else if (s == 3) {
-    const double r = std::sqrt(15.0);
-    t.name = "gauss6";
-    t.order = 6;
-    t.a = Mat{{5.0 / 36, 2.0 / 9 - r / 15, 5.0 / 36 - r / 30},
-              {5.0 / 36 + r / 24, 2.0 / 9, 5.0 / 36 - r / 24},
-              {5.0 / 36 + r / 30, 2.0 / 9 + r / 15, 5.0 / 36}};
-    t.b = Vec{{5.0 / 18, 4.0 / 9, 5.0 / 18}};
-  } else {
-    throw std::logic_error("gauss_tableau: 2 or 3 stages");
-  }
-  t.c = t.a.rowwise().sum();
-  return t;
+std::string tableau_who(const ButcherTableau& t) {
+  return "tableau '" + (t.name.empty() ? std::string("(unnamed)") : t.name) + "': ";
 }
 
-GaussConstants build_constants(int s) {
-  const ButcherTableau& tab = gauss_tableau(s);
+std::string num(double x) {
+  std::ostringstream os;
+  os.precision(3);
+  os << x;
+  return os.str();
+}
+
+// Smallest over largest singular value of m.
+double inverse_condition(const Mat& m) {
+  const Eigen::JacobiSVD<Mat> svd(m);
+  const Vec& sv = svd.singularValues();
+  return sv.size() == 0 || sv[0] == 0.0 ? 0.0 : sv[sv.size() - 1] / sv[0];
+}
+
+}  // namespace
+
+IrkConstants irk_constants(const ButcherTableau& tab) {
+  const std::string who = tableau_who(tab);
+  const Index s = tab.a.rows();
+  require_input(s >= 1 && tab.a.cols() == s && tab.b.size() == s && tab.a.allFinite(),
+                who + "a fully implicit method needs A s x s and b with s entries, all finite");
+  // A must be invertible: the stage equations are written in A⁻¹'s eigenbasis and dᵀ = bᵀA⁻¹.
+  const double rcond_a = inverse_condition(tab.a);
+  if (!(rcond_a > 1e-12)) {
+    std::string row;
+    for (Index i = 0; i < s && row.empty(); ++i)
+      if (tab.a.row(i).isZero(0.0)) row = " (row " + std::to_string(i) + " of A is zero)";
+    throw BadInput(who + "A is singular" + row + ": smallest/largest singular value " +
+                   num(rcond_a) + "; a fully implicit method needs an invertible A");
+  }
   const Mat ainv = tab.a.inverse();
   Eigen::EigenSolver<Mat> es(ainv);
-  GaussConstants k;
+  require_input(es.info() == Eigen::Success, who + "the eigenvalues of A^-1 could not be computed");
+  IrkConstants k;
   k.t.resize(s, s);
   int col = 0;
   // Real eigenvalues first (|Im| below 1e-12 of the spectral radius; A⁻¹ of a Gauss method has
@@ -48,24 +61,57 @@ GaussConstants build_constants(int s) {
   // A⁻¹(u + iw) = (a + ib)(u + iw) gives A⁻¹u = a u - b w, A⁻¹w = b u + a w, so with columns
   // (u, w) the block of T⁻¹A⁻¹T is [[a, b], [-b, a]].
   const double scale = es.eigenvalues().cwiseAbs().maxCoeff();
-  for (int i = 0; i < s; ++i)
+  for (Index i = 0; i < s; ++i)
     if (std::abs(es.eigenvalues()[i].imag()) <= 1e-12 * scale) {
       k.t.col(col++) = es.eigenvectors().col(i).real();
       k.real.push_back(es.eigenvalues()[i].real());
     }
-  for (int i = 0; i < s; ++i)
-    if (es.eigenvalues()[i].imag() > 1e-12 * scale) {
+  for (Index i = 0; i < s; ++i)
+    if (es.eigenvalues()[i].imag() > 1e-12 * scale && col + 2 <= s) {
       k.t.col(col++) = es.eigenvectors().col(i).real();
       k.t.col(col++) = es.eigenvectors().col(i).imag();
       k.a.push_back(es.eigenvalues()[i].real());
       k.b.push_back(es.eigenvalues()[i].imag());
     }
-  if (col != s) throw std::logic_error("gauss: unexpected eigenstructure of A^-1");
+  require_input(col == s, who +
+                              "the eigenvalues of A^-1 do not split into real ones and "
+                              "complex-conjugate pairs");
+  // Round-off in the transformed variables W = T⁻¹Z (where the Newton norm is measured) is
+  // amplified up to cond(T): gauss4 3.7, gauss6 12.3, Radau IIA 8.6, Lobatto IIIC 3.6; an
+  // SDIRK's A⁻¹, one Jordan block, comes out of the eigensolver as a pair split by about √ε
+  // with cond(T) ~ 1e8.
+  const double rcond_t = inverse_condition(k.t);
+  if (!(rcond_t >= 1e-4))
+    throw BadInput(who +
+                   "A^-1 has a repeated eigenvalue without a full set of eigenvectors, or nearly "
+                   "so: its eigenvector basis has condition number " +
+                   num(1.0 / rcond_t) +
+                   " (above 1e4 the transformed Newton iteration would amplify round-off by "
+                   "that much); it needs A^-1 diagonalisable with well-separated eigenvalues");
   k.t_inv = k.t.inverse();
   k.lambda = k.t_inv * ainv * k.t;
+  // The blocks must describe A⁻¹ itself (T Λ_blocks⁻¹ T⁻¹ = A to round-off), else the Newton
+  // iteration would solve another method.
+  Mat blocks = Mat::Zero(s, s);
+  Index j = 0;
+  for (const double g : k.real) blocks(j, j) = g, ++j;
+  for (std::size_t p = 0; p < k.a.size(); ++p, j += 2) {
+    blocks(j, j) = blocks(j + 1, j + 1) = k.a[p];
+    blocks(j, j + 1) = k.b[p];
+    blocks(j + 1, j) = -k.b[p];
+  }
+  const double defect = (k.t * blocks.inverse() * k.t_inv - tab.a).cwiseAbs().maxCoeff() /
+                        std::max(1.0, tab.a.cwiseAbs().maxCoeff());
+  if (!(defect <= 1e-12))
+    throw BadInput(who +
+                   "A^-1 is not diagonalisable to round-off (A rebuilt from its "
+                   "eigenvectors differs by " +
+                   num(defect) + ")");
   k.d = ainv.transpose() * tab.b;
   return k;
 }
+
+namespace {
 
 // dst.col(i) = Σ_j coef(i, j) src.col(j) (dst = src coefᵀ), column by column: no temporaries.
 void combine_columns(const Mat& src, const Mat& coef, Mat& dst) {
@@ -78,14 +124,14 @@ void combine_columns(const Mat& src, const Mat& coef, Mat& dst) {
 }  // namespace
 
 const ButcherTableau& gauss_tableau(int stages) {
-  static const ButcherTableau t2 = build_tableau(2), t3 = build_tableau(3);
-  if (stages == 2) return t2;
-  if (stages == 3) return t3;
+  if (stages == 2) return built_in_method("gauss4").tableau;
+  if (stages == 3) return built_in_method("gauss6").tableau;
   throw std::logic_error("gauss_tableau: 2 or 3 stages");
 }
 
 const GaussConstants& gauss_constants(int stages) {
-  static const GaussConstants k2 = build_constants(2), k3 = build_constants(3);
+  static const GaussConstants k2 = irk_constants(gauss_tableau(2)),
+                              k3 = irk_constants(gauss_tableau(3));
   if (stages == 2) return k2;
   if (stages == 3) return k3;
   throw std::logic_error("gauss_constants: 2 or 3 stages");
@@ -141,45 +187,43 @@ ImplicitOptions core_options(const GaussOptions& o) {
   return io;
 }
 
-constexpr Text kGaussReference =
-    join_text("J. C. Butcher, Implicit Runge-Kutta processes, Math. Comp. 18 (1964) 50-64", "; ",
-              cite(kGeometricIntegration, "Sect. II.1.3, VI.4"));
+}  // namespace
 
-constexpr MethodText kGauss4Text{
-    .description =
-        "Gauss-Legendre collocation, 2 stages, order 4 (Butcher 1964, Math. Comp. 18; "
-        "Hairer, Lubich & Wanner, Geometric Numerical Integration, Springer 2006): "
-        "symplectic, symmetric, A-stable with |R(iy)| = 1; transformed simplified "
-        "Newton; fixed step",
-    .kind = "Gauss collocation (2 stages)",
-    .reference = kGaussReference};
+namespace {
 
-constexpr MethodText kGauss6Text{
-    .description =
-        "Gauss-Legendre collocation, 3 stages, order 6 (Butcher 1964, Math. Comp. 18; "
-        "Hairer, Lubich & Wanner, Geometric Numerical Integration, Springer 2006): "
-        "symplectic, symmetric, A-stable with |R(iy)| = 1; transformed simplified "
-        "Newton; fixed step",
-    .kind = "Gauss collocation (3 stages)",
-    .reference = kGaussReference};
-
-const MethodText& method_text(int s) { return s == 2 ? kGauss4Text : kGauss6Text; }
+// The tableau checked against its claims (sizes, c completed from the row sums or checked,
+// claimed order) before the constants are derived from it.
+ButcherTableau validated_irk(ButcherTableau t) {
+  t.validate(ButcherTableau::Shape::any);
+  return t;
+}
 
 }  // namespace
 
-GaussCollocation::GaussCollocation(int stages, GaussOptions opt)
-    : Integrator(method_info(gauss_tableau(stages).name, Family::implicit,
-                             gauss_tableau(stages).order, stages, {}, method_text(stages))),
-      s_(stages),
-      tableau_(gauss_tableau(stages)),
-      k_(gauss_constants(stages)),
+ImplicitRungeKutta::ImplicitRungeKutta(ButcherTableau tableau, std::string description,
+                                       GaussOptions opt)
+    : Integrator({tableau.name,
+                  Family::implicit,
+                  tableau.order,
+                  tableau.stages(),
+                  {},
+                  std::move(description)}),
+      tableau_(validated_irk(std::move(tableau))),
+      k_(irk_constants(tableau_)),
+      s_(tableau_.stages()),
       opt_(opt),
       core_(core_options(opt)) {
+  const Vec& c = tableau_.c;
+  interpolate_ = true;
+  for (int i = 0; i < s_; ++i) {
+    zero_node_ = zero_node_ || c[i] == 0.0;
+    for (int j = 0; j < i; ++j) interpolate_ = interpolate_ && c[i] != c[j];
+  }
   real_.resize(k_.real.size());
   complex_.resize(k_.a.size());
 }
 
-void GaussCollocation::reset(const OdeSystem& sys, double t0, CVecRef y0) {
+void ImplicitRungeKutta::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   check_compatible(info(), sys);
   n_ = sys.dimension();
   const bool large = n_ > LinearSolverOptions{}.dense_max;
@@ -204,14 +248,30 @@ void GaussCollocation::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   cached_y_ = nullptr;
 }
 
-void GaussCollocation::starting_values(double h) {
-  if (!have_prev_) {
+void ImplicitRungeKutta::starting_values(double h) {
+  if (!have_prev_ || !interpolate_) {
     z_.setZero();
+    return;
+  }
+  const Vec& c = tableau_.c;
+  if (zero_node_) {
+    // A node at 0 (Lobatto): q through the s points (c_j, Z_j^prev) only, continued to the new
+    // nodes relative to the new y_n: Z_i = q(1 + c_i h/h_prev) - Σ_j d_j Z_j^prev.
+    const auto lagrange = [&](double x, int j) {
+      double l = 1.0;
+      for (int m = 0; m < s_; ++m)
+        if (m != j) l *= (x - c[m]) / (c[j] - c[m]);
+      return l;
+    };
+    for (int i = 0; i < s_; ++i) {
+      const double x = 1.0 + c[i] * h / h_prev_;
+      z_.col(i).setZero();
+      for (int j = 0; j < s_; ++j) z_.col(i) += (lagrange(x, j) - k_.d[j]) * z_prev_.col(j);
+    }
     return;
   }
   // The previous step's collocation polynomial q(σ), σ = (t - t_{n-1})/h_prev, through q(0) = 0
   // and q(c_j) = Z_j^prev, continued to the new nodes: Z_i = q(1 + c_i h/h_prev) - q(1).
-  const Vec& c = tableau_.c;
   const auto basis = [&](double x, int j) {
     double l = x / c[j];
     for (int m = 0; m < s_; ++m)
@@ -225,8 +285,8 @@ void GaussCollocation::starting_values(double h) {
   }
 }
 
-NewtonAttempt GaussCollocation::solve_stages(const OdeSystem& sys, double t, CVecRef y, double h,
-                                             SolveStats& stats) {
+NewtonAttempt ImplicitRungeKutta::solve_stages(const OdeSystem& sys, double t, CVecRef y, double h,
+                                               SolveStats& stats) {
   const Vec& c = tableau_.c;
   scale_ = 1.0 + y.array().abs();
   starting_values(h);
@@ -286,8 +346,8 @@ NewtonAttempt GaussCollocation::solve_stages(const OdeSystem& sys, double t, CVe
   return res;
 }
 
-Status GaussCollocation::step(const OdeSystem& sys, double t, VecRef y, double h,
-                              SolveStats& stats) {
+Status ImplicitRungeKutta::step(const OdeSystem& sys, double t, VecRef y, double h,
+                                SolveStats& stats) {
   const bool continuing = have_prev_ && cached_y_ == y.data() &&
                           std::abs(cached_t_ - t) <= 1e-12 * (std::abs(t) + std::abs(h));
   if (!continuing) have_prev_ = false;

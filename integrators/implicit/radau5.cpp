@@ -1,69 +1,120 @@
 #include "integrators/implicit/radau5.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <string>
+#include <utility>
 
 #include "integrators/method_entry.hpp"
+#include "integrators/method_file.hpp"
 
 namespace stiffbench {
 
-const ButcherTableau& radau5_tableau() {
-  static const ButcherTableau t = [] {
-    // HW II, Table IV.5.6 (Radau IIA, s = 3).
-    const double r = std::sqrt(6.0);
-    ButcherTableau b;
-    b.name = "radau5";
-    b.order = 5;
-    b.a = Mat(3, 3);
-    b.a << (88 - 7 * r) / 360, (296 - 169 * r) / 1800, (-2 + 3 * r) / 225,  //
-        (296 + 169 * r) / 1800, (88 + 7 * r) / 360, (-2 - 3 * r) / 225,     //
-        (16 - r) / 36, (16 + r) / 36, 1.0 / 9;
-    b.b = b.a.row(2).transpose();
-    b.c = Vec(3);
-    b.c << (4 - r) / 10, (4 + r) / 10, 1.0;
-    return b;
-  }();
+const ButcherTableau& radau5_tableau() { return built_in_method("radau5").tableau; }
+
+namespace {
+
+std::string num(double x) {
+  std::ostringstream os;
+  os.precision(3);
+  os << x;
+  return os.str();
+}
+
+// The checks of radau5.hpp that need no eigen-decomposition; BadInput naming the tableau.
+ButcherTableau validated_radau5(ButcherTableau t) {
+  t.validate(ButcherTableau::Shape::any);
+  const std::string who =
+      "tableau '" + (t.name.empty() ? std::string("(unnamed)") : t.name) + "': RADAU5 needs ";
+  require_input(t.stages() == 3, who + "3 stages (it has " + std::to_string(t.stages()) + ")");
+  require_input(std::abs(t.c[2] - 1.0) <= 1e-14, who + "c_3 = 1 (it is " + num(t.c[2]) + ")");
+  const double sa = (t.a.row(2).transpose() - t.b).cwiseAbs().maxCoeff();
+  require_input(sa <= 1e-14, who +
+                                 "a stiffly accurate tableau, b equal to the last row of A (they "
+                                 "differ by " +
+                                 num(sa) + ")");
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < i; ++j)
+      require_input(std::abs(t.c[i] - t.c[j]) > 1e-12,
+                    who + "distinct nodes (c_" + std::to_string(j + 1) + " = c_" +
+                        std::to_string(i + 1) + " = " + num(t.c[i]) + ")");
+  const Eigen::JacobiSVD<Mat> svd(t.a);
+  const double rcond = svd.singularValues()[2] / svd.singularValues()[0];
+  require_input(rcond > 1e-12,
+                who + "an invertible A (smallest/largest singular value " + num(rcond) + ")");
   return t;
 }
 
+}  // namespace
+
+Radau5Constants radau5_constants(const ButcherTableau& tableau) {
+  const ButcherTableau tab = validated_radau5(tableau);
+  const Eigen::Matrix3d a = tab.a;
+  const Eigen::Matrix3d ainv = a.inverse();
+  Eigen::EigenSolver<Eigen::Matrix3d> es(ainv);
+  int real_idx = 0, pair_idx = 0;
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(es.eigenvalues()[i].imag()) < std::abs(es.eigenvalues()[real_idx].imag()))
+      real_idx = i;
+    if (es.eigenvalues()[i].imag() > es.eigenvalues()[pair_idx].imag()) pair_idx = i;
+  }
+  const std::string who =
+      "tableau '" + (tab.name.empty() ? std::string("(unnamed)") : tab.name) + "': RADAU5 needs ";
+  const double scale = es.eigenvalues().cwiseAbs().maxCoeff();
+  require_input(es.info() == Eigen::Success &&
+                    std::abs(es.eigenvalues()[real_idx].imag()) <= 1e-12 * scale &&
+                    es.eigenvalues()[pair_idx].imag() > 1e-12 * scale,
+                who + "A^-1 with one real eigenvalue and one complex-conjugate pair");
+  // A⁻¹(u + iw) = (a' + ib')(u + iw) gives A⁻¹u = a'u - b'w, A⁻¹w = b'u + a'w: with
+  // T = [t1, u, w] the lower block of T⁻¹A⁻¹T is [[a', b'], [-b', a']].
+  Radau5Constants c;
+  c.t.col(0) = es.eigenvectors().col(real_idx).real();
+  c.t.col(1) = es.eigenvectors().col(pair_idx).real();
+  c.t.col(2) = es.eigenvectors().col(pair_idx).imag();
+  // As for ImplicitRungeKutta (gauss.cpp): the transformation must not amplify round-off.
+  const Eigen::JacobiSVD<Mat> svd_t(Mat(c.t));
+  const double cond_t = svd_t.singularValues()[0] / svd_t.singularValues()[2];
+  require_input(cond_t <= 1e4, who +
+                                   "A^-1 diagonalisable with well-separated eigenvalues (its "
+                                   "eigenvector basis has condition number " +
+                                   num(cond_t) + ")");
+  c.t_inv = c.t.inverse();
+  const Eigen::Matrix3d lambda = c.t_inv * ainv * c.t;
+  c.gamma_hat = lambda(0, 0);
+  c.a = lambda(1, 1);
+  c.b = lambda(1, 2);
+  // The blocks must be A⁻¹ itself (T Λ_blocks⁻¹ T⁻¹ = A to round-off), else the iteration
+  // solves another method.
+  Eigen::Matrix3d blocks = Eigen::Matrix3d::Zero();
+  blocks(0, 0) = c.gamma_hat;
+  blocks(1, 1) = blocks(2, 2) = c.a;
+  blocks(1, 2) = c.b;
+  blocks(2, 1) = -c.b;
+  const double defect = (c.t * blocks.inverse() * c.t_inv - a).cwiseAbs().maxCoeff() /
+                        std::max(1.0, a.cwiseAbs().maxCoeff());
+  require_input(defect <= 1e-12, who +
+                                     "A^-1 diagonalisable to round-off (A rebuilt from its "
+                                     "eigenvectors differs by " +
+                                     num(defect) + ")");
+  // Embedded weights of order 3 with b̂_0 = γ_0 = 1/γ̂ on f(t_n, y_n):
+  // γ_0 δ_{q0} + Σ_i b̂_i c_i^q = 1/(q+1), q = 0, 1, 2.
+  Eigen::Matrix3d v;
+  Eigen::Vector3d rhs;
+  for (int q = 0; q < 3; ++q) {
+    for (int i = 0; i < 3; ++i) v(q, i) = std::pow(tab.c[i], q);
+    rhs[q] = 1.0 / (q + 1) - (q == 0 ? 1.0 / c.gamma_hat : 0.0);
+  }
+  const Eigen::Vector3d bhat = v.partialPivLu().solve(rhs);
+  c.e = ainv.transpose() * (bhat - Eigen::Vector3d(tab.b));
+  return c;
+}
+
 const Radau5Constants& radau5_constants() {
-  static const Radau5Constants k = [] {
-    const ButcherTableau& tab = radau5_tableau();
-    const Eigen::Matrix3d a = tab.a;
-    const Eigen::Matrix3d ainv = a.inverse();
-    Eigen::EigenSolver<Eigen::Matrix3d> es(ainv);
-    int real_idx = 0, pair_idx = 0;
-    for (int i = 0; i < 3; ++i) {
-      if (std::abs(es.eigenvalues()[i].imag()) < std::abs(es.eigenvalues()[real_idx].imag()))
-        real_idx = i;
-      if (es.eigenvalues()[i].imag() > es.eigenvalues()[pair_idx].imag()) pair_idx = i;
-    }
-    // A⁻¹(u + iw) = (a' + ib')(u + iw) gives A⁻¹u = a'u - b'w, A⁻¹w = b'u + a'w: with
-    // T = [t1, u, w] the lower block of T⁻¹A⁻¹T is [[a', b'], [-b', a']].
-    Radau5Constants c;
-    c.t.col(0) = es.eigenvectors().col(real_idx).real();
-    c.t.col(1) = es.eigenvectors().col(pair_idx).real();
-    c.t.col(2) = es.eigenvectors().col(pair_idx).imag();
-    c.t_inv = c.t.inverse();
-    const Eigen::Matrix3d lambda = c.t_inv * ainv * c.t;
-    c.gamma_hat = lambda(0, 0);
-    c.a = lambda(1, 1);
-    c.b = lambda(1, 2);
-    // Embedded weights of order 3 with b̂_0 = γ_0 = 1/γ̂ on f(t_n, y_n):
-    // γ_0 δ_{q0} + Σ_i b̂_i c_i^q = 1/(q+1), q = 0, 1, 2.
-    Eigen::Matrix3d v;
-    Eigen::Vector3d rhs;
-    for (int q = 0; q < 3; ++q) {
-      for (int i = 0; i < 3; ++i) v(q, i) = std::pow(tab.c[i], q);
-      rhs[q] = 1.0 / (q + 1) - (q == 0 ? 1.0 / c.gamma_hat : 0.0);
-    }
-    const Eigen::Vector3d bhat = v.partialPivLu().solve(rhs);
-    c.e = ainv.transpose() * (bhat - Eigen::Vector3d(tab.b));
-    return c;
-  }();
+  static const Radau5Constants k = radau5_constants(radau5_tableau());
   return k;
 }
 
@@ -213,19 +264,38 @@ ImplicitOptions core_options(const Radau5Options& o) {
 
 }  // namespace
 
-constexpr MethodText kRadau5Text{
-    .description =
-        "Radau IIA order 5 (3 stages, L-stable, stiffly accurate); simplified Newton "
-        "split into one real and one complex linear system (Hairer-Wanner IV.8); "
-        "adaptive (rtol/atol) or fixed step",
-    .kind = "Radau IIA collocation",
-    .reference = cite(kHairerWanner, "Sect. IV.8 (RADAU5)")};
+namespace {
 
-Radau5::Radau5(Radau5Options opt)
-    : Integrator(method_info("radau5", Family::implicit, 5, 3, {}, kRadau5Text)),
+// The MethodInfo of the class: the solver and its tableau. A registered method's description,
+// kind and reference come from its method file (methods/radau5.toml for the built-in radau5;
+// method_registry_entry, integrators/method_file.hpp).
+MethodInfo radau5_info(const ButcherTableau& t) {
+  MethodInfo info{t.name,
+                  Family::implicit,
+                  t.order,
+                  3,
+                  {},
+                  "RADAU5 (Hairer-Wanner IV.8: simplified Newton split into one real and one "
+                  "complex system, embedded error estimate) on the 3-stage stiffly accurate "
+                  "tableau '" +
+                      t.name + "'; adaptive (rtol/atol) or fixed step"};
+  info.kind = "Radau IIA (RADAU5)";
+  info.reference = std::string(kHairerWanner) + ", Sect. IV.8 (RADAU5)";
+  return info;
+}
+
+}  // namespace
+
+Radau5::Radau5(ButcherTableau tableau, Radau5Options opt)
+    : Integrator(radau5_info(tableau)),
+      tableau_(validated_radau5(std::move(tableau))),
+      k_(radau5_constants(tableau_)),
+      zero_node_(tableau_.c[0] == 0.0 || tableau_.c[1] == 0.0),
       opt_(opt),
       core_(core_options(opt)),
       ctrl_(opt.control, 4) {}
+
+Radau5::Radau5(Radau5Options opt) : Radau5(radau5_tableau(), opt) {}
 
 void Radau5::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   check_compatible(info(), sys);
@@ -233,7 +303,8 @@ void Radau5::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   const bool large = n_ > LinearSolverOptions{}.dense_max;
   require_input(opt_.jacobian != JacobianSource::automatic || !large || sys.has_jacobian() ||
                     sys.has_jacobian_pattern(),
-                "integrator 'radau5' needs an assembled Jacobian: model '" + sys.name() +
+                "integrator '" + info().name + "' needs an assembled Jacobian: model '" +
+                    sys.name() +
                     "' has neither an analytic Jacobian nor a sparsity pattern and more than " +
                     std::to_string(LinearSolverOptions{}.dense_max) +
                     " unknowns (give jacobian=fd_dense to use a dense one)");
@@ -276,7 +347,7 @@ void Radau5::ensure_jacobian(const OdeSystem& sys, double t, CVecRef y, SolveSta
 
 bool Radau5::ensure_factors(double h, SolveStats& stats) {
   if (fact_valid_ && h == fact_h_) return true;
-  const Radau5Constants& k = radau5_constants();
+  const Radau5Constants& k = k_;
   const SparseMat& jac = core_.jacobian_matrix();
   stats.linear_setups += 2;
   fact_h_ = h;
@@ -291,8 +362,23 @@ void Radau5::starting_values(double h) {
     return;
   }
   // The previous step's collocation polynomial q(s), s = (t - t_{n-1})/h_prev, q(0) = 0,
-  // q(c_j) = Z_j^prev, continued to the new stages: Z_i = q(1 + c_i h/h_prev) - Z_3^prev.
-  const Vec& c = radau5_tableau().c;
+  // q(c_j) = Z_j^prev, continued to the new stages: Z_i = q(1 + c_i h/h_prev) - Z_3^prev. With a
+  // node at 0, q through (c_j, Z_j^prev) only (degree 2; y_{n+1} - y_n = Z_3^prev still).
+  const Vec& c = tableau_.c;
+  if (zero_node_) {
+    for (int i = 0; i < 3; ++i) {
+      const double s = 1.0 + c[i] * h / h_prev_;
+      double l[3];
+      for (int j = 0; j < 3; ++j) {
+        l[j] = 1.0;
+        for (int m = 0; m < 3; ++m)
+          if (m != j) l[j] *= (s - c[m]) / (c[j] - c[m]);
+      }
+      z_.col(i) =
+          l[0] * z_prev_.col(0) + l[1] * z_prev_.col(1) + l[2] * z_prev_.col(2) - z_prev_.col(2);
+    }
+    return;
+  }
   for (int i = 0; i < 3; ++i) {
     const double s = 1.0 + c[i] * h / h_prev_;
     double l[3];
@@ -308,8 +394,8 @@ void Radau5::starting_values(double h) {
 
 NewtonAttempt Radau5::solve_stages(const OdeSystem& sys, double t, CVecRef y, double h,
                                    bool adaptive, bool warm_start, SolveStats& stats) {
-  const Radau5Constants& k = radau5_constants();
-  const Vec& c = radau5_tableau().c;
+  const Radau5Constants& k = k_;
+  const Vec& c = tableau_.c;
   const double eps = std::numeric_limits<double>::epsilon();
   double kappa = 1.0;
   if (adaptive) {
@@ -400,7 +486,7 @@ NewtonAttempt Radau5::solve_stages(const OdeSystem& sys, double t, CVecRef y, do
 
 double Radau5::estimate_error(const OdeSystem& sys, double t, CVecRef y, double h, bool refine,
                               SolveStats& stats) {
-  const Radau5Constants& k = radau5_constants();
+  const Radau5Constants& k = k_;
   const double g = k.gamma_hat / h;
   // (I - hγ_0 J)⁻¹ [γ_0 h f0 + Σ e_j Z_j] = (γ̂/h I - J)⁻¹ [f0 + (γ̂/h) Σ e_j Z_j].
   tmp2_ = (g * k.e[0]) * z_.col(0) + (g * k.e[1]) * z_.col(1) + (g * k.e[2]) * z_.col(2);
@@ -447,7 +533,7 @@ Status Radau5::step(const OdeSystem& sys, double t, VecRef y, double h, SolveSta
   // linearisation where the stiff solution has moved to within the step). Each retry refactors.
   for (int attempt = 0; attempt < 3; ++attempt) {
     if (!ensure_factors(h, stats)) {
-      stats.message = "radau5: singular iteration matrix at t = " + std::to_string(t) +
+      stats.message = info().name + ": singular iteration matrix at t = " + std::to_string(t) +
                       (reasons.empty() ? "" : " (after Newton failed: " + reasons + ")");
       return Status::solver_error;
     }
@@ -486,7 +572,7 @@ Status Radau5::step(const OdeSystem& sys, double t, VecRef y, double h, SolveSta
   have_prev_ = false;
   jac_valid_ = false;  // the J of the step's end is not the next step's (t, y)
   std::ostringstream msg;
-  msg << "radau5: Newton failed at t = " << t << " (h = " << h << "): " << reasons;
+  msg << info().name << ": Newton failed at t = " << t << " (h = " << h << "): " << reasons;
   stats.message = msg.str();
   return Status::newton_failed;
 }

@@ -2,6 +2,16 @@
 // stage order 3), fixed-step and adaptive, after Hairer & Wanner, Solving ODEs II, §IV.8 and
 // their code RADAU5.
 //
+// The class takes its tableau (radau5_tableau() for the built-in radau5, the method file
+// methods/radau5.toml; a user's file with kind = "irk", solver = "radau5") and derives every
+// constant below from it at construction. What RADAU5's iteration and error estimate rely on is
+// checked, BadInput naming the tableau: ButcherTableau::validate (sizes, c = row sums, the claimed
+// order); 3 stages; A invertible with A⁻¹ having one real eigenvalue and one complex-conjugate pair
+// (diagonalised to round-off: T Λ⁻¹ T⁻¹ equals A to 1e-12 relative); c_3 = 1 and stiffly accurate,
+// b = the last row of A (to 1e-14; y_{n+1} = y_n + Z_3); three distinct nodes (the embedded weights
+// solve a Vandermonde system in c). A node at 0 (a Lobatto IIIC tableau) changes only the starting
+// values: the previous stages are interpolated at the nodes without the point q(0) = 0.
+//
 // Stage equations for Z_i = Y_i - y_n:  Z = h (A ⊗ I) F(Z),  y_{n+1} = y_n + Z_3.
 // Simplified Newton with J = ∂f/∂y at (t_n, y_n), in the transformed variables W = (T⁻¹ ⊗ I) Z
 // where T⁻¹ A⁻¹ T = Λ = diag(γ̂, [[a, b], [-b, a]]) (A⁻¹ has one real eigenvalue γ̂ ≈ 3.6378 and
@@ -58,6 +68,7 @@
 #include <Eigen/SparseLU>
 #include <complex>
 #include <memory>
+#include <string>
 
 #include "core/integrator.hpp"
 #include "core/tableau.hpp"
@@ -88,6 +99,9 @@ struct Radau5Constants {
   double a = 0, b = 0;       // Λ's 2×2 block [[a, b], [-b, a]]
   Eigen::Vector3d e;         // error weights e = (b̂ - b)ᵀ A⁻¹
 };
+// From a tableau, with the checks above (BadInput naming the tableau).
+Radau5Constants radau5_constants(const ButcherTableau& tableau);
+// Those of radau5_tableau().
 const Radau5Constants& radau5_constants();
 
 // M = shift·I - J factored, for a real or complex shift; dense or sparse.
@@ -114,6 +128,11 @@ class ShiftedSolver {
 
 class Radau5 final : public Integrator {
  public:
+  // The tableau checked as above. MethodInfo: the tableau's name and order, 3 stages, a
+  // description saying which tableau RADAU5 runs (a registered method's description, kind and
+  // reference come from its method file).
+  Radau5(ButcherTableau tableau, Radau5Options opt);
+  // radau5_tableau().
   explicit Radau5(Radau5Options opt);
 
   bool supports_adaptive() const override { return true; }
@@ -121,8 +140,9 @@ class Radau5 final : public Integrator {
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) override;
   std::optional<LinearStability> linear_stability() const override {
-    return tableau_stability(radau5_tableau());
+    return tableau_stability(tableau_);
   }
+  const ButcherTableau* butcher_tableau() const override { return &tableau_; }
 
  private:
   // Newton for the stages of a step of size h from (t, y), from the starting values (or, warm,
@@ -137,6 +157,9 @@ class Radau5 final : public Integrator {
   void starting_values(double h);
   void accept_stages(double h);
 
+  ButcherTableau tableau_;
+  Radau5Constants k_;
+  bool zero_node_ = false;  // c_1 = 0: starting values without q(0) = 0
   Radau5Options opt_;
   ImplicitCore core_;
   StepController ctrl_;
