@@ -71,6 +71,10 @@ class Integrator {
   // The Butcher tableau of a Runge–Kutta method (its coefficients, for `stiffbench audit`);
   // nullptr for methods that are not defined by one.
   virtual const ButcherTableau* butcher_tableau() const { return nullptr; }
+  // Likewise the coefficients of a Rosenbrock method and of a kick/drift splitting (for
+  // `stiffbench analyze`); nullptr for other methods.
+  virtual const RosenbrockTableau* rosenbrock_tableau() const { return nullptr; }
+  virtual const KickDriftCoefficients* kick_drift_coefficients() const { return nullptr; }
 
   // Starts a run at (t0, y0) on `sys`; checks compatibility, allocates workspaces, clears
   // history. The same system must be passed to the following step() calls.

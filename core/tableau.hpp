@@ -1,6 +1,7 @@
 // Methods as data: Butcher tableaux for Runge–Kutta methods and kick/drift coefficients for
 // symplectic splitting methods of mechanical systems. A tableau checks itself: row sums,
-// order conditions (rooted trees up to order 6) and its stability function R(z).
+// order conditions (rooted trees up to order 8, core/method_analysis.hpp) and its stability
+// function R(z).
 #pragma once
 
 #include <complex>
@@ -35,7 +36,7 @@ struct ButcherTableau {
   std::complex<double> stability(std::complex<double> z) const;
 
   // Largest |bᵀΦ(τ) - 1/γ(τ)| over the rooted trees τ with exactly p vertices (Butcher's
-  // order conditions; Hairer–Nørsett–Wanner I, §II.2). Defined for 1 <= p <= 6.
+  // order conditions; Hairer–Nørsett–Wanner I, §II.2). Defined for 1 <= p <= 8.
   double order_defect(int p) const { return order_defect(b, p); }
   double order_defect(const Vec& weights, int p) const;
 
@@ -62,9 +63,11 @@ struct ButcherTableau {
   //     to 1e-12;
   //   shape: explicit_rk needs A strictly lower triangular, diagonally_implicit lower
   //     triangular;
-  //   order >= 1 is claimed and every order condition up to min(order, 6) holds to 1e-12 (the
-  //     rooted trees of order_defect; a claim above 6 is checked up to 6); likewise the
-  //     embedded weights up to min(embedded_order, 6), and embedded_order >= 1 with them;
+  //   order >= 1 is claimed and every order condition up to min(order, 8) holds to 1e-12 (the
+  //     rooted trees of core/method_analysis.hpp; a claim above 8 is checked up to 8), else
+  //     the first violated condition is named: "order 3 claimed but the condition of tree
+  //     [[t]] (order 3) has residual -0.167"; likewise the embedded weights up to
+  //     min(embedded_order, 8), and embedded_order >= 1 with them;
   //   stage_order (when claimed) holds (C(q) to 1e-12);
   //   fsal (when claimed): coefficients_fsal().
   void validate(Shape shape = Shape::any);
@@ -86,6 +89,26 @@ struct KickDriftCoefficients {
   int evaluations_per_step() const;  // non-zero kicks
   // Conditions up to order 2: Σ kick = Σ drift = 1 and Σ_j kick_j Σ_{i<j} drift_i = 1/2.
   double order_defect(int p) const;
+};
+
+// Rosenbrock method in the form of Hairer & Wanner II, §IV.7, (7.4): stage coefficients α
+// (strictly lower), Γ = γI + γ_ij (strictly lower), weights b and optional embedded weights b̂
+// (integrators/implicit/linearly_implicit.hpp runs it; order_defect is implemented there).
+struct RosenbrockTableau {
+  std::string name;
+  int order = 0;
+  double gamma = 0;  // γ_ii (the same for all stages)
+  Mat alpha;         // strictly lower
+  Mat gamma_lower;   // γ_ij, j < i (strictly lower)
+  Vec b;
+  Vec b_embedded = Vec();  // optional embedded weights (size 0: none)
+  int embedded_order = 0;
+
+  Index stages() const { return b.size(); }
+  Mat gamma_full() const;  // Γ = gamma_lower + γ I
+  // Largest |Σ w_i Φ_i(τ) - 1/γ(τ)| over the rooted trees τ with exactly p vertices (the
+  // conditions of HW II §IV.7, see linearly_implicit.hpp). Defined for 1 <= p <= 6.
+  double order_defect(const Vec& weights, int p) const;
 };
 
 }  // namespace stiffbench

@@ -8,7 +8,8 @@ void add_common_flags(CLI::App* cmd, CommonFlags& f, bool with_model, bool model
     if (model_required) m->required();
   }
   cmd->add_option("--integrators", f.integrators,
-                  "comma-separated integrator names (see `stiffbench list integrators`)");
+                  "comma-separated integrator names (see `stiffbench list integrators`) or "
+                  "method-file paths (*.toml)");
   cmd->add_option("--param", f.params, "model/integrator parameter key=value (repeatable)")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);

@@ -21,7 +21,10 @@ void add_solve_command(CLI::App& app) {
                          "adaptive): final state, invariants, observables, statistics; --frames "
                          "writes particle frames");
   solve->add_option("--model", o.model, "model name")->required();
-  solve->add_option("--integrator", o.integrator, "integrator name")->required();
+  solve
+      ->add_option("--integrator", o.integrator,
+                   "integrator name, or the path of a method file (*.toml)")
+      ->required();
   solve->add_option("--h", o.h,
                     "step size (the run takes N = round(T/h) steps of T/N); omit for the adaptive "
                     "mode of a reference integrator or the model's suggested step");

@@ -26,7 +26,8 @@ void add_study_command(CLI::App& app, const StudyKind& kind) {
   else
     cmd->get_option("--integrators")
         ->description(
-            "comma-separated integrator names (default: every integrator the study applies to)");
+            "comma-separated integrator names or method-file paths (default: every integrator the "
+            "study applies to)");
   std::vector<std::pair<std::string, CLI::Option*>> given;
   for (const auto& o : kind.options) {
     std::string help = o.help;

@@ -629,11 +629,12 @@ MethodDefinition parse_method_file(const std::string& text, const std::string& o
       break;
   }
   m.class_text = r.text("class", false, default_class(m));
-  // The integrator's own checks (its constructor), reported against the file.
+  // The integrator's own checks (its constructor: e.g. A⁻¹ diagonalisable for irk, RADAU5's
+  // structure for solver = "radau5"), reported against the file.
   try {
     (void)make_integrator(m);
   } catch (const BadInput& e) {
-    throw BadInput(origin + ": " + e.what());
+    throw BadInput(r.where("A") + ": " + e.what());
   }
   return m;
 }

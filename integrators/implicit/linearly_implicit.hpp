@@ -80,22 +80,7 @@ class SemiImplicitEuler final : public Integrator {
   Vec f_, dy_, ft_, rhs_;
 };
 
-struct RosenbrockTableau {
-  std::string name;
-  int order = 0;
-  double gamma = 0;  // γ_ii (the same for all stages)
-  Mat alpha;         // strictly lower
-  Mat gamma_lower;   // γ_ij, j < i (strictly lower)
-  Vec b;
-  Vec b_embedded = Vec();  // optional embedded weights (size 0: none)
-  int embedded_order = 0;
-
-  Index stages() const { return b.size(); }
-  Mat gamma_full() const;  // Γ = gamma_lower + γ I
-  // Largest |Σ w_i Φ_i(τ) - 1/γ(τ)| over the rooted trees τ with exactly p vertices (the
-  // conditions of HW II §IV.7, see above). Defined for 1 <= p <= 6.
-  double order_defect(const Vec& weights, int p) const;
-};
+// struct RosenbrockTableau (α, Γ, b, b̂ as above) is declared in core/tableau.hpp.
 
 // The coefficients the integrator runs on (see above): a = αΓ⁻¹, c = diag(1/γ) - Γ⁻¹ (strictly
 // lower), m = bᵀΓ⁻¹, m̂ = b̂ᵀΓ⁻¹, α_i and γ_i.
@@ -120,6 +105,7 @@ class Rosenbrock final : public Integrator {
   Rosenbrock(RosenbrockTableau tableau, std::string description, ImplicitOptions opt,
              ControllerOptions control = {});
   const RosenbrockTableau& tableau() const { return tab_; }
+  const RosenbrockTableau* rosenbrock_tableau() const override { return &tab_; }
   bool supports_adaptive() const override { return tab_.b_embedded.size() > 0; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;

@@ -40,6 +40,7 @@ class KickDriftIntegrator final : public Integrator {
                       std::string description);
 
   const KickDriftCoefficients& coefficients() const { return coeffs_; }
+  const KickDriftCoefficients* kick_drift_coefficients() const override { return &coeffs_; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   std::optional<LinearStability> linear_stability() const override {

@@ -299,5 +299,90 @@ composition = ["1/(2 - cbrt(2))", "1 - 2/(2 - cbrt(2))", "1/(2 - cbrt(2))"]
   EXPECT_NE(msg.find("x.toml:3: key 'order'"), std::string::npos) << msg;
 }
 
+// Fixed-step runs of `a` and `b` on Kepler (e = 0.5, t = 1, h = 0.05): the largest difference of
+// the final states.
+double run_difference(Integrator& a, Integrator& b) {
+  Vec y[2];
+  Integrator* integ[2] = {&a, &b};
+  for (int k = 0; k < 2; ++k) {
+    auto sys = testing_support::model("kepler", {"e=0.5"});
+    FixedStepOptions opt;
+    opt.t_end = 1.0;
+    opt.h = 0.05;
+    const RunResult r = run_fixed_step(*sys, *integ[k], opt);
+    EXPECT_EQ(r.stats.status, Status::ok);
+    y[k] = r.y;
+  }
+  return (y[0] - y[1]).cwiseAbs().maxCoeff();
+}
+
+// Gauss–Legendre with 2 stages (Hairer–Nørsett–Wanner I, §II.7: c = 1/2 ∓ √3/6,
+// A = [[1/4, 1/4 - √3/6], [1/4 + √3/6, 1/4]], b = (1/2, 1/2)) as a file runs as the built-in
+// gauss4 does (the same class and coefficients to an ulp: the states agree to round-off), and
+// takes gauss4's parameters.
+TEST(MethodFile, IrkGaussFileRunsLikeGauss4) {
+  const MethodDefinition m = parse_method_file(R"toml(name = "my_gauss4"
+kind = "irk"
+order = 4
+stage_order = 2
+description = "2-stage Gauss"
+A = [["1/4", "1/4 - sqrt(3)/6"], ["1/4 + sqrt(3)/6", "1/4"]]
+b = ["1/2", "1/2"]
+c = ["1/2 - sqrt(3)/6", "1/2 + sqrt(3)/6"]
+)toml",
+                                               "g.toml");
+  EXPECT_EQ(m.class_text, "implicit RK");
+  EXPECT_FALSE(m.adaptive());
+  auto mine = make_integrator(m);
+  auto builtin = testing_support::make("gauss4");
+  EXPECT_LE(run_difference(*mine, *builtin), 1e-13);
+  std::vector<std::string> keys, theirs;
+  for (const ParamSpec& s : method_param_specs(m)) keys.push_back(s.key);
+  for (const ParamSpec& s : integrator_registry().at("gauss4").params) theirs.push_back(s.key);
+  EXPECT_EQ(keys, theirs);
+}
+
+// The 3-stage Radau IIA tableau (Hairer & Wanner II, Table IV.5.6) with solver = "radau5" runs
+// as the built-in radau5, fixed step and adaptive.
+TEST(MethodFile, IrkRadauFileRunsLikeRadau5) {
+  const MethodDefinition m = parse_method_file(R"toml(name = "my_radau5"
+kind = "irk"
+solver = "radau5"
+order = 5
+stage_order = 3
+description = "Radau IIA, 3 stages"
+A = [["(88 - 7*sqrt(6))/360", "(296 - 169*sqrt(6))/1800", "(-2 + 3*sqrt(6))/225"],
+     ["(296 + 169*sqrt(6))/1800", "(88 + 7*sqrt(6))/360", "(-2 - 3*sqrt(6))/225"],
+     ["(16 - sqrt(6))/36", "(16 + sqrt(6))/36", "1/9"]]
+b = ["(16 - sqrt(6))/36", "(16 + sqrt(6))/36", "1/9"]
+c = ["(4 - sqrt(6))/10", "(4 + sqrt(6))/10", 1]
+)toml",
+                                               "r.toml");
+  EXPECT_TRUE(m.adaptive());
+  auto mine = make_integrator(m);
+  auto builtin = testing_support::make("radau5");
+  EXPECT_TRUE(mine->supports_adaptive());
+  EXPECT_LE(run_difference(*mine, *builtin), 1e-13);
+  const IntegratorRegistry::Entry e = method_registry_entry(m);
+  EXPECT_EQ(e.info.kind, "Radau IIA (RADAU5)");
+  EXPECT_EQ(e.info.description, "Radau IIA, 3 stages");
+}
+
+TEST(MethodFile, IrkNeedsAnInvertibleA) {
+  const std::string msg = bad_input([] {
+    parse_method_file(R"toml(name = "x"
+kind = "irk"
+order = 1
+description = "singular"
+A = [[0, 0], ["1/2", "1/2"]]
+b = ["1/2", "1/2"]
+c = [0, 1]
+)toml",
+                      "x.toml");
+  });
+  EXPECT_NE(msg.find("x.toml:5: key 'A': an irk method needs an invertible A"), std::string::npos)
+      << msg;
+}
+
 }  // namespace
 }  // namespace stiffbench

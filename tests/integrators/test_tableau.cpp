@@ -198,12 +198,14 @@ TEST(TableauValidation, EachDefectIsRefusedByName) {
   t = named("heun");
   t.order = 3;
   m = refusal([&] { ExplicitRungeKutta(t, ""); });
-  EXPECT_TRUE(contains(m, "claims order 3 but an order-3 condition fails by 0.167")) << m;
+  EXPECT_TRUE(
+      contains(m, "order 3 claimed but the condition of tree [t^2] (order 3) has residual 0.167"))
+      << m;
   // Weights that do not sum to 1 (order 1 fails).
   t = named("rk4");
   t.b[0] = 0.2;
   m = refusal([&] { ExplicitRungeKutta(t, ""); });
-  EXPECT_TRUE(contains(m, "order-1 condition") && contains(m, "sum to 1.03")) << m;
+  EXPECT_TRUE(contains(m, "tree t (order 1)") && contains(m, "sum to 1.03")) << m;
   // Embedded weights that do not sum to 1 (dopri5's b̂_1 raised by 0.01).
   t = named("dopri5");
   t.b_embedded[0] += 0.01;
