@@ -99,7 +99,8 @@ TEST(MethodFilesCli, OverclaimedOrderExitsTwoNamingTheFile) {
               " --out " + shell_quote((dir / "out").string()));
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find(file.string() + ":3: key 'order'"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("claims order 4"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("order 4 claimed but the condition of tree [t^3]"), std::string::npos)
+      << r.err;
   // One message (one line), and nothing was written.
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_FALSE(fs::exists(dir / "out" / "convergence.csv"));

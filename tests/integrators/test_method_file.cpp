@@ -178,8 +178,12 @@ g = "1 - 1/sqrt(2)"
 TEST(MethodFile, OverclaimedOrderNamesFileLineAndCondition) {
   const std::string msg = bad_input([] { parse_method_file(with_order(4), "heun3.toml"); });
   EXPECT_NE(msg.find("heun3.toml:3:"), std::string::npos) << msg;  // line of `order`
-  EXPECT_NE(msg.find("order 4"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("order-4 condition"), std::string::npos) << msg;
+  // The first violated condition of order 4, by hand: bᵀc³ = 3/4·(2/3)³ = 2/9 against 1/4, the
+  // tree [t^3] (residual -1/36), comes before [[[t]]] in the order of rooted_trees().
+  EXPECT_NE(msg.find("order 4 claimed but the condition of tree [t^3] (order 4) has residual "
+                     "-0.0278"),
+            std::string::npos)
+      << msg;
 }
 
 TEST(MethodFile, BadFilesNameFileAndLine) {
@@ -257,7 +261,9 @@ b = ["1/2", "1/2"]
   EXPECT_FALSE(m.adaptive());
   const std::string msg = bad_input([&] { parse_method_file("order = 3\n" + text, "ros2.toml"); });
   EXPECT_NE(msg.find("ros2.toml:1: key 'order'"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("order-3 condition"), std::string::npos) << msg;
+  // ROS2 is of order 2 exactly: a condition of order 3 fails.
+  EXPECT_NE(msg.find("order 3 claimed but the condition of tree"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("(order 3)"), std::string::npos) << msg;
 }
 
 // Velocity Verlet as kick/drift coefficients, and yoshida4 as a composition γ = (c, 1 - 2c, c),
