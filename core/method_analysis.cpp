@@ -235,6 +235,12 @@ void fill_stability(MethodAnalysis& m, const LinearStability& s, const Mat& a, c
     int& order = k % 2 == 0 ? m.dissipation_order : m.dispersion_order;
     if (order == 0) order = k;
   }
+  if (m.dissipation_order == 0)
+    m.notes.push_back("no dissipation: |R(iy)| = 1 to degree " + std::to_string(kSeriesDegree) +
+                      " of the series of log R(z) - z");
+  if (m.dispersion_order == 0)
+    m.notes.push_back("no dispersion: arg R(iy) = y to degree " + std::to_string(kSeriesDegree) +
+                      " of the series of log R(z) - z");
 }
 
 double max_abs(const Mat& a) { return a.size() ? a.cwiseAbs().maxCoeff() : 0.0; }
@@ -301,7 +307,12 @@ MethodAnalysis analyze_runge_kutta(const ButcherTableau& t, const std::string& k
   m.fsal = m.stiffly_accurate && tab.a.row(0).cwiseAbs().maxCoeff() == 0.0;
   m.max_coefficient = std::max({max_abs(tab.a), max_abs(tab.b), max_abs(tab.c)});
   fill_stability(m, tableau_stability(tab), tab.a, tab.b);
-  if (tab.is_explicit()) m.ssp_coefficient = ssp_coefficient(tab);
+  if (tab.is_explicit()) {
+    m.ssp_coefficient = ssp_coefficient(tab);
+    m.notes.push_back(
+        "SSP coefficient: radius of absolute monotonicity (exact test in long "
+        "double, bisection to 1e-12 relative)");
+  }
   return m;
 }
 

@@ -426,8 +426,9 @@ TEST(MethodAnalysis, RegistryClaimsAgreeWithTheAnalysis) {
     if (!m) continue;
     ++analysed;
     EXPECT_EQ(m->order, e.info.order) << e.info.name;
-    if (const auto s = integ->linear_stability(); s && s->rational)
+    if (const auto s = integ->linear_stability(); s && s->rational) {
       EXPECT_EQ(m->a_stable, a_stable_exact(*s).value_or(false)) << e.info.name;
+    }
   }
   EXPECT_GE(analysed, 20);
 }
