@@ -1,6 +1,8 @@
 # Writes OUT, a C++ file defining stiffbench::FUNCTION() (default embedded_plot_scripts): the name
-# and text of each file PLOTS_DIR/PATTERN (default *.gp), as raw string literals. Run at build
-# time by experiments/CMakeLists.txt for the gnuplot scripts and the report's default suite.
+# and text of each file PLOTS_DIR/PATTERN (default *.gp), as raw string literals, sorted by name.
+# Run at build time by experiments/CMakeLists.txt for the gnuplot scripts and the report's
+# default suite, and by integrators/CMakeLists.txt for the built-in method files (methods/*.toml,
+# embedded_method_files()).
 if(NOT FUNCTION)
   set(FUNCTION embedded_plot_scripts)
 endif()

@@ -1,22 +1,21 @@
-// One entry per method: its description, kind, literature reference (and, for a
-// coefficient-defined method, its coefficients and step modes), side by side.
+// The text of a method implemented as a class: its description, kind and literature reference.
 //
-// Coefficient-defined methods: each family keeps one table of MethodEntry
-// (integrators/explicit/tableaux.cpp, implicit/dirk.cpp, implicit/gauss.cpp,
-// implicit/linearly_implicit.cpp, symplectic/kick_drift.cpp, symplectic/composition.cpp);
-// registration (integrators/register.cpp), the MethodInfo kind and reference, and the tableau
-// lookups the tests use are all derived from those tables.
+// Coefficient-defined methods (explicit RK, DIRK/ESDIRK, fully implicit RK, Rosenbrock,
+// kick/drift and Verlet compositions) are files, methods/*.toml, compiled into the library
+// (integrators/embedded_methods.hpp) and read by built_in_methods() (integrators/method_file.hpp):
+// each file holds the coefficients, description, kind, reference and claims side by side, and
+// registration (integrators/register.cpp) and the family lookups (explicit_tableaux(),
+// implicit_tableau(name), rodas4_tableau(), ...) are derived from them.
 //
-// Methods implemented as classes (verlet, leapfrog, rattle, bdf2, semi_implicit_euler, radau5,
-// baraff_witkin, xpbd, projective_dynamics, stable_fluids, the library references):
-// a MethodText sits next to the constructor (or the registration) that builds the method's
-// MethodInfo with method_info(), which takes it as an argument. add_built_in_integrator()
-// refuses, naming the method, a registration without a description, kind or reference.
+// Methods implemented as classes (verlet, leapfrog, rattle, bdf2, semi_implicit_euler,
+// baraff_witkin, xpbd, projective_dynamics, stable_fluids, the library references): a MethodText
+// sits next to the constructor (or the registration) that builds the method's MethodInfo with
+// method_info(), which takes it as an argument. add_built_in_integrator() refuses, naming the
+// method, a registration without a description, kind or reference.
 //
-// Every field is required at compile time: `Text` and `Required<T>` have no default constructor,
-// so an entry that leaves one out does not compile, and a `Text` is built from a string literal
-// by a consteval constructor that rejects the empty string. A method therefore cannot reach the
-// registry without its description, kind or reference.
+// Every field of a MethodText is required at compile time: `Text` has no default constructor,
+// so a MethodText that leaves one out does not compile, and a `Text` is built from a string
+// literal by a consteval constructor that rejects the empty string.
 #pragma once
 
 #include <array>
@@ -64,55 +63,12 @@ consteval Text join_text(Text a, std::string_view sep, Text b) {
 // "book, where": a textbook cited by section.
 consteval Text cite(Text book, Text where) { return join_text(book, ", ", where); }
 
-// A field that must be given: no default constructor.
-template <class T>
-struct Required {
-  // NOLINTNEXTLINE(google-explicit-constructor): entries are written as plain values.
-  Required(T v) : value(std::move(v)) {}
-  T value;
-  const T& operator*() const { return value; }
-  const T* operator->() const { return &value; }
-};
-
-// Which runs the method supports: fixed steps only (`--h`), or also adaptive ones (rtol/atol:
-// the coefficients carry an embedded error estimate). Registration chooses the parameters and
-// the constructor from it; tests/integrators/test_method_notes.cpp checks it against the
-// integrator.
-enum class StepModes { fixed, fixed_and_adaptive };
-
 // What `list integrators` and `describe NAME` print about a method.
 struct MethodText {
   Text description;
-  Text kind;       // the method class within its family, e.g. "embedded RK pair"
+  Text kind;       // the method class within its family, e.g. "multistep (BDF)"
   Text reference;  // authors, venue, year (and section where it is a textbook)
 };
-
-// One method of a family: Coefficients carries the name (ButcherTableau, RosenbrockTableau,
-// KickDriftScheme, CompositionMethod).
-template <class Coefficients>
-struct MethodEntry {
-  Required<Coefficients> coefficients;
-  MethodText text;
-  Required<StepModes> steps;
-
-  const std::string& name() const {
-    if constexpr (requires { coefficients->name(); })
-      return coefficients->name();
-    else
-      return coefficients->name;
-  }
-  bool adaptive() const { return *steps == StepModes::fixed_and_adaptive; }
-};
-
-// `info` with the entry's description, kind and reference (a coefficient-defined method's
-// constructor builds the rest of the MethodInfo from its coefficients, with the same
-// description).
-inline MethodInfo with_text(MethodInfo info, const MethodText& text) {
-  info.description = text.description.str();
-  info.kind = text.kind.str();
-  info.reference = text.reference.str();
-  return info;
-}
 
 // The MethodInfo of a method implemented as a class, built next to its constructor (or its
 // registration): every field is an argument, so a class without its text does not compile.
@@ -140,9 +96,6 @@ inline void add_built_in_integrator(IntegratorRegistry& reg, IntegratorRegistry:
 }
 
 // The textbooks cited by section.
-inline constexpr const char* kHairerNorsettWanner =
-    "E. Hairer, S. P. Norsett & G. Wanner, Solving Ordinary Differential Equations I, "
-    "2nd ed., Springer 1993";
 inline constexpr const char* kHairerWanner =
     "E. Hairer & G. Wanner, Solving Ordinary Differential Equations II, 2nd ed., Springer 1996";
 inline constexpr const char* kGeometricIntegration =

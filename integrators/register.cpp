@@ -3,22 +3,16 @@
 #include <utility>
 #include <vector>
 
-#include "integrators/adaptive/embedded_rk.hpp"
-#include "integrators/explicit/explicit_rk.hpp"
-#include "integrators/explicit/tableaux.hpp"
 #include "integrators/fluid/stable_fluids.hpp"
 #include "integrators/graphics/projective_dynamics.hpp"
 #include "integrators/graphics/xpbd.hpp"
 #include "integrators/implicit/baraff_witkin.hpp"
 #include "integrators/implicit/dirk.hpp"
-#include "integrators/implicit/gauss.hpp"
 #include "integrators/implicit/linearly_implicit.hpp"
-#include "integrators/implicit/radau5.hpp"
 #include "integrators/method_entry.hpp"
+#include "integrators/method_file.hpp"
 #include "integrators/reference/gsl.hpp"
 #include "integrators/reference/sundials.hpp"
-#include "integrators/symplectic/composition.hpp"
-#include "integrators/symplectic/kick_drift.hpp"
 #include "integrators/symplectic/rattle.hpp"
 #include "integrators/symplectic/verlet.hpp"
 
@@ -26,13 +20,11 @@ namespace stiffbench {
 
 namespace {
 
-// Registers `entry` with the MethodInfo of `probe` (an instance made from the entry) plus the
-// entry's description, kind and reference.
-template <class Entry, class Make>
-void add_method(IntegratorRegistry& reg, const Entry& entry, const Integrator& probe,
-                std::vector<ParamSpec> specs, Make make) {
-  add_built_in_integrator(reg,
-                          {with_text(probe.info(), entry.text), std::move(specs), std::move(make)});
+// Registers the built-in method files of `kind` (methods/*.toml, built_in_methods(): in file
+// name order) with the MethodInfo, parameters and factory of method_registry_entry().
+void add_methods(IntegratorRegistry& reg, MethodKind kind) {
+  for (const MethodDefinition& m : built_in_methods())
+    if (m.kind == kind) add_built_in_integrator(reg, method_registry_entry(m));
 }
 
 // Registers a method implemented as a class with the MethodInfo of `probe`, which its
@@ -46,44 +38,16 @@ void add_class(IntegratorRegistry& reg, const Integrator& probe, std::vector<Par
 
 }  // namespace
 
-// Explicit Runge-Kutta methods from their table (integrators/explicit/tableaux.hpp); the
-// embedded pairs run fixed-step with --h or adaptively with rtol/atol (integrators/adaptive/).
+// Explicit Runge-Kutta methods from their files; the embedded pairs run fixed-step with --h or
+// adaptively with rtol/atol (integrators/adaptive/).
 void register_explicit_integrators(IntegratorRegistry& reg) {
-  for (const ExplicitRkMethod& m : explicit_rk_methods()) {
-    const ButcherTableau& t = *m.coefficients;
-    const std::string desc = m.text.description.str();
-    if (!m.adaptive()) {
-      auto make = [t, desc](const Params&) {
-        return std::make_unique<ExplicitRungeKutta>(t, desc);
-      };
-      add_method(reg, m, ExplicitRungeKutta(t, desc), {}, make);
-    } else {
-      auto make = [t, desc](const Params& p) {
-        return std::make_unique<EmbeddedRungeKutta>(t, desc, read_controller_options(p));
-      };
-      add_method(reg, m, EmbeddedRungeKutta(t, desc, {}), controller_param_specs(), make);
-    }
-  }
+  add_methods(reg, MethodKind::explicit_rk);
 }
 
 void register_symplectic_integrators(IntegratorRegistry& reg) {
-  for (const KickDriftMethod& m : kick_drift_methods()) {
-    const KickDriftScheme& c = *m.coefficients;
-    const std::string desc = m.text.description.str();
-    auto make = [c, desc](const Params&) {
-      return std::make_unique<KickDriftIntegrator>(c.kick_drift, c.velocity_independent, desc);
-    };
-    add_method(reg, m, KickDriftIntegrator(c.kick_drift, c.velocity_independent, desc), {}, make);
-  }
-  // Compositions of velocity Verlet (composition.hpp): velocity-independent forces only.
-  for (const CompositionEntry& m : composition_entries()) {
-    auto make = [c = m.coefficients->kick_drift, desc = m.text.description.str()](const Params&) {
-      return std::make_unique<KickDriftIntegrator>(c, true, desc);
-    };
-    add_method(reg, m,
-               KickDriftIntegrator(m.coefficients->kick_drift, true, m.text.description.str()), {},
-               make);
-  }
+  // Kick/drift methods and compositions of velocity Verlet from their files (kick_drift.hpp,
+  // composition.hpp).
+  add_methods(reg, MethodKind::splitting);
   add_class(reg, PositionVerlet(), {},
             [](const Params&) { return std::make_unique<PositionVerlet>(); });
   add_class(reg, Leapfrog(), {}, [](const Params&) { return std::make_unique<Leapfrog>(); });
@@ -95,62 +59,21 @@ void register_symplectic_integrators(IntegratorRegistry& reg) {
 void register_implicit_integrators(IntegratorRegistry& reg) {
   const auto newton_specs = implicit_param_specs(true);
   const auto linear_specs = implicit_param_specs(false);
-  // DIRK methods (dirk.hpp); the ESDIRK pairs with an embedded estimate run fixed-step with --h
-  // or adaptively with rtol/atol.
-  const auto esdirk_specs = esdirk_param_specs();
-  for (const DirkMethod& m : dirk_methods()) {
-    const ButcherTableau& t = *m.coefficients;
-    const std::string desc = m.text.description.str();
-    if (!m.adaptive()) {
-      auto make = [t, desc](const Params& p) {
-        return std::make_unique<DirkIntegrator>(t, desc, read_implicit_options(p, true));
-      };
-      add_method(reg, m, DirkIntegrator(t, desc, {}), newton_specs, make);
-    } else {
-      auto make = [t, desc](const Params& p) {
-        return std::make_unique<DirkIntegrator>(t, desc, read_implicit_options(p, true),
-                                                read_controller_options(p), read_error_filter(p));
-      };
-      add_method(reg, m, DirkIntegrator(t, desc, {}), esdirk_specs, make);
-    }
-  }
+  // DIRK methods from their files (dirk.hpp); the ESDIRK pairs with an embedded estimate run
+  // fixed-step with --h or adaptively with rtol/atol.
+  add_methods(reg, MethodKind::dirk);
   add_class(reg, Bdf2Integrator({}), newton_specs, [](const Params& p) {
     return std::make_unique<Bdf2Integrator>(read_implicit_options(p, true));
   });
   add_class(reg, SemiImplicitEuler({}), linear_specs, [](const Params& p) {
     return std::make_unique<SemiImplicitEuler>(read_implicit_options(p, false));
   });
-  // Rosenbrock methods (linearly_implicit.hpp); the pairs with an embedded estimate run
-  // fixed-step with --h or adaptively with rtol/atol.
-  std::vector<ParamSpec> ros_adaptive_specs = controller_param_specs();
-  ros_adaptive_specs.insert(ros_adaptive_specs.end(), linear_specs.begin(), linear_specs.end());
-  for (const RosenbrockMethod& m : rosenbrock_methods()) {
-    const RosenbrockTableau* tab = &*m.coefficients;
-    const std::string desc = m.text.description.str();
-    if (!m.adaptive()) {
-      auto make = [tab, desc](const Params& p) {
-        return std::make_unique<Rosenbrock>(*tab, desc, read_implicit_options(p, false));
-      };
-      add_method(reg, m, Rosenbrock(*tab, desc, {}), linear_specs, make);
-    } else {
-      auto make = [tab, desc](const Params& p) {
-        return std::make_unique<Rosenbrock>(*tab, desc, read_implicit_options(p, false),
-                                            read_controller_options(p));
-      };
-      add_method(reg, m, Rosenbrock(*tab, desc, {}), ros_adaptive_specs, make);
-    }
-  }
-  add_class(reg, Radau5({}), radau5_param_specs(),
-            [](const Params& p) { return std::make_unique<Radau5>(read_radau5_options(p)); });
-  // Fully implicit RK from a tableau (gauss.hpp): Gauss-Legendre collocation, fixed step.
-  for (const GaussMethod& m : gauss_methods()) {
-    const ButcherTableau& t = *m.coefficients;
-    const std::string desc = m.text.description.str();
-    auto make = [t, desc](const Params& p) {
-      return std::make_unique<ImplicitRungeKutta>(t, desc, read_gauss_options(p));
-    };
-    add_method(reg, m, ImplicitRungeKutta(t, desc, {}), gauss_param_specs(), make);
-  }
+  // Rosenbrock methods from their files (linearly_implicit.hpp); the pairs with an embedded
+  // estimate run fixed-step with --h or adaptively with rtol/atol.
+  add_methods(reg, MethodKind::rosenbrock);
+  // Fully implicit RK from their files: Gauss-Legendre collocation (ImplicitRungeKutta, fixed
+  // step, gauss.hpp) and Radau IIA run by RADAU5 (solver = "radau5", radau5.hpp).
+  add_methods(reg, MethodKind::irk);
   // Baraff–Witkin is velocity-form by construction (no `form`), and its single Krylov solve
   // defaults to a relative 1e-6 (baraff_witkin.hpp).
   std::vector<ParamSpec> bw_specs;

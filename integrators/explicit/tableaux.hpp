@@ -1,31 +1,23 @@
-// The explicit Runge–Kutta methods of the testbed, as data: one entry per method (coefficients,
-// description, kind, reference, step modes; integrators/method_entry.hpp). Coefficients from
-// Butcher, Numerical Methods for ODEs (2016) §23 and Hairer–Nørsett–Wanner I,
-// Table II.1.1–1.2; SSPRK3 from Shu & Osher (1988).
+// The explicit Runge–Kutta tableaux of the testbed. They are defined by their method files
+// (methods/*.toml with kind = "explicit_rk": coefficients, description, kind, reference, order
+// and, for the embedded pairs, embedded_order and fsal), compiled into the library and parsed by
+// built_in_methods() (integrators/method_file.hpp); these lookups only select from them.
+//   fixed-step methods  euler, heun, midpoint, ralston, kutta3, ssprk3, rk4, rk38
+//                       (ExplicitRungeKutta)
+//   embedded pairs      bs3, dopri5, cash_karp, rkf45: b propagates the solution, b_embedded
+//                       gives the error estimate y - ŷ; run fixed-step or adaptively by
+//                       integrators/adaptive/embedded_rk.hpp
+// Their order conditions are checked for both weight rows in tests/test_adaptive.cpp.
 #pragma once
 
 #include <vector>
 
 #include "core/tableau.hpp"
-#include "integrators/method_entry.hpp"
 
 namespace stiffbench {
 
-using ExplicitRkMethod = MethodEntry<ButcherTableau>;
-
-// In registration order: the fixed-step methods euler, heun, midpoint, ralston, kutta3,
-// ssprk3, rk4, rk38 (ExplicitRungeKutta), then the embedded pairs (b propagates the solution,
-// b_embedded gives the error estimate y - ŷ), run fixed-step or adaptively by
-// integrators/adaptive/embedded_rk.hpp:
-//   bs3        Bogacki & Shampine (1989) 3(2), FSAL, 4 stages (3 f evaluations per step)
-//   dopri5     Dormand & Prince (1980) 5(4), FSAL, 7 stages (6 per step); HNW I Table II.5.2
-//   cash_karp  Cash & Karp (1990) 5(4), 6 stages; propagates the fifth-order solution
-//   rkf45      Fehlberg (1969) 4(5), 6 stages; propagates the fourth-order solution (Fehlberg's
-//              choice; local extrapolation would give order 5), HNW I Table II.5.1
-// Their order conditions are checked for both weight rows in tests/test_adaptive.cpp.
-const std::vector<ExplicitRkMethod>& explicit_rk_methods();
-
-// The tableaux of the table above: the fixed-step methods, and the embedded pairs.
+// The built-in explicit tableaux without embedded weights, and the embedded pairs, in the order
+// of built_in_methods() (file name).
 const std::vector<ButcherTableau>& explicit_tableaux();
 const std::vector<ButcherTableau>& embedded_tableaux();
 

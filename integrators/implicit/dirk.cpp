@@ -4,6 +4,9 @@
 #include <cmath>
 #include <limits>
 
+#include "integrators/method_entry.hpp"
+#include "integrators/method_file.hpp"
+
 namespace stiffbench {
 
 namespace {
@@ -11,133 +14,23 @@ namespace {
 // Floor of the adaptive Newton tolerance (relative to 1 + |z_i|): a few hundred ulps.
 constexpr double kMinAdaptiveNewtonTol = 1e-14;
 
-ButcherTableau make(std::string name, int order, Mat a, Vec b) {
-  ButcherTableau t;
-  t.name = std::move(name);
-  t.order = order;
-  t.c = a.rowwise().sum();
-  t.a = std::move(a);
-  t.b = std::move(b);
-  return t;
-}
-
-ButcherTableau make_embedded(std::string name, int order, int embedded_order, Mat a, Vec b,
-                             Vec b_hat) {
-  ButcherTableau t = make(std::move(name), order, std::move(a), std::move(b));
-  t.b_embedded = std::move(b_hat);
-  t.embedded_order = embedded_order;
-  t.fsal = true;  // explicit first stage, stiffly accurate: k_s serves as the next k_1
-  return t;
-}
-
-ButcherTableau sdirk2() {
-  const double g = 1.0 - 1.0 / std::sqrt(2.0);
-  return make("sdirk2", 2, Mat{{g, 0.0}, {1.0 - g, g}}, Vec{{1.0 - g, g}});
-}
-
-ButcherTableau sdirk3() {
-  // Alexander (1977), SIAM J. Numer. Anal. 14; Hairer–Wanner II Table IV.6.5.
-  const double g = 0.43586652150845899941601945;
-  const double tau = (1.0 + g) / 2.0;
-  const double b1 = -(6 * g * g - 16 * g + 1) / 4.0;
-  const double b2 = (6 * g * g - 20 * g + 5) / 4.0;
-  return make("sdirk3", 3, Mat{{g, 0.0, 0.0}, {tau - g, g, 0.0}, {b1, b2, g}}, Vec{{b1, b2, g}});
-}
-
-ButcherTableau trbdf2() {
-  // Hosea & Shampine (1996), Appl. Numer. Math. 20: TR-BDF2 of Bank et al. (1985) as a
-  // one-step ESDIRK; the embedded row is their third-order companion formula.
-  const double g = 2.0 - std::sqrt(2.0), d = g / 2.0, w = std::sqrt(2.0) / 4.0;
-  return make_embedded("trbdf2", 2, 3, Mat{{0.0, 0.0, 0.0}, {d, d, 0.0}, {w, w, d}}, Vec{{w, w, d}},
-                       Vec{{(1.0 - w) / 3.0, (3.0 * w + 1.0) / 3.0, d / 3.0}});
-}
-
-ButcherTableau esdirk43() {
-  // Kennedy & Carpenter (2003), Appl. Numer. Math. 44 (implicit part of ARK4(3)6L[2]SA):
-  // γ = 1/4.
-  const double q = 0.25;
-  Mat a = Mat::Zero(6, 6);
-  a(1, 0) = q;
-  a(2, 0) = 8611.0 / 62500.0;
-  a(2, 1) = -1743.0 / 31250.0;
-  a(3, 0) = 5012029.0 / 34652500.0;
-  a(3, 1) = -654441.0 / 2922500.0;
-  a(3, 2) = 174375.0 / 388108.0;
-  a(4, 0) = 15267082809.0 / 155376265600.0;
-  a(4, 1) = -71443401.0 / 120774400.0;
-  a(4, 2) = 730878875.0 / 902184768.0;
-  a(4, 3) = 2285395.0 / 8070912.0;
-  a(5, 0) = 82889.0 / 524892.0;
-  a(5, 2) = 15625.0 / 83664.0;
-  a(5, 3) = 69875.0 / 102672.0;
-  a(5, 4) = -2260.0 / 8211.0;
-  for (int i = 1; i < 6; ++i) a(i, i) = q;
-  const Vec b = a.row(5).transpose();
-  const Vec b_hat{{4586570599.0 / 29645900160.0, 0.0, 178811875.0 / 945068544.0,
-                   814220225.0 / 1159782912.0, -3700637.0 / 11593932.0, 61727.0 / 225920.0}};
-  return make_embedded("esdirk43", 4, 3, std::move(a), b, b_hat);
-}
-
-std::vector<ButcherTableau> tableaux_of(StepModes steps) {
+std::vector<ButcherTableau> dirk_of(bool embedded) {
   std::vector<ButcherTableau> out;
-  for (const DirkMethod& m : dirk_methods())
-    if (*m.steps == steps) out.push_back(*m.coefficients);
+  for (const MethodDefinition& m : built_in_methods())
+    if (m.kind == MethodKind::dirk && (m.tableau.b_embedded.size() != 0) == embedded)
+      out.push_back(m.tableau);
   return out;
 }
 
 }  // namespace
 
-const std::vector<DirkMethod>& dirk_methods() {
-  constexpr const char* kAlexander = "R. Alexander, SIAM J. Numer. Anal. 14 (1977) 1006-1021";
-  static const std::vector<DirkMethod> all = {
-      {make("backward_euler", 1, Mat::Constant(1, 1, 1.0), Vec::Constant(1, 1.0)),
-       {"backward (implicit) Euler with Newton; L-stable", "implicit RK",
-        cite(kHairerWanner, "Sect. IV.3")},
-       StepModes::fixed},
-      {make("implicit_midpoint", 2, Mat::Constant(1, 1, 0.5), Vec::Constant(1, 1.0)),
-       {"implicit midpoint rule; A-stable, symplectic, no damping", "Gauss collocation (1 stage)",
-        cite(kGeometricIntegration, "Sect. II.1")},
-       StepModes::fixed},
-      {make("trapezoidal", 2, Mat{{0.0, 0.0}, {0.5, 0.5}}, Vec{{0.5, 0.5}}),
-       {"trapezoidal rule (Crank-Nicolson); A-stable, no damping at infinity", "implicit RK",
-        "J. Crank & P. Nicolson, Proc. Cambridge Philos. Soc. 43 (1947) 50-67"},
-       StepModes::fixed},
-      {sdirk2(),
-       {"two-stage SDIRK, gamma = 1 - 1/sqrt(2); L-stable, stiffly accurate", "SDIRK", kAlexander},
-       StepModes::fixed},
-      {sdirk3(),
-       {"three-stage SDIRK of Alexander (1977); L-stable, stiffly accurate", "SDIRK", kAlexander},
-       StepModes::fixed},
-      // ESDIRK pairs with an embedded estimate: fixed step with --h, adaptive with rtol/atol.
-      {trbdf2(),
-       {"TR-BDF2 (Bank et al. 1985, IEEE Trans. CAD 4; as an ESDIRK 2(3) pair after Hosea & "
-        "Shampine 1996, Appl. Numer. Math. 20), gamma = 2 - sqrt(2); L-stable, stiffly "
-        "accurate, FSAL; adaptive or fixed step",
-        "ESDIRK (embedded pair)",
-        "R. E. Bank, W. M. Coughran, W. Fichtner, E. H. Grosse, D. J. Rose & R. K. Smith, "
-        "Transient simulation of silicon devices and circuits, IEEE Trans. Computer-Aided Design "
-        "4 (1985) 436-451; as an ESDIRK pair: M. E. Hosea & L. F. Shampine, Analysis and "
-        "implementation of TR-BDF2, Appl. Numer. Math. 20 (1996) 21-37"},
-       StepModes::fixed_and_adaptive},
-      {esdirk43(),
-       {"ESDIRK4(3)6L[2]SA, implicit part of ARK4(3)6L[2]SA (Kennedy & Carpenter 2003, Appl. "
-        "Numer. Math. 44), gamma = 1/4; L-stable, stiffly accurate, FSAL; adaptive or fixed step",
-        "ESDIRK (embedded pair)",
-        "C. A. Kennedy & M. H. Carpenter, Additive Runge-Kutta schemes for "
-        "convection-diffusion-reaction equations, Appl. Numer. Math. 44 (2003) 139-181 "
-        "(ESDIRK4(3)6L[2]SA, the implicit part of ARK4(3)6L[2]SA)"},
-       StepModes::fixed_and_adaptive},
-  };
-  return all;
-}
-
 const std::vector<ButcherTableau>& esdirk_tableaux() {
-  static const std::vector<ButcherTableau> all = tableaux_of(StepModes::fixed_and_adaptive);
+  static const std::vector<ButcherTableau> all = dirk_of(true);
   return all;
 }
 
 const std::vector<ButcherTableau>& implicit_tableaux() {
-  static const std::vector<ButcherTableau> all = tableaux_of(StepModes::fixed);
+  static const std::vector<ButcherTableau> all = dirk_of(false);
   return all;
 }
 

@@ -3,26 +3,24 @@
 // (ImplicitCore) and sets k_i = (z_i - ψ_i)/(h a_ii) from the converged iterate; a_ii = 0
 // stages are explicit. y⁺ = y + h Σ b_i k_i.
 //
-// Tableaux (Hairer & Wanner, Solving ODEs II, §IV.3–IV.6):
-//   backward_euler     A = [1], b = [1]                         order 1, L-stable
-//   implicit_midpoint  A = [½], b = [1]                         order 2, A-stable, symplectic
-//   trapezoidal        A = [[0,0],[½,½]], b = [½,½]             order 2, A-stable (|R(∞)| = 1)
-//   sdirk2             γ = 1 - 1/√2: A = [[γ,0],[1-γ,γ]], b = [1-γ,γ]   order 2, L-stable
-//   sdirk3             Alexander (1977): γ = 0.4358665215084590 (root of x³ - 3x² + 3x/2 - 1/6
-//                      in (1/6, 1/2)), τ = (1+γ)/2, b1 = -(6γ² - 16γ + 1)/4,
-//                      b2 = (6γ² - 20γ + 5)/4: A = [[γ,0,0],[τ-γ,γ,0],[b1,b2,γ]]
-//                                                                order 3, L-stable
+// The tableaux are method files (methods/NAME.toml, kind = "dirk": coefficients as exact
+// expressions, description, kind, reference, order; Hairer & Wanner, Solving ODEs II,
+// §IV.3–IV.6), compiled into the library and parsed by built_in_methods()
+// (integrators/method_file.hpp):
+//   backward_euler     order 1, L-stable
+//   implicit_midpoint  order 2, A-stable, symplectic
+//   trapezoidal        order 2, A-stable (|R(∞)| = 1)
+//   sdirk2             γ = 1 - 1/√2, order 2, L-stable
+//   sdirk3             Alexander (1977), γ ≈ 0.4358665215, order 3, L-stable
 // The L-stable ones are stiffly accurate (b = last row of A), so y⁺ = z_s exactly.
 //
 // ESDIRK pairs with an embedded estimate (esdirk_tableaux(); fixed step with --h, adaptive with
 // rtol/atol). The first stage is explicit (a_11 = 0, k_1 = f(t, y)), every other diagonal entry
 // is γ, and the last row of A is b (stiffly accurate, c_s = 1):
 //   trbdf2    TR-BDF2 (Bank et al. 1985, in the form of Hosea & Shampine 1996): γ = 2 - √2,
-//             d = γ/2, w = √2/4, c = (0, γ, 1), A = [[0,0,0],[d,d,0],[w,w,d]], b = (w, w, d),
-//             b̂ = ((1-w)/3, (3w+1)/3, d/3); order 2, embedded order 3, L-stable
+//             order 2, embedded order 3, L-stable
 //   esdirk43  ESDIRK4(3)6L[2]SA, the implicit tableau of the ARK4(3)6L[2]SA pair of Kennedy &
-//             Carpenter (2003): γ = 1/4, c = (0, 1/2, 83/250, 31/50, 17/20, 1), rational
-//             coefficients typed from the paper; order 4 (L-stable), embedded order 3 (A-stable)
+//             Carpenter (2003): γ = 1/4, order 4 (L-stable), embedded order 3 (A-stable)
 // The order conditions of both rows and R(∞) = 0 are checked in tests/test_esdirk_gauss.cpp.
 //
 // f evaluations: stage 1 of a step is f(t, y). Because the method is stiffly accurate, k_s
@@ -64,18 +62,12 @@
 #include "core/tableau.hpp"
 #include "integrators/adaptive/controller.hpp"
 #include "integrators/implicit/implicit_core.hpp"
-#include "integrators/method_entry.hpp"
 
 namespace stiffbench {
 
-// The DIRK methods, one entry each (coefficients, description, kind, reference, step modes;
-// integrators/method_entry.hpp), in registration order: the fixed-step ones above, then the
-// ESDIRK pairs (StepModes::fixed_and_adaptive).
-using DirkMethod = MethodEntry<ButcherTableau>;
-const std::vector<DirkMethod>& dirk_methods();
-
-// Their tableaux: the fixed-step ones (and one by name), the ESDIRK pairs with embedded weights
-// (b_embedded: trbdf2, esdirk43).
+// The built-in DIRK tableaux (the method files of kind dirk, in the order of built_in_methods()):
+// the fixed-step ones (and one by name: a logic_error for a name that is not one), the ESDIRK
+// pairs with embedded weights (b_embedded: trbdf2, esdirk43).
 const std::vector<ButcherTableau>& implicit_tableaux();
 const ButcherTableau& implicit_tableau(const std::string& name);
 const std::vector<ButcherTableau>& esdirk_tableaux();

@@ -10,34 +10,11 @@
 #include <string>
 #include <utility>
 
-#include "integrators/method_entry.hpp"
+#include "integrators/method_file.hpp"
 
 namespace stiffbench {
 
 namespace {
-
-ButcherTableau build_tableau(int s) {
-  ButcherTableau t;
-  if (s == 2) {
-    const double r = std::sqrt(3.0) / 6.0;
-    t.name = "gauss4";
-    t.order = 4;
-    t.a = Mat{{0.25, 0.25 - r}, {0.25 + r, 0.25}};
-    t.b = Vec{{0.5, 0.5}};
-  } else if (s == 3) {
-    const double r = std::sqrt(15.0);
-    t.name = "gauss6";
-    t.order = 6;
-    t.a = Mat{{5.0 / 36, 2.0 / 9 - r / 15, 5.0 / 36 - r / 30},
-              {5.0 / 36 + r / 24, 2.0 / 9, 5.0 / 36 - r / 24},
-              {5.0 / 36 + r / 30, 2.0 / 9 + r / 15, 5.0 / 36}};
-    t.b = Vec{{5.0 / 18, 4.0 / 9, 5.0 / 18}};
-  } else {
-    throw std::logic_error("gauss_tableau: 2 or 3 stages");
-  }
-  t.c = t.a.rowwise().sum();
-  return t;
-}
 
 std::string tableau_who(const ButcherTableau& t) {
   return "tableau '" + (t.name.empty() ? std::string("(unnamed)") : t.name) + "': ";
@@ -147,9 +124,8 @@ void combine_columns(const Mat& src, const Mat& coef, Mat& dst) {
 }  // namespace
 
 const ButcherTableau& gauss_tableau(int stages) {
-  static const ButcherTableau t2 = build_tableau(2), t3 = build_tableau(3);
-  if (stages == 2) return t2;
-  if (stages == 3) return t3;
+  if (stages == 2) return built_in_method("gauss4").tableau;
+  if (stages == 3) return built_in_method("gauss6").tableau;
   throw std::logic_error("gauss_tableau: 2 or 3 stages");
 }
 
@@ -211,37 +187,7 @@ ImplicitOptions core_options(const GaussOptions& o) {
   return io;
 }
 
-constexpr Text kGaussReference =
-    join_text("J. C. Butcher, Implicit Runge-Kutta processes, Math. Comp. 18 (1964) 50-64", "; ",
-              cite(kGeometricIntegration, "Sect. II.1.3, VI.4"));
-
-constexpr MethodText kGauss4Text{
-    .description =
-        "Gauss-Legendre collocation, 2 stages, order 4 (Butcher 1964, Math. Comp. 18; "
-        "Hairer, Lubich & Wanner, Geometric Numerical Integration, Springer 2006): "
-        "symplectic, symmetric, A-stable with |R(iy)| = 1; transformed simplified "
-        "Newton; fixed step",
-    .kind = "Gauss collocation (2 stages)",
-    .reference = kGaussReference};
-
-constexpr MethodText kGauss6Text{
-    .description =
-        "Gauss-Legendre collocation, 3 stages, order 6 (Butcher 1964, Math. Comp. 18; "
-        "Hairer, Lubich & Wanner, Geometric Numerical Integration, Springer 2006): "
-        "symplectic, symmetric, A-stable with |R(iy)| = 1; transformed simplified "
-        "Newton; fixed step",
-    .kind = "Gauss collocation (3 stages)",
-    .reference = kGaussReference};
-
 }  // namespace
-
-const std::vector<GaussMethod>& gauss_methods() {
-  static const std::vector<GaussMethod> all = {
-      {gauss_tableau(2), kGauss4Text, StepModes::fixed},
-      {gauss_tableau(3), kGauss6Text, StepModes::fixed},
-  };
-  return all;
-}
 
 namespace {
 

@@ -6,8 +6,8 @@
 // Integration, §II.1.3, §VI.4; Butcher 1964). Method files of kind "irk" (Radau IIA, Lobatto
 // IIIC, a user's own; integrators/method_file.hpp) run on the same class. Fixed step.
 //
-// Gauss tableaux (Hairer–Nørsett–Wanner I, §II.7; c the zeros of the shifted Legendre
-// polynomial):
+// Gauss tableaux (methods/gauss4.toml, gauss6.toml; Hairer–Nørsett–Wanner I, §II.7; c the zeros
+// of the shifted Legendre polynomial):
 //   s = 2: c = ½ ∓ √3/6,  A = [[¼, ¼ - √3/6], [¼ + √3/6, ¼]],  b = (½, ½)
 //   s = 3: c = ½ - √15/10, ½, ½ + √15/10, b = (5/18, 4/9, 5/18),
 //          A = [[5/36, 2/9 - √15/15, 5/36 - √15/30],
@@ -66,17 +66,11 @@
 #include "core/tableau.hpp"
 #include "integrators/implicit/implicit_core.hpp"
 #include "integrators/implicit/radau5.hpp"
-#include "integrators/method_entry.hpp"
 
 namespace stiffbench {
 
-// s = 2 or 3.
+// s = 2 or 3: the tableaux of the method files gauss4 and gauss6 (methods/*.toml).
 const ButcherTableau& gauss_tableau(int stages);
-
-// gauss4 and gauss6, one entry each (coefficients, description, kind, reference, step modes;
-// integrators/method_entry.hpp), in registration order.
-using GaussMethod = MethodEntry<ButcherTableau>;
-const std::vector<GaussMethod>& gauss_methods();
 
 struct GaussOptions {
   double newton_tol = 1e-15;

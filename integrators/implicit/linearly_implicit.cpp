@@ -6,6 +6,9 @@
 #include <stdexcept>
 #include <vector>
 
+#include "integrators/method_entry.hpp"
+#include "integrators/method_file.hpp"
+
 namespace stiffbench {
 
 constexpr MethodText kSemiImplicitEulerText{
@@ -172,127 +175,9 @@ RosenbrockTableau rosenbrock_from_transformed(std::string name, int order, int e
   return r;
 }
 
-namespace {
-
-RosenbrockTableau rosenbrock2() {
-  return [] {
-    RosenbrockTableau r;
-    r.name = "rosenbrock2";
-    r.order = 2;
-    r.gamma = 1.0 + 1.0 / std::sqrt(2.0);
-    r.alpha = Mat{{0.0, 0.0}, {1.0, 0.0}};
-    r.gamma_lower = Mat{{0.0, 0.0}, {-2.0 * r.gamma, 0.0}};
-    r.b = Vec{{0.5, 0.5}};
-    return r;
-  }();
-}
-
-RosenbrockTableau ros3p() {
-  // Lang & Verwer (BIT 41, 2001), in closed form: γ is the root ½ + √3/6 of γ² - γ + 1/6 = 0, the
-  // third-order condition of the chain tree [[τ]].
-  return [] {
-    RosenbrockTableau r;
-    r.name = "ros3p";
-    r.order = 3;
-    r.embedded_order = 2;
-    const double g = 0.5 + std::sqrt(3.0) / 6.0;
-    r.gamma = g;
-    r.alpha = Mat{{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {1.0, 0.0, 0.0}};
-    r.gamma_lower = Mat{{0.0, 0.0, 0.0}, {-1.0, 0.0, 0.0}, {-g, 0.5 - 2.0 * g, 0.0}};
-    r.b = Vec{{2.0 / 3.0, 0.0, 1.0 / 3.0}};
-    r.b_embedded = Vec{{1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0}};
-    return r;
-  }();
-}
-
-RosenbrockTableau rodas4() {
-  // The transformed coefficients of Hairer & Wanner's RODAS (METH = 1), γ = 1/4. Rows 5 and 6 of
-  // (a_ij) are the embedded and the main solution's stage weights (stiffly accurate):
-  // a_6j = a_5j (j < 5), a_65 = 1, m = (a_51..a_54, 1, 1), m̂ = (a_51..a_54, 1, 0).
-  return [] {
-    Mat a = Mat::Zero(6, 6), c = Mat::Zero(6, 6);
-    a(1, 0) = 1.544;
-    a(2, 0) = 0.9466785280815826;
-    a(2, 1) = 0.2557011698983284;
-    a(3, 0) = 3.314825187068521;
-    a(3, 1) = 2.896124015972201;
-    a(3, 2) = 0.9986419139977817;
-    a(4, 0) = 1.221224509226641;
-    a(4, 1) = 6.019134481288629;
-    a(4, 2) = 12.53708332932087;
-    a(4, 3) = -0.6878860361058950;
-    for (Index j = 0; j < 4; ++j) a(5, j) = a(4, j);
-    a(5, 4) = 1.0;
-    c(1, 0) = -5.6688;
-    c(2, 0) = -2.430093356833875;
-    c(2, 1) = -0.2063599157091915;
-    c(3, 0) = -0.1073529058151375;
-    c(3, 1) = -9.594562251023355;
-    c(3, 2) = -20.47028614809616;
-    c(4, 0) = 7.496443313967647;
-    c(4, 1) = -10.24680431464352;
-    c(4, 2) = -33.99990352819905;
-    c(4, 3) = 11.70890893206160;
-    c(5, 0) = 8.083246795921522;
-    c(5, 1) = -7.981132988064893;
-    c(5, 2) = -31.52159432874371;
-    c(5, 3) = 16.31930543123136;
-    c(5, 4) = -6.058818238834054;
-    Vec m = a.row(5).transpose();
-    m[5] = 1.0;
-    Vec m_hat = a.row(5).transpose();
-    return rosenbrock_from_transformed("rodas4", 4, 3, 0.25, a, c, m, m_hat);
-  }();
-}
-
-const RosenbrockTableau& rosenbrock_tableau(const std::string& name) {
-  for (const RosenbrockMethod& m : rosenbrock_methods())
-    if (m.name() == name) return *m.coefficients;
-  throw std::logic_error("no Rosenbrock tableau '" + name + "'");
-}
-
-}  // namespace
-
-const std::vector<RosenbrockMethod>& rosenbrock_methods() {
-  static const std::vector<RosenbrockMethod> all = {
-      {rosenbrock2(),
-       {"ROS2 Rosenbrock method (Verwer et al. 1999), gamma = 1 + 1/sqrt(2); L-stable",
-        "Rosenbrock",
-        "J. G. Verwer, E. J. Spee, J. G. Blom & W. Hundsdorfer, SIAM J. Sci. Comput. 20 (1999) "
-        "1456-1480"},
-       StepModes::fixed},
-      // Pairs with an embedded estimate: fixed-step with --h, adaptive with rtol/atol.
-      {ros3p(),
-       {"ROS3P Rosenbrock 3(2) of Lang & Verwer (BIT 41, 2001): 3 stages (2 f evaluations), "
-        "gamma = 1/2 + sqrt(3)/6, A-stable, R(inf) = 1 - sqrt(3); adaptive (rtol/atol) or fixed "
-        "step. Its error estimate is zero on linear autonomous problems (the embedded method has "
-        "the same stability function): there only h_max limits the adaptive step",
-        "Rosenbrock (embedded pair)",
-        "J. Lang & J. G. Verwer, ROS3P - an accurate third-order Rosenbrock solver designed for "
-        "parabolic problems, BIT Numer. Math. 41 (2001) 731-738"},
-       StepModes::fixed_and_adaptive},
-      {rodas4(),
-       {"RODAS4 Rosenbrock 4(3) of Hairer & Wanner (Solving ODEs II, 2nd ed., Springer 1996; "
-        "code RODAS): 6 stages, gamma = 1/4, L-stable, stiffly accurate; adaptive (rtol/atol) "
-        "or fixed step",
-        "Rosenbrock (embedded pair)", cite(kHairerWanner, "Sect. VI.4 (RODAS)")},
-       StepModes::fixed_and_adaptive},
-  };
-  return all;
-}
-
-const RosenbrockTableau& rosenbrock2_tableau() {
-  static const RosenbrockTableau& tab = rosenbrock_tableau("rosenbrock2");
-  return tab;
-}
-const RosenbrockTableau& ros3p_tableau() {
-  static const RosenbrockTableau& tab = rosenbrock_tableau("ros3p");
-  return tab;
-}
-const RosenbrockTableau& rodas4_tableau() {
-  static const RosenbrockTableau& tab = rosenbrock_tableau("rodas4");
-  return tab;
-}
+const RosenbrockTableau& rosenbrock2_tableau() { return built_in_method("rosenbrock2").rosenbrock; }
+const RosenbrockTableau& ros3p_tableau() { return built_in_method("ros3p").rosenbrock; }
+const RosenbrockTableau& rodas4_tableau() { return built_in_method("rodas4").rosenbrock; }
 
 Rosenbrock::Rosenbrock(RosenbrockTableau tableau, std::string description, ImplicitOptions opt,
                        ControllerOptions control)

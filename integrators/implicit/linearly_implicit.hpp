@@ -29,11 +29,13 @@
 // vertex has two or more sons and by β_jk = α_jk + γ_jk (the diagonal γ included) when it has
 // exactly one.
 //
+// The Rosenbrock methods are method files (methods/NAME.toml, kind = "rosenbrock"), compiled
+// into the library and parsed by built_in_methods() (integrators/method_file.hpp):
 // rosenbrock2 = ROS2 of Verwer, Spee, Blom & Hundsdorfer (SIAM J. Sci. Comput. 20, 1999):
-//   γ = 1 + 1/√2, α21 = 1, γ21 = -2γ, b = (½, ½). Order 2, L-stable (R(∞) = 0). Fixed step only.
+//   γ = 1 + 1/√2, order 2, L-stable (R(∞) = 0). Fixed step only.
 // ros3p = ROS3P of Lang & Verwer (BIT 41, 2001): γ = ½ + √3/6, α21 = α31 = 1, γ21 = -1,
-//   γ31 = -γ, γ32 = ½ - 2γ, b = (⅔, 0, ⅓), embedded b̂ = (⅓, ⅓, ⅓) of order 2. Order 3,
-//   A-stable with R(∞) = 1 - √3; stages 2 and 3 share their argument (2 f evaluations).
+//   b = (⅔, 0, ⅓), embedded b̂ = (⅓, ⅓, ⅓) of order 2. Order 3, A-stable with R(∞) = 1 - √3;
+//   stages 2 and 3 share their argument (2 f evaluations).
 //   Its error estimate vanishes identically on linear autonomous problems with the exact
 //   Jacobian: there β_21 = α21 + γ21 = 0 makes k_2 = k_1, and b - b̂ = (⅓, -⅓, 0), so the
 //   embedded method has the same stability function as the main one. Adaptive ros3p then
@@ -42,8 +44,9 @@
 // rodas4 = RODAS of Hairer & Wanner (Solving ODEs II, 2nd ed., Springer 1996; the coefficients
 //   of their code RODAS, METH = 1): 6 stages, γ = ¼, order 4 with an embedded order-3 solution;
 //   stiffly accurate (b_i = β_6i, b̂_i = β_5i, α_5 = α_6 = 1: y⁺ is the last stage's argument plus
-//   u_6 and the error estimate is u_6), L-stable. Its coefficients are published in the transformed
-//   form (a_ij, c_ij, γ); α, Γ, b, b̂ are derived from them.
+//   u_6 and the error estimate is u_6), L-stable. Its coefficients are published, and its file
+//   written, in the transformed form (a_ij, c_ij, γ, m, m̂); α, Γ, b, b̂ are derived from them
+//   (rosenbrock_from_transformed).
 //
 // Adaptive mode (tableaux with b̂): the error estimate y⁺ - ŷ⁺ = Σ (m_i - m̂_i) u_i is O(h^(p̂+1))
 // for an embedded order p̂, so the shared controller (integrators/adaptive/controller.hpp) uses
@@ -60,7 +63,6 @@
 #include "core/integrator.hpp"
 #include "integrators/adaptive/controller.hpp"
 #include "integrators/implicit/implicit_core.hpp"
-#include "integrators/method_entry.hpp"
 
 namespace stiffbench {
 
@@ -93,11 +95,7 @@ RosenbrockTableau rosenbrock_from_transformed(std::string name, int order, int e
                                               double gamma, const Mat& a, const Mat& c,
                                               const Vec& m, const Vec& m_embedded);
 
-// The Rosenbrock methods, one entry each (coefficients, description, kind, reference, step
-// modes; integrators/method_entry.hpp), in registration order: rosenbrock2 (fixed step), then
-// the embedded pairs ros3p and rodas4 (fixed step or adaptive); and their tableaux by name.
-using RosenbrockMethod = MethodEntry<RosenbrockTableau>;
-const std::vector<RosenbrockMethod>& rosenbrock_methods();
+// The built-in Rosenbrock tableaux by name (their method files, built_in_method()).
 const RosenbrockTableau& rosenbrock2_tableau();
 const RosenbrockTableau& ros3p_tableau();
 const RosenbrockTableau& rodas4_tableau();

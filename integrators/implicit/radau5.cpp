@@ -10,27 +10,11 @@
 #include <utility>
 
 #include "integrators/method_entry.hpp"
+#include "integrators/method_file.hpp"
 
 namespace stiffbench {
 
-const ButcherTableau& radau5_tableau() {
-  static const ButcherTableau t = [] {
-    // HW II, Table IV.5.6 (Radau IIA, s = 3).
-    const double r = std::sqrt(6.0);
-    ButcherTableau b;
-    b.name = "radau5";
-    b.order = 5;
-    b.a = Mat(3, 3);
-    b.a << (88 - 7 * r) / 360, (296 - 169 * r) / 1800, (-2 + 3 * r) / 225,  //
-        (296 + 169 * r) / 1800, (88 + 7 * r) / 360, (-2 - 3 * r) / 225,     //
-        (16 - r) / 36, (16 + r) / 36, 1.0 / 9;
-    b.b = b.a.row(2).transpose();
-    b.c = Vec(3);
-    b.c << (4 - r) / 10, (4 + r) / 10, 1.0;
-    return b;
-  }();
-  return t;
-}
+const ButcherTableau& radau5_tableau() { return built_in_method("radau5").tableau; }
 
 namespace {
 
@@ -280,25 +264,23 @@ ImplicitOptions core_options(const Radau5Options& o) {
 
 }  // namespace
 
-constexpr MethodText kRadau5Text{
-    .description =
-        "Radau IIA order 5 (3 stages, L-stable, stiffly accurate); simplified Newton "
-        "split into one real and one complex linear system (Hairer-Wanner IV.8); "
-        "adaptive (rtol/atol) or fixed step",
-    .kind = "Radau IIA collocation",
-    .reference = cite(kHairerWanner, "Sect. IV.8 (RADAU5)")};
-
 namespace {
 
-// radau5's text; for a tableau under another name, a description naming it.
+// The MethodInfo of the class: the solver and its tableau. A registered method's description,
+// kind and reference come from its method file (methods/radau5.toml for the built-in radau5;
+// method_registry_entry, integrators/method_file.hpp).
 MethodInfo radau5_info(const ButcherTableau& t) {
-  MethodInfo info = method_info(t.name, Family::implicit, t.order, 3, {}, kRadau5Text);
-  if (t.name != "radau5")
-    info.description =
-        "RADAU5 (Hairer-Wanner IV.8: simplified Newton split into one real and "
-        "one complex system, embedded error estimate) on the 3-stage stiffly "
-        "accurate tableau '" +
-        t.name + "'; adaptive (rtol/atol) or fixed step";
+  MethodInfo info{t.name,
+                  Family::implicit,
+                  t.order,
+                  3,
+                  {},
+                  "RADAU5 (Hairer-Wanner IV.8: simplified Newton split into one real and one "
+                  "complex system, embedded error estimate) on the 3-stage stiffly accurate "
+                  "tableau '" +
+                      t.name + "'; adaptive (rtol/atol) or fixed step"};
+  info.kind = "Radau IIA (RADAU5)";
+  info.reference = std::string(kHairerWanner) + ", Sect. IV.8 (RADAU5)";
   return info;
 }
 

@@ -2,14 +2,14 @@
 // stage order 3), fixed-step and adaptive, after Hairer & Wanner, Solving ODEs II, §IV.8 and
 // their code RADAU5.
 //
-// The class takes its tableau (radau5_tableau() for the built-in radau5; a method file's with
-// kind = "irk", solver = "radau5") and derives every constant below from it at construction.
-// What RADAU5's iteration and error estimate rely on is checked, BadInput naming the tableau:
-// ButcherTableau::validate (sizes, c = row sums, the claimed order); 3 stages; A invertible with
-// A⁻¹ having one real eigenvalue and one complex-conjugate pair (diagonalised to round-off:
-// T Λ⁻¹ T⁻¹ equals A to 1e-12 relative); c_3 = 1 and stiffly accurate, b = the last row of A
-// (to 1e-14; y_{n+1} = y_n + Z_3); three distinct nodes (the embedded weights solve a
-// Vandermonde system in c). A node at 0 (a Lobatto IIIC tableau) changes only the starting
+// The class takes its tableau (radau5_tableau() for the built-in radau5, the method file
+// methods/radau5.toml; a user's file with kind = "irk", solver = "radau5") and derives every
+// constant below from it at construction. What RADAU5's iteration and error estimate rely on is
+// checked, BadInput naming the tableau: ButcherTableau::validate (sizes, c = row sums, the claimed
+// order); 3 stages; A invertible with A⁻¹ having one real eigenvalue and one complex-conjugate pair
+// (diagonalised to round-off: T Λ⁻¹ T⁻¹ equals A to 1e-12 relative); c_3 = 1 and stiffly accurate,
+// b = the last row of A (to 1e-14; y_{n+1} = y_n + Z_3); three distinct nodes (the embedded weights
+// solve a Vandermonde system in c). A node at 0 (a Lobatto IIIC tableau) changes only the starting
 // values: the previous stages are interpolated at the nodes without the point q(0) = 0.
 //
 // Stage equations for Z_i = Y_i - y_n:  Z = h (A ⊗ I) F(Z),  y_{n+1} = y_n + Z_3.
@@ -128,9 +128,9 @@ class ShiftedSolver {
 
 class Radau5 final : public Integrator {
  public:
-  // The tableau checked as above. MethodInfo: the tableau's name and order, 3 stages; radau5's
-  // description, kind and reference (a tableau under another name: a description saying which
-  // tableau RADAU5 runs).
+  // The tableau checked as above. MethodInfo: the tableau's name and order, 3 stages, a
+  // description saying which tableau RADAU5 runs (a registered method's description, kind and
+  // reference come from its method file).
   Radau5(ButcherTableau tableau, Radau5Options opt);
   // radau5_tableau().
   explicit Radau5(Radau5Options opt);

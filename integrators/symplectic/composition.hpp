@@ -1,4 +1,7 @@
-// Symplectic compositions of velocity Verlet, as coefficient tables on one class.
+// Symplectic compositions of velocity Verlet, as coefficient tables on one class. The built-in
+// ones are method files (methods/NAME.toml, kind = "splitting", with composition = [γ...] or
+// kick and drift), compiled into the library and parsed by built_in_methods()
+// (integrators/method_file.hpp).
 //
 // A composition Φ_h = V_{γ_s h} ∘ … ∘ V_{γ_1 h} of velocity Verlet steps V (kick ½, drift 1,
 // kick ½) is itself a kick/drift splitting: neighbouring half kicks merge, so
@@ -23,7 +26,6 @@
 #include <vector>
 
 #include "core/tableau.hpp"
-#include "integrators/method_entry.hpp"
 
 namespace stiffbench {
 
@@ -38,12 +40,10 @@ struct CompositionMethod {
 KickDriftCoefficients verlet_composition(const std::string& name, const std::vector<double>& gamma,
                                          int order);
 
-// yoshida4, yoshida6, blanes_moan: one entry each (coefficients, description, kind, reference,
-// step modes; integrators/method_entry.hpp). All require velocity-independent forces.
-using CompositionEntry = MethodEntry<CompositionMethod>;
-const std::vector<CompositionEntry>& composition_entries();
-
-// Their coefficients.
+// The built-in kick/drift methods of order above 2 (the method files of kind splitting with
+// order > 2, in the order of built_in_methods(): blanes_moan, yoshida4, yoshida6). All require
+// velocity-independent forces. gamma is recovered from the kick/drift form when it is a Verlet
+// composition (drift = (γ, 0) and kick = verlet_composition(γ).kick exactly), else left empty.
 const std::vector<CompositionMethod>& composition_methods();
 
 }  // namespace stiffbench

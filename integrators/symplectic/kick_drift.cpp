@@ -1,5 +1,7 @@
 #include "integrators/symplectic/kick_drift.hpp"
 
+#include "integrators/method_file.hpp"
+
 namespace stiffbench {
 
 namespace {
@@ -7,33 +9,11 @@ namespace {
 constexpr Index kParallelEntries = 50000;
 }  // namespace
 
-const std::vector<KickDriftMethod>& kick_drift_methods() {
-  // Hairer, Lubich & Wanner, Geometric Numerical Integration (2006), §I.1 and §II.5.
-  static const std::vector<KickDriftMethod> all = {
-      // v⁺ = v + h a(t, x, v),  x⁺ = x + h v⁺
-      {KickDriftScheme{{"symplectic_euler", {1.0}, {1.0}, 1}, false},
-       {"symplectic Euler, velocity first: v+ = v + h a(t, x, v), x+ = x + h v+", "splitting",
-        cite(kGeometricIntegration, "Sect. I.1.2")},
-       StepModes::fixed},
-      // x⁺ = x + h v,  v⁺ = v + h a(t + h, x⁺, v)
-      {KickDriftScheme{{"symplectic_euler_x", {0.0, 1.0}, {1.0, 0.0}, 1}, false},
-       {"symplectic Euler, position first: x+ = x + h v, v+ = v + h a(t+h, x+, v)", "splitting",
-        cite(kGeometricIntegration, "Sect. I.1.2")},
-       StepModes::fixed},
-      // kick ½, drift 1, kick ½ (Störmer–Verlet in velocity form)
-      {KickDriftScheme{{"velocity_verlet", {0.5, 0.5}, {1.0, 0.0}, 2}, true},
-       {"velocity Verlet (kick-drift-kick), first-same-as-last", "splitting",
-        "W. C. Swope, H. C. Andersen, P. H. Berens & K. R. Wilson, J. Chem. Phys. 76 (1982) "
-        "637-649"},
-       StepModes::fixed},
-  };
-  return all;
-}
-
 const std::vector<KickDriftCoefficients>& kick_drift_coefficients() {
   static const std::vector<KickDriftCoefficients> all = [] {
     std::vector<KickDriftCoefficients> out;
-    for (const KickDriftMethod& m : kick_drift_methods()) out.push_back(m.coefficients->kick_drift);
+    for (const MethodDefinition& m : built_in_methods())
+      if (m.kind == MethodKind::splitting && m.order <= 2) out.push_back(m.splitting.kick_drift);
     return out;
   }();
   return all;

@@ -1,6 +1,7 @@
 // Kick/drift methods: symplectic splittings of mechanical systems y = [x; v] (of the flow into
 // kicks and drifts; not the operator splitting of Family::operator_splitting), as coefficient
-// data (core/tableau.hpp KickDriftCoefficients) read by one stepper, KickDriftIntegrator:
+// data (core/tableau.hpp KickDriftCoefficients; the built-in ones are method files,
+// methods/NAME.toml with kind = "splitting") read by one stepper, KickDriftIntegrator:
 //   for j = 1..s:  v ← v + h·kick_j·a(t_j, x, v);   x ← x + h·drift_j·v.
 // When a stage's kick is followed only by zero drifts, the acceleration it evaluates is the
 // one at the end of the step; for velocity-independent forces the next step reuses it
@@ -16,7 +17,6 @@
 
 #include "core/integrator.hpp"
 #include "core/tableau.hpp"
-#include "integrators/method_entry.hpp"
 
 namespace stiffbench {
 
@@ -28,13 +28,10 @@ struct KickDriftScheme {
   const std::string& name() const { return kick_drift.name; }
 };
 
-// One entry per method (coefficients, description, kind, reference, step modes;
-// integrators/method_entry.hpp): symplectic_euler (v first, the seed's form),
-// symplectic_euler_x (x first), velocity_verlet. The Verlet compositions are in composition.hpp.
-using KickDriftMethod = MethodEntry<KickDriftScheme>;
-const std::vector<KickDriftMethod>& kick_drift_methods();
-
-// Their coefficients.
+// The built-in kick/drift methods of order 1 and 2 (the method files of kind splitting with
+// order <= 2, in the order of built_in_methods(): symplectic_euler (v first, the seed's form),
+// symplectic_euler_x (x first), velocity_verlet); the higher-order compositions and splittings
+// are composition_methods() (composition.hpp).
 const std::vector<KickDriftCoefficients>& kick_drift_coefficients();
 
 class KickDriftIntegrator final : public Integrator {

@@ -8,13 +8,7 @@
 
 #include "experiments/catalog.hpp"
 #include "experiments/commands.hpp"
-#include "integrators/explicit/tableaux.hpp"
-#include "integrators/implicit/dirk.hpp"
-#include "integrators/implicit/gauss.hpp"
-#include "integrators/implicit/linearly_implicit.hpp"
 #include "integrators/method_entry.hpp"
-#include "integrators/symplectic/composition.hpp"
-#include "integrators/symplectic/kick_drift.hpp"
 
 namespace stiffbench {
 namespace {
@@ -33,8 +27,8 @@ TEST(MethodNotes, EveryBuiltInIntegratorHasKindAndReference) {
 // and reference.
 TEST(MethodNotes, ClassMethodsCarryTheirTextInTheirMethodInfo) {
   for (const char* name :
-       {"verlet", "leapfrog", "rattle", "bdf2", "semi_implicit_euler", "radau5", "baraff_witkin",
-        "xpbd", "projective_dynamics", "stable_fluids", "cvode_bdf", "cvode_adams", "arkode_erk",
+       {"verlet", "leapfrog", "rattle", "bdf2", "semi_implicit_euler", "baraff_witkin", "xpbd",
+        "projective_dynamics", "stable_fluids", "cvode_bdf", "cvode_adams", "arkode_erk",
         "arkode_dirk", "arkode_imex", "gsl_rk4", "gsl_msbdf"}) {
     SCOPED_TRACE(name);
     const auto* e = integrator_registry().find(name);
@@ -69,31 +63,9 @@ TEST(MethodNotes, JoinedTextKeepsEveryPart) {
   EXPECT_EQ(t.str(), "A; Book, Sect. 1");
 }
 
-// The coefficient-defined methods declare kind, reference and step modes in their table entry
-// (integrators/method_entry.hpp); the registered integrator must agree with it.
-template <class Entry>
-void expect_registered_as_declared(const std::vector<Entry>& table) {
-  for (const Entry& m : table) {
-    SCOPED_TRACE(m.name());
-    const auto* e = integrator_registry().find(m.name());
-    ASSERT_NE(e, nullptr);
-    EXPECT_EQ(e->info.description, m.text.description.str());
-    EXPECT_EQ(e->info.kind, m.text.kind.str());
-    EXPECT_EQ(e->info.reference, m.text.reference.str());
-    const auto integ = integrator_registry().create(m.name(), {});
-    EXPECT_TRUE(integ->supports_fixed_step());
-    EXPECT_EQ(integ->supports_adaptive(), m.adaptive());
-  }
-}
-
-TEST(MethodNotes, MethodTablesMatchTheRegisteredIntegrators) {
-  expect_registered_as_declared(explicit_rk_methods());
-  expect_registered_as_declared(dirk_methods());
-  expect_registered_as_declared(gauss_methods());
-  expect_registered_as_declared(rosenbrock_methods());
-  expect_registered_as_declared(kick_drift_methods());
-  expect_registered_as_declared(composition_entries());
-}
+// The coefficient-defined methods carry their kind, reference and step modes in their method
+// files (methods/*.toml); tests/integrators/test_method_files_registry.cpp checks that the
+// registry agrees with them.
 
 TEST(MethodNotes, DescribePrintsReferenceAndStepModes) {
   std::ostringstream dp;
