@@ -27,16 +27,6 @@ std::string tableau_kind(const ButcherTableau& t) {
   return "dirk";
 }
 
-// The analysis of an integrator's own coefficients; empty when it has none.
-std::optional<MethodAnalysis> coefficient_analysis(const Integrator& integ) {
-  if (const ButcherTableau* t = integ.butcher_tableau())
-    return analyze_runge_kutta(*t, tableau_kind(*t));
-  if (const RosenbrockTableau* t = integ.rosenbrock_tableau()) return analyze_rosenbrock(*t);
-  if (const KickDriftCoefficients* c = integ.kick_drift_coefficients())
-    return analyze_kick_drift(*c);
-  return std::nullopt;
-}
-
 // What a method without coefficients has: its stability data's limits (BDF2's sampled, the
 // others' exact) and, with a rational R = P/Q, its dissipation and dispersion.
 void stability_figures(AnalyzedMethod& m, const Integrator& integ, const MethodInfo& info,
@@ -74,6 +64,15 @@ std::vector<std::string> chosen(const AnalyzeSpec& spec) {
 }
 
 }  // namespace
+
+std::optional<MethodAnalysis> coefficient_analysis(const Integrator& integ) {
+  if (const ButcherTableau* t = integ.butcher_tableau())
+    return analyze_runge_kutta(*t, tableau_kind(*t));
+  if (const RosenbrockTableau* t = integ.rosenbrock_tableau()) return analyze_rosenbrock(*t);
+  if (const KickDriftCoefficients* c = integ.kick_drift_coefficients())
+    return analyze_kick_drift(*c);
+  return std::nullopt;
+}
 
 std::vector<std::string> analyze_integrators() {
   std::vector<std::string> out;

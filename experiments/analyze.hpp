@@ -50,6 +50,11 @@ struct AnalyzeSpec {
 // The registered integrators with coefficients or stability data, in registry order.
 std::vector<std::string> analyze_integrators();
 
+// The analysis of an integrator's own coefficients (butcher_tableau(), rosenbrock_tableau() or
+// kick_drift_coefficients()); empty when it has none. Convergence and local-error orders tables
+// show its achieved order beside the claimed one.
+std::optional<MethodAnalysis> coefficient_analysis(const Integrator& integ);
+
 struct AnalyzedMethod {
   std::string integrator;
   std::string family;                // registry family

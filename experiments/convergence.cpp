@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "core/driver.hpp"
+#include "experiments/analyze.hpp"
 #include "experiments/build_info.hpp"
 #include "experiments/catalog.hpp"
 
@@ -797,8 +798,11 @@ ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress
     }
   }
   add_observed_orders(result.rows);
-  for (const auto& integ : setup.integrators)
-    result.fits.push_back(fit_order(result.rows, integ->info().name, local));
+  for (const auto& integ : setup.integrators) {
+    OrderFit fit = fit_order(result.rows, integ->info().name, local);
+    if (const auto a = coefficient_analysis(*integ)) fit.analysed_order = a->order;
+    result.fits.push_back(std::move(fit));
+  }
   return result;
 }
 
@@ -1098,14 +1102,15 @@ Table local_error_table(const ConvergenceResult& res) {
 }
 
 Table orders_table(const ConvergenceResult& res) {
-  Table t{{"integrator", "order", "fitted_order", "fitted_order_se", "h_min", "h_max",
-           "levels_used", "reason"},
+  Table t{{"integrator", "order", "analysed_order", "fitted_order", "fitted_order_se", "h_min",
+           "h_max", "levels_used", "reason"},
           {}};
   for (const auto& f : res.fits)
-    t.rows.push_back({f.integrator, std::to_string(f.order), optional_full(f.fitted),
-                      optional_full(f.fitted_se), f.fitted ? format_full(f.h_min) : "",
-                      f.fitted ? format_full(f.h_max) : "", std::to_string(f.levels_used),
-                      f.reason});
+    t.rows.push_back({f.integrator, std::to_string(f.order),
+                      f.analysed_order ? std::to_string(*f.analysed_order) : "",
+                      optional_full(f.fitted), optional_full(f.fitted_se),
+                      f.fitted ? format_full(f.h_min) : "", f.fitted ? format_full(f.h_max) : "",
+                      std::to_string(f.levels_used), f.reason});
   return t;
 }
 

@@ -175,7 +175,10 @@ struct ConvergenceRow {
 // The order fit of one integrator (a row of NAME_orders.csv).
 struct OrderFit {
   std::string integrator;
-  int order = 0;                            // the method's classical (claimed) order
+  int order = 0;  // the method's classical (claimed) order
+  // The order its coefficients achieve (every order condition up to it holds; `analyze`), empty
+  // for a method that is not coefficient-defined.
+  std::optional<int> analysed_order;
   int expected_slope = 0;                   // order, or order + 1 for the local error
   std::optional<double> fitted, fitted_se;  // slope of log(error) against log(h) and its SE
   double h_min = 0, h_max = 0;              // the window's steps (0: no fit)
@@ -239,7 +242,8 @@ std::optional<double> last_observed_order(const std::vector<ConvergenceRow>& row
 
 Table convergence_table(const ConvergenceResult& r);  // the convergence.csv contract
 Table local_error_table(const ConvergenceResult& r);  // the local_error.csv contract
-// NAME_orders.csv: integrator,order,fitted_order,fitted_order_se,h_min,h_max,levels_used,reason.
+// NAME_orders.csv:
+// integrator,order,analysed_order,fitted_order,fitted_order_se,h_min,h_max,levels_used,reason.
 Table orders_table(const ConvergenceResult& r);
 
 // Writes DIR/NAME.csv, DIR/NAME_orders.csv, DIR/NAME.md and DIR/NAME.json (NAME = convergence or

@@ -168,6 +168,24 @@ TEST(OrderFit, Rk4OnTheOscillatorReachesTheRoundoffFloor) {
 // The columns: convergence.csv and local_error.csv keep their contract columns and add the
 // solver counters and the two floors; NAME_orders.csv has exactly the columns; the JSON
 // records the reference check of a numerical reference, which the cache keeps under its own key.
+// The orders table carries the order the coefficients achieve beside the claimed one: rk4 meets
+// Kutta's eight conditions up to order 4 and fails the order-5 tall tree (bᵀA⁴1 = 0 ≠ 1/120),
+// ros3p meets the Rosenbrock conditions to order 3 (Lang & Verwer 2001); bdf2 is a multistep
+// method with no tableau, so its entry is empty.
+TEST(OrderFit, OrdersTableShowsTheAnalysedOrder) {
+  ConvergenceSpec spec;
+  spec.model = "harmonic_oscillator";
+  spec.integrators = {"rk4", "ros3p", "bdf2"};
+  spec.t_end = 1;
+  spec.h = 0.1;
+  spec.levels = 3;
+  const auto res = run_convergence(spec, nullptr);
+  ASSERT_EQ(res.fits.size(), 3u);
+  EXPECT_EQ(res.fits[0].analysed_order, 4);
+  EXPECT_EQ(res.fits[1].analysed_order, 3);
+  EXPECT_FALSE(res.fits[2].analysed_order.has_value());
+}
+
 TEST(OrderFit, OutputColumnsAndReferenceCheck) {
   const auto dir = fresh_dir("cols");
   ConvergenceSpec spec;
@@ -187,7 +205,8 @@ TEST(OrderFit, OutputColumnsAndReferenceCheck) {
             "wall_s,status" +
                 counters);
   EXPECT_EQ(first_line(dir / "convergence_orders.csv"),
-            "integrator,order,fitted_order,fitted_order_se,h_min,h_max,levels_used,reason");
+            "integrator,order,analysed_order,fitted_order,fitted_order_se,h_min,h_max,levels_used,"
+            "reason");
   std::ifstream js(dir / "convergence.json");
   const auto meta = nlohmann::json::parse(js);
   ASSERT_TRUE(meta.contains("reference_accuracy")) << meta.dump(2);
@@ -220,7 +239,8 @@ TEST(OrderFit, OutputColumnsAndReferenceCheck) {
             "lin_solves" +
                 counters);
   EXPECT_EQ(first_line(ldir / "local_error_orders.csv"),
-            "integrator,order,fitted_order,fitted_order_se,h_min,h_max,levels_used,reason");
+            "integrator,order,analysed_order,fitted_order,fitted_order_se,h_min,h_max,levels_used,"
+            "reason");
   std::filesystem::remove_all(dir);
   std::filesystem::remove_all(ldir);
 }
