@@ -73,23 +73,23 @@ struct MethodAnalysis {
   std::string name;
   std::string kind;  // explicit_rk, dirk, irk, rosenbrock, splitting
   int stages = 0;
-  int claimed_order = 0;  // the method's claim (0: none)
-  int order = 0;          // achieved: every condition up to it holds to 1e-12 (8: at least 8)
-  int stage_order = -1;   // largest q with C(q); -1 where not defined (Rosenbrock, splitting)
+  int claimed_order = 0;   // the method's claim (0: none)
+  int order = 0;           // achieved: every condition up to it holds to 1e-12 (8: at least 8)
+  int stage_order = -1;    // largest q with C(q); -1 where not defined (Rosenbrock, splitting)
   int embedded_order = 0;  // achieved order of the embedded weights (0: none)
   bool fsal = false, stiffly_accurate = false;
-  std::vector<double> residual_by_order;  // [k-1]: max |residual| over the trees of order k
-  double error_norm_2 = 0, error_norm_max = 0;        // of τ over the trees of order p+1
+  std::vector<double> residual_by_order;        // [k-1]: max |residual| over the trees of order k
+  double error_norm_2 = 0, error_norm_max = 0;  // of τ over the trees of order p+1
   double error_norm_2_next = 0, error_norm_max_next = 0;  // of order p+2
-  double max_coefficient = 0;                         // largest |a_ij|, |b_i|, |c_i|
+  double max_coefficient = 0;                             // largest |a_ij|, |b_i|, |c_i|
   // The stability function (one-step methods; empty P for splittings).
-  Polynomial p, q;         // R = P/Q, ascending powers
-  double r_infinity = 0;   // |R(∞)| (+inf when deg P > deg Q)
+  Polynomial p, q;        // R = P/Q, ascending powers
+  double r_infinity = 0;  // |R(∞)| (+inf when deg P > deg Q)
   bool a_stable = false, l_stable = false;
   double real_axis_limit = 0, imag_axis_limit = 0;  // exact (AxisLimit of linear_stability.hpp)
   bool real_axis_unbounded = false, imag_axis_unbounded = false;
   double internal_amplification_real = 0, internal_amplification_imag = 0;
-  double ssp_coefficient = -1;  // explicit RK only; -1 otherwise
+  double ssp_coefficient = -1;                      // explicit RK only; -1 otherwise
   int dissipation_order = 0, dispersion_order = 0;  // 0: none (exact to the series' length)
   double oscillator_limit = 0;                      // splittings: stable for hω below it
   std::vector<OrderCondition> conditions;           // every condition up to order 8

@@ -61,10 +61,10 @@ struct MethodDefinition {
   MethodKind kind = MethodKind::explicit_rk;
   int order = 0;
   std::string description, reference, class_text;
-  std::string source;    // the file's path, or "methods/<file>.toml (built in)"
-  std::string solver;    // irk: "" (ImplicitRungeKutta) or "radau5"
-  ButcherTableau tableau;          // explicit_rk, dirk, irk (validated, c completed)
-  RosenbrockTableau rosenbrock;    // rosenbrock
+  std::string source;                   // the file's path, or "methods/<file>.toml (built in)"
+  std::string solver;                   // irk: "" (ImplicitRungeKutta) or "radau5"
+  ButcherTableau tableau;               // explicit_rk, dirk, irk (validated, c completed)
+  RosenbrockTableau rosenbrock;         // rosenbrock
   KickDriftScheme splitting{{}, true};  // splitting
   // Fixed and adaptive steps (embedded weights), or fixed only.
   bool adaptive() const;

@@ -207,8 +207,8 @@ int cli(std::vector<std::string> args) {
 
 fs::path fresh(const std::string& name) {
   // Per process: helpers or parallel test runs on one machine must not share the folder.
-  const fs::path d = fs::temp_directory_path() /
-                     ("stiffbench_study_" + name + "_" + std::to_string(::getpid()));
+  const fs::path d =
+      fs::temp_directory_path() / ("stiffbench_study_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   return d;
 }
