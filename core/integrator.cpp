@@ -12,6 +12,8 @@ std::string to_string(Family f) {
       return "symplectic";
     case Family::operator_splitting:
       return "splitting";
+    case Family::imex:
+      return "imex";
     case Family::reference:
       return "reference";
     case Family::graphics:
@@ -28,6 +30,7 @@ std::string describe_requirements(const Requirements& r) {
   if (r.constraints) parts.emplace_back("holonomic constraints");
   if (r.spring_network) parts.emplace_back("spring network");
   if (r.grid_fluid) parts.emplace_back("grid fluid operators (fluid_2d)");
+  if (r.split) parts.emplace_back("additive split f = f_E + f_I");
   std::string out;
   for (std::size_t i = 0; i < parts.size(); ++i) out += (i ? ", " : "") + parts[i];
   return out.empty() ? "-" : out;
@@ -69,6 +72,13 @@ void check_compatible(const MethodInfo& info, const OdeSystem& sys) {
     throw BadInput(who +
                    " runs only on grid fluid models (fluid_2d): it composes their "
                    "advection, diffusion and projection operators; model '" +
+                   sys.name() + "' has none");
+  }
+  if (info.requires_.split && !sys.has_imex_split()) {
+    throw BadInput(who +
+                   " needs a model with an additive split f = f_E + f_I (e.g. kaps, "
+                   "advection_diffusion, or cloth with split=springs; `stiffbench describe MODEL` "
+                   "names a model's splits); model '" +
                    sys.name() + "' has none");
   }
 }

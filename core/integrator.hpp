@@ -17,10 +17,19 @@
 namespace stiffbench {
 
 // graphics: the graphics community's spring solvers (xpbd, projective_dynamics);
-// operator_splitting: schemes that compose a model's own operators (stable_fluids), not f —
-// printed "splitting" (the family name in `list` and the CSVs). The symplectic kick/drift
+// operator_splitting: schemes that compose a model's own operators (stable_fluids) or advance the
+// two parts of an additive split one after the other (lie, strang) — printed "splitting" (the
+// family name in `list` and the CSVs); imex: additive (implicit–explicit) Runge–Kutta methods. The symplectic kick/drift
 // splittings are Family::symplectic (KickDriftIntegrator, integrators/symplectic/kick_drift.hpp).
-enum class Family { explicit_rk, implicit, symplectic, graphics, operator_splitting, reference };
+enum class Family {
+  explicit_rk,
+  implicit,
+  symplectic,
+  graphics,
+  operator_splitting,
+  imex,
+  reference
+};
 std::string to_string(Family f);
 
 // What an integrator needs from the system.
@@ -33,6 +42,7 @@ struct Requirements {
   bool constraints = false;
   bool spring_network = false;  // the system's springs (OdeSystem::spring_network())
   bool grid_fluid = false;      // the GridFluid operators (core/grid_fluid.hpp)
+  bool split = false;           // an additive split f = f_E + f_I (OdeSystem::has_imex_split)
 };
 
 struct MethodInfo {
@@ -75,6 +85,8 @@ class Integrator {
   // `stiffbench analyze`); nullptr for other methods.
   virtual const RosenbrockTableau* rosenbrock_tableau() const { return nullptr; }
   virtual const KickDriftCoefficients* kick_drift_coefficients() const { return nullptr; }
+  // The two tables of an additive (IMEX) Runge–Kutta method; nullptr for other methods.
+  virtual const AdditiveTableau* additive_tableau() const { return nullptr; }
 
   // Starts a run at (t0, y0) on `sys`; checks compatibility, allocates workspaces, clears
   // history. The same system must be passed to the following step() calls.
@@ -96,6 +108,13 @@ class Integrator {
   // The method's linear stability (core/linear_stability.hpp) from its coefficients, with the
   // parameters it was created with; empty where it has none (variable-order library methods).
   virtual std::optional<LinearStability> linear_stability() const { return std::nullopt; }
+
+  // For methods that advance f_E of an additive split explicitly (IMEX Runge–Kutta, operator
+  // splitting with an explicit sub-integrator): the linear stability of that explicit treatment
+  // (the explicit table's R, or the explicit sub-integrator's), which limits the step on the
+  // spectrum of ∂f_E/∂y when the implicit part is A-stable and does not interact (`stability`
+  // predicts from it). Empty for other methods.
+  virtual std::optional<LinearStability> explicit_part_stability() const { return std::nullopt; }
 
  private:
   MethodInfo info_;

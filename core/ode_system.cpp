@@ -43,12 +43,38 @@ void MechanicalSystem::eval_rhs(double t, CVecRef y, VecRef dydt) const {
   eval_acceleration(t, y.head(n), y.tail(n), dydt.tail(n));
 }
 
-void MechanicalSystem::eval_jacobian(double t, CVecRef y, SparseMat& jac) const {
-  // J = [[0, I], [K, D]]: x' = v contributes the identity block.
+void OdeSystem::eval_implicit_part_jacobian(double, CVecRef, SparseMat&) const {
+  throw BadInput("model '" + name() + "' provides no Jacobian of the implicit part of its split");
+}
+
+void MechanicalSystem::implicit_force_jacobians(double, CVecRef, CVecRef, SparseMat&,
+                                                SparseMat&) const {
+  throw BadInput("model '" + name() + "' provides no force Jacobians of its split's implicit part");
+}
+
+void MechanicalSystem::eval_acceleration_explicit_part(double, CVecRef, CVecRef, VecRef) const {
+  throw BadInput("model '" + name() + "' has no additive split (no explicit part)");
+}
+
+void MechanicalSystem::eval_acceleration_implicit_part(double, CVecRef, CVecRef, VecRef) const {
+  throw BadInput("model '" + name() + "' has no additive split (no implicit part)");
+}
+
+void MechanicalSystem::eval_rhs_explicit_part(double t, CVecRef y, VecRef fe) const {
   const Index n = dofs();
-  SparseMat k, d;
-  stiffness_block(t, y.head(n), y.tail(n), k);
-  damping_block(t, y.head(n), y.tail(n), d);
+  fe.head(n).setZero();
+  eval_acceleration_explicit_part(t, y.head(n), y.tail(n), fe.tail(n));
+}
+
+void MechanicalSystem::eval_rhs_implicit_part(double t, CVecRef y, VecRef fi) const {
+  const Index n = dofs();
+  fi.head(n) = y.tail(n);
+  eval_acceleration_implicit_part(t, y.head(n), y.tail(n), fi.tail(n));
+}
+
+namespace {
+// [[0, I], [K, D]] for a mechanical system with n dofs.
+void assemble_first_order(Index n, const SparseMat& k, const SparseMat& d, SparseMat& jac) {
   std::vector<Eigen::Triplet<double>> trips;
   trips.reserve(static_cast<std::size_t>(n + k.nonZeros() + d.nonZeros()));
   for (Index i = 0; i < n; ++i) trips.emplace_back(i, n + i, 1.0);
@@ -60,6 +86,23 @@ void MechanicalSystem::eval_jacobian(double t, CVecRef y, SparseMat& jac) const 
       trips.emplace_back(n + it.row(), n + it.col(), it.value());
   jac.resize(2 * n, 2 * n);
   jac.setFromTriplets(trips.begin(), trips.end());
+}
+}  // namespace
+
+void MechanicalSystem::eval_jacobian(double t, CVecRef y, SparseMat& jac) const {
+  // J = [[0, I], [K, D]]: x' = v contributes the identity block.
+  const Index n = dofs();
+  SparseMat k, d;
+  stiffness_block(t, y.head(n), y.tail(n), k);
+  damping_block(t, y.head(n), y.tail(n), d);
+  assemble_first_order(n, k, d, jac);
+}
+
+void MechanicalSystem::eval_implicit_part_jacobian(double t, CVecRef y, SparseMat& jac) const {
+  const Index n = dofs();
+  SparseMat k, d;
+  implicit_force_jacobians(t, y.head(n), y.tail(n), k, d);
+  assemble_first_order(n, k, d, jac);
 }
 
 double fd_increment(double yj, double y_norm) {

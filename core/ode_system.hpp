@@ -17,8 +17,28 @@
 namespace stiffbench {
 
 struct EvalCounters {
-  long f_evals = 0;    // rhs() and acceleration() calls
-  long jac_evals = 0;  // analytic jacobian() calls
+  long f_evals = 0;    // rhs() and acceleration() calls, and calls of either part of a split
+  long jac_evals = 0;  // analytic jacobian() and implicit_part_jacobian() calls
+  long fe_evals = 0;   // calls of the explicit part f_E of an additive split (also in f_evals)
+  long fi_evals = 0;   // calls of the implicit part f_I (also in f_evals)
+};
+
+// An additive split f = f_E + f_I of a model (OdeSystem::imex_split()): its name (the model's
+// `split` parameter value) and what each part holds, in words, for `describe` and the results'
+// metadata.
+struct SplitInfo {
+  std::string name;
+  std::string explicit_part;  // e.g. "gravity and point damping"
+  std::string implicit_part;  // e.g. "springs and dashpots (with x' = v)"
+};
+
+// Where the eigenvalues of a part of f lie, as a model estimates them: radius ρ (the largest
+// modulus) and the ray the extreme eigenvalues lie on (imaginary: ±iρ, e.g. central-difference
+// advection or undamped oscillation; negative_real: -ρ, e.g. diffusion or decay).
+struct SpectrumEstimate {
+  enum class Ray { imaginary, negative_real };
+  double radius = 0.0;
+  Ray ray = Ray::negative_real;
 };
 
 // A conserved (or monitored) quantity of a model, e.g. energy or angular momentum.
@@ -144,17 +164,35 @@ class OdeSystem : public ProblemMetadata, public FrameOutput {
   virtual bool has_jacobian_pattern() const { return has_jacobian(); }
   virtual SparseMat jacobian_pattern() const;
 
-  // Optional additive split f = f_E + f_I for IMEX methods (f_E non-stiff, treated
-  // explicitly; f_I stiff, implicitly). Each part's call counts as one f evaluation. Without a
-  // split, IMEX integrators treat all of f implicitly.
+  // Optional additive split f = f_E + f_I for IMEX, operator-splitting and multirate methods
+  // (f_E non-stiff, treated explicitly; f_I stiff, treated implicitly, with its own Jacobian).
+  // A model with several splits chooses one by its `split` parameter; imex_split() names the
+  // active one. f_E + f_I = f up to rounding (tests/models check it for every split model).
+  // Each part's call counts as one f evaluation, and in fe_evals or fi_evals. Without a split,
+  // methods that need one refuse the model (BadInput naming it).
   virtual bool has_imex_split() const { return false; }
+  virtual std::optional<SplitInfo> imex_split() const { return std::nullopt; }
   void rhs_explicit_part(double t, CVecRef y, VecRef fe) const {
-    count_f_eval();
+    count_split_eval(true);
     eval_rhs_explicit_part(t, y, fe);
   }
   void rhs_implicit_part(double t, CVecRef y, VecRef fi) const {
-    count_f_eval();
+    count_split_eval(false);
     eval_rhs_implicit_part(t, y, fi);
+  }
+  // Analytic Jacobian J_I = ∂f_I/∂y, sparse with a fixed pattern (the implicit stages' Newton
+  // matrices are built from it). Counted as one Jacobian evaluation.
+  virtual bool has_implicit_part_jacobian() const { return false; }
+  void implicit_part_jacobian(double t, CVecRef y, SparseMat& jac) const {
+    ++counters_.jac_evals;
+    eval_implicit_part_jacobian(t, y, jac);
+  }
+  // The model's estimate of the spectrum of ∂f_E/∂y (what limits the step of the explicit part:
+  // `stability` predicts an IMEX method's limit from it when the exact spectrum of J - J_I is not
+  // computed). Empty when the model cannot say.
+  virtual std::optional<SpectrumEstimate> explicit_part_spectrum(double /*t*/,
+                                                                 CVecRef /*y*/) const {
+    return std::nullopt;
   }
 
   // True when f does not depend on t explicitly (Rosenbrock methods then skip ∂f/∂t).
@@ -197,16 +235,20 @@ class OdeSystem : public ProblemMetadata, public FrameOutput {
  protected:
   virtual void eval_rhs(double t, CVecRef y, VecRef dydt) const = 0;
   virtual void eval_jacobian(double t, CVecRef y, SparseMat& jac) const;
-  // The split's parts (only called when has_imex_split()); the Jacobian of f_I is that of f
-  // restricted to the implicit part, which a split model provides through eval_jacobian when
-  // its explicit part does not depend on y.
+  // The split's parts (only called when has_imex_split()) and the Jacobian of f_I (only when
+  // has_implicit_part_jacobian(); the default throws BadInput).
   virtual void eval_rhs_explicit_part(double, CVecRef, VecRef) const {}
   virtual void eval_rhs_implicit_part(double, CVecRef, VecRef) const {}
+  virtual void eval_implicit_part_jacobian(double t, CVecRef y, SparseMat& jac) const;
   // Every f evaluation passes here, so this is also where a run over its wall-clock limit or an
   // interrupted one is stopped (core/run_control.hpp).
   void count_f_eval() const {
     ++counters_.f_evals;
     poll_run_control();
+  }
+  void count_split_eval(bool explicit_part) const {
+    count_f_eval();
+    ++(explicit_part ? counters_.fe_evals : counters_.fi_evals);
   }
 
  private:
@@ -262,10 +304,41 @@ class MechanicalSystem : public OdeSystem {
   // enforce them themselves; nullptr when the model offers none.
   virtual const HolonomicConstraints* holonomic_constraints() const { return nullptr; }
 
+  // Additive split of a mechanical system, made at the level of the acceleration:
+  // a = a_E + a_I, and then f_E = [0; a_E], f_I = [v; a_I] (x' = v belongs to the implicit part,
+  // so the stiff forces and the motion they cause are solved together). A split model overrides
+  // has_imex_split(), imex_split(), the two eval_acceleration_*_part() and, when it has force
+  // Jacobians, implicit_force_jacobians() (K_I = ∂a_I/∂x, D_I = ∂a_I/∂v with fixed patterns,
+  // written in place like force_jacobians()); J_I = [[0, I], [K_I, D_I]] is assembled from them,
+  // and the implicit part of a mechanical model is itself a MechanicalSystem for the implicit
+  // methods' velocity-form solves (core/split_views.hpp).
+  void acceleration_explicit_part(double t, CVecRef x, CVecRef v, VecRef a) const {
+    count_split_eval(true);
+    eval_acceleration_explicit_part(t, x, v, a);
+  }
+  void acceleration_implicit_part(double t, CVecRef x, CVecRef v, VecRef a) const {
+    count_split_eval(false);
+    eval_acceleration_implicit_part(t, x, v, a);
+  }
+  virtual void implicit_force_jacobians(double t, CVecRef x, CVecRef v, SparseMat& k,
+                                        SparseMat& d) const;
+  // Whether a_I depends on v (dashpots in the implicit part); by default velocity_dependent().
+  virtual bool implicit_part_velocity_dependent() const { return velocity_dependent(); }
+  // True when M K_I and M D_I are symmetric; by default symmetric_force_jacobians().
+  virtual bool symmetric_implicit_force_jacobians() const { return symmetric_force_jacobians(); }
+  bool has_implicit_part_jacobian() const override {
+    return has_imex_split() && has_force_jacobians();
+  }
+
  protected:
   virtual void eval_acceleration(double t, CVecRef x, CVecRef v, VecRef a) const = 0;
   void eval_rhs(double t, CVecRef y, VecRef dydt) const final;
   void eval_jacobian(double t, CVecRef y, SparseMat& jac) const override;
+  virtual void eval_acceleration_explicit_part(double t, CVecRef x, CVecRef v, VecRef a) const;
+  virtual void eval_acceleration_implicit_part(double t, CVecRef x, CVecRef v, VecRef a) const;
+  void eval_rhs_explicit_part(double t, CVecRef y, VecRef fe) const final;
+  void eval_rhs_implicit_part(double t, CVecRef y, VecRef fi) const final;
+  void eval_implicit_part_jacobian(double t, CVecRef y, SparseMat& jac) const final;
 };
 
 // Central-difference increment for component j: eps^(1/3)·max(|y_j|, 1e-3‖y‖∞), or eps^(1/3)

@@ -25,6 +25,10 @@ struct SolveStats {
   long newton_conv_failures = 0;  // Newton solves that did not converge (the step was retried
                                   // or the run ended with newton_failed)
   long linear_iters = 0;          // Krylov iterations
+  // Calls of the explicit and of the implicit part of an additive split (IMEX, splitting and
+  // multirate methods on a split model); each is also one of f_evals. 0 for the other methods.
+  long fe_evals = 0;
+  long fi_evals = 0;
   // The library's own count of f evaluations (references only; -1 when not reported). It can
   // differ from f_evals, which the testbed counts at the system boundary: see the reference
   // integrators' headers for why.
@@ -36,8 +40,9 @@ struct SolveStats {
 
   // The solver counters every study's CSV carries beside f_evals, jac_evals and lin_solves, in
   // this order: newton_iters, newton_conv_failures, error_test_failures (rejected steps),
-  // linear_setups (matrix assemblies / factorizations), linear_iters (Krylov iterations). The
-  // names are the columns' names (a contract, docs/design.md).
+  // linear_setups (matrix assemblies / factorizations), linear_iters (Krylov iterations),
+  // fe_evals and fi_evals (calls of the split's explicit and implicit parts). The names are the
+  // columns' names (a contract, docs/design.md).
   static std::vector<std::string> counter_names();
   std::vector<std::string> counter_values() const;
 

@@ -76,6 +76,26 @@ struct ButcherTableau {
   std::string defect(Shape shape = Shape::any) const;
 };
 
+// An additive (IMEX) Runge–Kutta method for y' = f_E(t, y) + f_I(t, y) (Ascher, Ruuth & Spiteri
+// 1997; Kennedy & Carpenter 2003): an explicit tableau (strictly lower triangular A_E) for f_E
+// and a diagonally implicit one (lower triangular A_I) for f_I with the same nodes c. Stage i:
+//   z_i = y + h Σ_{j<i} (aE_ij kE_j + aI_ij kI_j) + h aI_ii f_I(t + c_i h, z_i),
+//   kE_i = f_E(t + c_i h, z_i), kI_i = f_I(t + c_i h, z_i),
+//   y⁺ = y + h Σ_i (bE_i kE_i + bI_i kI_i)   (and the embedded ŷ with b̂E, b̂I when given).
+// The two tables' b (and b_embedded) may differ (ARS methods have bE ≠ bI); `order` is the
+// order of the pair, coupling conditions included (core/method_analysis.hpp checks them).
+struct AdditiveTableau {
+  std::string name;
+  ButcherTableau explicit_table;  // name, order: the pair's; orders of each table alone in them
+  ButcherTableau implicit_table;
+  int order = 0;
+  int embedded_order = 0;  // 0: no embedded pair
+  int stages() const { return explicit_table.stages(); }
+  bool has_embedded() const {
+    return explicit_table.b_embedded.size() > 0 && implicit_table.b_embedded.size() > 0;
+  }
+};
+
 // Kick/drift splitting for x' = v, v' = a(t, x, v). One step of size h is, for j = 1..s:
 //   v ← v + h·kick[j]·a(t_j, x, v);   x ← x + h·drift[j]·v;   t_j = t + h·Σ_{i<j} drift[i].
 // Zero kicks cost no evaluation. Each stage is a shear, so the map is symplectic whenever a does

@@ -36,6 +36,10 @@ class CountingBase : public Base {
   bool has_jacobian_pattern() const override { return inner_.has_jacobian_pattern(); }
   SparseMat jacobian_pattern() const override { return inner_.jacobian_pattern(); }
   bool has_imex_split() const override { return inner_.has_imex_split(); }
+  std::optional<SplitInfo> imex_split() const override { return inner_.imex_split(); }
+  std::optional<SpectrumEstimate> explicit_part_spectrum(double t, CVecRef y) const override {
+    return inner_.explicit_part_spectrum(t, y);
+  }
   bool autonomous() const override { return inner_.autonomous(); }
   bool has_exact() const override { return inner_.has_exact(); }
   void exact(double t, VecRef y) const override { inner_.exact(t, y); }
@@ -70,14 +74,6 @@ class CountingBase : public Base {
     ++counts_.jac;
     inner_.jacobian(t, y, jac);
   }
-  void eval_rhs_explicit_part(double t, CVecRef y, VecRef fe) const override {
-    ++counts_.f;
-    inner_.rhs_explicit_part(t, y, fe);
-  }
-  void eval_rhs_implicit_part(double t, CVecRef y, VecRef fi) const override {
-    ++counts_.f;
-    inner_.rhs_implicit_part(t, y, fi);
-  }
 
   const OdeSystem& inner_;
   CallCounts& counts_;
@@ -87,11 +83,24 @@ class CountingOde final : public CountingBase<OdeSystem> {
  public:
   using CountingBase::CountingBase;
   Index dimension() const override { return inner_.dimension(); }
+  bool has_implicit_part_jacobian() const override { return inner_.has_implicit_part_jacobian(); }
 
  protected:
   void eval_rhs(double t, CVecRef y, VecRef dydt) const override {
     ++counts_.f;
     inner_.rhs(t, y, dydt);
+  }
+  void eval_rhs_explicit_part(double t, CVecRef y, VecRef fe) const override {
+    ++counts_.f;
+    inner_.rhs_explicit_part(t, y, fe);
+  }
+  void eval_rhs_implicit_part(double t, CVecRef y, VecRef fi) const override {
+    ++counts_.f;
+    inner_.rhs_implicit_part(t, y, fi);
+  }
+  void eval_implicit_part_jacobian(double t, CVecRef y, SparseMat& jac) const override {
+    ++counts_.jac;
+    inner_.implicit_part_jacobian(t, y, jac);
   }
 };
 
@@ -121,11 +130,30 @@ class CountingMechanical final : public CountingBase<MechanicalSystem> {
   const HolonomicConstraints* holonomic_constraints() const override {
     return mech_.holonomic_constraints();
   }
+  void implicit_force_jacobians(double t, CVecRef x, CVecRef v, SparseMat& k,
+                                SparseMat& d) const override {
+    ++counts_.jac;
+    mech_.implicit_force_jacobians(t, x, v, k, d);
+  }
+  bool implicit_part_velocity_dependent() const override {
+    return mech_.implicit_part_velocity_dependent();
+  }
+  bool symmetric_implicit_force_jacobians() const override {
+    return mech_.symmetric_implicit_force_jacobians();
+  }
 
  protected:
   void eval_acceleration(double t, CVecRef x, CVecRef v, VecRef a) const override {
     ++counts_.f;
     mech_.acceleration(t, x, v, a);
+  }
+  void eval_acceleration_explicit_part(double t, CVecRef x, CVecRef v, VecRef a) const override {
+    ++counts_.f;
+    mech_.acceleration_explicit_part(t, x, v, a);
+  }
+  void eval_acceleration_implicit_part(double t, CVecRef x, CVecRef v, VecRef a) const override {
+    ++counts_.f;
+    mech_.acceleration_implicit_part(t, x, v, a);
   }
   void eval_jacobian(double t, CVecRef y, SparseMat& jac) const override {
     ++counts_.jac;

@@ -285,7 +285,9 @@ RunMemory estimate_run_memory(const std::string& model, const std::vector<std::s
   m.state_bytes = kWorkVectors * 8.0 * n;
   for (const auto& name : integrators) {
     const auto& ie = integrator_registry().at(name);
-    if (ie.info.family != Family::implicit && ie.info.family != Family::reference) continue;
+    if (ie.info.family != Family::implicit && ie.info.family != Family::imex &&
+        ie.info.family != Family::reference)
+      continue;
     const Params ip = resolve_params(ie.params, user, nullptr, "integrator '" + name + "'");
     m.jacobian_bytes = std::max(m.jacobian_bytes, kSparseCopies * 12.0 * m.model.jacobian_nonzeros);
     if (uses_dense(ip)) {

@@ -35,6 +35,7 @@ std::vector<PlotPanel> family_panels(const std::vector<std::string>& integrators
       {"explicit", "explicit Runge-Kutta"},
       {"symplectic", "symplectic"},
       {"implicit", "implicit"},
+      {"imex", "implicit-explicit (IMEX)"},
       {"graphics", "graphics (spring solvers)"},
       {"splitting", "splitting schemes"},
       {to_string(Family::reference), "library references"},

@@ -286,7 +286,7 @@ TEST(Cli, WorkPrecisionOnHiresErrorFallsAsWorkRises) {
   // The columns of before issue 24, then the solver counters and the timing spread.
   EXPECT_EQ(join_cells(table.front()),
             "model,integrator,setting,error,f_evals,jac_evals,lin_solves,steps,wall_s,status,mescd,"
-            "newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_iters,"
+            "newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_iters,fe_evals,fi_evals,"
             "wall_s_median,wall_s_min,wall_s_ci_low,wall_s_ci_high,repeats");
   std::map<std::string, std::vector<std::pair<long, double>>> by_method;
   for (std::size_t r = 1; r < table.size(); ++r) {
@@ -528,7 +528,7 @@ TEST(Cli, StabilityWritesContractFiles) {
   ASSERT_EQ(rows.size(), 3u);
   EXPECT_EQ(join_cells(rows[0]),
             "model,integrator,param,value,h_max_measured,h_max_predicted,ratio,status,"
-            "newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_iters");
+            "newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_iters,fe_evals,fi_evals");
   EXPECT_EQ(rows[1][1], "symplectic_euler");
   EXPECT_NEAR(std::stod(rows[1][6]), 1.0, 0.02);
   EXPECT_EQ(rows[2][1], "euler");

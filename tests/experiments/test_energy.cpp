@@ -330,7 +330,7 @@ TEST(EnergyOutputs, FilesFollowTheContract) {
   EXPECT_EQ(first_line(dir / "energy_summary.csv"),
             "model,integrator,h,t_end,max_rel_error,final_rel_error,drift_rate,growth,status,"
             "steps,f_evals,jac_evals,lin_solves,newton_iters,newton_conv_failures,"
-            "error_test_failures,linear_setups,linear_iters");
+            "error_test_failures,linear_setups,linear_iters,fe_evals,fi_evals");
   EXPECT_EQ(first_line(dir / "energy.md"), "# Energy drift: kepler");
   std::ifstream md(dir / "energy.md");
   const std::string text((std::istreambuf_iterator<char>(md)), {});

@@ -61,7 +61,7 @@ TEST(Stability, SpringChainLimitsMatchLinearTheory) {
             (std::vector<std::string>{"model", "integrator", "param", "value", "h_max_measured",
                                       "h_max_predicted", "ratio", "status", "newton_iters",
                                       "newton_conv_failures", "error_test_failures",
-                                      "linear_setups", "linear_iters"}));
+                                      "linear_setups", "linear_iters", "fe_evals", "fi_evals"}));
   // Counters of the largest stable run: backward Euler on a linear chain takes one Newton
   // update per step at least (the run has >= min_steps = 200 steps); euler none (no row).
   ASSERT_TRUE(be.counters);

@@ -143,7 +143,8 @@ TEST(WorkPrecisionTiming, ColumnsAndRepeats) {
   const Table t = work_precision_table(res);
   const std::vector<std::string> tail = {"newton_iters",        "newton_conv_failures",
                                          "error_test_failures", "linear_setups",
-                                         "linear_iters",        "wall_s_median",
+                                         "linear_iters",        "fe_evals",
+                                         "fi_evals",            "wall_s_median",
                                          "wall_s_min",          "wall_s_ci_low",
                                          "wall_s_ci_high",      "repeats"};
   ASSERT_EQ(t.columns.size(), 11u + tail.size());
