@@ -19,8 +19,9 @@ namespace stiffbench {
 // graphics: the graphics community's spring solvers (xpbd, projective_dynamics);
 // operator_splitting: schemes that compose a model's own operators (stable_fluids) or advance the
 // two parts of an additive split one after the other (lie, strang) — printed "splitting" (the
-// family name in `list` and the CSVs); imex: additive (implicit–explicit) Runge–Kutta methods. The symplectic kick/drift
-// splittings are Family::symplectic (KickDriftIntegrator, integrators/symplectic/kick_drift.hpp).
+// family name in `list` and the CSVs); imex: additive (implicit–explicit) Runge–Kutta methods. The
+// symplectic kick/drift splittings are Family::symplectic (KickDriftIntegrator,
+// integrators/symplectic/kick_drift.hpp).
 enum class Family {
   explicit_rk,
   implicit,

@@ -25,23 +25,35 @@ std::string to_string(Status s) {
 }
 
 std::vector<std::string> SolveStats::counter_names() {
-  return {"newton_iters", "newton_conv_failures", "error_test_failures", "linear_setups",
-          "linear_iters", "fe_evals",           "fi_evals"};
+  return {"newton_iters",  "newton_conv_failures", "error_test_failures",
+          "linear_setups", "linear_iters",         "fe_evals",
+          "fi_evals"};
 }
 
 std::vector<std::string> SolveStats::counter_values() const {
-  return {std::to_string(newton_iters), std::to_string(newton_conv_failures),
-          std::to_string(error_test_failures), std::to_string(linear_setups),
-          std::to_string(linear_iters), std::to_string(fe_evals),
+  return {std::to_string(newton_iters),
+          std::to_string(newton_conv_failures),
+          std::to_string(error_test_failures),
+          std::to_string(linear_setups),
+          std::to_string(linear_iters),
+          std::to_string(fe_evals),
           std::to_string(fi_evals)};
 }
 
 std::vector<std::string> SolveStats::field_names() {
-  return {"status",       "steps",        "error_test_failures",
-          "f_evals",      "fe_evals",     "fi_evals",
-          "jac_evals",    "linear_setups",
-          "lin_solves",   "newton_iters", "newton_conv_failures",
-          "linear_iters", "wall_s"};
+  return {"status",
+          "steps",
+          "error_test_failures",
+          "f_evals",
+          "fe_evals",
+          "fi_evals",
+          "jac_evals",
+          "linear_setups",
+          "lin_solves",
+          "newton_iters",
+          "newton_conv_failures",
+          "linear_iters",
+          "wall_s"};
 }
 
 std::vector<std::string> SolveStats::field_values() const {

@@ -17,7 +17,7 @@ std::string to_string(Status s);
 struct SolveStats {
   long steps = 0;
   long error_test_failures = 0;  // rejected steps: the error test failed (adaptive runs)
-  long f_evals = 0;    // counted at the system boundary (rhs and acceleration calls)
+  long f_evals = 0;              // counted at the system boundary (rhs and acceleration calls)
   long jac_evals = 0;  // analytic Jacobian evaluations (finite-difference ones count as f_evals)
   long linear_setups = 0;  // matrix assemblies / factorizations (Krylov: preconditioner set-ups)
   long lin_solves = 0;

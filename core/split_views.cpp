@@ -73,8 +73,7 @@ class MechanicalImplicitPartView final : public MechanicalSystem {
     SparseMat k;
     inner_.implicit_force_jacobians(t, x, v, k, d);
   }
-  void force_jacobians(double t, CVecRef x, CVecRef v, SparseMat& k,
-                       SparseMat& d) const override {
+  void force_jacobians(double t, CVecRef x, CVecRef v, SparseMat& k, SparseMat& d) const override {
     inner_.implicit_force_jacobians(t, x, v, k, d);
   }
   std::vector<Index> fixed_dofs() const override { return inner_.fixed_dofs(); }
@@ -99,8 +98,7 @@ class MechanicalImplicitPartView final : public MechanicalSystem {
 
 void require_split(const OdeSystem& sys, const std::string& who) {
   if (sys.has_imex_split()) return;
-  throw BadInput(who + " needs a model with an additive split f = f_E + f_I; model '" +
-                 sys.name() +
+  throw BadInput(who + " needs a model with an additive split f = f_E + f_I; model '" + sys.name() +
                  "' has none (`stiffbench describe MODEL` lists a model's splits and its `split` "
                  "parameter)");
 }

@@ -97,6 +97,36 @@ Spectrum spectrum_of(const OdeSystem& sys, double t0, const Vec& y0, const Stabi
   return s;
 }
 
+// The spectrum of ∂f_E/∂y of a split model: the eigenvalues of J - J_I when both are analytic and
+// the dimension is at most the dense limit, else the model's explicit_part_spectrum() estimate.
+Spectrum explicit_spectrum_of(const OdeSystem& sys, double t0, const Vec& y0,
+                              const StabilitySpec& spec) {
+  Spectrum s;
+  const Index n = sys.dimension();
+  if (n <= spec.dense_limit && sys.has_jacobian() && sys.has_implicit_part_jacobian()) {
+    SparseMat j, ji;
+    sys.jacobian(t0, y0, j);
+    sys.implicit_part_jacobian(t0, y0, ji);
+    const Mat je = Mat(j) - Mat(ji);
+    const Eigen::EigenSolver<Mat> es(je, false);
+    for (Index k = 0; k < n; ++k) s.eigenvalues.push_back(es.eigenvalues()(k));
+    s.source = "eigenvalues of J - J_I (analytic) at the perturbed initial state";
+  } else if (const auto est = sys.explicit_part_spectrum(t0, y0)) {
+    if (est->ray == SpectrumEstimate::Ray::imaginary) {
+      s.eigenvalues = {cd(0, est->radius), cd(0, -est->radius)};
+      s.source = "explicit_part_spectrum() estimate " + num(est->radius) + " on the imaginary axis";
+    } else {
+      s.eigenvalues = {cd(-est->radius, 0)};
+      s.source =
+          "explicit_part_spectrum() estimate " + num(est->radius) + " on the negative real axis";
+    }
+  } else {
+    s.source = "none (no analytic J and J_I within the dense limit, no explicit_part_spectrum())";
+  }
+  for (const cd& l : s.eigenvalues) s.omega = std::max(s.omega, std::abs(l));
+  return s;
+}
+
 Vec perturbed_state(const OdeSystem& sys, const StabilitySpec& spec) {
   Vec y = sys.initial_state();
   std::mt19937_64 rng(spec.seed);
@@ -213,9 +243,20 @@ std::function<double(double, CVecRef)> energy_criterion(const OdeSystem& sys,
   return energy;
 }
 
-// The linear-theory limit of the method on the system's spectrum, into `row`.
-void predict(const Integrator& integ, const Spectrum& spec_sys, bool mechanical, double h_cap,
-             StabilityRow& row) {
+// The linear-theory limit of the method on the system's spectrum, into `row`; for a method that
+// treats f_E explicitly on a split model, its explicit treatment's limit on the spectrum of f_E.
+void predict(const Integrator& integ, const Spectrum& spec_sys, const Spectrum* spec_explicit,
+             bool mechanical, double h_cap, StabilityRow& row) {
+  if (auto le = integ.explicit_part_stability(); le && spec_explicit) {
+    row.predicted_on = "f_E";
+    if (spec_explicit->eigenvalues.empty()) return;
+    const StepLimit lim = predicted_step_limit(*le, spec_explicit->eigenvalues, mechanical, h_cap);
+    if (lim.unbounded)
+      row.predicted_unbounded = true;
+    else
+      row.h_predicted = lim.h;
+    return;
+  }
   if (auto ls = integ.linear_stability(); ls && !spec_sys.eigenvalues.empty()) {
     const StepLimit lim = predicted_step_limit(*ls, spec_sys.eigenvalues, mechanical, h_cap);
     if (lim.unbounded)
@@ -427,14 +468,14 @@ class LimitSearch {
 
 // The measured and predicted stability limit of one integrator on the system.
 StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& spec_sys,
-                     const Vec& y0, const StabilitySpec& spec) {
+                     const Spectrum* spec_explicit, const Vec& y0, const StabilitySpec& spec) {
   StabilityRow row;
   row.model = spec.model;
   row.integrator = integ.info().name;
   const bool mechanical = sys.as_mechanical() != nullptr;
   const StepScales sc = step_scales(spec_sys, spec);
 
-  predict(integ, spec_sys, mechanical, sc.h_cap, row);
+  predict(integ, spec_sys, spec_explicit, mechanical, sc.h_cap, row);
 
   const double h0 = first_step(sys, row, sc.h_ref);
   const double h_floor = 1e-3 * std::min(h0, sc.h_ref);
@@ -579,9 +620,19 @@ StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress)
                   "stability: model " + spec.model + " gives no spectrum (" + sp.source +
                       "), so the horizon cannot be set in periods of its fastest mode: give "
                       "--horizon T");
+    std::optional<Spectrum> spe;
+    if (s.model->has_imex_split()) {
+      bool wanted = false;
+      for (const auto& integ : s.integrators)
+        wanted |= integ->explicit_part_stability().has_value();
+      if (wanted) {
+        spe = explicit_spectrum_of(*s.model, s.model->initial_time(), y0, spec);
+        res.explicit_spectrum_source = spe->source;
+      }
+    }
     for (auto& integ : s.integrators) {
       const RowClock clock;  // --max-wall covers the row's whole bisection
-      StabilityRow row = measure(*s.model, *integ, sp, y0, spec);
+      StabilityRow row = measure(*s.model, *integ, sp, spe ? &*spe : nullptr, y0, spec);
       if (sweep) {
         row.param = spec.sweep_param;
         row.value = values[iv];
@@ -678,6 +729,10 @@ std::string markdown_report(const StabilitySpec& spec, const StabilityResult& r)
      << " (at least " << spec.min_steps << " steps), from an initial state perturbed by a relative "
      << num(spec.perturbation) << " (seed " << spec.seed
      << ") so that every mode is excited. Predicted: " << r.spectrum_source
+     << (r.explicit_spectrum_source.empty()
+             ? std::string()
+             : " (IMEX and splitting methods: their explicit treatment on the spectrum of f_E, " +
+                   r.explicit_spectrum_source + ")")
      << ", scaled into each method's stability region. A ratio near 1 means linear theory "
         "predicts the limit; `unstable_for_all_h` marks methods whose measured limit shrinks "
         "with the horizon (no stable step), `stable_up_to` methods stable up to the largest step "
@@ -735,6 +790,8 @@ void write_stability_outputs(const std::filesystem::path& dir, const StabilitySp
   write_file_atomic(dir / "stability.md", markdown_report(spec, r));
   nlohmann::json meta = run_metadata("stability", spec.to_json());
   meta["spectrum"] = r.spectrum_source;
+  if (!r.explicit_spectrum_source.empty())
+    meta["explicit_part_spectrum"] = r.explicit_spectrum_source;
   meta["criterion"] =
       "stable: status ok, finite, max-norm <= norm_growth * max(1, |y0|) and (mechanical "
       "systems with an energy invariant) E <= E0 + (growth - 1) |E0| at every step of the "
@@ -746,6 +803,7 @@ void write_stability_outputs(const std::filesystem::path& dir, const StabilitySp
     j["integrator"] = row.integrator;
     if (!row.param.empty()) j[row.param] = row.value;
     j["status"] = row.status;
+    j["predicted_on"] = row.predicted_on;
     j["probes"] = row.probes;
     if (row.counters)
       for (std::size_t c = 0; c < SolveStats::counter_names().size(); ++c)
@@ -818,7 +876,12 @@ class StabilityJob : public StudyJob {
 
 std::string StabilityJob::report_markdown(const std::string& note) const {
   std::ostringstream md;
-  md << note << " Spectrum: " << result_.spectrum_source << ".\n\n";
+  md << note << " Spectrum: " << result_.spectrum_source << ".";
+  if (!result_.explicit_spectrum_source.empty())
+    md << " IMEX and splitting methods are predicted from their explicit treatment on the "
+          "spectrum of f_E: "
+       << result_.explicit_spectrum_source << ".";
+  md << "\n\n";
   Table summary{{"integrator", "statuses", "h_max/predicted (range)", "slope of log h_max",
                  "predicted slope"},
                 {}};

@@ -51,6 +51,15 @@
 // modes (sampled). A prediction of 0 means unstable for every h > 0: an undamped (imaginary)
 // eigenvalue and a method whose imaginary-axis limit is 0 (euler, heun, cash_karp, rkf45).
 //
+// IMEX and operator-splitting methods on a split model (Integrator::explicit_part_stability,
+// OdeSystem::has_imex_split): the implicit part is A-stable, so what limits the step is the
+// explicit treatment of f_E; the prediction is that treatment's limit (the explicit table's R, or
+// the explicit sub-integrator's) on the spectrum of ∂f_E/∂y — exact (eigenvalues of J - J_I, both
+// analytic, dimension <= dense_limit), else the model's explicit_part_spectrum() estimate on its
+// ray. It neglects the coupling of the parts (exact when they commute and f_I damps, e.g.
+// advection and diffusion on a periodic grid: the measured limit can only be at or above it).
+// stability.json says per row what the prediction was made on (`predicted_on`: f or f_E).
+//
 // Counters: the solver counters (SolveStats::counter_names()) of the run at h_max_measured are
 // columns of stability.csv after status; empty where no step ran stably.
 //
@@ -120,11 +129,18 @@ struct StabilityRow {
   int probes = 0;                           // runs made
   double horizon = 0;                       // time horizon used at h_max
   std::string message;                      // failed, solver_limit: why
+  // What the prediction was made on: "f" (the spectrum of ∂f/∂y) or "f_E" (an IMEX or
+  // operator-splitting method on a split model: the explicit treatment's stability on the
+  // spectrum of ∂f_E/∂y).
+  std::string predicted_on = "f";
 };
 
 struct StabilityResult {
   std::vector<StabilityRow> rows;
   std::string spectrum_source;  // per model (last value of a sweep): how ω was obtained
+  // How the spectrum of ∂f_E/∂y was obtained (split models with an IMEX or splitting method
+  // among the integrators; empty otherwise).
+  std::string explicit_spectrum_source;
   struct Fit {
     std::string integrator;
     std::optional<double> measured_slope, predicted_slope;
