@@ -92,6 +92,8 @@
 // springs' structure). explicit_part_spectrum(): springs: radius max γ/m on the negative real
 // axis (0 without point damping); stretch: the Gershgorin bound of ω_max of the explicit springs
 // alone (StiffnessSpectrum on their adjacency) on the imaginary axis, point damping ignored.
+// (J_E = [[0, 0], [K_E, D_E]] itself is nilpotent in x: the rate that limits an explicit a_E is
+// the explicit springs' oscillation ±iω under x' = v, the eigenvalues of [[0, I], [K_E, 0]].)
 //
 // Spring view (core/springs.hpp): spring_network() lists the springs (i, j, L, k, c), masses,
 // pins, gravity and point damping for the graphics solvers (XPBD, projective dynamics), which

@@ -5,8 +5,8 @@
 // Exact solution for every ε > 0: y1 = e^{-2t}, y2 = e^{-t} (then y2² = y1, so the 1/ε terms
 // cancel: -y1/ε + y2²/ε = 0, and y1' = -2 y1, y2' = y1 - y2 - y2² = -y2).
 // Parameter eps (ε > 0, default 1e-6): the stiffness knob. Autonomous.
-// Jacobian [[-(2 + 1/ε), 2 y2/ε], [1, -1 - 2 y2]]; stiffness() its Gershgorin bound
-// min(‖J‖₁, ‖J‖∞) (≈ 1/ε).
+// Jacobian [[-(2 + 1/ε), 2 y2/ε], [1, -1 - 2 y2]]; stiffness() its spectral radius, from the
+// 2×2 eigenvalues in closed form (≈ 1/ε; the Gershgorin bound would be 3/ε at y(0)).
 // Additive split (split=stiff, the only one): f_I = (-y1/ε + y2²/ε, 0) (the 1/ε terms),
 // J_I = [[-1/ε, 2 y2/ε], [0, 0]]; f_E = (-2 y1, y1 - y2 - y2²), whose Jacobian
 // [[-2, 0], [1, -1 - 2 y2]] has the eigenvalues -2 and -1 - 2 y2 (lower triangular):
