@@ -11,6 +11,7 @@
 
 #include <toml++/toml.h>
 
+#include "core/additive_conditions.hpp"
 #include "core/method_analysis.hpp"
 #include "core/params.hpp"
 #include "core/types.hpp"
@@ -19,6 +20,7 @@
 #include "integrators/coefficient_expr.hpp"
 #include "integrators/embedded_methods.hpp"
 #include "integrators/explicit/explicit_rk.hpp"
+#include "integrators/imex/imex_ark.hpp"
 #include "integrators/implicit/dirk.hpp"
 #include "integrators/implicit/gauss.hpp"
 #include "integrators/implicit/implicit_core.hpp"
@@ -39,6 +41,8 @@ std::string to_string(MethodKind k) {
       return "rosenbrock";
     case MethodKind::splitting:
       return "splitting";
+    case MethodKind::imex_ark:
+      return "imex_ark";
   }
   return "?";
 }
@@ -55,6 +59,8 @@ bool MethodDefinition::adaptive() const {
       return rosenbrock.b_embedded.size() != 0;
     case MethodKind::splitting:
       return false;
+    case MethodKind::imex_ark:
+      return additive.has_embedded();
   }
   return false;
 }
@@ -66,7 +72,8 @@ const std::vector<std::pair<std::string, MethodKind>> kKinds = {
     {"dirk", MethodKind::dirk},
     {"irk", MethodKind::irk},
     {"rosenbrock", MethodKind::rosenbrock},
-    {"splitting", MethodKind::splitting}};
+    {"splitting", MethodKind::splitting},
+    {"imex_ark", MethodKind::imex_ark}};
 
 const std::vector<std::string> kCommonKeys = {"name",      "kind",  "order",    "description",
                                               "reference", "class", "constants"};
@@ -84,6 +91,8 @@ std::vector<std::string> kind_keys(MethodKind k) {
               "m_embedded"};
     case MethodKind::splitting:
       return {"kick", "drift", "composition", "velocity_independent"};
+    case MethodKind::imex_ark:
+      return {"stage_order", "c", "embedded_order", "explicit", "implicit"};
   }
   return {};
 }
@@ -102,6 +111,15 @@ class Reader {
 
   const std::string& origin() const { return origin_; }
 
+  // A reader of the sub-table [name] (its keys named "name.key" in messages), with the file's
+  // constants.
+  Reader section(const toml::table& t, const std::string& name) const {
+    Reader r(t, origin_);
+    r.constants_ = constants_;
+    r.prefix_ = name + ".";
+    return r;
+  }
+
   std::string where(const toml::node& n) const {
     const auto& s = n.source();
     if (!s.begin) return origin_;
@@ -113,7 +131,7 @@ class Reader {
   }
   [[noreturn]] void fail(const toml::node& n, const std::string& key,
                          const std::string& what) const {
-    throw BadInput(where(n) + ": key '" + key + "': " + what);
+    throw BadInput(where(n) + ": key '" + prefix_ + key + "': " + what);
   }
 
   const toml::node* get(const std::string& key) const { return root_.get(key); }
@@ -122,7 +140,7 @@ class Reader {
   std::string text(const std::string& key, bool required, const std::string& fallback = "") const {
     const toml::node* n = get(key);
     if (!n) {
-      if (required) throw BadInput(origin_ + ": key '" + key + "' missing (a string)");
+      if (required) throw BadInput(origin_ + ": key '" + prefix_ + key + "' missing (a string)");
       return fallback;
     }
     if (!n->is_string()) fail(*n, key, "expected a string");
@@ -132,7 +150,7 @@ class Reader {
   int integer(const std::string& key, bool required, int fallback, int lo, int hi) const {
     const toml::node* n = get(key);
     if (!n) {
-      if (required) throw BadInput(origin_ + ": key '" + key + "' missing (an integer)");
+      if (required) throw BadInput(origin_ + ": key '" + prefix_ + key + "' missing (an integer)");
       return fallback;
     }
     if (!n->is_integer()) fail(*n, key, "expected an integer");
@@ -169,7 +187,7 @@ class Reader {
 
   long double scalar(const std::string& key) const {
     const toml::node* n = get(key);
-    if (!n) throw BadInput(origin_ + ": key '" + key + "' missing (a coefficient)");
+    if (!n) throw BadInput(origin_ + ": key '" + prefix_ + key + "' missing (a coefficient)");
     return coefficient(*n, key);
   }
 
@@ -178,7 +196,7 @@ class Reader {
     const toml::node* n = get(key);
     if (!n) {
       if (required)
-        throw BadInput(origin_ + ": key '" + key + "' missing (a list of coefficients)");
+        throw BadInput(origin_ + ": key '" + prefix_ + key + "' missing (a list of coefficients)");
       return {};
     }
     const toml::array* a = n->as_array();
@@ -193,8 +211,8 @@ class Reader {
   std::vector<std::vector<long double>> matrix(const std::string& key, std::size_t s) const {
     const toml::node* n = get(key);
     if (!n)
-      throw BadInput(origin_ + ": key '" + key + "' missing (" + std::to_string(s) + " rows of " +
-                     std::to_string(s) + " coefficients)");
+      throw BadInput(origin_ + ": key '" + prefix_ + key + "' missing (" + std::to_string(s) +
+                     " rows of " + std::to_string(s) + " coefficients)");
     const toml::array* a = n->as_array();
     if (!a) fail(*n, key, "expected a list of rows (lists of coefficients)");
     if (a->size() != s)
@@ -263,6 +281,7 @@ class Reader {
   const toml::table& root_;
   std::string origin_;
   CoefficientConstants constants_;
+  std::string prefix_;  // "explicit." in a section's reader
 };
 
 Vec to_vec(const std::vector<long double>& v) {
@@ -476,6 +495,146 @@ void read_splitting(const Reader& r, MethodDefinition& m) {
                         : ""));
 }
 
+// imex_ark: the [explicit] and [implicit] sections of an additive Runge–Kutta method.
+const toml::table& imex_section(const Reader& r, const std::string& name) {
+  const toml::node* n = r.get(name);
+  if (!n)
+    throw BadInput(r.origin() + ": section [" + name +
+                   "] missing (A, b and optionally b_embedded " + "and c of the " + name +
+                   " table)");
+  const toml::table* t = n->as_table();
+  if (!t) r.fail(*n, name, "expected a section [" + name + "] with A, b (and b_embedded, c)");
+  const std::vector<std::string> known = {"A", "b", "b_embedded", "c"};
+  for (const auto& [k, v] : *t) {
+    const std::string key(k.str());
+    if (std::find(known.begin(), known.end(), key) == known.end())
+      throw BadInput(r.where(v) + ": unknown key '" + name + "." + key + "' in section [" + name +
+                     "]" + did_you_mean(key, known) + "; known: " + join(known));
+  }
+  return *t;
+}
+
+// c[i] must be the row sum of A (1e-12, as for the other kinds).
+void check_nodes(const Reader& owner, const std::string& key, const std::vector<long double>& c,
+                 const std::vector<std::vector<long double>>& a, const std::string& table) {
+  if (c.size() != a.size())
+    owner.fail(*owner.get("c"), key,
+               std::to_string(c.size()) + " entries, need " + std::to_string(a.size()));
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    long double sum = 0;
+    for (long double x : a[i]) sum += x;
+    if (std::fabs(c[i] - sum) > 1e-12L * std::max(1.0L, std::fabs(sum)))
+      owner.fail(owner.element("c", i), key,
+                 "c[" + std::to_string(i + 1) + "] = " + num(c[i]) + " is not the row sum of the " +
+                     table + " table's A (" + num(sum) + ")");
+  }
+}
+
+// One table: A (shape checked), b, b_embedded, its nodes (own c, else the shared c, else the
+// row sums).
+ButcherTableau read_imex_table(const Reader& r, const Reader& sec, const std::string& name,
+                               std::size_t stages, const std::vector<long double>& shared_c) {
+  const std::vector<long double> b = sec.vector("b", true);
+  if (stages != 0 && b.size() != stages)
+    sec.fail(*sec.get("b"), "b",
+             std::to_string(b.size()) + " entries, the explicit table has " +
+                 std::to_string(stages) + " stages");
+  const auto a = sec.matrix("A", b.size());
+  sec.require_lower("A", a, name == "explicit", "the " + name + " table of an imex_ark method");
+  const std::vector<long double> be = sec.vector("b_embedded", false);
+  if (!be.empty() && be.size() != b.size())
+    sec.fail(*sec.get("b_embedded"), "b_embedded",
+             std::to_string(be.size()) + " entries, need " + std::to_string(b.size()));
+  std::vector<long double> c = sec.vector("c", false);
+  if (!c.empty() && !shared_c.empty())
+    sec.fail(*sec.get("c"), "c",
+             "give the nodes either once at the top (shared) or in each section, not both");
+  if (!c.empty()) {
+    check_nodes(sec, "c", c, a, name);
+  } else if (!shared_c.empty()) {
+    check_nodes(r, "c", shared_c, a, name);
+    c = shared_c;
+  } else {
+    for (const auto& row : a) {
+      long double sum = 0;
+      for (long double x : row) sum += x;
+      c.push_back(sum);
+    }
+  }
+  ButcherTableau t;
+  t.name = r.origin() + " (" + name + " table)";
+  t.a = to_mat(a);
+  t.b = to_vec(b);
+  t.c = to_vec(c);
+  t.b_embedded = to_vec(be);
+  return t;
+}
+
+void read_imex_ark(const Reader& r, MethodDefinition& m) {
+  const Reader ex = r.section(imex_section(r, "explicit"), "explicit");
+  const Reader im = r.section(imex_section(r, "implicit"), "implicit");
+  const std::vector<long double> shared_c = r.vector("c", false);
+  AdditiveTableau& t = m.additive;
+  t.name = m.name;
+  t.order = m.order;
+  t.explicit_table = read_imex_table(r, ex, "explicit", 0, shared_c);
+  t.implicit_table = read_imex_table(r, im, "implicit", t.explicit_table.b.size(), shared_c);
+  t.explicit_table.name = m.name + " (explicit table)";
+  t.implicit_table.name = m.name + " (implicit table)";
+  const bool emb_e = t.explicit_table.b_embedded.size() != 0;
+  const bool emb_i = t.implicit_table.b_embedded.size() != 0;
+  if (emb_e != emb_i)
+    throw BadInput((emb_e ? ex.where("b_embedded") : im.where("b_embedded")) + ": key '" +
+                   (emb_e ? "explicit" : "implicit") +
+                   ".b_embedded': give the embedded weights of both tables or of neither");
+  if (emb_e && !r.has("embedded_order"))
+    throw BadInput(ex.where("b_embedded") +
+                   ": key 'explicit.b_embedded' given without 'embedded_order'");
+  if (!emb_e && r.has("embedded_order"))
+    throw BadInput(r.where("embedded_order") +
+                   ": key 'embedded_order' given without the tables' b_embedded");
+  t.embedded_order = r.integer("embedded_order", false, 0, 1, 12);
+  const std::string who = "imex_ark method '" + m.name + "': ";
+  // Each table alone (rooted trees up to order 8), then the pair's coupling conditions.
+  for (ButcherTableau* tab : {&t.explicit_table, &t.implicit_table}) {
+    const std::string part = tab == &t.explicit_table ? "explicit" : "implicit";
+    if (const std::string d =
+            violated_claim(rk_order_conditions(*tab, tab->b, std::min(m.order, 8)), m.order,
+                           "the " + part + " table alone: order");
+        !d.empty())
+      throw BadInput(r.where("order") + ": key 'order': " + who + d);
+    if (emb_e) {
+      if (const std::string d = violated_claim(
+              rk_order_conditions(*tab, tab->b_embedded, std::min(t.embedded_order, 8)),
+              t.embedded_order, "the " + part + " table's embedded weights alone: embedded order");
+          !d.empty())
+        throw BadInput(r.where("embedded_order") + ": key 'embedded_order': " + who + d);
+    }
+    tab->order = tab->satisfied_order(1e-12, 6);
+    tab->embedded_order = emb_e ? tab->satisfied_order(tab->b_embedded, 1e-12, 6) : 0;
+  }
+  const auto coupling = [&](const Vec& we, const Vec& wi, int order, const std::string& label,
+                            const std::string& key) {
+    const int p = std::min(order, 4);
+    const auto conditions =
+        additive_order_conditions(t.explicit_table, t.implicit_table, we, wi, p, label);
+    if (const auto v = first_violated_additive_condition(conditions, p, true))
+      throw BadInput(r.where(key) + ": key '" + key + "': " + who + key + " " +
+                     std::to_string(order) + " claimed but the coupling condition " + v->name +
+                     " (order " + std::to_string(v->order) + ") has residual " + num(v->residual));
+  };
+  coupling(t.explicit_table.b, t.implicit_table.b, m.order, "b", "order");
+  if (emb_e)
+    coupling(t.explicit_table.b_embedded, t.implicit_table.b_embedded, t.embedded_order,
+             "b_embedded_", "embedded_order");
+  const int q = r.integer("stage_order", false, 0, 1, 12);
+  if (q > 0 && t.implicit_table.satisfied_stage_order() < q)
+    throw BadInput(r.where("stage_order") + ": key 'stage_order': " + who + "stage order " +
+                   std::to_string(q) + " claimed but the implicit table meets C(" +
+                   std::to_string(t.implicit_table.satisfied_stage_order()) + ") only");
+  t.implicit_table.stage_order = q;
+}
+
 std::string default_class(const MethodDefinition& m) {
   switch (m.kind) {
     case MethodKind::explicit_rk:
@@ -490,6 +649,8 @@ std::string default_class(const MethodDefinition& m) {
       return m.rosenbrock.b_embedded.size() != 0 ? "Rosenbrock (embedded pair)" : "Rosenbrock";
     case MethodKind::splitting:
       return "splitting";
+    case MethodKind::imex_ark:
+      return m.additive.has_embedded() ? "IMEX additive RK (embedded pair)" : "IMEX additive RK";
   }
   return "";
 }
@@ -567,6 +728,13 @@ std::unique_ptr<Integrator> build(const MethodDefinition& m, const Params& p) {
     case MethodKind::splitting:
       return std::make_unique<KickDriftIntegrator>(m.splitting.kick_drift,
                                                    m.splitting.velocity_independent, m.description);
+    case MethodKind::imex_ark:
+      if (m.adaptive())
+        return std::make_unique<ImexArkIntegrator>(
+            m.additive, m.description, read_implicit_options(p, true), read_controller_options(p),
+            read_error_filter(p));
+      return std::make_unique<ImexArkIntegrator>(m.additive, m.description,
+                                                 read_implicit_options(p, true));
   }
   throw std::logic_error("make_integrator: unknown kind");
 }
@@ -631,6 +799,9 @@ MethodDefinition parse_method_file(const std::string& text, const std::string& o
     case MethodKind::splitting:
       read_splitting(r, m);
       break;
+    case MethodKind::imex_ark:
+      read_imex_ark(r, m);
+      break;
   }
   m.class_text = r.text("class", false, default_class(m));
   // The integrator's own checks (its constructor: e.g. A⁻¹ diagonalisable for irk, RADAU5's
@@ -667,6 +838,8 @@ std::vector<ParamSpec> method_param_specs(const MethodDefinition& m) {
     }
     case MethodKind::splitting:
       return {};
+    case MethodKind::imex_ark:
+      return m.adaptive() ? esdirk_param_specs() : implicit_param_specs(true);
   }
   return {};
 }

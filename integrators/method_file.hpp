@@ -2,8 +2,8 @@
 // repository, compiled into the library; a user's own anywhere). The format:
 //
 //   name = "heun3"                    # [a-z0-9_]+, unique among the registered integrators
-//   kind = "explicit_rk"              # explicit_rk | dirk | irk | rosenbrock | splitting
-//   order = 3                         # claimed; every order condition up to it must hold
+//   kind = "explicit_rk"              # explicit_rk | dirk | irk | rosenbrock | splitting |
+//   imex_ark order = 3                         # claimed; every order condition up to it must hold
 //   stage_order = 1                   # optional claim (C(q))
 //   description = "..."               # what `list integrators` prints
 //   reference = "..."                 # authors, venue, year
@@ -34,6 +34,20 @@
 //   splitting    kick, drift (kick/drift coefficients, run as v += h kick_j a; x += h drift_j v),
 //                or composition = [γ...] (a composition of velocity Verlet steps);
 //                velocity_independent = true|false (default true).
+//   imex_ark     an additive (implicit-explicit) Runge-Kutta method (integrators/imex/imex_ark.hpp)
+//                for models with an additive split f = f_E + f_I: the tables in two sections,
+//                  [explicit]  A (strictly lower triangular), b, optional b_embedded
+//                  [implicit]  A (lower triangular: DIRK/ESDIRK), b, optional b_embedded
+//                with the same number of stages; c at the top (shared nodes, checked against
+//                the row sums of both A) or, for methods whose tables have different nodes
+//                (Pareschi & Russo's IMEX-SSP), c in each section (each checked against its
+//                own A; leave both out to take the row sums); b_embedded in both sections or
+//                in neither, with embedded_order (fixed or adaptive steps); stage_order: a claim
+//                about the implicit table (C(q)). Checked: each table's own order conditions
+//                up to `order` (rooted trees up to 8), then the coupling conditions of the pair
+//                up to min(order, 4) (bi-coloured trees, core/additive_conditions.hpp), the
+//                first violated one named ("coupling condition bE·AI·c = 1/6 (order 3) has
+//                residual ..."); likewise the embedded rows up to embedded_order.
 //
 // A bad file is BadInput (exit 2) naming the file, the line and what is wrong: wrong shapes,
 // the wrong triangle for the kind, an unparseable expression, an unknown key, a claimed order
@@ -53,7 +67,7 @@
 
 namespace stiffbench {
 
-enum class MethodKind { explicit_rk, dirk, irk, rosenbrock, splitting };
+enum class MethodKind { explicit_rk, dirk, irk, rosenbrock, splitting, imex_ark };
 std::string to_string(MethodKind k);
 
 struct MethodDefinition {
@@ -66,6 +80,7 @@ struct MethodDefinition {
   ButcherTableau tableau;               // explicit_rk, dirk, irk (validated, c completed)
   RosenbrockTableau rosenbrock;         // rosenbrock
   KickDriftScheme splitting{{}, true};  // splitting
+  AdditiveTableau additive;             // imex_ark (validated, c completed)
   // Fixed and adaptive steps (embedded weights), or fixed only.
   bool adaptive() const;
 };

@@ -94,6 +94,10 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
   add_class(reg, BaraffWitkin({}), bw_specs, [](const Params& p) {
     return std::make_unique<BaraffWitkin>(read_implicit_options(p, false));
   });
+  // Additive (IMEX) Runge-Kutta methods from their files (Family::imex, integrators/imex/
+  // imex_ark.hpp): split models only; their implicit stages take the implicit family's Newton and
+  // linear-solver parameters.
+  add_methods(reg, MethodKind::imex_ark);
 }
 
 // The graphics community's solvers for stiff springs (integrators/graphics/): they work on the

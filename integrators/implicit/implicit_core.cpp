@@ -565,6 +565,8 @@ NewtonAttempt ImplicitCore::newton_attempt(const OdeSystem& sys, double t, CVecR
     if (need_j) {
       update_jacobian(sys, t, z, fz, stats);
       a.fresh_jacobian = true;
+      // Finite-difference Jacobians use g_ as work space: the residual again (fz is untouched).
+      g_ = z - psi - hg * fz;
     }
     if (!prepare(hg, stats)) {
       a.outcome = NewtonOutcome::linear_failed;

@@ -53,6 +53,10 @@ struct RawFile {
     for (std::size_t i = 0; i < a.size(); ++i) v[static_cast<Index>(i)] = coefficient(a[i]);
     return v;
   }
+  // An imex_ark file's [explicit] or [implicit] section, with the file's constants.
+  RawFile section(const char* name) const {
+    return RawFile{file, *root[name].as_table(), constants};
+  }
   Mat matrix(const char* key) const {
     const toml::array& rows = *root[key].as_array();
     const auto s = static_cast<Index>(rows.size());
@@ -121,6 +125,9 @@ KickDriftCoefficients splitting_of(const RawFile& r) {
 // velocity-independent forces, the first kick non-zero and no drift after the last kick).
 int evaluations_of(const RawFile& r) {
   const std::string kind = r.text("kind");
+  // An additive method: one stage per row of its tables (MethodInfo::stages; the evaluations of
+  // each part per step are in integrators/imex/imex_ark.hpp).
+  if (kind == "imex_ark") return static_cast<int>(r.section("explicit").vector("b").size());
   if (is_tableau_kind(kind)) {
     const int s = static_cast<int>(r.vector("b").size());
     return s - (r.root["fsal"].value_or(false) ? 1 : 0);
@@ -162,6 +169,7 @@ int evaluations_of(const RawFile& r) {
 std::string family_of(const std::string& kind) {
   if (kind == "explicit_rk") return to_string(Family::explicit_rk);
   if (kind == "splitting") return to_string(Family::symplectic);
+  if (kind == "imex_ark") return to_string(Family::imex);
   return to_string(Family::implicit);
 }
 
@@ -185,8 +193,9 @@ TEST(MethodFilesRegistry, EveryFileIsRegisteredAsWritten) {
     EXPECT_EQ(to_string(e->info.family), family_of(r.text("kind")));
     const auto integ = integrator_registry().create(name, {});
     EXPECT_EQ(e->info.stages, evaluations_of(r));
-    const bool adaptive =
-        r.has("b_embedded") || r.has("m_embedded") || r.text("solver") == "radau5";
+    const bool adaptive = r.has("b_embedded") || r.has("m_embedded") ||
+                          r.text("solver") == "radau5" ||
+                          (r.text("kind") == "imex_ark" && r.section("explicit").has("b_embedded"));
     EXPECT_EQ(integ->supports_adaptive(), adaptive);
     EXPECT_TRUE(integ->supports_fixed_step());
     EXPECT_EQ(built_in_method(name).source, "methods/" + r.file + " (built in)");
@@ -202,7 +211,7 @@ TEST(MethodFilesRegistry, EveryCoefficientIntegratorComesFromAFile) {
   for (const auto& e : integrator_registry().entries()) {
     if (!e.built_in) continue;
     const auto integ = integrator_registry().create(e.info.name, {});
-    if (integ->butcher_tableau() != nullptr ||
+    if (integ->butcher_tableau() != nullptr || integ->additive_tableau() != nullptr ||
         dynamic_cast<const Rosenbrock*>(integ.get()) != nullptr ||
         dynamic_cast<const KickDriftIntegrator*>(integ.get()) != nullptr)
       coefficient_defined.insert(e.info.name);
@@ -258,6 +267,26 @@ TEST(MethodFilesRegistry, CoefficientsEqualTheFiles) {
       ASSERT_TRUE(lookups.count(name));
       expect_tableau_of_file(*lookups[name], r);
       expect_tableau_of_file(built_in_method(name).tableau, r);
+    } else if (kind == "imex_ark") {
+      const AdditiveTableau* t = integ->additive_tableau();
+      ASSERT_NE(t, nullptr);
+      EXPECT_EQ(t->order, r.root["order"].value<int>().value());
+      EXPECT_EQ(t->embedded_order, r.root["embedded_order"].value_or(0));
+      for (const auto& [part, tab] :
+           {std::pair{"explicit", &t->explicit_table}, std::pair{"implicit", &t->implicit_table}}) {
+        SCOPED_TRACE(part);
+        const RawFile sec = r.section(part);
+        const Mat a = sec.matrix("A");
+        expect_same(tab->a, a, "A");
+        expect_same(tab->b, sec.vector("b"), "b");
+        if (sec.has("b_embedded"))
+          expect_same(tab->b_embedded, sec.vector("b_embedded"), "b_embedded");
+        expect_same(tab->c,
+                    sec.has("c") ? sec.vector("c")
+                    : r.has("c") ? r.vector("c")
+                                 : Vec(a.rowwise().sum()),
+                    "c");
+      }
     } else if (kind == "rosenbrock") {
       const auto* ros = dynamic_cast<const Rosenbrock*>(integ.get());
       ASSERT_NE(ros, nullptr);
