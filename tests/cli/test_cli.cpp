@@ -201,7 +201,7 @@ TEST(Cli, ConvergenceWritesContractFiles) {
   EXPECT_EQ(header,
             "model,integrator,order,h,steps,error,observed_order,f_evals,jac_evals,lin_solves,wall_"
             "s,status,newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_"
-            "iters,roundoff_floor,reference_floor");
+            "iters,fe_evals,fi_evals,roundoff_floor,reference_floor");
   int rows = 0;
   for (std::string line; std::getline(f, line);) ++rows;
   EXPECT_EQ(rows, 6);
@@ -218,7 +218,7 @@ TEST(Cli, ConvergenceWritesContractFiles) {
   EXPECT_EQ(header,
             "model,integrator,order,h,local_error,observed_order,status,f_evals,jac_evals,lin_"
             "solves,newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_"
-            "iters,roundoff_floor,reference_floor");
+            "iters,fe_evals,fi_evals,roundoff_floor,reference_floor");
   EXPECT_TRUE(std::filesystem::exists(dir / "local_error_orders.csv"));
   std::filesystem::remove_all(dir);
 }
@@ -259,7 +259,7 @@ TEST(Cli, ConvergenceRowsOfImplicitMethodsCountJacobiansAndSolves) {
     const auto& cells = table[r];
     const std::string line = join_cells(cells);
     // 12 contract columns, the 5 solver counters and the 2 floors.
-    ASSERT_EQ(cells.size(), 19u) << line;
+    ASSERT_EQ(cells.size(), 21u) << line;
     EXPECT_GT(std::stol(cells[8]), 0) << line;  // jac_evals
     EXPECT_GT(std::stol(cells[9]), 0) << line;  // lin_solves
     ++rows;
@@ -286,19 +286,20 @@ TEST(Cli, WorkPrecisionOnHiresErrorFallsAsWorkRises) {
   // The columns of before issue 24, then the solver counters and the timing spread.
   EXPECT_EQ(join_cells(table.front()),
             "model,integrator,setting,error,f_evals,jac_evals,lin_solves,steps,wall_s,status,mescd,"
-            "newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_iters,fe_evals,fi_evals,"
+            "newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_iters,fe_"
+            "evals,fi_evals,"
             "wall_s_median,wall_s_min,wall_s_ci_low,wall_s_ci_high,repeats");
   std::map<std::string, std::vector<std::pair<long, double>>> by_method;
   for (std::size_t r = 1; r < table.size(); ++r) {
     const auto& c = table[r];
     const std::string line = join_cells(c);
-    ASSERT_EQ(c.size(), 21u) << line;
+    ASSERT_EQ(c.size(), 23u) << line;
     ASSERT_EQ(c[9], "ok") << line;
-    EXPECT_EQ(c[20], "1") << line;    // --repeats 1
-    EXPECT_EQ(c[8], c[16]) << line;   // wall_s is the median
-    EXPECT_EQ(c[16], c[17]) << line;  // one run: median = min = both interval ends
-    EXPECT_EQ(c[16], c[18]) << line;
-    EXPECT_EQ(c[16], c[19]) << line;
+    EXPECT_EQ(c[22], "1") << line;    // --repeats 1
+    EXPECT_EQ(c[8], c[18]) << line;   // wall_s is the median
+    EXPECT_EQ(c[18], c[19]) << line;  // one run: median = min = both interval ends
+    EXPECT_EQ(c[18], c[20]) << line;
+    EXPECT_EQ(c[18], c[21]) << line;
     // Every method here is implicit; all but GSL's (whose odeiv2 reports no Newton counts)
     // count their Newton iterations.
     if (c[1].rfind("gsl_", 0) != 0) {
@@ -528,7 +529,8 @@ TEST(Cli, StabilityWritesContractFiles) {
   ASSERT_EQ(rows.size(), 3u);
   EXPECT_EQ(join_cells(rows[0]),
             "model,integrator,param,value,h_max_measured,h_max_predicted,ratio,status,"
-            "newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_iters,fe_evals,fi_evals");
+            "newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_iters,fe_"
+            "evals,fi_evals");
   EXPECT_EQ(rows[1][1], "symplectic_euler");
   EXPECT_NEAR(std::stod(rows[1][6]), 1.0, 0.02);
   EXPECT_EQ(rows[2][1], "euler");

@@ -199,7 +199,7 @@ TEST(OrderFit, OutputColumnsAndReferenceCheck) {
   const auto res = convergence_study(spec, dir.string(), false, nullptr, err);
   const std::string counters =
       ",newton_iters,newton_conv_failures,error_test_failures,"
-      "linear_setups,linear_iters,roundoff_floor,reference_floor";
+      "linear_setups,linear_iters,fe_evals,fi_evals,roundoff_floor,reference_floor";
   EXPECT_EQ(first_line(dir / "convergence.csv"),
             "model,integrator,order,h,steps,error,observed_order,f_evals,jac_evals,lin_solves,"
             "wall_s,status" +
