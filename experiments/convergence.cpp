@@ -936,7 +936,16 @@ std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, 
     w_hi = std::max(w_hi, lv.pair_order(b));
   }
   std::string reason;
-  if (coarser_near)
+  // Below the classical order by more than kOrderReductionSpread over a window whose pairwise
+  // orders agree (within kOrderAgreement, as every fit window): the method's reduced order on
+  // this problem.
+  if (slope < expected - kOrderReductionSpread && !coarser_near)
+    reason = "order reduction to " + format_fixed(slope, 2) + " (classical " +
+             std::to_string(expected_slope) +
+             "): a steady reduced order on this problem, as on stiff problems where the stage "
+             "order or the lack of stiff accuracy sets it; pairwise orders " +
+             all;
+  else if (coarser_near)
     reason = "the error stops following h^" + std::to_string(expected_slope) +
              " below h = " + format_short(lv.rs[a]->h) +
              ": something other than the truncation error sets it there (a solver "

@@ -149,9 +149,13 @@ Vec reference_at_end(const StepStudySpec& spec, const OdeSystem& sys, double t_e
 
 // The floor check's constants (see the top of this file).
 constexpr double kUnitRoundoff = 0x1p-53;
-constexpr double kFloorFactor = 10;          // a row within this factor of a floor has status floor
-constexpr double kOrderAgreement = 0.2;      // max − min of the pairwise orders in a fit window
-constexpr double kOrderTolerance = 0.1;      // a fit further from the expected slope gets a reason
+constexpr double kFloorFactor = 10;      // a row within this factor of a floor has status floor
+constexpr double kOrderAgreement = 0.2;  // max − min of the pairwise orders in a fit window
+constexpr double kOrderTolerance = 0.1;  // a fit further from the expected slope gets a reason
+// A fit more than this below the classical order (its window's pairwise orders agreeing, as in
+// every fit, and no coarser pair near the classical order) is reported as an order reduction to
+// the fitted value: the reason names it.
+constexpr double kOrderReductionSpread = 0.15;
 constexpr double kReferenceTightening = 10;  // the second reference run: tolerances / 10, h / 2
 constexpr double kLadderTop = 1e-2;          // per-method ladder: coarsest error ≤ about 1e-2·s
 constexpr double kLadderFloorMargin = 100;   // predicted finest error ≥ 100 × floor
