@@ -24,6 +24,7 @@
 #include <utility>
 
 #include "core/run_control.hpp"
+#include "core/split_views.hpp"
 #include "integrators/implicit/velocity_form.hpp"
 #include "integrators/method_entry.hpp"
 #include "integrators/reference/callback_guard.hpp"
@@ -106,6 +107,12 @@ struct Settings {
   int max_order = 0;          // 0: the library's default
   long lsetup_frequency = 1;  // ARKODE: steps between linear-solver setups
   std::string explicit_table, implicit_table;
+  // arkode_imex: a pair by number (ARKStepSetTableNum) instead of the names above; -1: names.
+  int erk_num = -1, dirk_num = -1;
+  // ARKODE's nonlinear solver (implicit stages): the Newton convergence test's coefficient and
+  // the iteration limit (ARKStepSetNonlinConvCoef, ARKStepSetMaxNonlinIters); ARKODE's defaults.
+  double nonlin_conv_coef = 0.1;
+  int max_nonlin_iters = 3;
 };
 
 // Reads a FILE* report (PrintAllStats) into a string.
@@ -154,21 +161,28 @@ class SundialsAdapter {
 
   // Starts a run of integrator `name` on `sys`: resolves the Jacobian (analytic or the
   // library's difference quotients) and the linear solver, and with `linear` (a method with
-  // implicit stages) and an analytic Jacobian fixes its pattern.
+  // implicit stages) and an analytic Jacobian fixes its pattern. With `implicit_part` (ARKStep
+  // on an additive split) the Newton matrices are built from the implicit part's Jacobian J_I
+  // (K_I, D_I for a mechanical model), through implicit_part_view(sys): the library's implicit
+  // stages solve z = ψ + hγ f_I(z), whose Jacobian is J_I, not the full J.
   void reset(const OdeSystem& sys, const std::string& name, const Settings& set, bool linear,
-             double t0, CVecRef y0) {
+             double t0, CVecRef y0, bool implicit_part = false) {
     sys_ = &sys;
+    jview_ = implicit_part ? implicit_part_view(sys) : nullptr;
+    jsys_ = implicit_part ? jview_.get() : &sys;
     n_ = sys.dimension();
-    use_analytic_ = set.jacobian == "analytic" || (set.jacobian == "auto" && sys.has_jacobian());
-    require_input(!use_analytic_ || sys.has_jacobian(),
-                  "integrator '" + name + "': model '" + sys.name() + "' has no analytic Jacobian");
-    resolve_linear_solver(sys, name, set.lin);
+    const OdeSystem& js = *jsys_;
+    use_analytic_ = set.jacobian == "analytic" || (set.jacobian == "auto" && js.has_jacobian());
+    require_input(!use_analytic_ || js.has_jacobian(),
+                  "integrator '" + name + "': model '" + sys.name() + "' has no analytic " +
+                      (implicit_part ? "Jacobian of its split's implicit part" : "Jacobian"));
+    resolve_linear_solver(js, name, set.lin);
     force_jac_evals_ = 0;
     if (use_analytic_ && linear) build_jacobian_layout(t0, y0);
     vel_.reset();
     if (lin_ == Lin::velocity) {
       vel_ = std::make_unique<VelocityFormSolver>();
-      vel_->reset(*sys.as_mechanical(), LinearSolverOptions{}, t0, y0);
+      vel_->reset(*js.as_mechanical(), LinearSolverOptions{}, t0, y0);
     }
   }
 
@@ -182,9 +196,9 @@ class SundialsAdapter {
         break;
       case Lin::band: {
         Index mu = n_ - 1, ml = n_ - 1;
-        if (use_analytic_ || sys_->has_jacobian_pattern()) {
+        if (use_analytic_ || jsys_->has_jacobian_pattern()) {
           mu = ml = 0;
-          const SparseMat p = use_analytic_ ? jp_ : sys_->jacobian_pattern();
+          const SparseMat p = use_analytic_ ? jp_ : jsys_->jacobian_pattern();
           for (Index c = 0; c < p.outerSize(); ++c)
             for (SparseMat::InnerIterator it(p, c); it; ++it) {
               mu = std::max(mu, c - it.row());
@@ -322,7 +336,7 @@ class SundialsAdapter {
   // The fixed pattern jp_ = pattern(J) ∪ diagonal, computed once per reset(), and the maps
   // from the model's matrices into it. Structure only: the evaluations here are not counted.
   void build_jacobian_layout(double t0, CVecRef y0) {
-    const MechanicalSystem* ms = sys_->as_mechanical();
+    const MechanicalSystem* ms = jsys_->as_mechanical();
     mech_ = ms != nullptr && ms->has_force_jacobians();
     std::vector<Eigen::Triplet<double>> trips;
     for (Index i = 0; i < n_; ++i) trips.emplace_back(i, i, 0.0);
@@ -344,7 +358,7 @@ class SundialsAdapter {
           trips.emplace_back(nd + it.row(), nd + c, 1.0);
       }
     } else {
-      jac_ = sys_->jacobian_pattern();  // compressed, the structure jacobian() fills
+      jac_ = jsys_->jacobian_pattern();  // compressed, the structure jacobian() fills
       for (Index c = 0; c < jac_.outerSize(); ++c)
         for (SparseMat::InnerIterator it(jac_, c); it; ++it) trips.emplace_back(it.row(), c, 1.0);
     }
@@ -379,13 +393,13 @@ class SundialsAdapter {
     };
     if (mech_) {
       const Index nd = n_ / 2;
-      sys_->as_mechanical()->force_jacobians(t, yv.head(nd), yv.tail(nd), k_, d_);
+      jsys_->as_mechanical()->force_jacobians(t, yv.head(nd), yv.tail(nd), k_, d_);
       ++force_jac_evals_;
       for (const Index p : ones_) data[p] = 1.0;
       scatter(k_, k_map_);
       scatter(d_, d_map_);
     } else {
-      sys_->jacobian(t, yv, jac_);
+      jsys_->jacobian(t, yv, jac_);
       scatter(jac_, j_map_);
     }
   }
@@ -482,6 +496,9 @@ class SundialsAdapter {
   }
 
   const OdeSystem* sys_ = nullptr;
+  // The system whose Jacobian the linear solver uses: sys_, or the view of its implicit part.
+  const OdeSystem* jsys_ = nullptr;
+  std::unique_ptr<OdeSystem> jview_;
   Index n_ = 0;
   bool use_analytic_ = false;
   Lin lin_ = Lin::dense;                     // the linear solver of this run (auto resolved)
@@ -518,7 +535,7 @@ class SundialsFrontEnd : public Integrator {
 
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override {
     check_compatible(info(), sys);
-    adapter_.reset(sys, info().name, set_, needs_linear_solver(), t0, y0);
+    adapter_.reset(sys, info().name, set_, needs_linear_solver(), t0, y0, uses_implicit_part(sys));
     t_ = t0;
     y_last_ = y0;
     fixed_h_ = 0;
@@ -551,6 +568,9 @@ class SundialsFrontEnd : public Integrator {
 
   // --- the library calls ---------------------------------------------------------------
   virtual bool needs_linear_solver() const = 0;
+  // True when the implicit stages solve for the implicit part f_I of the model's split (the
+  // Newton matrices then come from J_I).
+  virtual bool uses_implicit_part(const OdeSystem&) const { return false; }
   // Creates mem_ at (t0, y) with the user data, error handler, tolerances and options.
   virtual void create(double t0, N_Vector y, const Ok& ok) = 0;
   // Hands the adapter's linear solver to the library, then the adapter's Jacobian.
@@ -731,6 +751,9 @@ class ArkodeIntegrator final : public SundialsFrontEnd {
 
  private:
   bool needs_linear_solver() const override { return mode_ != ArkodeMode::explicit_only; }
+  bool uses_implicit_part(const OdeSystem& sys) const override {
+    return mode_ == ArkodeMode::imex && sys.has_imex_split();
+  }
   // IMEX with the model's split; all-implicit (arkode_imex on a model without one) otherwise.
   bool split() const { return mode_ == ArkodeMode::imex && adapter_.system()->has_imex_split(); }
   ARKRhsFn explicit_rhs() const {
@@ -750,9 +773,21 @@ class ArkodeIntegrator final : public SundialsFrontEnd {
     ok(ARKStepSStolerances(mem_, set_.rtol, set_.atol), "ARKStepSStolerances");
     ok(ARKStepSetMaxNumSteps(mem_, set_.max_steps), "ARKStepSetMaxNumSteps");
     // A part without a right-hand side gets no table.
-    const char* itab = implicit_rhs() ? set_.implicit_table.c_str() : "ARKODE_DIRK_NONE";
-    const char* etab = explicit_rhs() ? set_.explicit_table.c_str() : "ARKODE_ERK_NONE";
-    ok(ARKStepSetTableName(mem_, itab, etab), "ARKStepSetTableName");
+    if (set_.dirk_num >= 0) {
+      ok(ARKStepSetTableNum(
+             mem_,
+             implicit_rhs() ? static_cast<ARKODE_DIRKTableID>(set_.dirk_num) : ARKODE_DIRK_NONE,
+             explicit_rhs() ? static_cast<ARKODE_ERKTableID>(set_.erk_num) : ARKODE_ERK_NONE),
+         "ARKStepSetTableNum");
+    } else {
+      const char* itab = implicit_rhs() ? set_.implicit_table.c_str() : "ARKODE_DIRK_NONE";
+      const char* etab = explicit_rhs() ? set_.explicit_table.c_str() : "ARKODE_ERK_NONE";
+      ok(ARKStepSetTableName(mem_, itab, etab), "ARKStepSetTableName");
+    }
+    if (implicit_rhs()) {
+      ok(ARKStepSetNonlinConvCoef(mem_, set_.nonlin_conv_coef), "ARKStepSetNonlinConvCoef");
+      ok(ARKStepSetMaxNonlinIters(mem_, set_.max_nonlin_iters), "ARKStepSetMaxNonlinIters");
+    }
   }
   void attach_linear_solver(const Ok& ok) override {
     ok(ARKStepSetLinearSolver(mem_, adapter_.linear_solver(), adapter_.matrix()),
@@ -861,6 +896,78 @@ int dirk_order(const std::string& name) {
   const int q = t->q;
   ARKodeButcherTable_Free(t);
   return q;
+}
+
+// The ARK pairs of ARKODE 5.4 (SUNDIALS 6.4) by the `tables` key of arkode_imex: explicit and
+// implicit tables of C. A. Kennedy & M. H. Carpenter, Additive Runge-Kutta schemes for
+// convection-diffusion-reaction equations, Appl. Numer. Math. 44 (2003) 139-181 (ark324l2sa,
+// ark436l2sa, ark548l2sa) and Higher-order additive Runge-Kutta schemes for ordinary
+// differential equations, Appl. Numer. Math. 136 (2019) 183-205 (ark437l2sa, ark548l2sab).
+struct ArkPair {
+  const char* key;
+  ARKODE_ERKTableID erk;
+  ARKODE_DIRKTableID dirk;
+  const char* erk_name;
+  const char* dirk_name;
+};
+constexpr ArkPair kArkPairs[] = {
+    {"ark324l2sa", ARKODE_ARK324L2SA_ERK_4_2_3, ARKODE_ARK324L2SA_DIRK_4_2_3,
+     "ARKODE_ARK324L2SA_ERK_4_2_3", "ARKODE_ARK324L2SA_DIRK_4_2_3"},
+    {"ark436l2sa", ARKODE_ARK436L2SA_ERK_6_3_4, ARKODE_ARK436L2SA_DIRK_6_3_4,
+     "ARKODE_ARK436L2SA_ERK_6_3_4", "ARKODE_ARK436L2SA_DIRK_6_3_4"},
+    {"ark437l2sa", ARKODE_ARK437L2SA_ERK_7_3_4, ARKODE_ARK437L2SA_DIRK_7_3_4,
+     "ARKODE_ARK437L2SA_ERK_7_3_4", "ARKODE_ARK437L2SA_DIRK_7_3_4"},
+    {"ark548l2sa", ARKODE_ARK548L2SA_ERK_8_4_5, ARKODE_ARK548L2SA_DIRK_8_4_5,
+     "ARKODE_ARK548L2SA_ERK_8_4_5", "ARKODE_ARK548L2SA_DIRK_8_4_5"},
+    {"ark548l2sab", ARKODE_ARK548L2SAb_ERK_8_4_5, ARKODE_ARK548L2SAb_DIRK_8_4_5,
+     "ARKODE_ARK548L2SAb_ERK_8_4_5", "ARKODE_ARK548L2SAb_DIRK_8_4_5"},
+};
+
+// arkode_imex's `tables`: a pair by number, or (named) the two tables by name.
+void read_ark_pair(const Params& p, Settings& s) {
+  const std::string key = p.text("tables");
+  s.explicit_table = p.text("explicit_table");
+  s.implicit_table = p.text("implicit_table");
+  if (key == "named") {
+    require_input(!s.explicit_table.empty() && !s.implicit_table.empty(),
+                  "tables=named needs both parameters 'explicit_table' and 'implicit_table'");
+    return;
+  }
+  require_input(s.explicit_table.empty() && s.implicit_table.empty(),
+                "parameters 'explicit_table' and 'implicit_table' need tables=named (tables=" +
+                    key + " chooses both tables)");
+  for (const ArkPair& a : kArkPairs)
+    if (key == a.key) {
+      s.erk_num = a.erk;
+      s.dirk_num = a.dirk;
+      s.explicit_table = a.erk_name;
+      s.implicit_table = a.dirk_name;
+      return;
+    }
+  throw BadInput("parameter 'tables': unknown ARK pair '" + key + "'");
+}
+
+// ARKODE's Newton iteration on the implicit stages. It stops when its estimate of the stage
+// error, in the WRMS norm of the weights 1/(rtol |y| + atol), is below nonlin_conv_coef; ARKODE's
+// defaults (0.1, 3 iterations) leave a stage error near 0.1 rtol. A fixed-step run that is to
+// agree with another implementation of the same tables to round-off needs the iteration
+// converged: rtol=1e-12 atol=1e-14 nonlin_conv_coef=1e-3 max_nonlin_iters=20 (docs/design.md).
+std::vector<ParamSpec> nonlin_specs() {
+  return {{"nonlin_conv_coef", ParamType::real, "0.1",
+           "Newton stops when its error estimate (WRMS norm with the rtol/atol weights) is below "
+           "this (ARKStepSetNonlinConvCoef; ARKODE's default 0.1); fixed-step comparisons: "
+           "1e-3 with rtol=1e-12 atol=1e-14",
+           Bounds::positive()},
+          {"max_nonlin_iters", ParamType::integer, "3",
+           "Newton iterations per stage before the step fails (ARKStepSetMaxNonlinIters; "
+           "ARKODE's default 3; a failure in fixed-step mode ends the run)",
+           Bounds::at_least(1)}};
+}
+void read_nonlin(const Params& p, Settings& s) {
+  s.nonlin_conv_coef = p.real("nonlin_conv_coef");
+  require_input(s.nonlin_conv_coef > 0, "parameter 'nonlin_conv_coef' must be > 0");
+  s.max_nonlin_iters = static_cast<int>(p.integer("max_nonlin_iters"));
+  require_input(s.max_nonlin_iters >= 1, "parameter 'max_nonlin_iters' must be >= 1");
 }
 
 }  // namespace
@@ -977,6 +1084,7 @@ void register_sundials_integrators(IntegratorRegistry& reg) {
       B::at_least(1)};
   auto dirk_specs = common_specs(true);
   dirk_specs.push_back(lsetup);
+  for (const ParamSpec& n : nonlin_specs()) dirk_specs.push_back(n);
   dirk_specs.push_back(
       {"implicit_table", P::text, "ARKODE_SDIRK_5_3_4", "ARKODE implicit Butcher table name"});
   add_built_in_integrator(
@@ -986,6 +1094,7 @@ void register_sundials_integrators(IntegratorRegistry& reg) {
               Settings s = read_common(p, true);
               s.lsetup_frequency = p.integer("lsetup_frequency");
               require_input(s.lsetup_frequency >= 1, "parameter 'lsetup_frequency' must be >= 1");
+              read_nonlin(p, s);
               s.implicit_table = p.text("implicit_table");
               MethodInfo info = arkode_info("arkode_dirk", dirk_order(s.implicit_table),
                                             kArkodeDirkText, "ARKODE DIRK " + s.implicit_table);
@@ -993,19 +1102,31 @@ void register_sundials_integrators(IntegratorRegistry& reg) {
             }});
   auto imex_specs = common_specs(true);
   imex_specs.push_back(lsetup);
+  for (const ParamSpec& n : nonlin_specs()) imex_specs.push_back(n);
+  std::vector<std::string> pair_keys;
+  for (const ArkPair& a : kArkPairs) pair_keys.emplace_back(a.key);
+  pair_keys.emplace_back("named");
   imex_specs.push_back(
-      {"explicit_table", P::text, "ARKODE_ARK436L2SA_ERK_6_3_4", "explicit table of the ARK pair"});
-  imex_specs.push_back({"implicit_table", P::text, "ARKODE_ARK436L2SA_DIRK_6_3_4",
-                        "implicit table of the ARK pair"});
+      {"tables", P::text, "ark436l2sa",
+       "the ARK pair (ARKStepSetTableNum): ark324l2sa = ARKODE_ARK324L2SA_ERK_4_2_3 + "
+       "ARKODE_ARK324L2SA_DIRK_4_2_3 (order 3, ARKODE's default at order 3), ark436l2sa = "
+       "ARK436L2SA_ERK_6_3_4 + _DIRK_6_3_4 (order 4, ARKODE's default), ark437l2sa, ark548l2sa "
+       "(ARKODE's default at order 5), ark548l2sab; named: explicit_table and implicit_table",
+       pair_keys});
+  imex_specs.push_back({"explicit_table", P::text, "",
+                        "with tables=named: the explicit table of the pair by ARKODE name"});
+  imex_specs.push_back({"implicit_table", P::text, "",
+                        "with tables=named: the implicit table of the pair by ARKODE name"});
+  const ArkPair& def = kArkPairs[1];
   add_built_in_integrator(
-      reg, {method_info("arkode_imex", Family::reference,
-                        dirk_order("ARKODE_ARK436L2SA_DIRK_6_3_4"), 6, {}, kArkodeImexText),
+      reg, {method_info("arkode_imex", Family::reference, dirk_order(def.dirk_name), 6, {},
+                        kArkodeImexText),
             imex_specs, [](const Params& p) {
               Settings s = read_common(p, true);
               s.lsetup_frequency = p.integer("lsetup_frequency");
               require_input(s.lsetup_frequency >= 1, "parameter 'lsetup_frequency' must be >= 1");
-              s.explicit_table = p.text("explicit_table");
-              s.implicit_table = p.text("implicit_table");
+              read_nonlin(p, s);
+              read_ark_pair(p, s);
               const int q = std::min(erk_order(s.explicit_table), dirk_order(s.implicit_table));
               MethodInfo info =
                   arkode_info("arkode_imex", q, kArkodeImexText,
