@@ -1,6 +1,7 @@
 #include "experiments/commands.hpp"
 #include "experiments/study.hpp"
 
+#include <algorithm>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -127,6 +128,42 @@ void cmd_list(const std::string& what, std::ostream& out) {
   }
 }
 
+namespace {
+
+// The model's additive splits (OdeSystem::imex_split): each value of its `split` parameter with
+// what each part holds, the default marked; "none" when the model has no split.
+void describe_splits(const std::string& name, const std::vector<ParamSpec>& params,
+                     const OdeSystem& defaults, std::ostream& out) {
+  const auto spec = std::find_if(params.begin(), params.end(),
+                                 [](const ParamSpec& p) { return p.key == "split"; });
+  if (spec == params.end()) {
+    const auto info = defaults.imex_split();
+    out << "splits: "
+        << (info ? info->name
+            : defaults.has_imex_split()
+                ? std::string("one (unnamed: the model does not describe it)")
+                : std::string("none"))
+        << "\n";
+    if (info)
+      out << "  " << info->name << ": explicit f_E = " << info->explicit_part
+          << "; implicit f_I = " << info->implicit_part << "\n";
+    return;
+  }
+  out << "splits (parameter split, default " << spec->default_value << "):\n";
+  for (const std::string& value : spec->choices) {
+    const auto sys = model_registry().create(name, Params{{"split", value}});
+    const auto info = sys->imex_split();
+    out << "  " << value << ": ";
+    if (info)
+      out << "explicit f_E = " << info->explicit_part << "; implicit f_I = " << info->implicit_part
+          << "\n";
+    else
+      out << "no split (f is not divided)\n";
+  }
+}
+
+}  // namespace
+
 void cmd_describe(const std::string& name, std::ostream& out) {
   if (const auto* m = model_registry().find(name)) {
     out << "model " << name << ": " << m->info.description << "\n";
@@ -144,6 +181,7 @@ void cmd_describe(const std::string& name, std::ostream& out) {
     std::vector<std::string> obs;
     for (const auto& o : sys->observables()) obs.push_back(o.name);
     if (!obs.empty()) out << "observables: " << join(obs) << "\n";
+    describe_splits(name, m->params, *sys, out);
     print_params(m->params, out);
     return;
   }

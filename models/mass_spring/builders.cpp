@@ -69,6 +69,7 @@ std::unique_ptr<MassSpringNetwork> make_spring_chain(const SpringChainOptions& o
     springs.push_back({i, i + 1, o.k, o.rest_length, o.dashpot, SpringKind::structural});
   NetworkOptions net;
   net.point_damping = o.point_damping;
+  net.split = o.split;
   auto sys =
       std::make_unique<MassSpringNetwork>(model, 1, std::move(points), std::move(springs), net);
   if (o.perturbation == 0) {
@@ -151,6 +152,7 @@ std::unique_ptr<MassSpringNetwork> make_cloth(const ClothOptions& o) {
   net.point_damping = o.point_damping;
   net.compressed_dd_only = o.compressed_dd_only;
   net.parallel_threshold = o.parallel_threshold;
+  net.split = o.split;
   return std::make_unique<MassSpringNetwork>(model, 3, std::move(points), std::move(springs), net);
 }
 
@@ -218,6 +220,7 @@ std::unique_ptr<MassSpringNetwork> make_soft_cube(const SoftCubeOptions& o) {
   net.point_damping = o.point_damping;
   net.compressed_dd_only = o.compressed_dd_only;
   net.parallel_threshold = o.parallel_threshold;
+  net.split = o.split;
   return std::make_unique<MassSpringNetwork>(model, 3, std::move(points), std::move(springs), net);
 }
 

@@ -66,6 +66,7 @@ struct SpringChainOptions {
   unsigned long seed = 1;
   double perturbation = 0.0;
   double point_damping = 0.0, dashpot = 0.0;
+  NetworkSplit split = NetworkSplit::none;  // none or springs (network.hpp)
 };
 std::unique_ptr<MassSpringNetwork> make_spring_chain(const SpringChainOptions& o);
 
@@ -83,6 +84,7 @@ struct ClothOptions {
   double point_damping = 0.0, dashpot = 0.0;
   bool compressed_dd_only = false;
   long parallel_threshold = 2048;
+  NetworkSplit split = NetworkSplit::none;  // none, springs or stretch (network.hpp)
 };
 std::unique_ptr<MassSpringNetwork> make_cloth(const ClothOptions& o);
 
@@ -96,6 +98,7 @@ struct SoftCubeOptions {
   double point_damping = 0.0, dashpot = 0.0;
   bool compressed_dd_only = false;
   long parallel_threshold = 2048;
+  NetworkSplit split = NetworkSplit::none;  // none or springs (network.hpp)
 };
 std::unique_ptr<MassSpringNetwork> make_soft_cube(const SoftCubeOptions& o);
 

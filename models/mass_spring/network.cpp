@@ -145,8 +145,14 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
       packed_[slot] = {static_cast<std::int32_t>(sp.i), static_cast<std::int32_t>(sp.j), sp.k,
                        sp.rest};
       if (has_dashpots_) packed_damping_[slot] = sp.damping;
+      if (opt_.split != NetworkSplit::none) {
+        packed_implicit_.resize(springs_.size(), 0);
+        packed_implicit_[slot] = implicit_spring(sp) ? 1 : 0;
+      }
     }
   }
+  for (const Spring& sp : springs_)
+    implicit_dashpots_ = implicit_dashpots_ || (implicit_spring(sp) && sp.damping != 0.0);
 
   // The adjacency lists and the Jacobian pattern are built on first use (build_structure): an
   // explicit run never needs them, and for a 512² cloth they are most of the construction cost.
@@ -172,15 +178,28 @@ const SpringNetworkView* MassSpringNetwork::spring_network() const {
 // Adjacency lists (Jacobians, stiffness estimates) and the fixed pattern of K and D with the
 // value positions of every block, built once, on first use, by whichever thread gets there first.
 void MassSpringNetwork::ensure_structure() const {
-  std::call_once(structure_once_, [this] { build_structure(); });
+  std::call_once(structure_once_, [this] {
+    structure_ = build_structure(springs_);
+    if (opt_.split == NetworkSplit::stretch) {
+      std::vector<Spring> implicit, explicit_springs;
+      for (const Spring& sp : springs_)
+        (implicit_spring(sp) ? implicit : explicit_springs).push_back(sp);
+      implicit_structure_ = build_structure(implicit);
+      explicit_adjacency_ = SpringAdjacency::build(num_points(), explicit_springs);
+    }
+  });
 }
 
-void MassSpringNetwork::build_structure() const {
+MassSpringNetwork::Structure MassSpringNetwork::build_structure(
+    const std::vector<Spring>& springs) const {
   const Index np = num_points();
   const Index n = dofs();
-  adjacency_ = SpringAdjacency::build(np, springs_);
-  const std::vector<Index>& start = adjacency_.start;
-  const std::vector<SpringNeighbour>& neighbours = adjacency_.neighbours;
+  Structure st;
+  for (const Spring& sp : springs) st.dashpots = st.dashpots || sp.damping != 0.0;
+  st.adjacency = SpringAdjacency::build(np, springs);
+  const std::vector<Index>& start = st.adjacency.start;
+  const std::vector<SpringNeighbour>& neighbours = st.adjacency.neighbours;
+  SparseMat& pattern = st.pattern;
 
   // The fixed pattern of K and D: every point's diagonal block and one block per ordered pair
   // of spring ends (pinned rows included, as explicit zeros).
@@ -206,19 +225,19 @@ void MassSpringNetwork::build_structure() const {
       }
     }
     const std::vector<double> zeros(inner.size(), 0.0);
-    pattern_ = Eigen::Map<const SparseMat>(n, n, static_cast<Index>(inner.size()), outer.data(),
-                                           inner.data(), zeros.data());
-    pattern_.makeCompressed();
+    pattern = Eigen::Map<const SparseMat>(n, n, static_cast<Index>(inner.size()), outer.data(),
+                                          inner.data(), zeros.data());
+    pattern.makeCompressed();
   }
-  diag_pattern_.resize(n, n);
-  diag_pattern_.setIdentity();
-  diag_pattern_.makeCompressed();
-  std::fill(diag_pattern_.valuePtr(), diag_pattern_.valuePtr() + n, 0.0);
+  st.diag_pattern.resize(n, n);
+  st.diag_pattern.setIdentity();
+  st.diag_pattern.makeCompressed();
+  std::fill(st.diag_pattern.valuePtr(), st.diag_pattern.valuePtr() + n, 0.0);
   auto position = [&](Index row, Index col) {
     using StorageIndex = SparseMat::StorageIndex;
-    const StorageIndex* inner = pattern_.innerIndexPtr();
-    const StorageIndex* begin = inner + pattern_.outerIndexPtr()[col];
-    const StorageIndex* end = inner + pattern_.outerIndexPtr()[col + 1];
+    const StorageIndex* inner = pattern.innerIndexPtr();
+    const StorageIndex* begin = inner + pattern.outerIndexPtr()[col];
+    const StorageIndex* end = inner + pattern.outerIndexPtr()[col + 1];
     const StorageIndex* it = std::lower_bound(begin, end, static_cast<StorageIndex>(row));
     if (it == end || *it != row) throw std::logic_error("mass-spring pattern lookup failed");
     return static_cast<Index>(it - inner);
@@ -227,30 +246,31 @@ void MassSpringNetwork::build_structure() const {
   // block (p, q) sits at position(d p, d q) + a + b · (column length). One search per block.
   const auto block = [&](Index p, Index q, std::vector<Index>& out, std::size_t at) {
     const Index base = position(d * p, d * q);
-    const Index len = pattern_.outerIndexPtr()[d * q + 1] - pattern_.outerIndexPtr()[d * q];
+    const Index len = pattern.outerIndexPtr()[d * q + 1] - pattern.outerIndexPtr()[d * q];
     for (Index a = 0; a < d; ++a)
       for (Index b = 0; b < d; ++b)
         out[at + static_cast<std::size_t>(a * d + b)] = base + a + b * len;
   };
-  diag_pos_.resize(static_cast<std::size_t>(np * d * d));
-  adj_pos_.resize(neighbours.size() * static_cast<std::size_t>(d * d));
-  adj_pos_t_.resize(adj_pos_.size());
+  st.diag_pos.resize(static_cast<std::size_t>(np * d * d));
+  st.adj_pos.resize(neighbours.size() * static_cast<std::size_t>(d * d));
+  st.adj_pos_t.resize(st.adj_pos.size());
   for (Index p = 0; p < np; ++p) {
-    block(p, p, diag_pos_, static_cast<std::size_t>(p * d * d));
+    block(p, p, st.diag_pos, static_cast<std::size_t>(p * d * d));
     for (Index e = start[static_cast<std::size_t>(p)]; e < start[static_cast<std::size_t>(p) + 1];
          ++e) {
       const Index q = neighbours[static_cast<std::size_t>(e)].other;
-      block(p, q, adj_pos_, static_cast<std::size_t>(e * d * d));
+      block(p, q, st.adj_pos, static_cast<std::size_t>(e * d * d));
       // The transposed block (rows of q, columns of p), element [a][b] at (q a, p b).
-      block(q, p, adj_pos_t_, static_cast<std::size_t>(e * d * d));
+      block(q, p, st.adj_pos_t, static_cast<std::size_t>(e * d * d));
     }
   }
+  return st;
 }
 
 // ---------------------------------------------------------------------------------------------
 // Forces.
 
-template <int D>
+template <int D, MassSpringNetwork::Part P>
 void MassSpringNetwork::acceleration_impl(const double* x, const double* v, double* a) const {
   const double gamma = opt_.point_damping;
   const MassPoint* pts = points_.data();
@@ -261,7 +281,14 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
   const Index parts = static_cast<Index>(part_start_.size()) - 1;
   // a first holds the force sums. Each spring once: coef = k (l - L)/l (+ c (u·r)/l²), f_i +=
   // coef r, f_j -= coef r (exactly opposite).
+  const std::uint8_t* in_implicit = packed_implicit_.data();
   const auto spring = [&](Index e) {
+    // A part of the split sums its own springs only (springs: all in a_I, none in a_E).
+    if constexpr (P == Part::implicit_part) {
+      if (!in_implicit[e]) return;
+    } else if constexpr (P == Part::explicit_part) {
+      if (in_implicit[e]) return;
+    }
     const PackedSpring& s = sp[e];
     const double* xi = x + D * static_cast<Index>(s.i);
     const double* xj = x + D * static_cast<Index>(s.j);
@@ -312,14 +339,34 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
       return;
     }
     const double* vp = v + D * p;
-    for (int c = 0; c < D; ++c)
-      ap[c] = opt_.gravity[static_cast<std::size_t>(c)] + (ap[c] - gamma * vp[c]) / pt.mass;
+    if constexpr (P == Part::implicit_part) {  // springs and dashpots only
+      for (int c = 0; c < D; ++c) ap[c] /= pt.mass;
+    } else {
+      for (int c = 0; c < D; ++c)
+        ap[c] = opt_.gravity[static_cast<std::size_t>(c)] + (ap[c] - gamma * vp[c]) / pt.mass;
+    }
   });
 }
 
 void MassSpringNetwork::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a) const {
   detail::with_dim<1, 3>(dim_, [&](auto dim) {
-    acceleration_impl<decltype(dim)::value>(x.data(), v.data(), a.data());
+    acceleration_impl<decltype(dim)::value, Part::all>(x.data(), v.data(), a.data());
+  });
+}
+
+void MassSpringNetwork::eval_acceleration_explicit_part(double, CVecRef x, CVecRef v,
+                                                        VecRef a) const {
+  require_input(has_imex_split(), name_ + ": no split (parameter split=none)");
+  detail::with_dim<1, 3>(dim_, [&](auto dim) {
+    acceleration_impl<decltype(dim)::value, Part::explicit_part>(x.data(), v.data(), a.data());
+  });
+}
+
+void MassSpringNetwork::eval_acceleration_implicit_part(double, CVecRef x, CVecRef v,
+                                                        VecRef a) const {
+  require_input(has_imex_split(), name_ + ": no split (parameter split=none)");
+  detail::with_dim<1, 3>(dim_, [&](auto dim) {
+    acceleration_impl<decltype(dim)::value, Part::implicit_part>(x.data(), v.data(), a.data());
   });
 }
 
@@ -332,21 +379,20 @@ void MassSpringNetwork::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a
 // and ∂f_i/∂x_i = -J_c because d depends on x_j - x_i only. ∂f_i/∂v_j = c d dᵀ = -∂f_i/∂v_i.
 
 template <int D>
-void MassSpringNetwork::blocks_impl(const double* x, const double* v, double* k_values,
-                                    double* d_values) const {
-  const double gamma = opt_.point_damping;
+void MassSpringNetwork::blocks_impl(const Structure& st, double gamma, const double* x,
+                                    const double* v, double* k_values, double* d_values) const {
   const bool dd_only = opt_.compressed_dd_only;
-  const Index* start = adjacency_.start.data();
-  const SpringNeighbour* nb = adjacency_.neighbours.data();
+  const Index* start = st.adjacency.start.data();
+  const SpringNeighbour* nb = st.adjacency.neighbours.data();
   const MassPoint* pts = points_.data();
-  const Index* dpos = diag_pos_.data();
-  const Index* apos = adj_pos_.data();
+  const Index* dpos = st.diag_pos.data();
+  const Index* apos = st.adj_pos.data();
   // Without dashpots each spring's block J_s is symmetric and the same from both ends, so point
   // p can fill its own column block instead of its row block: K_qp = J_s / m_q (0 for a pinned
   // q), a contiguous range of the column-major storage. With dashpots (J_c is not symmetric)
   // point p fills its rows.
-  const bool by_column = !has_dashpots_ && !d_values;
-  const Index* tpos = adj_pos_t_.data();
+  const bool by_column = !st.dashpots && !d_values;
+  const Index* tpos = st.adj_pos_t.data();
   const double* inv_mass = inv_mass_.data();
   if (by_column && k_values) {
     for_points(num_points(), parallel(), [&](Index p) {
@@ -454,8 +500,8 @@ void MassSpringNetwork::blocks_impl(const double* x, const double* v, double* k_
   });
 }
 
-void MassSpringNetwork::fill_blocks(CVecRef x, CVecRef v, SparseMat* k, SparseMat* d) const {
-  ensure_structure();
+void MassSpringNetwork::fill_blocks(const Structure& st, double gamma, CVecRef x, CVecRef v,
+                                    SparseMat* k, SparseMat* d) const {
   // A matrix that already has this pattern (same size and number of nonzeros, compressed: a
   // previous result of this network) keeps its storage; only the values are written. Without
   // dashpots D = -(γ/m) I is diagonal and gets a diagonal pattern.
@@ -465,32 +511,81 @@ void MassSpringNetwork::fill_blocks(CVecRef x, CVecRef v, SparseMat* k, SparseMa
         m->nonZeros() != pattern.nonZeros() || !m->isCompressed())
       *m = pattern;
   };
-  ensure(k, pattern_);
-  ensure(d, has_dashpots_ ? pattern_ : diag_pattern_);
+  ensure(k, st.pattern);
+  ensure(d, st.dashpots ? st.pattern : st.diag_pattern);
   double* kv = k ? k->valuePtr() : nullptr;
-  double* dv = d && has_dashpots_ ? d->valuePtr() : nullptr;
+  double* dv = d && st.dashpots ? d->valuePtr() : nullptr;
   if (kv || dv)
-    detail::with_dim<1, 3>(
-        dim_, [&](auto dim) { blocks_impl<decltype(dim)::value>(x.data(), v.data(), kv, dv); });
-  if (d && !has_dashpots_) {
+    detail::with_dim<1, 3>(dim_, [&](auto dim) {
+      blocks_impl<decltype(dim)::value>(st, gamma, x.data(), v.data(), kv, dv);
+    });
+  if (d && !st.dashpots) {
     double* dd = d->valuePtr();
     for (Index p = 0; p < num_points(); ++p)
       for (int c = 0; c < dim_; ++c)
-        dd[dim_ * p + c] = -opt_.point_damping * inv_mass_[static_cast<std::size_t>(p)];
+        dd[dim_ * p + c] = -gamma * inv_mass_[static_cast<std::size_t>(p)];
   }
 }
 
 void MassSpringNetwork::stiffness_block(double, CVecRef x, CVecRef v, SparseMat& k) const {
-  fill_blocks(x, v, &k, nullptr);
+  ensure_structure();
+  fill_blocks(structure_, opt_.point_damping, x, v, &k, nullptr);
 }
 
 void MassSpringNetwork::damping_block(double, CVecRef x, CVecRef v, SparseMat& d) const {
-  fill_blocks(x, v, nullptr, &d);
+  ensure_structure();
+  fill_blocks(structure_, opt_.point_damping, x, v, nullptr, &d);
 }
 
 void MassSpringNetwork::force_jacobians(double, CVecRef x, CVecRef v, SparseMat& k,
                                         SparseMat& d) const {
-  fill_blocks(x, v, &k, &d);
+  ensure_structure();
+  fill_blocks(structure_, opt_.point_damping, x, v, &k, &d);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Additive split (see the header comment).
+
+std::optional<SplitInfo> MassSpringNetwork::imex_split() const {
+  switch (opt_.split) {
+    case NetworkSplit::none:
+      return std::nullopt;
+    case NetworkSplit::springs:
+      return SplitInfo{"springs", "gravity and point damping",
+                       "springs and dashpots (with x' = v)"};
+    case NetworkSplit::stretch:
+      return SplitInfo{"stretch",
+                       "shear and bend springs (and their dashpots), gravity and point damping",
+                       "structural springs and their dashpots (with x' = v)"};
+  }
+  return std::nullopt;
+}
+
+// K_I and D_I on the implicit springs' pattern, without point damping (it is explicit).
+void MassSpringNetwork::implicit_force_jacobians(double, CVecRef x, CVecRef v, SparseMat& k,
+                                                 SparseMat& d) const {
+  require_input(has_imex_split(), name_ + ": no split (parameter split=none)");
+  ensure_structure();
+  fill_blocks(implicit_structure(), 0.0, x, v, &k, &d);
+}
+
+std::optional<SpectrumEstimate> MassSpringNetwork::explicit_part_spectrum(double, CVecRef y) const {
+  if (opt_.split == NetworkSplit::springs) {
+    // f_E = [0; g - γ v/m]: ∂f_E/∂y has eigenvalues 0 and -γ/m_i (free points).
+    double rate = 0.0;
+    for (std::size_t p = 0; p < points_.size(); ++p)
+      rate = std::max(rate, opt_.point_damping * inv_mass_[p]);
+    return SpectrumEstimate{rate, SpectrumEstimate::Ray::negative_real};
+  }
+  if (opt_.split == NetworkSplit::stretch) {
+    // The explicit springs alone oscillate at up to ω_max (eigenvalues ±iω of [[0, I], [K_E, 0]]);
+    // the Gershgorin bound of their ω_max.
+    ensure_structure();
+    const double omega =
+        StiffnessSpectrum(dim_, points_, explicit_adjacency_).omega_max_bound(y.head(dofs()));
+    return SpectrumEstimate{omega, SpectrumEstimate::Ray::imaginary};
+  }
+  return std::nullopt;
 }
 
 std::vector<Index> MassSpringNetwork::fixed_dofs() const {
@@ -608,17 +703,17 @@ double MassSpringNetwork::constraint_residual(CVecRef y) const {
 
 double MassSpringNetwork::omega_max_bound(CVecRef x) const {
   ensure_structure();
-  return StiffnessSpectrum(dim_, points_, adjacency_).omega_max_bound(x);
+  return StiffnessSpectrum(dim_, points_, structure_.adjacency).omega_max_bound(x);
 }
 
 std::pair<double, double> MassSpringNetwork::stiffness_eigen_range(CVecRef x) const {
   ensure_structure();
-  return StiffnessSpectrum(dim_, points_, adjacency_).eigen_range(x);
+  return StiffnessSpectrum(dim_, points_, structure_.adjacency).eigen_range(x);
 }
 
 double MassSpringNetwork::omega_max_estimate(CVecRef x) const {
   ensure_structure();
-  return StiffnessSpectrum(dim_, points_, adjacency_).omega_max_estimate(x);
+  return StiffnessSpectrum(dim_, points_, structure_.adjacency).omega_max_estimate(x);
 }
 
 std::optional<double> MassSpringNetwork::stiffness(double, CVecRef y) const {

@@ -80,6 +80,19 @@
 // network has constraints, with g = C over the active constraints only (those not joining two
 // pinned points, in list order). The driver does not call project() after such a method's steps.
 //
+// Additive split (NetworkOptions::split, the models' `split` parameter; core/ode_system.hpp):
+//   none     no split (the default; the right-hand side is untouched, bitwise);
+//   springs  a_I = springs and dashpots, a_E = gravity and point damping. K_I = K and
+//            D_I = the dashpots' ∂/∂v (D without -(γ/m) I), on K's pattern;
+//   stretch  a_I = the structural springs and their dashpots (SpringKind::structural), a_E =
+//            every other spring (shear, bend) with its dashpot, gravity and point damping. K_I
+//            and D_I have only the structural pairs' blocks (a pattern of their own, sparser).
+// a_E + a_I = a up to rounding (each part sums its own springs; pinned points: 0 in both).
+// The parts' Jacobians are written in place like force_jacobians() (fill_blocks on the implicit
+// springs' structure). explicit_part_spectrum(): springs: radius max γ/m on the negative real
+// axis (0 without point damping); stretch: the Gershgorin bound of ω_max of the explicit springs
+// alone (StiffnessSpectrum on their adjacency) on the imaginary axis, point damping ignored.
+//
 // Spring view (core/springs.hpp): spring_network() lists the springs (i, j, L, k, c), masses,
 // pins, gravity and point damping for the graphics solvers (XPBD, projective dynamics), which
 // work on the springs directly. Built on first use (it copies the spring list). Constraints are
@@ -103,11 +116,14 @@
 
 namespace stiffbench {
 
+enum class NetworkSplit { none, springs, stretch };
+
 struct NetworkOptions {
-  std::array<double, 3> gravity{};  // g (components beyond dim must be 0)
-  double point_damping = 0.0;       // γ (>= 0), force -γ v on every free point
-  bool compressed_dd_only = false;  // see the header comment
-  Index parallel_threshold = 2048;  // points; below this the right-hand side runs serially
+  std::array<double, 3> gravity{};          // g (components beyond dim must be 0)
+  double point_damping = 0.0;               // γ (>= 0), force -γ v on every free point
+  bool compressed_dd_only = false;          // see the header comment
+  Index parallel_threshold = 2048;          // points; below this the right-hand side runs serially
+  NetworkSplit split = NetworkSplit::none;  // additive split (see the header comment)
 };
 
 class MassSpringNetwork final : public MechanicalSystem {
@@ -140,6 +156,15 @@ class MassSpringNetwork final : public MechanicalSystem {
   std::optional<double> stiffness(double t, CVecRef y) const override;
 
   const SpringNetworkView* spring_network() const override;
+
+  // Additive split (see the header comment).
+  bool has_imex_split() const override { return opt_.split != NetworkSplit::none; }
+  std::optional<SplitInfo> imex_split() const override;
+  void implicit_force_jacobians(double t, CVecRef x, CVecRef v, SparseMat& k,
+                                SparseMat& d) const override;
+  bool implicit_part_velocity_dependent() const override { return implicit_dashpots_; }
+  bool symmetric_implicit_force_jacobians() const override { return !implicit_dashpots_; }
+  std::optional<SpectrumEstimate> explicit_part_spectrum(double t, CVecRef y) const override;
 
   bool has_constraints() const override { return !distance_constraints_.empty(); }
   void project(double t, VecRef y) const override;
@@ -182,15 +207,42 @@ class MassSpringNetwork final : public MechanicalSystem {
 
  protected:
   void eval_acceleration(double t, CVecRef x, CVecRef v, VecRef a) const override;
+  void eval_acceleration_explicit_part(double t, CVecRef x, CVecRef v, VecRef a) const override;
+  void eval_acceleration_implicit_part(double t, CVecRef x, CVecRef v, VecRef a) const override;
 
  private:
-  template <int D>
+  // Which forces an acceleration evaluation sums: all of them, or one part of the split.
+  enum class Part { all, explicit_part, implicit_part };
+  // The springs' adjacency and the fixed pattern of K and D built from it, with for each point's
+  // diagonal block and each adjacency entry the position in valuePtr() of every block entry
+  // (row-major within the block). One for the whole network, one for the implicit springs of
+  // split=stretch.
+  struct Structure {
+    SpringAdjacency adjacency;
+    SparseMat pattern;
+    SparseMat diag_pattern;        // D's pattern without dashpots (D = -(γ/m) I)
+    std::vector<Index> diag_pos;   // dim² per point
+    std::vector<Index> adj_pos;    // dim² per adjacency entry
+    std::vector<Index> adj_pos_t;  // the same for the transposed block (rows of the neighbour)
+    bool dashpots = false;         // some spring of this structure has a dashpot
+  };
+  template <int D, Part P>
   void acceleration_impl(const double* x, const double* v, double* a) const;
   template <int D>
-  void blocks_impl(const double* x, const double* v, double* k_values, double* d_values) const;
-  void fill_blocks(CVecRef x, CVecRef v, SparseMat* k, SparseMat* d) const;
+  void blocks_impl(const Structure& st, double gamma, const double* x, const double* v,
+                   double* k_values, double* d_values) const;
+  void fill_blocks(const Structure& st, double gamma, CVecRef x, CVecRef v, SparseMat* k,
+                   SparseMat* d) const;
   void ensure_structure() const;  // builds the members marked "on first use" once
-  void build_structure() const;
+  Structure build_structure(const std::vector<Spring>& springs) const;
+  const Structure& implicit_structure() const {
+    return opt_.split == NetworkSplit::stretch ? implicit_structure_ : structure_;
+  }
+  // Whether spring s is in the implicit part of the active split.
+  bool implicit_spring(const Spring& s) const {
+    return opt_.split == NetworkSplit::springs ||
+           (opt_.split == NetworkSplit::stretch && s.kind == SpringKind::structural);
+  }
 
   std::string name_;
   int dim_;
@@ -213,20 +265,16 @@ class MassSpringNetwork final : public MechanicalSystem {
   std::vector<PackedSpring> packed_;
   std::vector<double> packed_damping_;  // dashpot coefficients (empty without dashpots)
   std::vector<Index> part_start_;
+  std::vector<std::uint8_t> packed_implicit_;  // per packed spring: in a_I (split only)
+  bool implicit_dashpots_ = false;             // some implicit spring has a dashpot
 
-  // Built on first use (ensure_structure; an explicit run never needs them):
-  // The springs per point (Jacobian blocks, stiffness spectrum).
+  // Built on first use (ensure_structure; an explicit run never needs them): the whole
+  // network's structure (Jacobian blocks, stiffness spectrum), the implicit springs' (stretch)
+  // and the explicit springs' adjacency (stretch: explicit_part_spectrum).
   mutable std::once_flag structure_once_;
-  mutable SpringAdjacency adjacency_;
-
-  // Fixed pattern of K and D, and for each point's diagonal block and each adjacency entry the
-  // position in valuePtr() of every block entry (row-major within the block). On first use.
-  mutable SparseMat pattern_;
-  mutable SparseMat diag_pattern_;       // D's pattern without dashpots (D = -(γ/m) I)
-  mutable std::vector<Index> diag_pos_;  // dim² per point
-  mutable std::vector<Index> adj_pos_;   // dim² per adjacency entry
-  mutable std::vector<Index>
-      adj_pos_t_;  // the same for the transposed block (rows of the neighbour)
+  mutable Structure structure_;
+  mutable Structure implicit_structure_;
+  mutable SpringAdjacency explicit_adjacency_;
 
   std::function<void(double, VecRef)> exact_;
 

@@ -28,6 +28,11 @@ std::string str(double x) {
 std::string str(long x) { return std::to_string(x); }
 std::string str(bool x) { return x ? "true" : "false"; }
 
+NetworkSplit split_param(const Params& p) {
+  return choice<NetworkSplit>(p, "split", {"none", "springs", "stretch"},
+                              {NetworkSplit::none, NetworkSplit::springs, NetworkSplit::stretch});
+}
+
 unsigned long seed_param(const Params& p, const std::string& model) {
   const long seed = p.integer("seed");
   require_input(seed >= 0, model + ": parameter 'seed' must be >= 0");
@@ -89,7 +94,13 @@ void register_mass_spring_models(ModelRegistry& reg) {
             {"gamma", P::real, str(chain.point_damping),
              "point damping coefficient (force -gamma v)", B::non_negative()},
             {"dashpot", P::real, str(chain.dashpot), "dashpot coefficient of every spring",
-             B::non_negative()}},
+             B::non_negative()},
+            {"split",
+             P::text,
+             "none",
+             "additive split f = f_E + f_I: none, or springs (springs and dashpots implicit; "
+             "point damping explicit)",
+             {"none", "springs"}}},
            [](const Params& p) {
              SpringChainOptions o;
              o.n = p.integer("n");
@@ -103,6 +114,7 @@ void register_mass_spring_models(ModelRegistry& reg) {
              o.perturbation = p.real("perturbation");
              o.point_damping = p.real("gamma");
              o.dashpot = p.real("dashpot");
+             o.split = split_param(p);
              return make_spring_chain(o);
            }});
   reg.find_mutable("spring_chain")->info.size = [](const Params& p) {
@@ -146,7 +158,14 @@ void register_mass_spring_models(ModelRegistry& reg) {
             {"compressed_dd", P::boolean, str(cloth.compressed_dd_only),
              "Jacobian keeps only k d d^T for compressed springs (inexact, definite)"},
             {"parallel_threshold", P::integer, str(cloth.parallel_threshold), threshold_help,
-             B::at_least(1)}},
+             B::at_least(1)},
+            {"split",
+             P::text,
+             "none",
+             "additive split f = f_E + f_I: none; springs (springs and dashpots implicit; "
+             "gravity and point damping explicit); stretch (structural springs implicit; shear, "
+             "bend, gravity and point damping explicit)",
+             {"none", "springs", "stretch"}}},
            [](const Params& p) {
              ClothOptions o;
              o.perturbation = p.real("perturbation");
@@ -168,6 +187,7 @@ void register_mass_spring_models(ModelRegistry& reg) {
              o.dashpot = p.real("dashpot");
              o.compressed_dd_only = p.boolean("compressed_dd");
              o.parallel_threshold = p.integer("parallel_threshold");
+             o.split = split_param(p);
              return make_cloth(o);
            }});
   reg.find_mutable("cloth")->info.size = [](const Params& p) {
@@ -209,7 +229,13 @@ void register_mass_spring_models(ModelRegistry& reg) {
             {"compressed_dd", P::boolean, str(cube.compressed_dd_only),
              "Jacobian keeps only k d d^T for compressed springs (inexact, definite)"},
             {"parallel_threshold", P::integer, str(cube.parallel_threshold), threshold_help,
-             B::at_least(1)}},
+             B::at_least(1)},
+            {"split",
+             P::text,
+             "none",
+             "additive split f = f_E + f_I: none, or springs (springs and dashpots implicit; "
+             "gravity and point damping explicit)",
+             {"none", "springs"}}},
            [](const Params& p) {
              SoftCubeOptions o;
              o.n = p.integer("n");
@@ -229,6 +255,7 @@ void register_mass_spring_models(ModelRegistry& reg) {
              o.dashpot = p.real("dashpot");
              o.compressed_dd_only = p.boolean("compressed_dd");
              o.parallel_threshold = p.integer("parallel_threshold");
+             o.split = split_param(p);
              return make_soft_cube(o);
            }});
   reg.find_mutable("soft_cube")->info.size = [](const Params& p) {

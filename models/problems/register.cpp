@@ -1,8 +1,11 @@
-#include "models/register.hpp"
+#include <algorithm>
+
+#include "models/problems/advection_diffusion.hpp"
 #include "models/problems/dahlquist.hpp"
 #include "models/problems/e5.hpp"
 #include "models/problems/harmonic_oscillator.hpp"
 #include "models/problems/hires.hpp"
+#include "models/problems/kaps.hpp"
 #include "models/problems/kepler.hpp"
 #include "models/problems/orego.hpp"
 #include "models/problems/pendulum.hpp"
@@ -10,6 +13,7 @@
 #include "models/problems/prothero_robinson.hpp"
 #include "models/problems/robertson.hpp"
 #include "models/problems/van_der_pol.hpp"
+#include "models/register.hpp"
 
 namespace stiffbench {
 
@@ -126,6 +130,50 @@ void register_problem_models(ModelRegistry& reg) {
             false, false, "Verwer 1994 (SIAM J. Sci. Comput. 15); IVP test set 'pollu'"},
            {},
            [](const Params&) { return std::make_unique<Pollution>(); }});
+  reg.add({{"kaps",
+            "Kaps' problem y1' = -(2 + 1/ε) y1 + y2²/ε, y2' = y1 - y2 - y2², exact "
+            "(e^{-2t}, e^{-t}) for every ε; split=stiff: the 1/ε terms implicit; end time 1",
+            false, true,
+            "Kaps & Rentrop, Numer. Math. 33 (1979); Hairer & Wanner II §IV.15 (order reduction)"},
+           {{"eps", P::real, "1e-6", "stiffness parameter ε", B::positive()},
+            {"split",
+             P::text,
+             "stiff",
+             "additive split f = f_E + f_I: stiff (f_I = the 1/ε terms, f_E the rest)",
+             {"stiff"}}},
+           [](const Params& p) {
+             p.text("split");  // one split (stiff): nothing to choose
+             return std::make_unique<Kaps>(p.real("eps"));
+           }});
+  reg.add({{"advection_diffusion",
+            "1D periodic u_t + a u_x = ν u_xx - r u on [0,1), central differences on n cells, "
+            "initial sin(2πk x); split=advection: advection explicit, diffusion and reaction "
+            "implicit; end time 1",
+            false, true,
+            "method of lines; exact solution of the ODE e^{μt} sin(θj - ωt) from the circulant "
+            "operator's Fourier modes"},
+           {{"n", P::integer, "256", "cells N (Δx = 1/N)", B::in(3, 10000000)},
+            {"a", P::real, "1", "advection speed a", B::any()},
+            {"nu", P::real, "1e-4", "diffusion coefficient ν", B::non_negative()},
+            {"r", P::real, "0", "reaction (decay) rate r", B::non_negative()},
+            {"k", P::integer, "1", "wave number of the initial mode sin(2πk x)", B::in(0, 1e9)},
+            {"split",
+             P::text,
+             "advection",
+             "additive split f = f_E + f_I: advection (advection explicit; diffusion and "
+             "reaction implicit)",
+             {"advection"}}},
+           [](const Params& p) {
+             p.text("split");  // one split (advection): nothing to choose
+             return std::make_unique<AdvectionDiffusion>(static_cast<int>(p.integer("n")),
+                                                         p.real("a"), p.real("nu"), p.real("r"),
+                                                         static_cast<int>(p.integer("k")));
+           }});
+  // advection_diffusion: n unknowns, the tridiagonal Jacobian (3n nonzeros of 12 bytes).
+  reg.find_mutable("advection_diffusion")->info.size = [](const Params& p) {
+    const double n = std::max(static_cast<double>(p.integer("n")), 0.0);
+    return ModelSize{n, 12.0 * 3.0 * n + 32.0 * n, 3.0 * n, "n=" + std::to_string(p.integer("n"))};
+  };
   // Fixed-size problems: at most 20 unknowns (POLLU), whatever their parameters.
   for (const auto& name : reg.names()) {
     auto* e = reg.find_mutable(name);
