@@ -3,6 +3,7 @@
 #include <arkode/arkode_arkstep.h>
 #include <arkode/arkode_butcher_dirk.h>
 #include <arkode/arkode_butcher_erk.h>
+#include <arkode/arkode_mristep.h>
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sunlinsol/sunlinsol_band.h>
@@ -113,6 +114,9 @@ struct Settings {
   // the iteration limit (ARKStepSetNonlinConvCoef, ARKStepSetMaxNonlinIters); ARKODE's defaults.
   double nonlin_conv_coef = 0.1;
   int max_nonlin_iters = 3;
+  // arkode_mri: the slow coupling table and the fast steps per slow step (0: adaptive fast).
+  int mri_table = -1;
+  long fast_steps = 0;
 };
 
 // Reads a FILE* report (PrintAllStats) into a string.
@@ -827,6 +831,108 @@ class ArkodeIntegrator final : public SundialsFrontEnd {
   ArkodeMode mode_;
 };
 
+// arkode_mri: MRIStep, slow part f_E explicit with an MRI coupling table at a fixed slow step
+// h; fast part f_I by an inner ARKStep with an implicit (DIRK) table, its Newton on J_I and the
+// same linear solvers as arkode_imex, adaptive at rtol/atol or fast_steps fixed steps of
+// h/fast_steps. MRIStep 2.x (SUNDIALS 6.4) has fixed slow steps only: no adaptive mode.
+class MriIntegrator final : public SundialsFrontEnd {
+ public:
+  MriIntegrator(MethodInfo info, Settings s) : SundialsFrontEnd(std::move(info), std::move(s)) {}
+  ~MriIntegrator() override { free_memory(); }
+
+  bool supports_adaptive() const override { return false; }
+  Status advance_to(const OdeSystem&, double, VecRef, SolveStats&) override {
+    throw BadInput("integrator '" + info().name +
+                   "' runs at a fixed slow step only (MRIStep of SUNDIALS 6.4): give --h");
+  }
+  Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override {
+    if (set_.fast_steps > 0 && h != fast_for_h_) {
+      const int flag = ARKStepSetFixedStep(inner_, h / static_cast<double>(set_.fast_steps));
+      if (flag < 0) {
+        stats.message = "ARKStepSetFixedStep (fast) failed";
+        return Status::solver_error;
+      }
+      fast_for_h_ = h;
+    }
+    return fixed_step(sys, t, y, h, stats, MRIStepSetFixedStep);
+  }
+
+ private:
+  bool needs_linear_solver() const override { return true; }
+  bool uses_implicit_part(const OdeSystem&) const override { return true; }
+  void create(double t0, N_Vector y, const Ok& ok) override {
+    fast_for_h_ = 0;
+    inner_ = ARKStepCreate(nullptr, SundialsAdapter::rhs_implicit_cb, t0, y, ctx_);
+    ok(ARKStepSetUserData(inner_, &adapter_), "ARKStepSetUserData");
+    ok(ARKStepSetErrHandlerFn(inner_, SundialsAdapter::err_cb, &adapter_),
+       "ARKStepSetErrHandlerFn");
+    ok(ARKStepSStolerances(inner_, set_.rtol, set_.atol), "ARKStepSStolerances");
+    ok(ARKStepSetMaxNumSteps(inner_, set_.max_steps), "ARKStepSetMaxNumSteps");
+    ok(ARKStepSetTableName(inner_, set_.implicit_table.c_str(), "ARKODE_ERK_NONE"),
+       "ARKStepSetTableName");
+    ok(ARKStepSetNonlinConvCoef(inner_, set_.nonlin_conv_coef), "ARKStepSetNonlinConvCoef");
+    ok(ARKStepSetMaxNonlinIters(inner_, set_.max_nonlin_iters), "ARKStepSetMaxNonlinIters");
+    ok(ARKStepCreateMRIStepInnerStepper(inner_, &stepper_), "ARKStepCreateMRIStepInnerStepper");
+    mem_ = MRIStepCreate(SundialsAdapter::rhs_explicit_cb, nullptr, t0, y, stepper_, ctx_);
+    if (!mem_) throw std::runtime_error("MRIStepCreate failed");
+    ok(MRIStepSetUserData(mem_, &adapter_), "MRIStepSetUserData");
+    ok(MRIStepSetErrHandlerFn(mem_, SundialsAdapter::err_cb, &adapter_), "MRIStepSetErrHandlerFn");
+    ok(MRIStepSStolerances(mem_, set_.rtol, set_.atol), "MRIStepSStolerances");
+    ok(MRIStepSetMaxNumSteps(mem_, set_.max_steps), "MRIStepSetMaxNumSteps");
+    MRIStepCoupling c = MRIStepCoupling_LoadTable(static_cast<ARKODE_MRITableID>(set_.mri_table));
+    if (!c) throw std::runtime_error("MRIStepCoupling_LoadTable failed");
+    const int flag = MRIStepSetCoupling(mem_, c);
+    MRIStepCoupling_Free(c);  // MRIStep keeps its own copy
+    ok(flag, "MRIStepSetCoupling");
+  }
+  void attach_linear_solver(const Ok& ok) override {
+    ok(ARKStepSetLinearSolver(inner_, adapter_.linear_solver(), adapter_.matrix()),
+       "ARKStepSetLinearSolver");
+    ok(ARKStepSetLSetupFrequency(inner_, static_cast<int>(set_.lsetup_frequency)),
+       "ARKStepSetLSetupFrequency");
+    adapter_.attach_jacobian<ArkodeLinearSolverApi>(inner_, ok);
+  }
+  void reinit(double t, N_Vector y) override {
+    MRIStepReInit(mem_, SundialsAdapter::rhs_explicit_cb, nullptr, t, y);
+  }
+  int set_stop_time(double t_out) override { return MRIStepSetStopTime(mem_, t_out); }
+  int solve(double t_out, N_Vector yout, sunrealtype* tret, bool one_step) override {
+    return MRIStepEvolve(mem_, t_out, yout, tret, one_step ? ARK_ONE_STEP : ARK_NORMAL);
+  }
+  const char* solve_name() const override { return "MRIStepEvolve"; }
+  char* flag_name(int flag) const override { return MRIStepGetReturnFlagName(flag); }
+  Counters counters(SolveStats& s) const override {
+    Counters c;
+    long nfsi = 0, nfe_fast = 0;
+    MRIStepGetNumSteps(mem_, &c.steps);
+    MRIStepGetNumRhsEvals(mem_, &c.nfe, &nfsi);
+    ARKStepGetNumRhsEvals(inner_, &nfe_fast, &c.nfi);
+    ARKStepGetNumErrTestFails(inner_, &c.etf);
+    ARKStepGetNumNonlinSolvIters(inner_, &c.nni);
+    ARKStepGetNumNonlinSolvConvFails(inner_, &c.ncf);
+    ARKStepGetNumLinSolvSetups(inner_, &c.nsetups);
+    ARKStepGetNumJacEvals(inner_, &c.nje);
+    ARKStepGetNumLinIters(inner_, &c.nli);
+    ARKStepGetNumLinRhsEvals(inner_, &c.nfels);
+    long inner_steps = 0;
+    ARKStepGetNumSteps(inner_, &inner_steps);
+    s.library_report =
+        "Fast (inner ARKStep) steps   = " + std::to_string(inner_steps) + "\n" +
+        capture([&](FILE* f) { MRIStepPrintAllStats(mem_, f, SUN_OUTPUTFORMAT_TABLE); }) +
+        capture([&](FILE* f) { ARKStepPrintAllStats(inner_, f, SUN_OUTPUTFORMAT_TABLE); });
+    return c;
+  }
+  void free_library_memory() override {
+    MRIStepFree(&mem_);
+    MRIStepInnerStepper_Free(&stepper_);
+    ARKStepFree(&inner_);
+  }
+
+  void* inner_ = nullptr;
+  MRIStepInnerStepper stepper_ = nullptr;
+  double fast_for_h_ = 0;
+};
+
 std::vector<ParamSpec> common_specs(bool linear) {
   using P = ParamType;
   using B = Bounds;
@@ -968,6 +1074,77 @@ void read_nonlin(const Params& p, Settings& s) {
   require_input(s.nonlin_conv_coef > 0, "parameter 'nonlin_conv_coef' must be > 0");
   s.max_nonlin_iters = static_cast<int>(p.integer("max_nonlin_iters"));
   require_input(s.max_nonlin_iters >= 1, "parameter 'max_nonlin_iters' must be >= 1");
+}
+
+// arkode_mri's slow coupling tables: explicit slow part (f_E) only.
+struct MriTable {
+  const char* key;
+  ARKODE_MRITableID id;
+  int order;
+};
+constexpr MriTable kMriTables[] = {
+    {"mri_gark_erk33a", ARKODE_MRI_GARK_ERK33a, 3},
+    {"mis_kw3", ARKODE_MIS_KW3, 3},
+    {"mri_gark_erk45a", ARKODE_MRI_GARK_ERK45a, 4},
+};
+
+constexpr MethodText kArkodeMriText{
+    .description =
+        "SUNDIALS ARKODE MRIStep on the model's split: slow f_E explicit (MRI coupling "
+        "table), fast f_I by an inner implicit ARKStep with J_I; fixed slow step",
+    .kind = "library: ARKODE (multirate)",
+    .reference =
+        "D. R. Reynolds, D. J. Gardner, C. S. Woodward & R. Chinomona, ARKODE: a "
+        "flexible IVP solver infrastructure for one-step methods, ACM Trans. Math. "
+        "Softw. 49 (2023) 19; A. Sandu, A class of multirate infinitesimal GARK methods, "
+        "SIAM J. Numer. Anal. 57 (2019) 2300-2327"};
+
+void register_arkode_mri(IntegratorRegistry& reg, const ParamSpec& lsetup) {
+  auto specs = common_specs(true);
+  specs.push_back(lsetup);
+  for (const ParamSpec& n : nonlin_specs()) specs.push_back(n);
+  std::vector<std::string> keys;
+  for (const MriTable& m : kMriTables) keys.emplace_back(m.key);
+  specs.push_back({"coupling", ParamType::text, "mri_gark_erk33a",
+                   "slow coupling table (MRIStepSetCoupling): mri_gark_erk33a (order 3, Sandu "
+                   "2019), mis_kw3 (order 3, ARKODE's own default at order 3; Knoth & Wolke "
+                   "1998), mri_gark_erk45a (order 4)",
+                   keys});
+  specs.push_back({"fast_steps", ParamType::integer, "0",
+                   "fast (inner) steps of h/fast_steps (ARKStepSetFixedStep on the inner "
+                   "ARKStep); 0: the inner ARKStep adapts its step to rtol/atol",
+                   Bounds::at_least(0)});
+  specs.push_back({"implicit_table", ParamType::text, "ARKODE_SDIRK_5_3_4",
+                   "the inner ARKStep's DIRK table for f_I, by ARKODE name"});
+  add_built_in_integrator(
+      reg, {method_info("arkode_mri", Family::reference, 3, 0, Requirements{.split = true},
+                        kArkodeMriText),
+            specs, [](const Params& p) {
+              Settings s = read_common(p, true);
+              s.lsetup_frequency = p.integer("lsetup_frequency");
+              require_input(s.lsetup_frequency >= 1, "parameter 'lsetup_frequency' must be >= 1");
+              read_nonlin(p, s);
+              s.fast_steps = p.integer("fast_steps");
+              require_input(s.fast_steps >= 0, "parameter 'fast_steps' must be >= 0");
+              s.implicit_table = p.text("implicit_table");
+              dirk_order(s.implicit_table);  // BadInput for an unknown name
+              const std::string key = p.text("coupling");
+              int order = 0;
+              for (const MriTable& m : kMriTables)
+                if (key == m.key) {
+                  s.mri_table = m.id;
+                  order = m.order;
+                }
+              require_input(order > 0, "parameter 'coupling': unknown MRI table '" + key + "'");
+              Requirements needs;
+              needs.split = true;
+              MethodInfo info =
+                  method_info("arkode_mri", Family::reference, order, 0, needs, kArkodeMriText);
+              info.description = "ARKODE MRIStep " + key + ", fast " + s.implicit_table +
+                                 (s.fast_steps > 0 ? " at h/" + std::to_string(s.fast_steps)
+                                                   : std::string(" adaptive"));
+              return std::make_unique<MriIntegrator>(info, s);
+            }});
 }
 
 }  // namespace
@@ -1133,6 +1310,7 @@ void register_sundials_integrators(IntegratorRegistry& reg) {
                               "ARKODE IMEX " + s.explicit_table + " / " + s.implicit_table);
               return std::make_unique<ArkodeIntegrator>(info, ArkodeMode::imex, s);
             }});
+  register_arkode_mri(reg, lsetup);
 }
 
 }  // namespace stiffbench

@@ -18,6 +18,7 @@ namespace stiffbench {
 namespace {
 
 using testing_support::KapsSplit;
+using testing_support::LinearSplit;
 using testing_support::make;
 
 // The settings under which ARKODE's Newton iteration converges far below the comparison's 1e-9
@@ -132,6 +133,43 @@ TEST(ArkodeImex, SplitModeNewtonUsesTheImplicitPartsJacobian) {
   ASSERT_EQ(run_fixed_step(whole, *dirk, {0.5, 0.05}).stats.status, Status::ok);
   EXPECT_GT(whole.full_jacobian_calls(), 0);
   EXPECT_EQ(whole.implicit_jacobian_calls(), 0);
+}
+
+// arkode_mri: slow f_E by the MRI coupling table, fast f_I by the inner DIRK at h/20. On the
+// linear split with non-commuting parts (lambda = 3; exact solution in split_test_system.hpp)
+// the observed order over three halvings from h = 0.1 is the coupling table's: 3 for
+// MRI-GARK-ERK33a and MIS-KW3 (Sandu 2019; Knoth & Wolke 1998), 4 for MRI-GARK-ERK45a; the
+// inner SDIRK 5-3-4 (order 4, step h/20) and a converged Newton keep the fast error below it.
+TEST(ArkodeMri, ObservedOrderIsTheCouplingTables) {
+  for (const auto& [coupling, order] : {std::pair<std::string, double>{"mri_gark_erk33a", 3.0},
+                                        {"mis_kw3", 3.0},
+                                        {"mri_gark_erk45a", 4.0}}) {
+    std::vector<double> err;
+    for (double h = 0.1; h > 0.01; h /= 2) {
+      LinearSplit sys(3.0);
+      auto integ = make("arkode_mri", with({"coupling=" + coupling, "fast_steps=20"}, kTight));
+      EXPECT_EQ(integ->info().order, static_cast<int>(order));
+      const RunResult r = run_fixed_step(sys, *integ, {1.0, h});
+      ASSERT_EQ(r.stats.status, Status::ok) << r.stats.message;
+      Vec ye(2);
+      sys.exact(1.0, ye);
+      err.push_back(max_abs_diff(r.y, ye));
+      // The slow part is evaluated only by the slow stages: f_E calls do not grow with the
+      // fast steps (at most one per slow stage and step, plus ARKODE's initial one).
+      EXPECT_LE(sys.counters().fe_evals, 5 * r.n_steps + 1) << coupling;
+    }
+    for (std::size_t k = 0; k + 1 < err.size(); ++k)
+      EXPECT_NEAR(std::log2(err[k] / err[k + 1]), order, 0.25)
+          << coupling << ": " << err[k] << " -> " << err[k + 1];
+  }
+}
+
+TEST(ArkodeMri, RefusesModelsWithoutSplitAndAdaptiveRuns) {
+  auto integ = make("arkode_mri");
+  auto no_split = testing_support::model("dahlquist");
+  EXPECT_THROW(run_fixed_step(*no_split, *integ, {0.1, 0.05}), BadInput);
+  EXPECT_FALSE(integ->supports_adaptive());
+  EXPECT_THROW(make("arkode_mri", {"coupling=nope"}), BadInput);
 }
 
 TEST(ArkodeImex, TablesParameterIsChecked) {
