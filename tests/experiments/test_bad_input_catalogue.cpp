@@ -86,7 +86,8 @@ TestModel model_for(const std::string& integrator) {
       {"dahlquist", {}},
       {"spring_chain", {}},
       {"pendulum_chain", {{"constrained", "true"}, {"n", 3}}},
-      {"fluid_2d", {{"n", 8}}}};
+      {"fluid_2d", {{"n", 8}}},
+      {"prothero_robinson", {}}};  // a split (lie, strang, arkode_mri)
   for (const TestModel& m : candidates) {
     try {
       make_setup(m.name, {integrator}, m.params);
