@@ -13,6 +13,7 @@
 #include "integrators/method_file.hpp"
 #include "integrators/reference/gsl.hpp"
 #include "integrators/reference/sundials.hpp"
+#include "integrators/splitting/operator_splitting.hpp"
 #include "integrators/symplectic/rattle.hpp"
 #include "integrators/symplectic/verlet.hpp"
 
@@ -113,6 +114,8 @@ void register_graphics_integrators(IntegratorRegistry& reg) {
 void register_operator_splitting_integrators(IntegratorRegistry& reg) {
   add_class(reg, StableFluids(), {},
             [](const Params&) { return std::make_unique<StableFluids>(); });
+  // lie and strang on a model's additive split (integrators/splitting/operator_splitting.hpp).
+  register_splitting_integrators(reg);
 }
 
 void register_reference_integrators(IntegratorRegistry& reg) {

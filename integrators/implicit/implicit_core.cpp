@@ -294,6 +294,7 @@ void ImplicitCore::allocate_workspaces(Index n) {
   tmp_.resize(n);
   tmp2_.resize(n);
   g_.resize(n);
+  fd_minus_.resize(n);
   delta_.resize(n);
   z0_.resize(n);
 }
@@ -328,12 +329,12 @@ void ImplicitCore::fd_jacobian(const OdeSystem& sys, double t, CVecRef y, CVecRe
     sys.rhs(t, tmp_, tmp2_);
     for (Index j = 0; j < n; ++j)
       if (colors_[static_cast<std::size_t>(j)] == color) tmp_[j] = 2.0 * y[j] - tmp_[j];
-    sys.rhs(t, tmp_, g_);
+    sys.rhs(t, tmp_, fd_minus_);
     for (Index j = 0; j < n; ++j) {
       if (colors_[static_cast<std::size_t>(j)] != color) continue;
       const double span = (2.0 * y[j] - tmp_[j]) - tmp_[j];  // the representable 2δ applied
       for (SparseMat::InnerIterator it(jac_, j); it; ++it)
-        it.valueRef() = (tmp2_[it.row()] - g_[it.row()]) / span;
+        it.valueRef() = (tmp2_[it.row()] - fd_minus_[it.row()]) / span;
       tmp_[j] = y[j];
     }
   }
@@ -565,8 +566,6 @@ NewtonAttempt ImplicitCore::newton_attempt(const OdeSystem& sys, double t, CVecR
     if (need_j) {
       update_jacobian(sys, t, z, fz, stats);
       a.fresh_jacobian = true;
-      // Finite-difference Jacobians use g_ as work space: the residual again (fz is untouched).
-      g_ = z - psi - hg * fz;
     }
     if (!prepare(hg, stats)) {
       a.outcome = NewtonOutcome::linear_failed;

@@ -209,6 +209,9 @@ class ImplicitCore {
   // Linearisation point of the matrix-free product.
   double lin_t_ = 0.0;
   Vec lin_y_, lin_f_, tmp_, tmp2_, g_, delta_, z0_;
+  // fd_jacobian()'s f(y - δ): not g_, which holds the Newton residual when the Jacobian is
+  // refreshed inside the iteration.
+  Vec fd_minus_;
 };
 
 }  // namespace stiffbench

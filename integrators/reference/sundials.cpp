@@ -3,6 +3,7 @@
 #include <arkode/arkode_arkstep.h>
 #include <arkode/arkode_butcher_dirk.h>
 #include <arkode/arkode_butcher_erk.h>
+#include <arkode/arkode_mristep.h>
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sunlinsol/sunlinsol_band.h>
@@ -24,6 +25,7 @@
 #include <utility>
 
 #include "core/run_control.hpp"
+#include "core/split_views.hpp"
 #include "integrators/implicit/velocity_form.hpp"
 #include "integrators/method_entry.hpp"
 #include "integrators/reference/callback_guard.hpp"
@@ -106,6 +108,15 @@ struct Settings {
   int max_order = 0;          // 0: the library's default
   long lsetup_frequency = 1;  // ARKODE: steps between linear-solver setups
   std::string explicit_table, implicit_table;
+  // arkode_imex: a pair by number (ARKStepSetTableNum) instead of the names above; -1: names.
+  int erk_num = -1, dirk_num = -1;
+  // ARKODE's nonlinear solver (implicit stages): the Newton convergence test's coefficient and
+  // the iteration limit (ARKStepSetNonlinConvCoef, ARKStepSetMaxNonlinIters); ARKODE's defaults.
+  double nonlin_conv_coef = 0.1;
+  int max_nonlin_iters = 3;
+  // arkode_mri: the slow coupling table and the fast steps per slow step (0: adaptive fast).
+  int mri_table = -1;
+  long fast_steps = 0;
 };
 
 // Reads a FILE* report (PrintAllStats) into a string.
@@ -154,21 +165,28 @@ class SundialsAdapter {
 
   // Starts a run of integrator `name` on `sys`: resolves the Jacobian (analytic or the
   // library's difference quotients) and the linear solver, and with `linear` (a method with
-  // implicit stages) and an analytic Jacobian fixes its pattern.
+  // implicit stages) and an analytic Jacobian fixes its pattern. With `implicit_part` (ARKStep
+  // on an additive split) the Newton matrices are built from the implicit part's Jacobian J_I
+  // (K_I, D_I for a mechanical model), through implicit_part_view(sys): the library's implicit
+  // stages solve z = ψ + hγ f_I(z), whose Jacobian is J_I, not the full J.
   void reset(const OdeSystem& sys, const std::string& name, const Settings& set, bool linear,
-             double t0, CVecRef y0) {
+             double t0, CVecRef y0, bool implicit_part = false) {
     sys_ = &sys;
+    jview_ = implicit_part ? implicit_part_view(sys) : nullptr;
+    jsys_ = implicit_part ? jview_.get() : &sys;
     n_ = sys.dimension();
-    use_analytic_ = set.jacobian == "analytic" || (set.jacobian == "auto" && sys.has_jacobian());
-    require_input(!use_analytic_ || sys.has_jacobian(),
-                  "integrator '" + name + "': model '" + sys.name() + "' has no analytic Jacobian");
-    resolve_linear_solver(sys, name, set.lin);
+    const OdeSystem& js = *jsys_;
+    use_analytic_ = set.jacobian == "analytic" || (set.jacobian == "auto" && js.has_jacobian());
+    require_input(!use_analytic_ || js.has_jacobian(),
+                  "integrator '" + name + "': model '" + sys.name() + "' has no analytic " +
+                      (implicit_part ? "Jacobian of its split's implicit part" : "Jacobian"));
+    resolve_linear_solver(js, name, set.lin);
     force_jac_evals_ = 0;
     if (use_analytic_ && linear) build_jacobian_layout(t0, y0);
     vel_.reset();
     if (lin_ == Lin::velocity) {
       vel_ = std::make_unique<VelocityFormSolver>();
-      vel_->reset(*sys.as_mechanical(), LinearSolverOptions{}, t0, y0);
+      vel_->reset(*js.as_mechanical(), LinearSolverOptions{}, t0, y0);
     }
   }
 
@@ -182,9 +200,9 @@ class SundialsAdapter {
         break;
       case Lin::band: {
         Index mu = n_ - 1, ml = n_ - 1;
-        if (use_analytic_ || sys_->has_jacobian_pattern()) {
+        if (use_analytic_ || jsys_->has_jacobian_pattern()) {
           mu = ml = 0;
-          const SparseMat p = use_analytic_ ? jp_ : sys_->jacobian_pattern();
+          const SparseMat p = use_analytic_ ? jp_ : jsys_->jacobian_pattern();
           for (Index c = 0; c < p.outerSize(); ++c)
             for (SparseMat::InnerIterator it(p, c); it; ++it) {
               mu = std::max(mu, c - it.row());
@@ -322,7 +340,7 @@ class SundialsAdapter {
   // The fixed pattern jp_ = pattern(J) ∪ diagonal, computed once per reset(), and the maps
   // from the model's matrices into it. Structure only: the evaluations here are not counted.
   void build_jacobian_layout(double t0, CVecRef y0) {
-    const MechanicalSystem* ms = sys_->as_mechanical();
+    const MechanicalSystem* ms = jsys_->as_mechanical();
     mech_ = ms != nullptr && ms->has_force_jacobians();
     std::vector<Eigen::Triplet<double>> trips;
     for (Index i = 0; i < n_; ++i) trips.emplace_back(i, i, 0.0);
@@ -344,7 +362,7 @@ class SundialsAdapter {
           trips.emplace_back(nd + it.row(), nd + c, 1.0);
       }
     } else {
-      jac_ = sys_->jacobian_pattern();  // compressed, the structure jacobian() fills
+      jac_ = jsys_->jacobian_pattern();  // compressed, the structure jacobian() fills
       for (Index c = 0; c < jac_.outerSize(); ++c)
         for (SparseMat::InnerIterator it(jac_, c); it; ++it) trips.emplace_back(it.row(), c, 1.0);
     }
@@ -379,13 +397,13 @@ class SundialsAdapter {
     };
     if (mech_) {
       const Index nd = n_ / 2;
-      sys_->as_mechanical()->force_jacobians(t, yv.head(nd), yv.tail(nd), k_, d_);
+      jsys_->as_mechanical()->force_jacobians(t, yv.head(nd), yv.tail(nd), k_, d_);
       ++force_jac_evals_;
       for (const Index p : ones_) data[p] = 1.0;
       scatter(k_, k_map_);
       scatter(d_, d_map_);
     } else {
-      sys_->jacobian(t, yv, jac_);
+      jsys_->jacobian(t, yv, jac_);
       scatter(jac_, j_map_);
     }
   }
@@ -482,6 +500,9 @@ class SundialsAdapter {
   }
 
   const OdeSystem* sys_ = nullptr;
+  // The system whose Jacobian the linear solver uses: sys_, or the view of its implicit part.
+  const OdeSystem* jsys_ = nullptr;
+  std::unique_ptr<OdeSystem> jview_;
   Index n_ = 0;
   bool use_analytic_ = false;
   Lin lin_ = Lin::dense;                     // the linear solver of this run (auto resolved)
@@ -518,7 +539,7 @@ class SundialsFrontEnd : public Integrator {
 
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override {
     check_compatible(info(), sys);
-    adapter_.reset(sys, info().name, set_, needs_linear_solver(), t0, y0);
+    adapter_.reset(sys, info().name, set_, needs_linear_solver(), t0, y0, uses_implicit_part(sys));
     t_ = t0;
     y_last_ = y0;
     fixed_h_ = 0;
@@ -551,6 +572,9 @@ class SundialsFrontEnd : public Integrator {
 
   // --- the library calls ---------------------------------------------------------------
   virtual bool needs_linear_solver() const = 0;
+  // True when the implicit stages solve for the implicit part f_I of the model's split (the
+  // Newton matrices then come from J_I).
+  virtual bool uses_implicit_part(const OdeSystem&) const { return false; }
   // Creates mem_ at (t0, y) with the user data, error handler, tolerances and options.
   virtual void create(double t0, N_Vector y, const Ok& ok) = 0;
   // Hands the adapter's linear solver to the library, then the adapter's Jacobian.
@@ -731,6 +755,9 @@ class ArkodeIntegrator final : public SundialsFrontEnd {
 
  private:
   bool needs_linear_solver() const override { return mode_ != ArkodeMode::explicit_only; }
+  bool uses_implicit_part(const OdeSystem& sys) const override {
+    return mode_ == ArkodeMode::imex && sys.has_imex_split();
+  }
   // IMEX with the model's split; all-implicit (arkode_imex on a model without one) otherwise.
   bool split() const { return mode_ == ArkodeMode::imex && adapter_.system()->has_imex_split(); }
   ARKRhsFn explicit_rhs() const {
@@ -750,9 +777,21 @@ class ArkodeIntegrator final : public SundialsFrontEnd {
     ok(ARKStepSStolerances(mem_, set_.rtol, set_.atol), "ARKStepSStolerances");
     ok(ARKStepSetMaxNumSteps(mem_, set_.max_steps), "ARKStepSetMaxNumSteps");
     // A part without a right-hand side gets no table.
-    const char* itab = implicit_rhs() ? set_.implicit_table.c_str() : "ARKODE_DIRK_NONE";
-    const char* etab = explicit_rhs() ? set_.explicit_table.c_str() : "ARKODE_ERK_NONE";
-    ok(ARKStepSetTableName(mem_, itab, etab), "ARKStepSetTableName");
+    if (set_.dirk_num >= 0) {
+      ok(ARKStepSetTableNum(
+             mem_,
+             implicit_rhs() ? static_cast<ARKODE_DIRKTableID>(set_.dirk_num) : ARKODE_DIRK_NONE,
+             explicit_rhs() ? static_cast<ARKODE_ERKTableID>(set_.erk_num) : ARKODE_ERK_NONE),
+         "ARKStepSetTableNum");
+    } else {
+      const char* itab = implicit_rhs() ? set_.implicit_table.c_str() : "ARKODE_DIRK_NONE";
+      const char* etab = explicit_rhs() ? set_.explicit_table.c_str() : "ARKODE_ERK_NONE";
+      ok(ARKStepSetTableName(mem_, itab, etab), "ARKStepSetTableName");
+    }
+    if (implicit_rhs()) {
+      ok(ARKStepSetNonlinConvCoef(mem_, set_.nonlin_conv_coef), "ARKStepSetNonlinConvCoef");
+      ok(ARKStepSetMaxNonlinIters(mem_, set_.max_nonlin_iters), "ARKStepSetMaxNonlinIters");
+    }
   }
   void attach_linear_solver(const Ok& ok) override {
     ok(ARKStepSetLinearSolver(mem_, adapter_.linear_solver(), adapter_.matrix()),
@@ -790,6 +829,108 @@ class ArkodeIntegrator final : public SundialsFrontEnd {
   void free_library_memory() override { ARKStepFree(&mem_); }
 
   ArkodeMode mode_;
+};
+
+// arkode_mri: MRIStep, slow part f_E explicit with an MRI coupling table at a fixed slow step
+// h; fast part f_I by an inner ARKStep with an implicit (DIRK) table, its Newton on J_I and the
+// same linear solvers as arkode_imex, adaptive at rtol/atol or fast_steps fixed steps of
+// h/fast_steps. MRIStep 2.x (SUNDIALS 6.4) has fixed slow steps only: no adaptive mode.
+class MriIntegrator final : public SundialsFrontEnd {
+ public:
+  MriIntegrator(MethodInfo info, Settings s) : SundialsFrontEnd(std::move(info), std::move(s)) {}
+  ~MriIntegrator() override { free_memory(); }
+
+  bool supports_adaptive() const override { return false; }
+  Status advance_to(const OdeSystem&, double, VecRef, SolveStats&) override {
+    throw BadInput("integrator '" + info().name +
+                   "' runs at a fixed slow step only (MRIStep of SUNDIALS 6.4): give --h");
+  }
+  Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override {
+    if (set_.fast_steps > 0 && h != fast_for_h_) {
+      const int flag = ARKStepSetFixedStep(inner_, h / static_cast<double>(set_.fast_steps));
+      if (flag < 0) {
+        stats.message = "ARKStepSetFixedStep (fast) failed";
+        return Status::solver_error;
+      }
+      fast_for_h_ = h;
+    }
+    return fixed_step(sys, t, y, h, stats, MRIStepSetFixedStep);
+  }
+
+ private:
+  bool needs_linear_solver() const override { return true; }
+  bool uses_implicit_part(const OdeSystem&) const override { return true; }
+  void create(double t0, N_Vector y, const Ok& ok) override {
+    fast_for_h_ = 0;
+    inner_ = ARKStepCreate(nullptr, SundialsAdapter::rhs_implicit_cb, t0, y, ctx_);
+    ok(ARKStepSetUserData(inner_, &adapter_), "ARKStepSetUserData");
+    ok(ARKStepSetErrHandlerFn(inner_, SundialsAdapter::err_cb, &adapter_),
+       "ARKStepSetErrHandlerFn");
+    ok(ARKStepSStolerances(inner_, set_.rtol, set_.atol), "ARKStepSStolerances");
+    ok(ARKStepSetMaxNumSteps(inner_, set_.max_steps), "ARKStepSetMaxNumSteps");
+    ok(ARKStepSetTableName(inner_, set_.implicit_table.c_str(), "ARKODE_ERK_NONE"),
+       "ARKStepSetTableName");
+    ok(ARKStepSetNonlinConvCoef(inner_, set_.nonlin_conv_coef), "ARKStepSetNonlinConvCoef");
+    ok(ARKStepSetMaxNonlinIters(inner_, set_.max_nonlin_iters), "ARKStepSetMaxNonlinIters");
+    ok(ARKStepCreateMRIStepInnerStepper(inner_, &stepper_), "ARKStepCreateMRIStepInnerStepper");
+    mem_ = MRIStepCreate(SundialsAdapter::rhs_explicit_cb, nullptr, t0, y, stepper_, ctx_);
+    if (!mem_) throw std::runtime_error("MRIStepCreate failed");
+    ok(MRIStepSetUserData(mem_, &adapter_), "MRIStepSetUserData");
+    ok(MRIStepSetErrHandlerFn(mem_, SundialsAdapter::err_cb, &adapter_), "MRIStepSetErrHandlerFn");
+    ok(MRIStepSStolerances(mem_, set_.rtol, set_.atol), "MRIStepSStolerances");
+    ok(MRIStepSetMaxNumSteps(mem_, set_.max_steps), "MRIStepSetMaxNumSteps");
+    MRIStepCoupling c = MRIStepCoupling_LoadTable(static_cast<ARKODE_MRITableID>(set_.mri_table));
+    if (!c) throw std::runtime_error("MRIStepCoupling_LoadTable failed");
+    const int flag = MRIStepSetCoupling(mem_, c);
+    MRIStepCoupling_Free(c);  // MRIStep keeps its own copy
+    ok(flag, "MRIStepSetCoupling");
+  }
+  void attach_linear_solver(const Ok& ok) override {
+    ok(ARKStepSetLinearSolver(inner_, adapter_.linear_solver(), adapter_.matrix()),
+       "ARKStepSetLinearSolver");
+    ok(ARKStepSetLSetupFrequency(inner_, static_cast<int>(set_.lsetup_frequency)),
+       "ARKStepSetLSetupFrequency");
+    adapter_.attach_jacobian<ArkodeLinearSolverApi>(inner_, ok);
+  }
+  void reinit(double t, N_Vector y) override {
+    MRIStepReInit(mem_, SundialsAdapter::rhs_explicit_cb, nullptr, t, y);
+  }
+  int set_stop_time(double t_out) override { return MRIStepSetStopTime(mem_, t_out); }
+  int solve(double t_out, N_Vector yout, sunrealtype* tret, bool one_step) override {
+    return MRIStepEvolve(mem_, t_out, yout, tret, one_step ? ARK_ONE_STEP : ARK_NORMAL);
+  }
+  const char* solve_name() const override { return "MRIStepEvolve"; }
+  char* flag_name(int flag) const override { return MRIStepGetReturnFlagName(flag); }
+  Counters counters(SolveStats& s) const override {
+    Counters c;
+    long nfsi = 0, nfe_fast = 0;
+    MRIStepGetNumSteps(mem_, &c.steps);
+    MRIStepGetNumRhsEvals(mem_, &c.nfe, &nfsi);
+    ARKStepGetNumRhsEvals(inner_, &nfe_fast, &c.nfi);
+    ARKStepGetNumErrTestFails(inner_, &c.etf);
+    ARKStepGetNumNonlinSolvIters(inner_, &c.nni);
+    ARKStepGetNumNonlinSolvConvFails(inner_, &c.ncf);
+    ARKStepGetNumLinSolvSetups(inner_, &c.nsetups);
+    ARKStepGetNumJacEvals(inner_, &c.nje);
+    ARKStepGetNumLinIters(inner_, &c.nli);
+    ARKStepGetNumLinRhsEvals(inner_, &c.nfels);
+    long inner_steps = 0;
+    ARKStepGetNumSteps(inner_, &inner_steps);
+    s.library_report =
+        "Fast (inner ARKStep) steps   = " + std::to_string(inner_steps) + "\n" +
+        capture([&](FILE* f) { MRIStepPrintAllStats(mem_, f, SUN_OUTPUTFORMAT_TABLE); }) +
+        capture([&](FILE* f) { ARKStepPrintAllStats(inner_, f, SUN_OUTPUTFORMAT_TABLE); });
+    return c;
+  }
+  void free_library_memory() override {
+    MRIStepFree(&mem_);
+    MRIStepInnerStepper_Free(&stepper_);
+    ARKStepFree(&inner_);
+  }
+
+  void* inner_ = nullptr;
+  MRIStepInnerStepper stepper_ = nullptr;
+  double fast_for_h_ = 0;
 };
 
 std::vector<ParamSpec> common_specs(bool linear) {
@@ -861,6 +1002,149 @@ int dirk_order(const std::string& name) {
   const int q = t->q;
   ARKodeButcherTable_Free(t);
   return q;
+}
+
+// The ARK pairs of ARKODE 5.4 (SUNDIALS 6.4) by the `tables` key of arkode_imex: explicit and
+// implicit tables of C. A. Kennedy & M. H. Carpenter, Additive Runge-Kutta schemes for
+// convection-diffusion-reaction equations, Appl. Numer. Math. 44 (2003) 139-181 (ark324l2sa,
+// ark436l2sa, ark548l2sa) and Higher-order additive Runge-Kutta schemes for ordinary
+// differential equations, Appl. Numer. Math. 136 (2019) 183-205 (ark437l2sa, ark548l2sab).
+struct ArkPair {
+  const char* key;
+  ARKODE_ERKTableID erk;
+  ARKODE_DIRKTableID dirk;
+  const char* erk_name;
+  const char* dirk_name;
+};
+constexpr ArkPair kArkPairs[] = {
+    {"ark324l2sa", ARKODE_ARK324L2SA_ERK_4_2_3, ARKODE_ARK324L2SA_DIRK_4_2_3,
+     "ARKODE_ARK324L2SA_ERK_4_2_3", "ARKODE_ARK324L2SA_DIRK_4_2_3"},
+    {"ark436l2sa", ARKODE_ARK436L2SA_ERK_6_3_4, ARKODE_ARK436L2SA_DIRK_6_3_4,
+     "ARKODE_ARK436L2SA_ERK_6_3_4", "ARKODE_ARK436L2SA_DIRK_6_3_4"},
+    {"ark437l2sa", ARKODE_ARK437L2SA_ERK_7_3_4, ARKODE_ARK437L2SA_DIRK_7_3_4,
+     "ARKODE_ARK437L2SA_ERK_7_3_4", "ARKODE_ARK437L2SA_DIRK_7_3_4"},
+    {"ark548l2sa", ARKODE_ARK548L2SA_ERK_8_4_5, ARKODE_ARK548L2SA_DIRK_8_4_5,
+     "ARKODE_ARK548L2SA_ERK_8_4_5", "ARKODE_ARK548L2SA_DIRK_8_4_5"},
+    {"ark548l2sab", ARKODE_ARK548L2SAb_ERK_8_4_5, ARKODE_ARK548L2SAb_DIRK_8_4_5,
+     "ARKODE_ARK548L2SAb_ERK_8_4_5", "ARKODE_ARK548L2SAb_DIRK_8_4_5"},
+};
+
+// arkode_imex's `tables`: a pair by number, or (named) the two tables by name.
+void read_ark_pair(const Params& p, Settings& s) {
+  const std::string key = p.text("tables");
+  s.explicit_table = p.text("explicit_table");
+  s.implicit_table = p.text("implicit_table");
+  if (key == "named") {
+    require_input(!s.explicit_table.empty() && !s.implicit_table.empty(),
+                  "tables=named needs both parameters 'explicit_table' and 'implicit_table'");
+    return;
+  }
+  require_input(s.explicit_table.empty() && s.implicit_table.empty(),
+                "parameters 'explicit_table' and 'implicit_table' need tables=named (tables=" +
+                    key + " chooses both tables)");
+  for (const ArkPair& a : kArkPairs)
+    if (key == a.key) {
+      s.erk_num = a.erk;
+      s.dirk_num = a.dirk;
+      s.explicit_table = a.erk_name;
+      s.implicit_table = a.dirk_name;
+      return;
+    }
+  throw BadInput("parameter 'tables': unknown ARK pair '" + key + "'");
+}
+
+// ARKODE's Newton iteration on the implicit stages. It stops when its estimate of the stage
+// error, in the WRMS norm of the weights 1/(rtol |y| + atol), is below nonlin_conv_coef; ARKODE's
+// defaults (0.1, 3 iterations) leave a stage error near 0.1 rtol. A fixed-step run that is to
+// agree with another implementation of the same tables to round-off needs the iteration
+// converged: rtol=1e-12 atol=1e-14 nonlin_conv_coef=1e-3 max_nonlin_iters=20 (docs/design.md).
+std::vector<ParamSpec> nonlin_specs() {
+  return {{"nonlin_conv_coef", ParamType::real, "0.1",
+           "Newton stops when its error estimate (WRMS norm with the rtol/atol weights) is below "
+           "this (ARKStepSetNonlinConvCoef; ARKODE's default 0.1); fixed-step comparisons: "
+           "1e-3 with rtol=1e-12 atol=1e-14",
+           Bounds::positive()},
+          {"max_nonlin_iters", ParamType::integer, "3",
+           "Newton iterations per stage before the step fails (ARKStepSetMaxNonlinIters; "
+           "ARKODE's default 3; a failure in fixed-step mode ends the run)",
+           Bounds::at_least(1)}};
+}
+void read_nonlin(const Params& p, Settings& s) {
+  s.nonlin_conv_coef = p.real("nonlin_conv_coef");
+  require_input(s.nonlin_conv_coef > 0, "parameter 'nonlin_conv_coef' must be > 0");
+  s.max_nonlin_iters = static_cast<int>(p.integer("max_nonlin_iters"));
+  require_input(s.max_nonlin_iters >= 1, "parameter 'max_nonlin_iters' must be >= 1");
+}
+
+// arkode_mri's slow coupling tables: explicit slow part (f_E) only.
+struct MriTable {
+  const char* key;
+  ARKODE_MRITableID id;
+  int order;
+};
+constexpr MriTable kMriTables[] = {
+    {"mri_gark_erk33a", ARKODE_MRI_GARK_ERK33a, 3},
+    {"mis_kw3", ARKODE_MIS_KW3, 3},
+    {"mri_gark_erk45a", ARKODE_MRI_GARK_ERK45a, 4},
+};
+
+constexpr MethodText kArkodeMriText{
+    .description =
+        "SUNDIALS ARKODE MRIStep on the model's split: slow f_E explicit (MRI coupling "
+        "table), fast f_I by an inner implicit ARKStep with J_I; fixed slow step",
+    .kind = "library: ARKODE (multirate)",
+    .reference =
+        "D. R. Reynolds, D. J. Gardner, C. S. Woodward & R. Chinomona, ARKODE: a "
+        "flexible IVP solver infrastructure for one-step methods, ACM Trans. Math. "
+        "Softw. 49 (2023) 19; A. Sandu, A class of multirate infinitesimal GARK methods, "
+        "SIAM J. Numer. Anal. 57 (2019) 2300-2327"};
+
+void register_arkode_mri(IntegratorRegistry& reg, const ParamSpec& lsetup) {
+  auto specs = common_specs(true);
+  specs.push_back(lsetup);
+  for (const ParamSpec& n : nonlin_specs()) specs.push_back(n);
+  std::vector<std::string> keys;
+  for (const MriTable& m : kMriTables) keys.emplace_back(m.key);
+  specs.push_back({"coupling", ParamType::text, "mri_gark_erk33a",
+                   "slow coupling table (MRIStepSetCoupling): mri_gark_erk33a (order 3, Sandu "
+                   "2019), mis_kw3 (order 3, ARKODE's own default at order 3; Knoth & Wolke "
+                   "1998), mri_gark_erk45a (order 4)",
+                   keys});
+  specs.push_back({"fast_steps", ParamType::integer, "0",
+                   "fast (inner) steps of h/fast_steps (ARKStepSetFixedStep on the inner "
+                   "ARKStep); 0: the inner ARKStep adapts its step to rtol/atol",
+                   Bounds::at_least(0)});
+  specs.push_back({"implicit_table", ParamType::text, "ARKODE_SDIRK_5_3_4",
+                   "the inner ARKStep's DIRK table for f_I, by ARKODE name"});
+  add_built_in_integrator(
+      reg, {method_info("arkode_mri", Family::reference, 3, 0, Requirements{.split = true},
+                        kArkodeMriText),
+            specs, [](const Params& p) {
+              Settings s = read_common(p, true);
+              s.lsetup_frequency = p.integer("lsetup_frequency");
+              require_input(s.lsetup_frequency >= 1, "parameter 'lsetup_frequency' must be >= 1");
+              read_nonlin(p, s);
+              s.fast_steps = p.integer("fast_steps");
+              require_input(s.fast_steps >= 0, "parameter 'fast_steps' must be >= 0");
+              s.implicit_table = p.text("implicit_table");
+              dirk_order(s.implicit_table);  // BadInput for an unknown name
+              const std::string key = p.text("coupling");
+              int order = 0;
+              for (const MriTable& m : kMriTables)
+                if (key == m.key) {
+                  s.mri_table = m.id;
+                  order = m.order;
+                }
+              require_input(order > 0, "parameter 'coupling': unknown MRI table '" + key + "'");
+              Requirements needs;
+              needs.split = true;
+              MethodInfo info =
+                  method_info("arkode_mri", Family::reference, order, 0, needs, kArkodeMriText);
+              info.description = "ARKODE MRIStep " + key + ", fast " + s.implicit_table +
+                                 (s.fast_steps > 0 ? " at h/" + std::to_string(s.fast_steps)
+                                                   : std::string(" adaptive"));
+              return std::make_unique<MriIntegrator>(info, s);
+            }});
 }
 
 }  // namespace
@@ -977,6 +1261,7 @@ void register_sundials_integrators(IntegratorRegistry& reg) {
       B::at_least(1)};
   auto dirk_specs = common_specs(true);
   dirk_specs.push_back(lsetup);
+  for (const ParamSpec& n : nonlin_specs()) dirk_specs.push_back(n);
   dirk_specs.push_back(
       {"implicit_table", P::text, "ARKODE_SDIRK_5_3_4", "ARKODE implicit Butcher table name"});
   add_built_in_integrator(
@@ -986,6 +1271,7 @@ void register_sundials_integrators(IntegratorRegistry& reg) {
               Settings s = read_common(p, true);
               s.lsetup_frequency = p.integer("lsetup_frequency");
               require_input(s.lsetup_frequency >= 1, "parameter 'lsetup_frequency' must be >= 1");
+              read_nonlin(p, s);
               s.implicit_table = p.text("implicit_table");
               MethodInfo info = arkode_info("arkode_dirk", dirk_order(s.implicit_table),
                                             kArkodeDirkText, "ARKODE DIRK " + s.implicit_table);
@@ -993,25 +1279,38 @@ void register_sundials_integrators(IntegratorRegistry& reg) {
             }});
   auto imex_specs = common_specs(true);
   imex_specs.push_back(lsetup);
+  for (const ParamSpec& n : nonlin_specs()) imex_specs.push_back(n);
+  std::vector<std::string> pair_keys;
+  for (const ArkPair& a : kArkPairs) pair_keys.emplace_back(a.key);
+  pair_keys.emplace_back("named");
   imex_specs.push_back(
-      {"explicit_table", P::text, "ARKODE_ARK436L2SA_ERK_6_3_4", "explicit table of the ARK pair"});
-  imex_specs.push_back({"implicit_table", P::text, "ARKODE_ARK436L2SA_DIRK_6_3_4",
-                        "implicit table of the ARK pair"});
+      {"tables", P::text, "ark436l2sa",
+       "the ARK pair (ARKStepSetTableNum): ark324l2sa = ARKODE_ARK324L2SA_ERK_4_2_3 + "
+       "ARKODE_ARK324L2SA_DIRK_4_2_3 (order 3, ARKODE's default at order 3), ark436l2sa = "
+       "ARK436L2SA_ERK_6_3_4 + _DIRK_6_3_4 (order 4, ARKODE's default), ark437l2sa, ark548l2sa "
+       "(ARKODE's default at order 5), ark548l2sab; named: explicit_table and implicit_table",
+       pair_keys});
+  imex_specs.push_back({"explicit_table", P::text, "",
+                        "with tables=named: the explicit table of the pair by ARKODE name"});
+  imex_specs.push_back({"implicit_table", P::text, "",
+                        "with tables=named: the implicit table of the pair by ARKODE name"});
+  const ArkPair& def = kArkPairs[1];
   add_built_in_integrator(
-      reg, {method_info("arkode_imex", Family::reference,
-                        dirk_order("ARKODE_ARK436L2SA_DIRK_6_3_4"), 6, {}, kArkodeImexText),
+      reg, {method_info("arkode_imex", Family::reference, dirk_order(def.dirk_name), 6, {},
+                        kArkodeImexText),
             imex_specs, [](const Params& p) {
               Settings s = read_common(p, true);
               s.lsetup_frequency = p.integer("lsetup_frequency");
               require_input(s.lsetup_frequency >= 1, "parameter 'lsetup_frequency' must be >= 1");
-              s.explicit_table = p.text("explicit_table");
-              s.implicit_table = p.text("implicit_table");
+              read_nonlin(p, s);
+              read_ark_pair(p, s);
               const int q = std::min(erk_order(s.explicit_table), dirk_order(s.implicit_table));
               MethodInfo info =
                   arkode_info("arkode_imex", q, kArkodeImexText,
                               "ARKODE IMEX " + s.explicit_table + " / " + s.implicit_table);
               return std::make_unique<ArkodeIntegrator>(info, ArkodeMode::imex, s);
             }});
+  register_arkode_mri(reg, lsetup);
 }
 
 }  // namespace stiffbench

@@ -14,17 +14,24 @@
 //                            L-stable, order 4).
 //   arkode_imex              ARKStep with the model's explicit/implicit split
 //                            (OdeSystem::has_imex_split); all-implicit when the model has none.
-//                            Tables by name (default ARKODE_ARK436L2SA_ERK_6_3_4 /
-//                            ARKODE_ARK436L2SA_DIRK_6_3_4).
+//                            ARK pair by `tables` (ARKStepSetTableNum; default ark436l2sa =
+//                            ARKODE_ARK436L2SA_ERK_6_3_4 + _DIRK_6_3_4) or, with tables=named,
+//                            explicit_table/implicit_table by name. In split mode the Newton
+//                            matrices come from J_I (implicit_part_view: implicit_part_jacobian,
+//                            or K_I/D_I of a mechanical model), not the full J.
+//   arkode_mri               MRIStep: slow f_E explicit (coupling table), fast f_I by an inner
+//                            implicit ARKStep on J_I; fixed slow step only (SUNDIALS 6.4).
 // ARKODE integrators run adaptive (rtol/atol) or fixed-step (ARKStepSetFixedStep: step() of the
 // driver takes exactly one step of h; implicit stages still use Newton with tolerances derived
-// from rtol/atol, so tighten rtol for convergence studies).
+// from rtol/atol and nonlin_conv_coef/max_nonlin_iters, so tighten them for convergence studies
+// and step-for-step comparisons: rtol=1e-12 atol=1e-14 nonlin_conv_coef=1e-3
+// max_nonlin_iters=20).
 //
-// Structure (all in sundials.cpp): two front-ends, CvodeIntegrator (cvode_bdf, cvode_adams) and
-// ArkodeIntegrator (arkode_erk, arkode_dirk, arkode_imex), implement the library calls of one
-// SundialsFrontEnd (the Integrator face: reset, fixed steps, adaptive runs to exact stops,
-// restarts, error messages, counters); both run on a shared SundialsAdapter, the library's user
-// data: the C callbacks (f, IMEX parts, analytic Jacobian, J v, the velocity-form
+// Structure (all in sundials.cpp): three front-ends, CvodeIntegrator (cvode_bdf, cvode_adams),
+// ArkodeIntegrator (arkode_erk, arkode_dirk, arkode_imex) and MriIntegrator (arkode_mri), implement
+// the library calls of one SundialsFrontEnd (the Integrator face: reset, fixed steps, adaptive runs
+// to exact stops, restarts, error messages, counters); both run on a shared SundialsAdapter, the
+// library's user data: the C callbacks (f, IMEX parts, analytic Jacobian, J v, the velocity-form
 // preconditioner) with their exception guard, and the linear solver with its Jacobian pattern.
 //
 // State vectors are wrapped, not copied: N_VMake_Serial on the driver's y. Library errors

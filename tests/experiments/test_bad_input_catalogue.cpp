@@ -87,7 +87,7 @@ TestModel model_for(const std::string& integrator) {
       {"spring_chain", {}},
       {"pendulum_chain", {{"constrained", "true"}, {"n", 3}}},
       {"fluid_2d", {{"n", 8}}},
-      {"prothero_robinson", {}}};  // a model with an additive split (the imex family)
+      {"prothero_robinson", {}}};  // a model with an additive split (imex, lie, strang, arkode_mri)
   for (const TestModel& m : candidates) {
     try {
       make_setup(m.name, {integrator}, m.params);

@@ -20,7 +20,8 @@ namespace {
 std::vector<std::string> all_integrators() {
   std::vector<std::string> out;
   for (const auto& e : integrator_registry().entries())
-    // stable_fluids runs only on fluid_2d (tests/models/test_grid.cpp).
+    // stable_fluids runs only on fluid_2d (tests/models/test_grid.cpp); lie and strang need a
+    // split (tests/integrators/test_operator_splitting.cpp).
     if (e.info.family != Family::reference && !e.info.requires_.constraints &&
         !e.info.requires_.spring_network && !e.info.requires_.grid_fluid && !e.info.requires_.split)
       out.push_back(e.info.name);
