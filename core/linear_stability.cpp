@@ -624,4 +624,39 @@ bool a_stable_on_samples(const LinearStability& s, double r, int n) {
   return true;
 }
 
+namespace {
+Polynomial poly_multiply(const Polynomial& a, const Polynomial& b) {
+  Polynomial c(a.size() + b.size() - 1, 0.0);
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (std::size_t j = 0; j < b.size(); ++j) c[i + j] += a[i] * b[j];
+  return c;
+}
+// P(z/k)^k (coefficients in ascending powers of z).
+Polynomial scaled_power(Polynomial p, int k) {
+  double f = 1.0;
+  for (double& c : p) {
+    c *= f;
+    f /= k;
+  }
+  Polynomial r{1.0};
+  for (int i = 0; i < k; ++i) r = poly_multiply(r, p);
+  return r;
+}
+}  // namespace
+
+LinearStability substepped(const LinearStability& s, int k) {
+  if (k == 1) return s;
+  if (!s.amplification || s.boundary_locus || !s.oscillator_half_trace.empty())
+    throw std::logic_error("substepped: only one-step methods with R(z) have R(z/k)^k");
+  LinearStability out;
+  out.kind = s.kind + ", " + std::to_string(k) + " substeps of h/" + std::to_string(k);
+  const auto amp = s.amplification;
+  out.amplification = [amp, k](std::complex<double> z) {
+    return std::pow(amp(z / static_cast<double>(k)), k);
+  };
+  if (s.rational)
+    out.rational = RationalForm{scaled_power(s.rational->p, k), scaled_power(s.rational->q, k)};
+  return with_mechanical_from_scalar(std::move(out));
+}
+
 }  // namespace stiffbench

@@ -85,6 +85,11 @@ LinearStability multistep_stability(const std::vector<double>& alpha,
 LinearStability kick_drift_stability(const KickDriftCoefficients& c);
 // Fills mechanical_amplification of a method that has `amplification`.
 LinearStability with_mechanical_from_scalar(LinearStability s);
+// k steps of size h/k as one step of size h: R_k(z) = R(z/k)^k (its limits along every ray are k
+// times R's). From `amplification` and, when present, the rational form (P(z/k)^k / Q(z/k)^k);
+// a multistep or mechanical-only method is returned unchanged when k = 1 and refused otherwise
+// (logic_error).
+LinearStability substepped(const LinearStability& s, int k);
 
 // Stability limits along the rays of the test equations.
 struct AxisLimit {

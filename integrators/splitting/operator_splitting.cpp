@@ -169,4 +169,10 @@ void register_splitting_integrators(IntegratorRegistry& reg) {
   }
 }
 
+std::optional<LinearStability> OperatorSplitting::explicit_part_stability() const {
+  auto ls = explicit_->linear_stability();
+  if (!ls || scheme_ == SplittingScheme::lie) return ls;
+  return substepped(*ls, 2);
+}
+
 }  // namespace stiffbench

@@ -26,7 +26,9 @@
 // Sect. II.5; G. Strang, On the construction and comparison of difference schemes, SIAM J.
 // Numer. Anal. 5 (1968) 506-517). linear_stability() is empty (the composition's R is not a
 // function of one hλ when the parts do not commute); explicit_part_stability() is the explicit
-// sub-integrator's linear_stability().
+// sub-integrator's linear_stability() over one step h: R(z) for lie, R(z/2)² for strang (two
+// half steps; `substepped` in core/linear_stability.hpp), so its limits are twice the
+// sub-integrator's.
 #pragma once
 
 #include <memory>
@@ -47,9 +49,8 @@ class OperatorSplitting final : public Integrator {
 
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
-  std::optional<LinearStability> explicit_part_stability() const override {
-    return explicit_->linear_stability();
-  }
+  // lie: the explicit sub-integrator's R(z); strang: its two half steps, R(z/2)².
+  std::optional<LinearStability> explicit_part_stability() const override;
 
   const Integrator& explicit_integrator() const { return *explicit_; }
   const Integrator& implicit_integrator() const { return *implicit_; }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/driver.hpp"
+#include "core/linear_stability.hpp"
 #include "core/types.hpp"
 #include "tests/integrators/split_test_system.hpp"
 #include "tests/test_support.hpp"
@@ -102,13 +103,21 @@ TEST(OperatorSplitting, BadSubIntegratorsNameTheParameter) {
   EXPECT_THROW(run_fixed_step(*no_split, *lie, {0.1, 0.05}), BadInput);
 }
 
-// explicit_part_stability() is the explicit sub-integrator's: for rk4 R(z) = 1 + z + z^2/2 +
-// z^3/6 + z^4/24, |R(-2.5)| = 0.6484375 (by hand).
+// explicit_part_stability() is the explicit sub-integrator's over one step: for rk4 R(z) = 1 + z +
+// z^2/2 + z^3/6 + z^4/24, lie |R(-2.5)| = 0.6484375 and strang (two half steps) R(-1.25)^2 =
+// (1889/6144)^2 = 3568321/37748736 (exact fractions by hand); strang's real-axis limit is twice
+// rk4's (2.785293563405282, the root of |R| = 1 on the negative axis).
 TEST(OperatorSplitting, ExplicitPartStabilityIsTheExplicitSubIntegrators) {
   auto s = make("strang", {"explicit=rk4"});
   const auto ls = s->explicit_part_stability();
   ASSERT_TRUE(ls.has_value());
-  EXPECT_NEAR(ls->amplification({-2.5, 0.0}), 0.6484375, 1e-12);
+  EXPECT_NEAR(ls->amplification({-2.5, 0.0}), 3568321.0 / 37748736.0, 1e-12);
+  const auto ll = make("lie", {"explicit=rk4"})->explicit_part_stability();
+  ASSERT_TRUE(ll.has_value());
+  EXPECT_NEAR(ll->amplification({-2.5, 0.0}), 0.6484375, 1e-12);
+  const AxisLimit lim = real_axis_limit(*ls);
+  EXPECT_TRUE(lim.exact);
+  EXPECT_NEAR(lim.limit, 2 * 2.785293563405282, 1e-8);
   EXPECT_FALSE(s->linear_stability().has_value());
   EXPECT_EQ(s->info().order, 2);
   EXPECT_EQ(make("lie")->info().order, 1);
