@@ -141,12 +141,11 @@ TEST(WorkPrecisionTiming, ColumnsAndRepeats) {
   spec.seed = 11;
   const WorkPrecisionResult res = run_work_precision(spec, nullptr);
   const Table t = work_precision_table(res);
-  const std::vector<std::string> tail = {"newton_iters",        "newton_conv_failures",
-                                         "error_test_failures", "linear_setups",
-                                         "linear_iters",        "fe_evals",
-                                         "fi_evals",            "wall_s_median",
-                                         "wall_s_min",          "wall_s_ci_low",
-                                         "wall_s_ci_high",      "repeats"};
+  const std::vector<std::string> tail = {
+      "newton_iters",  "newton_conv_failures", "error_test_failures",
+      "linear_setups", "linear_iters",         "fe_evals",
+      "fi_evals",      "wall_s_median",        "wall_s_min",
+      "wall_s_ci_low", "wall_s_ci_high",       "repeats"};
   ASSERT_EQ(t.columns.size(), 11u + tail.size());
   EXPECT_EQ(std::vector<std::string>(t.columns.begin() + 11, t.columns.end()), tail);
   ASSERT_EQ(t.rows.size(), 6u);
