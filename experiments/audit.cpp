@@ -496,6 +496,14 @@ void adaptive_checks(std::vector<AuditRow>& rows, const std::string& name) {
   auto probe = create(name);
   const MethodInfo& info = probe->info();
   if (!probe->supports_adaptive()) return;
+  if (info.requires_.split) {
+    // The exactness systems have no additive split; the IMEX pairs' adaptive runs are tested on
+    // split models (tests/integrators/test_imex_ark.cpp).
+    const std::string why = "needs an additive split f = f_E + f_I, which these systems lack";
+    rows.push_back(skip(name, "adaptive_constant", "y'=1", why));
+    rows.push_back(skip(name, "adaptive_polynomial", "y'=t^(p-1)", why));
+    return;
+  }
   if (info.order <= 0) {
     const std::string why =
         "variable order: a polynomial is exact only at the order the method has reached";
