@@ -5,13 +5,11 @@
 #include <limits>
 
 #include "core/split_views.hpp"
+#include "integrators/implicit/dirk.hpp"
 
 namespace stiffbench {
 
 namespace {
-
-// Floor of the adaptive Newton tolerance (relative to 1 + |z_i|), as for the ESDIRK pairs.
-constexpr double kMinAdaptiveNewtonTol = 1e-14;
 
 // Whether stage i's slope of table t enters a later stage, the weights or the embedded weights.
 std::vector<char> slopes_used(const ButcherTableau& t) {
@@ -132,12 +130,7 @@ Status ImexArkIntegrator::advance_to(const OdeSystem& sys, double t_out, VecRef 
   }
   const auto trial = [&](double t, double h) {
     // Newton tolerance two orders below the controller's scale (integrators/implicit/dirk.hpp).
-    double tol = std::numeric_limits<double>::infinity();
-    for (Index i = 0; i < y.size(); ++i) {
-      const double ay = std::abs(y[i]);
-      tol = std::min(tol, (control_.atol + control_.rtol * ay) / (1.0 + ay));
-    }
-    core_.set_newton_tol(std::max(0.01 * tol, kMinAdaptiveNewtonTol));
+    core_.set_newton_tol(adaptive_newton_tolerance(y, control_));
     ynew_ = y;
     const Status st = stages(sys, t, ynew_, h, stats);
     if (st != Status::ok || !ynew_.allFinite()) {

@@ -24,6 +24,15 @@ std::vector<ButcherTableau> dirk_of(bool embedded) {
 
 }  // namespace
 
+double adaptive_newton_tolerance(CVecRef y, const ControllerOptions& control) {
+  double tol = std::numeric_limits<double>::infinity();
+  for (Index i = 0; i < y.size(); ++i) {
+    const double ay = std::abs(y[i]);
+    tol = std::min(tol, (control.atol + control.rtol * ay) / (1.0 + ay));
+  }
+  return std::max(0.01 * tol, kMinAdaptiveNewtonTol);
+}
+
 const std::vector<ButcherTableau>& esdirk_tableaux() {
   static const std::vector<ButcherTableau> all = dirk_of(true);
   return all;
@@ -189,12 +198,7 @@ Status DirkIntegrator::advance_to(const OdeSystem& sys, double t_out, VecRef y, 
       k1_valid_ = true;
     }
     // Newton tolerance two orders below the controller's scale (see the header).
-    double tol = std::numeric_limits<double>::infinity();
-    for (Index i = 0; i < y.size(); ++i) {
-      const double ay = std::abs(y[i]);
-      tol = std::min(tol, (control_.atol + control_.rtol * ay) / (1.0 + ay));
-    }
-    core_.set_newton_tol(std::max(0.01 * tol, kMinAdaptiveNewtonTol));
+    core_.set_newton_tol(adaptive_newton_tolerance(y, control_));
     ynew_ = y;
     const Status st = stepper_.step(core_, sys, t, ynew_, h, stats, true);
     if (st != Status::ok || !ynew_.allFinite()) {

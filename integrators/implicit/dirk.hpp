@@ -127,6 +127,10 @@ class DirkIntegrator final : public Integrator {
   Vec cached_values_;
 };
 
+// The Newton tolerance of an adaptive trial from y (see the header comment): max(0.01 min_i
+// (atol + rtol |y_i|)/(1 + |y_i|), 1e-14). Shared by the ESDIRK and IMEX pairs.
+double adaptive_newton_tolerance(CVecRef y, const ControllerOptions& control);
+
 // Parameters of the ESDIRK pairs: the implicit family's (with Newton), the controller's and
 // error_filter; and the reader of the last.
 std::vector<ParamSpec> esdirk_param_specs();
