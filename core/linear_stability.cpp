@@ -19,13 +19,49 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // R(z) = 1 + z bᵀ(I − zA)⁻¹1 for a full (possibly implicit) stage matrix. Infinite where
 // I − zA is singular (a pole of R).
-double rk_amplification(const Mat& a, const Vec& b, cd z) {
+cd rk_multiplier(const Mat& a, const Vec& b, cd z) {
   const Index s = b.size();
   const Eigen::MatrixXcd m = Eigen::MatrixXcd::Identity(s, s) - z * a.cast<cd>();
   const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(m);
   const Eigen::VectorXcd k = lu.solve(Eigen::VectorXcd::Ones(s));
-  const cd r = 1.0 + z * b.cast<cd>().dot(k);
-  return std::isfinite(r.real()) && std::isfinite(r.imag()) ? std::abs(r) : kInf;
+  // bᵀk without conjugation (Eigen's dot() conjugates its first argument).
+  const cd r = 1.0 + z * (b.cast<cd>().transpose() * k)(0, 0);
+  return std::isfinite(r.real()) && std::isfinite(r.imag()) ? r : cd(kInf, 0.0);
+}
+double rk_amplification(const Mat& a, const Vec& b, cd z) {
+  return std::abs(rk_multiplier(a, b, z));
+}
+
+// The root of largest modulus of Σ_j (α_j − zβ_j) ζ^j (companion matrix); ∞ for a root at
+// infinity.
+cd multistep_multiplier(const std::vector<double>& alpha, const std::vector<double>& beta, cd z) {
+  const std::size_t k = alpha.size() - 1;
+  std::vector<cd> c(k + 1);
+  for (std::size_t j = 0; j <= k; ++j) c[j] = alpha[j] - z * beta[j];
+  if (std::abs(c[k]) <= 1e-14 * std::abs(c[0]) + 1e-300) return {kInf, 0.0};
+  if (k == 1) return -c[0] / c[1];
+  Eigen::MatrixXcd comp = Eigen::MatrixXcd::Zero(static_cast<Index>(k), static_cast<Index>(k));
+  for (std::size_t j = 0; j < k; ++j) {
+    comp(0, static_cast<Index>(j)) = -c[k - 1 - j] / c[k];
+    if (j + 1 < k) comp(static_cast<Index>(j + 1), static_cast<Index>(j)) = 1.0;
+  }
+  const Eigen::ComplexEigenSolver<Eigen::MatrixXcd> es(comp, false);
+  Index best = 0;
+  es.eigenvalues().cwiseAbs().maxCoeff(&best);
+  return es.eigenvalues()(best);
+}
+
+// The eigenvalue of largest modulus of a real 2×2 matrix [[p, q], [r, s]]; of a complex pair,
+// the one with Im >= 0.
+cd dominant_eigenvalue_2x2(double p, double q, double r, double s) {
+  const double half_tr = 0.5 * (p + s);
+  const double det = p * s - q * r;
+  const double disc = half_tr * half_tr - det;
+  if (disc >= 0.0) {
+    const double root = std::sqrt(disc);
+    return {half_tr >= 0.0 ? half_tr + root : half_tr - root, 0.0};
+  }
+  return {half_tr, std::sqrt(-disc)};
 }
 
 // Spectral radius of a real 2×2 matrix [[p, q], [r, s]].
@@ -242,6 +278,7 @@ LinearStability tableau_stability(const ButcherTableau& t) {
   LinearStability s;
   s.kind = t.is_explicit() ? "explicit Runge-Kutta" : "implicit Runge-Kutta";
   s.amplification = [a = t.a, b = t.b](cd z) { return rk_amplification(a, b, z); };
+  s.multiplier = [a = t.a, b = t.b](cd z) { return rk_multiplier(a, b, z); };
   s.rational = runge_kutta_rational_form(t.a, t.b);
   return with_mechanical_from_scalar(std::move(s));
 }
@@ -252,6 +289,7 @@ LinearStability rosenbrock_stability(const Mat& alpha, const Mat& gamma, const V
   LinearStability s;
   s.kind = "Rosenbrock";
   s.amplification = [a = Mat(alpha + gamma), b](cd z) { return rk_amplification(a, b, z); };
+  s.multiplier = [a = Mat(alpha + gamma), b](cd z) { return rk_multiplier(a, b, z); };
   s.rational = runge_kutta_rational_form(alpha + gamma, b);
   return with_mechanical_from_scalar(std::move(s));
 }
@@ -262,21 +300,12 @@ LinearStability multistep_stability(const std::vector<double>& alpha,
                 "multistep_stability: alpha and beta need the same length k + 1 >= 2");
   LinearStability s;
   s.kind = "linear multistep";
+  s.levels = static_cast<int>(alpha.size()) - 1;
   s.amplification = [alpha, beta](cd z) {
-    // Largest root modulus of Σ (α_j − zβ_j) ζ^j, from the companion matrix.
-    const std::size_t k = alpha.size() - 1;
-    std::vector<cd> c(k + 1);
-    for (std::size_t j = 0; j <= k; ++j) c[j] = alpha[j] - z * beta[j];
-    if (std::abs(c[k]) <= 1e-14 * std::abs(c[0]) + 1e-300) return kInf;  // a root at infinity
-    Eigen::MatrixXcd comp = Eigen::MatrixXcd::Zero(static_cast<Index>(k), static_cast<Index>(k));
-    for (std::size_t j = 0; j < k; ++j) {
-      comp(0, static_cast<Index>(j)) = -c[k - 1 - j] / c[k];
-      if (j + 1 < k) comp(static_cast<Index>(j + 1), static_cast<Index>(j)) = 1.0;
-    }
-    if (k == 1) return std::abs(comp(0, 0));
-    const Eigen::ComplexEigenSolver<Eigen::MatrixXcd> es(comp, false);
-    return es.eigenvalues().cwiseAbs().maxCoeff();
+    const cd mu = multistep_multiplier(alpha, beta, z);
+    return std::isfinite(mu.real()) ? std::abs(mu) : kInf;
   };
+  s.multiplier = [alpha, beta](cd z) { return multistep_multiplier(alpha, beta, z); };
   s.boundary_locus = [alpha, beta](double theta) {
     const cd zeta = std::polar(1.0, theta);
     cd rho = 0.0, sigma = 0.0, p = 1.0;
@@ -309,6 +338,19 @@ LinearStability kick_drift_stability(const KickDriftCoefficients& c) {
     }
     return spectral_radius_2x2(m00, m01, m10, m11);
   };
+  s.mechanical_multiplier = [kick = c.kick, drift = c.drift](double h2a, double hb) {
+    double m00 = 1, m01 = 0, m10 = 0, m11 = 1;  // the same product as above
+    for (std::size_t j = 0; j < kick.size(); ++j) {
+      const double k = kick[j];
+      const double n10 = k * h2a * m00 + (1 + k * hb) * m10;
+      const double n11 = k * h2a * m01 + (1 + k * hb) * m11;
+      m10 = n10;
+      m11 = n11;
+      m00 += drift[j] * m10;
+      m01 += drift[j] * m11;
+    }
+    return dominant_eigenvalue_2x2(m00, m01, m10, m11);
+  };
   // The same product with polynomial entries in x = h²a at hb = 0, for the half-trace.
   using P = std::vector<ld>;
   auto mul_add = [](const P& a, const P& b, ld scale, int shift) {  // a + scale·x^shift·b
@@ -339,6 +381,17 @@ LinearStability with_mechanical_from_scalar(LinearStability s) {
     const cd root = std::sqrt(cd(0.25 * hb * hb + h2a, 0.0));
     return std::max(amp(0.5 * hb + root), amp(0.5 * hb - root));
   };
+  if (s.multiplier) {
+    s.mechanical_multiplier = [mult = s.multiplier](double h2a, double hb) {
+      // std::sqrt gives the root with Im >= 0 for a negative discriminant, so hλ₊ is the
+      // eigenvalue with Im >= 0 and, for real coefficients, R(hλ₊) the one of the conjugate
+      // pair R(hλ₊), R(hλ₋) = conj R(hλ₊) with Im >= 0 (for small ν).
+      const cd root = std::sqrt(cd(0.25 * hb * hb + h2a, 0.0));
+      const cd plus = mult(0.5 * hb + root), minus = mult(0.5 * hb - root);
+      const cd best = std::abs(minus) > std::abs(plus) ? minus : plus;
+      return best.imag() < 0.0 ? std::conj(best) : best;
+    };
+  }
   return s;
 }
 
@@ -654,9 +707,30 @@ LinearStability substepped(const LinearStability& s, int k) {
   out.amplification = [amp, k](std::complex<double> z) {
     return std::pow(amp(z / static_cast<double>(k)), k);
   };
+  if (s.multiplier)
+    out.multiplier = [mult = s.multiplier, k](std::complex<double> z) {
+      return std::pow(mult(z / static_cast<double>(k)), k);
+    };
   if (s.rational)
     out.rational = RationalForm{scaled_power(s.rational->p, k), scaled_power(s.rational->q, k)};
   return with_mechanical_from_scalar(std::move(out));
+}
+
+OscillatorResponse oscillator_response(std::complex<double> multiplier, double nu) {
+  OscillatorResponse r;
+  r.nu = nu;
+  r.amplification = std::abs(multiplier);
+  r.phase = std::abs(std::arg(multiplier));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  r.damping_ratio = r.phase > 0.0 ? -std::log(r.amplification) / r.phase : nan;
+  r.period_error = r.phase > 0.0 ? nu / r.phase - 1.0 : kInf;
+  r.frequency_error = r.phase / nu - 1.0;
+  return r;
+}
+
+std::optional<OscillatorResponse> oscillator_response(const LinearStability& s, double nu) {
+  if (!s.mechanical_multiplier) return std::nullopt;
+  return oscillator_response(s.mechanical_multiplier(-nu * nu, 0.0), nu);
 }
 
 }  // namespace stiffbench

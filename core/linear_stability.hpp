@@ -69,7 +69,39 @@ struct LinearStability {
   // Kick/drift splittings: half-trace T(x) of the step map on x'' = −ω²x, x = −(hω)² (its
   // determinant is 1). Empty otherwise.
   Polynomial oscillator_half_trace;
+  // The step map's dominant eigenvalue itself (complex), for damping and phase: on y' = λy,
+  // R(z) for one-step methods and the root of largest modulus of ρ(ζ) − zσ(ζ) for multistep
+  // ones (empty for mechanical-only methods); on x'' = a x + b x', the eigenvalue of largest
+  // modulus of the step map, the one with Im >= 0 of a complex pair (set for every method).
+  std::function<std::complex<double>(std::complex<double>)> multiplier;
+  std::function<std::complex<double>(double h2a, double hb)> mechanical_multiplier;
+  // Levels of the state the step map acts on: 1 for one-step methods, k for a k-step method.
+  int levels = 1;
 };
+
+// What one step does to the undamped oscillator x'' = −ω²x at ν = hω, from the step map's
+// dominant eigenvalue μ = A e^{iθ} (θ = arg μ ∈ [0, π]; the exact flow has μ = e^{iν}). The
+// definitions are those of Hilber, Hughes & Taylor (1977), "Improved numerical dissipation for
+// time integration algorithms in structural dynamics", Earthquake Eng. Struct. Dyn. 5:
+//   amplification    A = |μ| per step (1: no numerical damping);
+//   damping_ratio    ξ̄ = −ln A / θ, the damping ratio of the linear oscillator whose exact
+//                    solution the numerical one is (amplitude ×e^{−2πξ̄} per numerical period);
+//   period_error     T̄/T − 1 = ν/θ − 1 (relative period elongation; > 0: too slow);
+//   frequency_error  θ/ν − 1.
+// θ = 0 (a real eigenvalue: the numerical mode does not oscillate) gives NaN for ξ̄ and ∞ for
+// the period error.
+struct OscillatorResponse {
+  double nu = 0.0;
+  double amplification = 0.0;
+  double phase = 0.0;  // θ
+  double damping_ratio = 0.0;
+  double period_error = 0.0;
+  double frequency_error = 0.0;
+};
+OscillatorResponse oscillator_response(std::complex<double> multiplier, double nu);
+// From the method's coefficients (mechanical_multiplier at h²a = −ν², hb = 0); nullopt when
+// the method has no stability data.
+std::optional<OscillatorResponse> oscillator_response(const LinearStability& s, double nu);
 
 // R = P/Q of a Runge–Kutta stage matrix and weights (Rosenbrock: A = α + Γ).
 RationalForm runge_kutta_rational_form(const Mat& a, const Vec& b);

@@ -21,7 +21,7 @@ void add_study_command(CLI::App& app, const StudyKind& kind) {
   };
   auto st = std::make_shared<State>();
   auto* cmd = app.add_subcommand(kind.name, kind.summary);
-  add_common_flags(cmd, st->flags, kind.takes_model, kind.takes_model);
+  add_common_flags(cmd, st->flags, kind.takes_model, kind.takes_model && kind.model_required);
   if (kind.integrators_required)
     cmd->get_option("--integrators")->required();
   else

@@ -339,7 +339,7 @@ SpecFile parse_spec_text(const std::string& source, const std::string& file,
   apply_sets(sets, settings, params, integrators);
   for (const auto& e : settings) check_setting(kind_schema, spec.kind, e);
   read_integrators(integrators, kind_schema, spec);
-  if (kind_schema.takes_model) {
+  if (kind_schema.takes_model && kind_schema.model_required) {
     const bool has_model = std::any_of(settings.begin(), settings.end(),
                                        [](const auto& e) { return e.key == "model"; });
     if (!has_model) throw BadInput(file + ": key 'model' missing");

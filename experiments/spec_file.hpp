@@ -54,6 +54,7 @@ struct SpecFile {
 // and the type of each of its keys.
 struct SpecKindSchema {
   bool takes_model = true;
+  bool model_required = true;
   bool integrators_required = true;
   std::map<std::string, SpecScalar::Type> keys;
 };

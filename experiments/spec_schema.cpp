@@ -31,6 +31,7 @@ const SpecSchema& spec_schema() {
     if (!k) return std::nullopt;
     SpecKindSchema s;
     s.takes_model = k->takes_model;
+    s.model_required = k->model_required;
     s.integrators_required = k->integrators_required;
     for (const auto& o : k->options) s.keys[o.key] = spec_type(o.type);
     return s;

@@ -20,6 +20,7 @@ StudyKind region_study_kind();
 StudyKind energy_study_kind();
 StudyKind audit_study_kind();
 StudyKind analyze_study_kind();
+StudyKind fidelity_study_kind();
 
 namespace {
 
@@ -27,7 +28,8 @@ std::vector<StudyKind>& mutable_study_kinds() {
   static std::vector<StudyKind> kinds = {convergence_study_kind(),    local_error_study_kind(),
                                          work_precision_study_kind(), stability_study_kind(),
                                          region_study_kind(),         energy_study_kind(),
-                                         audit_study_kind(),          analyze_study_kind()};
+                                         audit_study_kind(),          analyze_study_kind(),
+                                         fidelity_study_kind()};
   return kinds;
 }
 
@@ -139,7 +141,8 @@ ScopedStudyObjects::~ScopedStudyObjects() {
 std::unique_ptr<StudyJob> make_study(const StudyKind& kind, const StudyTarget& target,
                                      const Params& options, const StudyContext& ctx,
                                      const std::function<std::string(const std::string&)>& how) {
-  if (kind.takes_model) require_input(!target.model.empty(), how("model") + " is required");
+  if (kind.takes_model && kind.model_required)
+    require_input(!target.model.empty(), how("model") + " is required");
   require_input(
       kind.takes_params || target.params.empty(),
       "--param does not apply to " + kind.name + ": it depends only on the methods' coefficients");

@@ -89,6 +89,7 @@ struct StudyKind {
   std::string stem;     // file stem of its outputs, e.g. "work_precision"
   std::string summary;  // one line: what it measures and writes
   bool takes_model = true;
+  bool model_required = true;        // fidelity: the model is optional (per-mode part)
   bool takes_params = true;          // region: a method's coefficients only
   bool integrators_required = true;  // region: default every method with stability data
   // `run`: one unit per integrator; false: one unit per point with every integrator (region).
