@@ -86,6 +86,12 @@ std::vector<ParamSpec> fluid_specs(const SceneDefaults& d, std::vector<ParamSpec
                  "energy-consistent) or mirrored (twice that: p_b = p_i)",
                  {"akinci", "mirrored"}});
   }
+  s.push_back({"split",
+               P::text,
+               "none",
+               "additive split f = f_E + f_I: none, or viscosity (viscosity with its boundary "
+               "terms implicit; pressure, walls and gravity explicit)",
+               {"none", "viscosity"}});
   s.push_back({"parallel_threshold", P::integer, "512",
                "fluid particles from which the right-hand side runs with OpenMP (results do not "
                "depend on it)",
@@ -132,6 +138,7 @@ SphOptions read_fluid(const Params& p, double spacing, double fall_height, const
     o.boundary = p.text("boundary") == "penalty" ? SphBoundary::penalty : SphBoundary::particles;
     o.mirror_boundary_pressure = p.text("boundary_pressure") == "mirrored";
   }
+  o.split = p.text("split") == "viscosity" ? SphSplit::viscosity : SphSplit::none;
   const long threshold = p.integer("parallel_threshold");
   require_input(threshold >= 0, who + "'parallel_threshold' must be >= 0");
   o.parallel_threshold = threshold;

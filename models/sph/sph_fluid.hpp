@@ -93,6 +93,7 @@ enum class SphEos { linear, tait };
 enum class SphPressureForm { symmetric, variational };
 enum class SphViscosity { none, muller, artificial };
 enum class SphBoundary { particles, penalty };
+enum class SphSplit { none, viscosity };
 
 struct SphOptions {
   double spacing = 0.01;   // Δx
@@ -117,6 +118,7 @@ struct SphOptions {
   bool equilibrium_masses = false;
   bool mirror_boundary_pressure = false;  // f = 2 in the boundary pressure force (see above)
   Index parallel_threshold = 512;         // particles; below this the passes run serially
+  SphSplit split = SphSplit::none;        // additive split (see the header comment)
 };
 
 // A wall plane n·x = offset; the fluid is on the side n·x > offset.
@@ -160,6 +162,11 @@ class SphFluid final : public MechanicalSystem {
   bool has_particles() const override { return true; }
   ParticleFrame particles(double t, CVecRef y) const override;
 
+  // Additive split (see the header comment). No analytic Jacobian of either part.
+  bool has_imex_split() const override { return opt_.split != SphSplit::none; }
+  std::optional<SplitInfo> imex_split() const override;
+  std::optional<SpectrumEstimate> explicit_part_spectrum(double t, CVecRef y) const override;
+
   // Data.
   int dim() const { return dim_; }
   Index fluid_particles() const { return n_; }
@@ -179,6 +186,9 @@ class SphFluid final : public MechanicalSystem {
   double energy(CVecRef y) const;
   double kinetic_energy(CVecRef y) const;
   Vec linear_momentum(CVecRef y) const;
+  Vec angular_momentum(CVecRef y) const;  // 2D: 1 component Σ m (x v_y - y v_x); 3D: Σ m x × v
+  // ω_max of the pressure waves on the uniform lattice at rest (see the header comment).
+  double acoustic_rate() const { return acoustic_rate_; }
   double max_density_error(CVecRef y) const;  // max_i |ρ_i/ρ0 - 1| (free surfaces included)
   double max_compression(CVecRef y) const;    // max_i (ρ_i/ρ0 - 1), the WCSPH accuracy measure
   // Penalty wall range d0 = Δx/2 and strength K = c²/(4 d0) (see the header comment).
@@ -193,12 +203,19 @@ class SphFluid final : public MechanicalSystem {
 
  protected:
   void eval_acceleration(double t, CVecRef x, CVecRef v, VecRef a) const override;
+  void eval_acceleration_explicit_part(double t, CVecRef x, CVecRef v, VecRef a) const override;
+  void eval_acceleration_implicit_part(double t, CVecRef x, CVecRef v, VecRef a) const override;
 
  private:
+  // Which terms a force pass sums: all of them, or one part of the split.
+  enum class Part { all, explicit_part, implicit_part };
   template <int D, sph::KernelType KD>
   void density_pass(const double* x) const;
-  template <int D, sph::KernelType KG>
+  template <int D, sph::KernelType KG, Part P>
   void force_pass(const double* v, double* a) const;
+  template <Part P>
+  void acceleration_impl(const double* x, const double* v, double* a) const;
+  double lattice_acoustic_rate() const;
   template <int D>
   const sph::NeighbourGrid<D>& fluid_grid() const;
   template <int D>
@@ -212,6 +229,7 @@ class SphFluid final : public MechanicalSystem {
   int dim_ = 2;
   Index n_ = 0;
   double mass_ = 0.0, c_ = 0.0, k_ = 0.0, tait_b_ = 0.0, hs_ = 0.0, nu_ = 0.0;
+  double acoustic_rate_ = 0.0;
   bool viscous_ = false, parallel_ = false;
   sph::Kernel wd_, wg_, wv_;  // density, gradient and viscosity-Laplacian kernels
   Vec y0_;
