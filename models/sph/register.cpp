@@ -90,6 +90,12 @@ std::vector<ParamSpec> fluid_specs(const SceneDefaults& d, std::vector<ParamSpec
                "fluid particles from which the right-hand side runs with OpenMP (results do not "
                "depend on it)",
                B::non_negative()});
+  s.push_back({"split",
+               P::text,
+               "none",
+               "additive split f = f_E + f_I: none, or viscosity (viscosity with its boundary "
+               "terms implicit; pressure, walls and gravity explicit)",
+               {"none", "viscosity"}});
   return s;
 }
 
@@ -132,6 +138,7 @@ SphOptions read_fluid(const Params& p, double spacing, double fall_height, const
     o.boundary = p.text("boundary") == "penalty" ? SphBoundary::penalty : SphBoundary::particles;
     o.mirror_boundary_pressure = p.text("boundary_pressure") == "mirrored";
   }
+  o.split = p.text("split") == "viscosity" ? SphSplit::viscosity : SphSplit::none;
   const long threshold = p.integer("parallel_threshold");
   require_input(threshold >= 0, who + "'parallel_threshold' must be >= 0");
   o.parallel_threshold = threshold;
@@ -264,24 +271,25 @@ void add_drop(ModelRegistry& reg) {
        {"oscillation", "rotation", "none"}},
       {"rate", P::real, "1", "A (1/s)", B::any()},
       {"drift", P::real, "0", "uniform initial velocity along x (m/s)", B::any()}};
-  reg.add({{name,
-            "2D SPH drop: no gravity, no walls, inviscid by default, oscillating or rotating "
-            "(momentum, energy and convergence tests)",
-            true, false, "Monaghan's elliptic drop; invariants energy and momentum"},
-           fluid_specs(d, scene),
-           [name](const Params& p) {
-             DropOptions o;
-             o.radius = p.real("radius");
-             o.n = int_param(p, "n", name, 2, 4000);
-             const std::string& v = p.text("velocity");
-             o.velocity = v == "rotation"      ? DropOptions::Velocity::rotation
-                          : v == "oscillation" ? DropOptions::Velocity::oscillation
-                                               : DropOptions::Velocity::none;
-             o.rate = p.real("rate");
-             o.drift = p.real("drift");
-             const SphOptions f = read_fluid(p, 2.0 * o.radius / o.n, 2.0 * o.radius, name, false);
-             return std::make_unique<SphFluid>(name, make_drop_scene(o), f);
-           }});
+  reg.add(
+      {{name,
+        "2D SPH drop: no gravity, no walls, inviscid by default, oscillating or rotating "
+        "(momentum, angular momentum, energy and convergence tests)",
+        true, false, "Monaghan's elliptic drop; invariants energy, momentum and angular momentum"},
+       fluid_specs(d, scene),
+       [name](const Params& p) {
+         DropOptions o;
+         o.radius = p.real("radius");
+         o.n = int_param(p, "n", name, 2, 4000);
+         const std::string& v = p.text("velocity");
+         o.velocity = v == "rotation"      ? DropOptions::Velocity::rotation
+                      : v == "oscillation" ? DropOptions::Velocity::oscillation
+                                           : DropOptions::Velocity::none;
+         o.rate = p.real("rate");
+         o.drift = p.real("drift");
+         const SphOptions f = read_fluid(p, 2.0 * o.radius / o.n, 2.0 * o.radius, name, false);
+         return std::make_unique<SphFluid>(name, make_drop_scene(o), f);
+       }});
   reg.find_mutable(name)->info.size = [](const Params& p) {
     // A disc n particles across: about (pi/4) n^2 particles (no walls).
     const double n = std::max(static_cast<double>(p.integer("n")), 0.0);

@@ -86,6 +86,7 @@ SphFluid::SphFluid(std::string name, SphScene scene, SphOptions options)
   viscous_ = (opt_.viscosity == SphViscosity::muller && opt_.mu > 0) ||
              (opt_.viscosity == SphViscosity::artificial && opt_.alpha > 0);
   parallel_ = n_ >= opt_.parallel_threshold;
+  acoustic_rate_ = lattice_acoustic_rate();
 
   y0_.resize(2 * dofs());
   for (Index i = 0; i < n_; ++i)
@@ -296,16 +297,22 @@ void SphFluid::density_pass(const double* x) const {
   }
 }
 
-template <int D, sph::KernelType KG>
+// P selects the terms (Part::all: every term, in the order of the unsplit right-hand side, so
+// split=none is unchanged bit for bit): explicit_part = gravity, pressure, boundary pressure and
+// penalty walls; implicit_part = both viscosities with their boundary terms.
+template <int D, sph::KernelType KG, SphFluid::Part P>
 void SphFluid::force_pass(const double* v, double* a) const {
+  constexpr bool with_explicit = P != Part::implicit_part;
+  constexpr bool with_implicit = P != Part::explicit_part;
   const auto& grid = fluid_grid<D>();
   const auto& order = grid.order();
   const double* sx = grid.positions();
   const std::size_t n = static_cast<std::size_t>(n_), cap = nb_capacity_;
   const bool penalty = opt_.boundary == SphBoundary::penalty;
   const bool variational = opt_.form == SphPressureForm::variational;
-  const bool muller = opt_.viscosity == SphViscosity::muller && opt_.mu > 0;
-  const bool artificial = opt_.viscosity == SphViscosity::artificial && opt_.alpha > 0;
+  const bool muller = with_implicit && opt_.viscosity == SphViscosity::muller && opt_.mu > 0;
+  const bool artificial =
+      with_implicit && opt_.viscosity == SphViscosity::artificial && opt_.alpha > 0;
   const double rho0 = opt_.rho0, mu = opt_.mu;
   const double av = opt_.alpha * c_ * hs_, eps2 = 0.01 * hs_ * hs_;
   const double d0 = wall_range(), k_wall = wall_strength();
@@ -322,7 +329,8 @@ void SphFluid::force_pass(const double* v, double* a) const {
     const double* vi = sv_.data() + D * k;
     const double rhoi = srho_[k], pi = sp_[k], pr2i = spr2_[k], inv_rhoi = sinv_rho_[k];
     std::array<double, D> acc;
-    for (int d = 0; d < D; ++d) acc[d] = opt_.gravity[static_cast<std::size_t>(d)];
+    for (int d = 0; d < D; ++d)
+      acc[d] = with_explicit ? opt_.gravity[static_cast<std::size_t>(d)] : 0.0;
     const Index* idx = nb_index_.data() + k * cap;
     const double* dist = nb_dist_.data() + k * cap;
     for (std::size_t q = 0; q < nb_count_[k]; ++q) {
@@ -335,8 +343,10 @@ void SphFluid::force_pass(const double* v, double* a) const {
       std::array<double, D> dx;
       for (int d = 0; d < D; ++d) dx[d] = xi[d] - xj[d];
       const double dwr = wg.dw_over_r_as<KG>(r);  // ∇W_ij = dwr · (x_i - x_j)
-      double coef =
-          variational ? m * (pr2i + spr2_[j]) : 0.5 * m * (pi + sp_[j]) * inv_rhoi * sinv_rho_[j];
+      double coef = 0.0;
+      if constexpr (with_explicit)
+        coef =
+            variational ? m * (pr2i + spr2_[j]) : 0.5 * m * (pi + sp_[j]) * inv_rhoi * sinv_rho_[j];
       if (artificial) {
         double vr = 0.0;
         for (int d = 0; d < D; ++d) vr += (vi[d] - vj[d]) * dx[d];
@@ -357,7 +367,9 @@ void SphFluid::force_pass(const double* v, double* a) const {
       for (int d = 0; d < D; ++d) dx[d] = xi[d] - bx_[D * b + static_cast<std::size_t>(d)];
       const double vb = bvol_[b];
       const double dwr = wg.dw_over_r_as<KG>(r);
-      double coef = bfac * rho0 * vb * pr2i;  // -f ρ0 V_b p_i/ρ_i² ∇W_ib, f = 2 or 1
+      double coef = 0.0;
+      if constexpr (with_explicit)
+        coef = bfac * rho0 * vb * pr2i;  // -f ρ0 V_b p_i/ρ_i² ∇W_ib, f = 2 or 1
       if (artificial) {
         double vr = 0.0;
         for (int d = 0; d < D; ++d) vr += vi[d] * dx[d];
@@ -369,7 +381,7 @@ void SphFluid::force_pass(const double* v, double* a) const {
         for (int d = 0; d < D; ++d) acc[d] -= cv * vi[d];
       }
     }
-    if (penalty) {
+    if (with_explicit && penalty) {
       for (const auto& wall : scene_.walls) {
         double sd = -wall.offset;
         for (int d = 0; d < D; ++d) sd += wall.normal[static_cast<std::size_t>(d)] * xi[d];
@@ -385,14 +397,95 @@ void SphFluid::force_pass(const double* v, double* a) const {
   }
 }
 
-void SphFluid::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a) const {
+template <SphFluid::Part P>
+void SphFluid::acceleration_impl(const double* x, const double* v, double* a) const {
   detail::with_dim<2, 3>(dim_, [&](auto dc) {
     constexpr int D = decltype(dc)::value;
     sph::with_kernel(opt_.density_kernel,
-                     [&](auto kd) { density_pass<D, decltype(kd)::value>(x.data()); });
+                     [&](auto kd) { density_pass<D, decltype(kd)::value>(x); });
     sph::with_kernel(opt_.gradient_kernel,
-                     [&](auto kg) { force_pass<D, decltype(kg)::value>(v.data(), a.data()); });
+                     [&](auto kg) { force_pass<D, decltype(kg)::value, P>(v, a); });
   });
+}
+
+void SphFluid::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a) const {
+  acceleration_impl<Part::all>(x.data(), v.data(), a.data());
+}
+
+void SphFluid::eval_acceleration_explicit_part(double, CVecRef x, CVecRef v, VecRef a) const {
+  require_input(has_imex_split(), name_ + ": no split (parameter split=none)");
+  acceleration_impl<Part::explicit_part>(x.data(), v.data(), a.data());
+}
+
+void SphFluid::eval_acceleration_implicit_part(double, CVecRef x, CVecRef v, VecRef a) const {
+  require_input(has_imex_split(), name_ + ": no split (parameter split=none)");
+  acceleration_impl<Part::implicit_part>(x.data(), v.data(), a.data());
+}
+
+std::optional<SplitInfo> SphFluid::imex_split() const {
+  if (opt_.split == SphSplit::none) return std::nullopt;
+  std::string visc =
+      "viscosity (Mueller's mu or Monaghan's artificial alpha, whichever is selected) with its "
+      "boundary-particle terms (with x' = v)";
+  if (!viscous_) visc += "; none is selected here, so a_I = 0";
+  return SplitInfo{"viscosity", "pressure, boundary-particle pressure or penalty walls, gravity",
+                   visc};
+}
+
+// f_E = [0; a_E]: its Jacobian is nilpotent; the rate that limits an explicit a_E is the pressure
+// waves' oscillation ±iω under x' = v (eigenvalues of [[0, I], [∂a_E/∂x, 0]]), ω up to the
+// lattice's acoustic rate, and the penalty walls' ω where they are on.
+std::optional<SpectrumEstimate> SphFluid::explicit_part_spectrum(double, CVecRef) const {
+  if (opt_.split == SphSplit::none) return std::nullopt;
+  double rate = acoustic_rate_;
+  if (opt_.boundary == SphBoundary::penalty && !scene_.walls.empty())
+    rate = std::max(rate, penalty_frequency());
+  return SpectrumEstimate{rate, SpectrumEstimate::Ray::imaginary};
+}
+
+// The fastest pressure wave of the uniform lattice at rest (p0 = 0, lattice masses; derivation
+// in the header comment): ω² = f c² (T_g(k)·T_d(k)) / S², T(k) = Σ_j ∇W(X_j) sin(k·X_j) over
+// the lattice offsets X_j, S = Σ_j W_d(X_j), f = 1 (variational) or 1/2 (symmetric), maximised
+// over a grid of wave vectors k ∈ [0, π/Δx]^D with k_x >= k_y (>= k_z) (the lattice's and the
+// radial kernels' symmetry).
+double SphFluid::lattice_acoustic_rate() const {
+  const double dx = opt_.spacing;
+  const double h = std::max(wd_.support(), wg_.support());
+  const int r = static_cast<int>(std::ceil(h / dx)) + 1;
+  const int kz = dim_ == 3 ? r : 0;
+  struct Offset {
+    double x[3];
+    double gd, gg;  // dW/dr / r of the density and gradient kernels
+  };
+  std::vector<Offset> offs;
+  double sum_w = 0.0;
+  for (int i = -r; i <= r; ++i)
+    for (int j = -r; j <= r; ++j)
+      for (int k = -kz; k <= kz; ++k) {
+        const double len = dx * std::sqrt(double(i * i + j * j + k * k));
+        sum_w += wd_.w(len);
+        if (len == 0.0 || len >= h) continue;
+        offs.push_back({{dx * i, dx * j, dx * k}, wd_.dw(len) / len, wg_.dw(len) / len});
+      }
+  const int grid = dim_ == 2 ? 48 : 16;
+  const double kpi = 3.14159265358979323846 / dx;
+  double best = 0.0;
+  for (int a = 0; a <= grid; ++a)
+    for (int b = 0; b <= a; ++b)
+      for (int c = 0; c <= (dim_ == 3 ? b : 0); ++c) {
+        const double kv[3] = {kpi * a / grid, kpi * b / grid, kpi * c / grid};
+        double td[3] = {0, 0, 0}, tg[3] = {0, 0, 0};
+        for (const Offset& o : offs) {
+          const double s = std::sin(kv[0] * o.x[0] + kv[1] * o.x[1] + kv[2] * o.x[2]);
+          for (int d = 0; d < 3; ++d) {
+            td[d] += o.gd * o.x[d] * s;
+            tg[d] += o.gg * o.x[d] * s;
+          }
+        }
+        best = std::max(best, td[0] * tg[0] + td[1] * tg[1] + td[2] * tg[2]);
+      }
+  const double form = opt_.form == SphPressureForm::variational ? 1.0 : 0.5;
+  return c_ * std::sqrt(form * best) / sum_w;
 }
 
 void SphFluid::compute_densities(CVecRef x) const {
@@ -434,6 +527,23 @@ Vec SphFluid::linear_momentum(CVecRef y) const {
     for (int d = 0; d < dim_; ++d)
       p[d] += m_[static_cast<std::size_t>(i)] * y[dofs() + dim_ * i + d];
   return p;
+}
+
+Vec SphFluid::angular_momentum(CVecRef y) const {
+  Vec l = Vec::Zero(dim_ == 2 ? 1 : 3);
+  for (Index i = 0; i < n_; ++i) {
+    const double m = m_[static_cast<std::size_t>(i)];
+    const double* x = y.data() + dim_ * i;
+    const double* v = y.data() + dofs() + dim_ * i;
+    if (dim_ == 2) {
+      l[0] += m * (x[0] * v[1] - x[1] * v[0]);
+    } else {
+      l[0] += m * (x[1] * v[2] - x[2] * v[1]);
+      l[1] += m * (x[2] * v[0] - x[0] * v[2]);
+      l[2] += m * (x[0] * v[1] - x[1] * v[0]);
+    }
+  }
+  return l;
 }
 
 double SphFluid::energy(CVecRef y) const {
@@ -511,6 +621,27 @@ std::vector<Invariant> SphFluid::invariants() const {
     for (int d = 0; d < dim_; ++d)
       if (opt_.gravity[static_cast<std::size_t>(d)] == 0.0)
         out.push_back({names[d], [this, d](double, CVecRef y) { return linear_momentum(y)[d]; }});
+  }
+  // Angular momentum: central pair forces only (pressure, Monaghan's viscosity), no walls; in 2D
+  // no gravity, in 3D component c when g ∥ e_c (gravity's torque M x_cm × g has no component
+  // along g). Müller's pair force (v_j - v_i) is not central: not listed.
+  const bool central = !(opt_.viscosity == SphViscosity::muller && opt_.mu > 0);
+  if (free && central) {
+    const auto& g = opt_.gravity;
+    if (dim_ == 2 && g[0] == 0.0 && g[1] == 0.0) {
+      out.push_back(
+          {"angular_momentum", [this](double, CVecRef y) { return angular_momentum(y)[0]; }});
+    } else if (dim_ == 3) {
+      static const char* axis[] = {"angular_momentum_x", "angular_momentum_y",
+                                   "angular_momentum_z"};
+      for (int c = 0; c < 3; ++c) {
+        bool parallel = true;
+        for (int o = 0; o < 3; ++o)
+          if (o != c && g[static_cast<std::size_t>(o)] != 0.0) parallel = false;
+        if (parallel)
+          out.push_back({axis[c], [this, c](double, CVecRef y) { return angular_momentum(y)[c]; }});
+      }
+    }
   }
   return out;
 }

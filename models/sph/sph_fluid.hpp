@@ -53,6 +53,45 @@
 // The symmetric and variational pair terms and both viscosities are antisymmetric per pair, so
 // without gravity and boundaries total linear momentum is conserved; both viscosities dissipate
 // kinetic energy (each pair's term is -w|v_ij|² or -w (v_ij·r_ij)²/… with w >= 0).
+// Angular momentum L = Σ m x × v (2D: the scalar Σ m (x v_y - y v_x); angular_momentum()):
+// dL/dt = Σ_i m_i x_i × a_i, and a pair term m_i m_j c_ij r_ij with c_ij = c_ji (both pressure
+// forms, and Monaghan's Π_ij, which acts along ∇W_ij ∥ r_ij) adds m_i m_j c_ij (x_i - x_j) × r_ij
+// = 0: central pair forces conserve L. Müller's pair term ∝ (v_j - v_i) is not central: for a
+// rigid rotation v = ω e_z × x it gives the pair torque -ω c_ij |r_ij|² e_z with c_ij > 0, so it
+// brakes a rigid rotation (which has no viscous stress in a real fluid) and L is not conserved
+// (tested). Walls and gravity exert torques. invariants() therefore lists angular_momentum
+// (2D) or angular_momentum_x/y/z (3D, component c when g ∥ e_c or g = 0) exactly when there
+// are no boundary particles or penalty walls and no Müller viscosity (μ > 0), and in 2D no
+// gravity; of the scenes only sph_drop_2d (free, no gravity; `velocity=rotation` spins it).
+// Symplectic Euler and velocity Verlet conserve L exactly up to rounding for central forces:
+// each is a composition of kicks v += h a(x) (torque Σ m x × a = 0) and drifts x += h v
+// (adds h Σ m v × v = 0).
+//
+// Additive split (SphOptions::split, the scenes' `split` parameter; core/ode_system.hpp):
+//   none       no split (the default; the right-hand side is untouched, bit for bit);
+//   viscosity  a_I = the viscosity selected (Müller's or Monaghan's, with their boundary-particle
+//              terms); a_E = pressure, boundary-particle pressure or penalty walls, gravity.
+//              f_E = [0; a_E], f_I = [v; a_I]. Without a viscosity a_I = 0.
+// Both parts are the same force pass as a (a template parameter selects the terms; Part::all is
+// the unsplit code path), after the same density pass: allocation-free after the first call and
+// bitwise identical for any thread count; a_E + a_I = a up to rounding (the artificial
+// viscosity's term is added to the pressure coefficient of its pair in a, kept apart in the
+// parts). a_I depends on x (densities, kernel) and, for Müller, linearly on v; Monaghan's is
+// positively homogeneous in v but acts on approaching pairs only. No analytic Jacobian of either
+// part (has_implicit_part_jacobian() is false): the IMEX stages' Newton takes finite-difference
+// products of f_I — matrix-free GMRES with `jacobian=auto` above 200 unknowns, a dense
+// difference Jacobian below; ARKODE (arkode_imex) SPGMR above 100 unknowns.
+// explicit_part_spectrum(): the pressure waves oscillate (imaginary axis) at up to the lattice's
+// acoustic rate acoustic_rate() (the penalty walls' ω when larger). Linearising a_E about the
+// uniform lattice at rest (p0 = 0, lattice masses m = ρ0/S, S = Σ_j W_d(X_j)): a displacement
+// u_i = U e^{ik·X_i} changes the densities by δρ_i = i m T_d(k)·U e^{ik·X_i} and gives
+// a_i = -f (c²/ρ0²) m² T_g(k) (T_d(k)·U) e^{ik·X_i}, T(k) = Σ_j ∇W(X_j) sin(k·X_j) over the
+// lattice offsets, f = 1 (variational) or 1/2 (symmetric: its (p_i + p_j)/2 has half the
+// variational form's linear response); so ω(k)² = f c² T_g·T_d / S², maximised over a grid of k
+// in [0, π/Δx]^D at construction. For Wendland C2 with support 2.5 Δx: ω_max = 0.8686 c/Δx in
+// 2D, 0.9008 c/Δx in 3D (2.17 and 2.25 c/h; stiffness()'s c/h is the rougher scale). It omits
+// walls, free surfaces and the heavier equilibrium masses near them (the measured explicit
+// limits on sph_drop_2d are ~0.7 of what it predicts for rk4 and symplectic Euler).
 // Energy E = Σ ½ m|v|² + Σ m u(ρ_i) - Σ m g·x (+ the penalty potential), u(ρ) the EOS internal
 // energy: linear u = k[ln(ρ/ρ0) + ρ0/ρ - 1], Tait u = B/(γ-1)[ρ^(γ-1)/ρ0^γ + (γ-1)/ρ - γ/ρ0];
 // clamped EOS: u = 0 for ρ < ρ0 (then du/dρ = max(0, p)/ρ² still holds). du/dρ = p/ρ², so with
@@ -93,6 +132,7 @@ enum class SphEos { linear, tait };
 enum class SphPressureForm { symmetric, variational };
 enum class SphViscosity { none, muller, artificial };
 enum class SphBoundary { particles, penalty };
+enum class SphSplit { none, viscosity };
 
 struct SphOptions {
   double spacing = 0.01;   // Δx
@@ -117,6 +157,7 @@ struct SphOptions {
   bool equilibrium_masses = false;
   bool mirror_boundary_pressure = false;  // f = 2 in the boundary pressure force (see above)
   Index parallel_threshold = 512;         // particles; below this the passes run serially
+  SphSplit split = SphSplit::none;        // additive split (see the header comment)
 };
 
 // A wall plane n·x = offset; the fluid is on the side n·x > offset.
@@ -160,6 +201,11 @@ class SphFluid final : public MechanicalSystem {
   bool has_particles() const override { return true; }
   ParticleFrame particles(double t, CVecRef y) const override;
 
+  // Additive split (see the header comment). No analytic Jacobian of either part.
+  bool has_imex_split() const override { return opt_.split != SphSplit::none; }
+  std::optional<SplitInfo> imex_split() const override;
+  std::optional<SpectrumEstimate> explicit_part_spectrum(double t, CVecRef y) const override;
+
   // Data.
   int dim() const { return dim_; }
   Index fluid_particles() const { return n_; }
@@ -179,6 +225,9 @@ class SphFluid final : public MechanicalSystem {
   double energy(CVecRef y) const;
   double kinetic_energy(CVecRef y) const;
   Vec linear_momentum(CVecRef y) const;
+  Vec angular_momentum(CVecRef y) const;  // 2D: 1 component Σ m (x v_y - y v_x); 3D: Σ m x × v
+  // ω_max of the pressure waves on the uniform lattice at rest (see the header comment).
+  double acoustic_rate() const { return acoustic_rate_; }
   double max_density_error(CVecRef y) const;  // max_i |ρ_i/ρ0 - 1| (free surfaces included)
   double max_compression(CVecRef y) const;    // max_i (ρ_i/ρ0 - 1), the WCSPH accuracy measure
   // Penalty wall range d0 = Δx/2 and strength K = c²/(4 d0) (see the header comment).
@@ -193,12 +242,19 @@ class SphFluid final : public MechanicalSystem {
 
  protected:
   void eval_acceleration(double t, CVecRef x, CVecRef v, VecRef a) const override;
+  void eval_acceleration_explicit_part(double t, CVecRef x, CVecRef v, VecRef a) const override;
+  void eval_acceleration_implicit_part(double t, CVecRef x, CVecRef v, VecRef a) const override;
 
  private:
+  // Which terms a force pass sums: all of them, or one part of the split.
+  enum class Part { all, explicit_part, implicit_part };
   template <int D, sph::KernelType KD>
   void density_pass(const double* x) const;
-  template <int D, sph::KernelType KG>
+  template <int D, sph::KernelType KG, Part P>
   void force_pass(const double* v, double* a) const;
+  template <Part P>
+  void acceleration_impl(const double* x, const double* v, double* a) const;
+  double lattice_acoustic_rate() const;
   template <int D>
   const sph::NeighbourGrid<D>& fluid_grid() const;
   template <int D>
@@ -212,6 +268,7 @@ class SphFluid final : public MechanicalSystem {
   int dim_ = 2;
   Index n_ = 0;
   double mass_ = 0.0, c_ = 0.0, k_ = 0.0, tait_b_ = 0.0, hs_ = 0.0, nu_ = 0.0;
+  double acoustic_rate_ = 0.0;
   bool viscous_ = false, parallel_ = false;
   sph::Kernel wd_, wg_, wv_;  // density, gradient and viscosity-Laplacian kernels
   Vec y0_;
