@@ -49,15 +49,19 @@
 // methods' implicit stages use finite-difference Jacobians of f_I (dense, up to 200 unknowns) or
 // matrix-free Krylov products (above), ARKODE dense difference quotients or SPGMR likewise. On
 // the periodic grid L commutes with D and Dᵀ, so on divergence-free fields f_I = νLu exactly
-// (Taylor–Green's field is an eigenfunction of L: f_I = νλ_h u).
-// explicit_part_spectrum(): the Jacobian of the central advection, -(U·∇)δu - (δu·∇)U at the
-// state U, is skew-symmetric to leading order (the transport part with divergence-free U), so its
-// eigenvalues lie near the imaginary axis; the estimate is the Gershgorin bound of its rows,
-//   max over faces of (|u| + |ū_⊥|)/Δx + |∂_x u_c| + |∂_y u_c|
-// (|u|, |ū_⊥| the face's own and averaged cross velocity, ∂ u_c its component's central
-// differences), on the imaginary ray; P (an orthogonal projection) adds nothing to the spectrum's
-// extent in practice (tests/models/test_fluid_split.cpp checks it against dense eigenvalues). For
-// Taylor–Green (|u| + |v| ≤ 1) this is about 1/Δx + 4π, for the cavity about 2U/Δx near the lid.
+// (Taylor–Green's field is an eigenfunction of L, f_I = νλ_h u with λ_h = -(8/Δx²) sin²(πΔx), and
+// its central advection term is a discrete gradient, so f_E = 0 on it: the semi-discrete solution
+// is e^{νλ_h t} u0, derived in tests/models/test_fluid_split.cpp).
+// explicit_part_spectrum(): the Jacobian of the central advection at the state U,
+// -(U·∇)δu - (δu·∇)U, is skew-symmetric to leading order: its transport part has the local
+// symbol -i(u sin θ_x + v̄ sin θ_y)/Δx at a u face (u its own velocity, v̄ the average of the four
+// v around it; likewise at a v face), so its eigenvalues lie near the imaginary axis with modulus
+// up to about (|u| + |v̄|)/Δx. The estimate is the largest (|u| + |v̄|)/Δx over the free faces,
+// on the imaginary ray: at most 2U/Δx (U the largest velocity component), about 1/Δx for the
+// Taylor–Green field (|u| + |v| = |sin(2πx ± 2πy)| ≤ 1). The lower-order -(δu·∇)U moves the
+// eigenvalues off the axis by O(|∇U|). Against the dense eigenvalues of ∂f_E/∂y (P included) on
+// 12 × 12 grids it lies 1.3-1.7 times above the largest modulus, tending to 1 on finer grids for a
+// smooth field (tests/models/test_fluid_split.cpp).
 //
 // GridFluid operators (for stable_fluids, Stam 1999):
 //   advect — departure point x - h u(x) traced by the midpoint rule (velocity sampled at x and at
