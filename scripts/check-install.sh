@@ -5,7 +5,9 @@
 #     built (Release) and run in a temporary working folder; both CSVs must exist with data rows
 #     (and both PNGs when gnuplot is on PATH); then examples/user_method (a user's own system and
 #     own Integrator class, not registered, through convergence, stability, energy and
-#     work-precision), which checks its method's order and stability limit against theory;
+#     work-precision), which checks its method's order and stability limit against theory, and
+#     its system's additive split through explicit_part_view/implicit_part_view, an ars232 run
+#     and the additive order conditions (all from the public header);
 #  3. a tiny add_subdirectory consumer written on the fly (its own project, CMAKE_BUILD_TYPE
 #     Debug, an executable that creates a model by name and takes one rk4 step) is configured,
 #     and its CMakeCache must show STIFFBENCH_BUILD_TESTS, STIFFBENCH_BUILD_BENCH and
@@ -79,7 +81,9 @@ fi
 
 # --- 2b. examples/user_method: a user's own system and own integrator (not registered by name)
 # through convergence, stability, energy and work-precision with the one-call functions; the
-# program checks ralston3's order (3) and stability limit (sqrt(3)/50) and exits 1 otherwise.
+# program checks ralston3's order (3) and stability limit (sqrt(3)/50), and its system's additive
+# split (f_E + f_I = f through the part views, ars232's order 2 from h = 0.1, ars232's additive
+# order conditions), and exits 1 otherwise.
 example="$root/examples/user_method"
 echo "check-install: building examples/user_method with find_package(stiffbench)"
 cmake -S "$example" -B "$tmp/method-build" -DCMAKE_BUILD_TYPE=Release \

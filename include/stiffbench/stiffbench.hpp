@@ -5,7 +5,13 @@
 // Stable (kept source-compatible within a minor version):
 //   core/types.hpp, core/params.hpp        Vec/Index, Params (typed: Params{{"rtol", 1e-8}}),
 //                                           ParamSpec (with Bounds), BadInput
-//   core/ode_system.hpp                     OdeSystem (y' = f(t, y)) and MechanicalSystem
+//   core/ode_system.hpp                     OdeSystem (y' = f(t, y)) and MechanicalSystem,
+//                                           with the optional additive split f = f_E + f_I
+//   core/split_views.hpp                    explicit_part_view / implicit_part_view: one part
+//                                           of a split as an OdeSystem of its own
+//   core/tableau.hpp, core/additive_conditions.hpp
+//                                           Butcher and additive (IMEX) tables; the additive
+//                                           Runge-Kutta order conditions
 //   core/integrator.hpp, core/solve_stats.hpp, core/driver.hpp
 //                                           the integrator face, counters, fixed-step and
 //                                           adaptive drivers
@@ -32,6 +38,7 @@
 // public but may change between versions.
 #pragma once
 
+#include "core/additive_conditions.hpp"
 #include "core/driver.hpp"
 #include "core/integrator.hpp"
 #include "core/ode_system.hpp"
@@ -40,6 +47,8 @@
 #include "core/registry_types.hpp"
 #include "core/run_control.hpp"
 #include "core/solve_stats.hpp"
+#include "core/split_views.hpp"
+#include "core/tableau.hpp"
 #include "core/types.hpp"
 #include "experiments/analyze.hpp"
 #include "experiments/audit.hpp"

@@ -66,6 +66,7 @@ Fluid2d::Fluid2d(const Fluid2dOptions& options) : opt_(options) {
   build_operators();
   rhs_div_.resize(static_cast<Index>(n_) * n_);
   psi_ = Vec::Zero(rhs_div_.size());
+  psi_e_ = psi_i_ = psi_;
   diff_rhs_.resize(dimension());
 }
 
@@ -212,7 +213,7 @@ void Fluid2d::solve_pressure(CVecRef div, Vec& psi) const {
   }
 }
 
-void Fluid2d::eval_rhs(double, CVecRef yv, VecRef f) const {
+void Fluid2d::advection_terms(CVecRef yv, VecRef f) const {
   const double* y = yv.data();
   const double inv2dx = 0.5 / dx_;
   // -(u·∇)u at the u faces, then the v faces.
@@ -242,11 +243,64 @@ void Fluid2d::eval_rhs(double, CVecRef yv, VecRef f) const {
           0.25 * (u_at(y, i, j - 1) + u_at(y, i + 1, j - 1) + u_at(y, i, j) + u_at(y, i + 1, j));
       f(k) = -(ubar * dvdx + y[k] * dvdy) - opt_.gravity;
     }
+}
+
+void Fluid2d::project_in_place(VecRef f, Vec& psi) const {
+  solve_pressure(div_ * f, psi);
+  f.noalias() -= div_t_ * psi;
+}
+
+void Fluid2d::eval_rhs(double, CVecRef yv, VecRef f) const {
+  advection_terms(yv, f);
   // + ν(L u + b), then the projection.
   f.noalias() += nu_ * (lap_ * yv);
   f += nu_ * lap_const_;
-  solve_pressure(div_ * f, psi_);
-  f.noalias() -= div_t_ * psi_;
+  project_in_place(f, psi_);
+}
+
+void Fluid2d::eval_rhs_explicit_part(double, CVecRef y, VecRef fe) const {
+  advection_terms(y, fe);
+  project_in_place(fe, psi_e_);
+}
+
+void Fluid2d::eval_rhs_implicit_part(double, CVecRef y, VecRef fi) const {
+  fi.noalias() = nu_ * (lap_ * y);
+  fi += nu_ * lap_const_;
+  project_in_place(fi, psi_i_);
+}
+
+std::optional<SplitInfo> Fluid2d::imex_split() const {
+  if (!has_imex_split()) return std::nullopt;
+  return SplitInfo{"diffusion",
+                   "advection and gravity P[-(u.grad)u + g] (central differences, projected)",
+                   "diffusion P[nu Laplace(u) + nu b] (5-point stencil with the walls' and lid's "
+                   "ghost values, projected)"};
+}
+
+std::optional<SpectrumEstimate> Fluid2d::explicit_part_spectrum(double, CVecRef yv) const {
+  if (!has_imex_split()) return std::nullopt;
+  // The central transport operator -(u ∂_x + v̄ ∂_y) at a u face (and -(ū ∂_x + v ∂_y) at a v
+  // face) has the local symbol -i (u sin θ_x + v̄ sin θ_y)/Δx, of modulus at most (|u| + |v̄|)/Δx;
+  // its largest value over the faces (see the header comment).
+  const double* y = yv.data();
+  double speed = 0.0;
+  for (int j = 0; j < n_; ++j)
+    for (int i = 0; i < nux_; ++i) {
+      const Index k = u_index(i, j);
+      if (free_(k) == 0) continue;
+      const double vbar =
+          0.25 * (v_at(y, i - 1, j) + v_at(y, i, j) + v_at(y, i - 1, j + 1) + v_at(y, i, j + 1));
+      speed = std::max(speed, std::abs(y[k]) + std::abs(vbar));
+    }
+  for (int j = 0; j < nvy_; ++j)
+    for (int i = 0; i < n_; ++i) {
+      const Index k = v_index(i, j);
+      if (free_(k) == 0) continue;
+      const double ubar =
+          0.25 * (u_at(y, i, j - 1) + u_at(y, i + 1, j - 1) + u_at(y, i, j) + u_at(y, i + 1, j));
+      speed = std::max(speed, std::abs(ubar) + std::abs(y[k]));
+    }
+  return SpectrumEstimate{speed / dx_, SpectrumEstimate::Ray::imaginary};
 }
 
 double Fluid2d::kinetic_energy(CVecRef y) const { return 0.5 * y.squaredNorm() * dx_ * dx_; }
@@ -436,8 +490,7 @@ int Fluid2d::diffuse(double h, CVecRef in, VecRef out) const {
 }
 
 int Fluid2d::project_divergence_free(VecRef y) const {
-  solve_pressure(div_ * y, psi_);
-  y.noalias() -= div_t_ * psi_;
+  project_in_place(y, psi_);
   return 1;
 }
 

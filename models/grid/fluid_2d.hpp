@@ -40,6 +40,29 @@
 // advection operator's), a rough scale. No analytic Jacobian (P makes it dense): implicit
 // methods use finite differences or matrix-free Krylov products.
 //
+// Additive split (parameter split=diffusion; default none, no split and f bitwise unchanged):
+//   f_E = P[-(u·∇)u + g]   advection and gravity (explicit),
+//   f_I = P[νL u + νb]     diffusion with the lid's boundary term (implicit).
+// The projection stays as it is, applied to each part: P is linear, so f_E + f_I = f up to the
+// rounding of the two projections (ΣDF = 0 holds for each part alone, so the pinned Poisson
+// equation is consistent for both). No analytic J_I = νPL (P makes it dense, like J): the IMEX
+// methods' implicit stages use finite-difference Jacobians of f_I (dense, up to 200 unknowns) or
+// matrix-free Krylov products (above), ARKODE dense difference quotients or SPGMR likewise. On
+// the periodic grid L commutes with D and Dᵀ, so on divergence-free fields f_I = νLu exactly
+// (Taylor–Green's field is an eigenfunction of L, f_I = νλ_h u with λ_h = -(8/Δx²) sin²(πΔx), and
+// its central advection term is a discrete gradient, so f_E = 0 on it: the semi-discrete solution
+// is e^{νλ_h t} u0, derived in tests/models/test_fluid_split.cpp).
+// explicit_part_spectrum(): the Jacobian of the central advection at the state U,
+// -(U·∇)δu - (δu·∇)U, is skew-symmetric to leading order: its transport part has the local
+// symbol -i(u sin θ_x + v̄ sin θ_y)/Δx at a u face (u its own velocity, v̄ the average of the four
+// v around it; likewise at a v face), so its eigenvalues lie near the imaginary axis with modulus
+// up to about (|u| + |v̄|)/Δx. The estimate is the largest (|u| + |v̄|)/Δx over the free faces,
+// on the imaginary ray: at most 2U/Δx (U the largest velocity component), about 1/Δx for the
+// Taylor–Green field (|u| + |v| = |sin(2πx ± 2πy)| ≤ 1). The lower-order -(δu·∇)U moves the
+// eigenvalues off the axis by O(|∇U|). Against the dense eigenvalues of ∂f_E/∂y (P included) on
+// 12 × 12 grids it lies 1.3-1.7 times above the largest modulus, tending to 1 on finer grids for a
+// smooth field (tests/models/test_fluid_split.cpp).
+//
 // GridFluid operators (for stable_fluids, Stam 1999):
 //   advect — departure point x - h u(x) traced by the midpoint rule (velocity sampled at x and at
 //     x - ½h u(x)), clamped into the box; the transported component interpolated there
@@ -71,6 +94,7 @@ struct Fluid2dOptions {
   double gravity = 0;  // along -y
   enum class Solver { cholesky, cg } solver = Solver::cholesky;
   enum class Advection { linear, cubic } advection = Advection::linear;
+  enum class Split { none, diffusion } split = Split::none;
 };
 
 class Fluid2d final : public OdeSystem, public GridFluid {
@@ -92,6 +116,11 @@ class Fluid2d final : public OdeSystem, public GridFluid {
   // cavity: "centreline" (columns y, u: centreline_u).
   std::vector<Profile> profiles(double t, CVecRef y) const override;
   const GridFluid* as_grid_fluid() const override { return this; }
+
+  // Additive split (split=diffusion; see the header comment).
+  bool has_imex_split() const override { return opt_.split == Fluid2dOptions::Split::diffusion; }
+  std::optional<SplitInfo> imex_split() const override;
+  std::optional<SpectrumEstimate> explicit_part_spectrum(double t, CVecRef y) const override;
 
   // GridFluid (see the header comment).
   void add_body_force(double h, VecRef y) const override;
@@ -124,8 +153,14 @@ class Fluid2d final : public OdeSystem, public GridFluid {
 
  protected:
   void eval_rhs(double t, CVecRef y, VecRef dydt) const override;
+  void eval_rhs_explicit_part(double t, CVecRef y, VecRef fe) const override;
+  void eval_rhs_implicit_part(double t, CVecRef y, VecRef fi) const override;
 
  private:
+  // -(u·∇)u - g on the free faces, 0 on the fixed ones (the unprojected advection and gravity).
+  void advection_terms(CVecRef y, VecRef f) const;
+  // f -= Dᵀψ with DDᵀψ = Df (the projection of f in place); psi the warm start and result.
+  void project_in_place(VecRef f, Vec& psi) const;
   // A velocity value at integer face indices, any (i, j): the stored entry k (< 0: none) times
   // s, plus c (ghosts across walls, periodic wrap; see the header comment).
   struct Ref {
@@ -159,6 +194,9 @@ class Fluid2d final : public OdeSystem, public GridFluid {
   mutable Eigen::ConjugateGradient<SparseMat, Eigen::Lower | Eigen::Upper> cg_;
   // Scratch of one evaluation (allocated once).
   mutable Vec rhs_div_, psi_;
+  // The projections' ψ of the split's parts (kept apart from psi_, which pressure() reads and the
+  // full f warm-starts CG with).
+  mutable Vec psi_e_, psi_i_;
   // Implicit diffusion matrix I - hνL, factorised for step last_h_.
   mutable Eigen::SimplicialLDLT<SparseMat> diff_chol_;
   mutable double last_h_ = -1;

@@ -52,7 +52,8 @@ void add_fluid(ModelRegistry& reg) {
   reg.add({{"fluid_2d",
             "incompressible Navier-Stokes on a MAC grid, u' = P[-(u.grad)u + nu Laplace(u) + g] "
             "(pressure projection); scenes taylor_green (periodic) and cavity (lid-driven); "
-            "observables kinetic_energy, max_divergence",
+            "observables kinetic_energy, max_divergence; split=diffusion: advection explicit, "
+            "diffusion implicit",
             false, false,
             "Taylor-Green: kinetic energy decays as exp(-16 pi^2 t/Re) (Taylor & Green 1937); "
             "cavity: Ghia, Ghia & Shin 1982 centreline profiles"},
@@ -77,7 +78,14 @@ void add_fluid(ModelRegistry& reg) {
              "linear",
              "interpolation of the semi-Lagrangian advection (stable_fluids only): linear "
              "(Stam 1999) or cubic (Catmull-Rom)",
-             {"linear", "cubic"}}},
+             {"linear", "cubic"}},
+            {"split",
+             P::text,
+             "none",
+             "additive split f = f_E + f_I: none (f is not divided) or diffusion (f_E = "
+             "P[-(u.grad)u + g] explicit, f_I = P[nu Laplace(u) + nu b] implicit, no analytic "
+             "J_I)",
+             {"none", "diffusion"}}},
            [](const Params& p) {
              Fluid2dOptions o;
              o.scene = p.text("scene") == "cavity" ? Fluid2dOptions::Scene::cavity
@@ -90,6 +98,8 @@ void add_fluid(ModelRegistry& reg) {
                                                  : Fluid2dOptions::Solver::cholesky;
              o.advection = p.text("advection") == "cubic" ? Fluid2dOptions::Advection::cubic
                                                           : Fluid2dOptions::Advection::linear;
+             o.split = p.text("split") == "diffusion" ? Fluid2dOptions::Split::diffusion
+                                                      : Fluid2dOptions::Split::none;
              return std::make_unique<Fluid2d>(o);
            }});
 }

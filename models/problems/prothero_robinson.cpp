@@ -38,6 +38,10 @@ void ProtheroRobinson::eval_jacobian(double, CVecRef, SparseMat& jac) const {
   jac.insert(0, 0) = lambda_;
 }
 
+std::optional<SplitInfo> ProtheroRobinson::imex_split() const {
+  return SplitInfo{"stiff", "φ'(t) (independent of y)", "λ(y - φ(t)) (the stiff term)"};
+}
+
 void ProtheroRobinson::exact(double t, VecRef y) const {
   y[0] = phi(t) + offset_ * std::exp(lambda_ * t);
 }

@@ -5,6 +5,9 @@
 // φ = sin t, cos t or e^t), y0_offset. Jacobian λ; spectral radius |λ|. Explicit methods are
 // stable only for h|λ| below their real-axis limit (2 for Euler), while L-stable implicit
 // methods track φ for any h; the error of non-stiffly-accurate methods shows order reduction.
+// Additive split (the only one, named stiff; no parameter): f_I = λ(y - φ(t)) (the stiff part,
+// implicit), f_E = φ'(t) (explicit, independent of y). J_I = λ (= J); ∂f_E/∂y = 0, so
+// explicit_part_spectrum() is exactly 0 (an explicit treatment of f_E limits no step).
 #pragma once
 
 #include <string>
@@ -28,6 +31,11 @@ class ProtheroRobinson final : public OdeSystem {
   std::optional<double> stiffness(double, CVecRef) const override { return std::abs(lambda_); }
   // IMEX split: f_I = λ(y - φ(t)) (stiff), f_E = φ'(t) (independent of y, so J_I = J = λ).
   bool has_imex_split() const override { return true; }
+  std::optional<SplitInfo> imex_split() const override;
+  bool has_implicit_part_jacobian() const override { return true; }
+  std::optional<SpectrumEstimate> explicit_part_spectrum(double, CVecRef) const override {
+    return SpectrumEstimate{0.0, SpectrumEstimate::Ray::negative_real};
+  }
 
   double phi(double t) const;
   double phi_dot(double t) const;
@@ -38,6 +46,9 @@ class ProtheroRobinson final : public OdeSystem {
   void eval_rhs_explicit_part(double t, CVecRef, VecRef fe) const override { fe[0] = phi_dot(t); }
   void eval_rhs_implicit_part(double t, CVecRef y, VecRef fi) const override {
     fi[0] = lambda_ * (y[0] - phi(t));
+  }
+  void eval_implicit_part_jacobian(double t, CVecRef y, SparseMat& jac) const override {
+    eval_jacobian(t, y, jac);  // ∂f_I/∂y = λ = ∂f/∂y
   }
 
  private:
