@@ -469,8 +469,9 @@ std::vector<BudgetFamily> equal_total_families(const BudgetResult& r) {
 namespace {
 
 std::string config_name(const BudgetRow& row) {
-  return std::to_string(row.substeps) +
-         (row.iterations ? "×" + std::to_string(*row.iterations) : " substeps");
+  return std::to_string(row.substeps) + (row.iterations ? "×" + std::to_string(*row.iterations)
+                                         : row.substeps == 1 ? " substep"
+                                                             : " substeps");
 }
 
 std::string ms_text(const BudgetRow& row) {
@@ -581,6 +582,13 @@ void write_budget_outputs(const std::filesystem::path& dir, const BudgetSpec& sp
   else
     md << "The model has neither springs nor constraints: no stretch or constraint error (the "
           "columns are empty and no plot is drawn). ";
+  for (const auto& row : r.rows)
+    if (row.angular_drift) {
+      md << "L drift: the largest |L_c(end) - L_c(0)| over the model's angular momentum "
+            "components, relative to |L_c(0)| unless that is <= "
+         << format_short(kZeroInvariant, 1) << " (then absolute). ";
+      break;
+    }
   md << "energy rel: (E_N - E_0)/max(|E_0|, the largest kinetic energy over the frames). "
         "fits: ok and median ms/frame <= the frame time.\n\n"
      << budget_markdown_table(r).to_markdown() << "\n"
