@@ -273,7 +273,8 @@ void measure_errors(const BudgetContext& c, const BudgetPoint& p, BudgetRow& row
   row.strain_max = row.strain_rms = row.strain_peak = kNaN;
   row.constraint = row.constraint_peak = kNaN;
   row.energy_rel = kNaN;
-  if (const SpringNetworkView* net = sys.spring_network()) {
+  const SpringNetworkView* net = sys.spring_network();
+  if (net && spring_strain(*net, f.front()).springs > 0) {
     row.strain_peak = 0;
     for (const Vec& y : f) row.strain_peak = std::max(row.strain_peak, spring_strain(*net, y).max);
     const StrainStats last = spring_strain(*net, f.back());
@@ -351,7 +352,10 @@ BudgetResult run_budget(const BudgetSpec& spec, std::ostream* progress) {
   res.frame = spec.frame;
   res.frame_count = spec.frame_count;
   const Vec y0 = sys.initial_state();
-  if (const SpringNetworkView* net = sys.spring_network()) {
+  // A network whose springs all have k = 0 or L = 0 (the constrained pendulum chain's view has
+  // none) is measured by its constraints.
+  const SpringNetworkView* net = sys.spring_network();
+  if (net && spring_strain(*net, y0).springs > 0) {
     res.error_measure = "strain_max";
     res.initial_strain_max = spring_strain(*net, y0).max;
   } else if (sys.has_constraints()) {
@@ -572,7 +576,8 @@ void write_budget_outputs(const std::filesystem::path& dir, const BudgetSpec& sp
      << spec.timing_repeats << " runs per configuration in rounds shuffled with seed " << spec.seed
      << ". ";
   if (r.error_measure == "strain_max")
-    md << "Strain: |l - L|/L over every spring with k > 0 (structural, shear and bend), largest "
+    md << "Strain: |l - L|/L over every spring with k > 0 and L > 0 (the cloth: structural, shear "
+          "and bend), largest "
           "and RMS at the last frame, peak: the largest over the frames; the initial state's "
           "largest strain is "
        << format_short(r.initial_strain_max) << ". ";
