@@ -124,7 +124,7 @@ struct BudgetPoint {
   std::unique_ptr<Integrator> integ;
   std::vector<double> ms;  // ms per frame, one per timed run
   RunResult first;
-  std::vector<Vec> frames;  // the first run's states at t0 and after every frame
+  BudgetRow measured;  // the errors of the first run (measure_errors)
   bool stopped = false;
   std::string mismatch;
 };
@@ -194,11 +194,18 @@ std::string point_label(const BudgetContext& c, const BudgetPoint& p) {
   return s;
 }
 
-// The first run: its states are kept; reported as run `done` of `total`.
-void first_run(const BudgetContext& c, BudgetPoint& p, std::size_t done, std::size_t total) {
-  const double ms = run_point(c, p, p.frames, p.first);
+void measure_errors(const BudgetContext& c, const std::vector<Vec>& f, BudgetRow& row);
+
+// The first run: its errors are measured from its frames (`frames`: a buffer every run of the
+// study reuses, so one set of frames is held at a time); reported as run `done` of `total`.
+void first_run(const BudgetContext& c, BudgetPoint& p, std::vector<Vec>& frames, std::size_t done,
+               std::size_t total) {
+  const double ms = run_point(c, p, frames, p.first);
   p.stopped = std::isnan(ms);  // a run that did not end ok is not repeated
-  if (!p.stopped) p.ms.push_back(ms);
+  if (!p.stopped) {
+    p.ms.push_back(ms);
+    measure_errors(c, frames, p.measured);
+  }
   if (!c.progress) return;
   *c.progress << "[" << done << "/" << total << "] " << point_label(c, p)
               << " h=" << format_short(c.spec.frame / static_cast<double>(p.substeps)) << ": "
@@ -208,10 +215,9 @@ void first_run(const BudgetContext& c, BudgetPoint& p, std::size_t done, std::si
 }
 
 // A repeat: its time, or a stop on a timeout or on a final state differing from run 1.
-void repeat_run(const BudgetContext& c, BudgetPoint& p) {
-  std::vector<Vec> scratch;
+void repeat_run(const BudgetContext& c, BudgetPoint& p, std::vector<Vec>& frames) {
   RunResult r;
-  const double ms = run_point(c, p, scratch, r);
+  const double ms = run_point(c, p, frames, r);
   if (r.stats.status == Status::timeout) {
     p.stopped = true;
     return;
@@ -238,6 +244,7 @@ bool repeats_more(const BudgetContext& c, const BudgetPoint& p) {
 // Rounds in an order shuffled with the seed (run_order), as work-precision runs its points.
 void run_rounds(const BudgetContext& c, std::vector<BudgetPoint>& points) {
   std::size_t done = 0;
+  std::vector<Vec> frames;
   for (int round = 1; round <= c.spec.timing_repeats; ++round) {
     std::size_t ran = 0;
     for (const std::size_t idx : run_order(points.size(), c.spec.seed, round)) {
@@ -245,9 +252,9 @@ void run_rounds(const BudgetContext& c, std::vector<BudgetPoint>& points) {
       if (round > 1 && !repeats_more(c, p)) continue;
       ++ran;
       if (round == 1)
-        first_run(c, p, ++done, points.size());
+        first_run(c, p, frames, ++done, points.size());
       else
-        repeat_run(c, p);
+        repeat_run(c, p, frames);
     }
     if (c.progress && round > 1 && ran > 0)
       *c.progress << "repeat round " << round << "/" << c.spec.timing_repeats << ": " << ran
@@ -265,10 +272,9 @@ double kinetic_energy(const MechanicalSystem& mech, const Vec& masses, CVecRef y
   return e;
 }
 
-// The errors of a point's first run, from its frames.
-void measure_errors(const BudgetContext& c, const BudgetPoint& p, BudgetRow& row) {
+// The errors of a run from its states at t0 and after every frame.
+void measure_errors(const BudgetContext& c, const std::vector<Vec>& f, BudgetRow& row) {
   const OdeSystem& sys = c.sys;
-  const std::vector<Vec>& f = p.frames;
   const double t_end = sys.initial_time() + c.spec.frame * static_cast<double>(c.spec.frame_count);
   row.strain_max = row.strain_rms = row.strain_peak = kNaN;
   row.constraint = row.constraint_peak = kNaN;
@@ -305,7 +311,7 @@ void measure_errors(const BudgetContext& c, const BudgetPoint& p, BudgetRow& row
 
 // The row of point `idx`: timing spread over its runs, status, errors, whether it fits.
 BudgetRow budget_row(const BudgetContext& c, const BudgetPoint& p, std::size_t idx) {
-  BudgetRow row;
+  BudgetRow row = p.measured;
   row.integrator = c.spec.integrators[p.method];
   row.substeps = p.substeps;
   row.iterations = p.iterations;
@@ -322,7 +328,6 @@ BudgetRow budget_row(const BudgetContext& c, const BudgetPoint& p, std::size_t i
     row.ms = {kNaN, kNaN, kNaN, kNaN, 0};
     row.ms_max = kNaN;
   }
-  if (row.stats.status == Status::ok) measure_errors(c, p, row);
   if (row.stats.status == Status::ok && row.strain_peak > c.spec.max_strain) {
     row.stats.status = Status::unstable;
     row.stats.message = "strain " + format_short(row.strain_peak) + " exceeds --max-strain " +
