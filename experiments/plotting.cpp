@@ -1,6 +1,7 @@
 #include "experiments/plotting.hpp"
 
 #include "experiments/analyze.hpp"
+#include "experiments/budget.hpp"
 #include "experiments/energy.hpp"
 #include "experiments/region.hpp"
 #include "experiments/stability.hpp"
@@ -218,6 +219,7 @@ const std::map<std::string, std::pair<std::string, Replotter>>& replotters() {
       {"energy.csv", {"Energy drift", plot_energy}},
       {"region.csv", {"Stability regions", plot_region}},
       {"analyze_dispersion.csv", {"Dissipation and dispersion", plot_analyze}},
+      {"budget.csv", {"Frame budget", plot_budget}},
   };
   return table;
 }

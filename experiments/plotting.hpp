@@ -64,9 +64,9 @@ bool plot_work_precision(const std::filesystem::path& csv, const std::string& ti
 
 // `stiffbench plot DIR`: redraws every plot of an output folder (searched recursively) from
 // its CSV files: convergence.csv, local_error.csv, work_precision.csv, energy.csv,
-// stability.csv, region.csv, analyze_dispersion.csv (→ analyze.png). Titles name the model from the
-// NAME.json beside each CSV. Returns the number of plots drawn; BadInput when DIR is not a
-// directory or holds none of these files.
+// stability.csv, region.csv, analyze_dispersion.csv (→ analyze.png), budget.csv. Titles name the
+// model from the NAME.json beside each CSV. Returns the number of plots drawn; BadInput when DIR is
+// not a directory or holds none of these files.
 int replot_directory(const std::filesystem::path& dir, const PlotOptions& opt, std::ostream& out,
                      std::ostream& err);
 

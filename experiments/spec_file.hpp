@@ -54,9 +54,9 @@ struct SpecFile {
 // and the type of each of its keys.
 struct SpecKindSchema {
   bool takes_model = true;
-  bool model_required = true;
   bool integrators_required = true;
   std::map<std::string, SpecScalar::Type> keys;
+  bool model_required = true;  // false: `model` may be left out (fidelity)
 };
 // The kinds a reader knows: the registered studies (spec_schema(), from each study's option
 // declarations; experiments/spec_schema.cpp), or a schema of a program's own (the fuzz targets

@@ -21,6 +21,7 @@ StudyKind energy_study_kind();
 StudyKind audit_study_kind();
 StudyKind analyze_study_kind();
 StudyKind fidelity_study_kind();
+StudyKind budget_study_kind();
 
 namespace {
 
@@ -29,7 +30,7 @@ std::vector<StudyKind>& mutable_study_kinds() {
                                          work_precision_study_kind(), stability_study_kind(),
                                          region_study_kind(),         energy_study_kind(),
                                          audit_study_kind(),          analyze_study_kind(),
-                                         fidelity_study_kind()};
+                                         fidelity_study_kind(),       budget_study_kind()};
   return kinds;
 }
 

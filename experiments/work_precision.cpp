@@ -510,6 +510,13 @@ std::string WorkPrecisionJob::report_markdown(const std::string& note) const {
 
 }  // namespace
 
+ParamSpec timing_repeats_option(const std::string& default_value) {
+  return {"repeats", ParamType::integer, default_value,
+          "most runs per setting (a first run of 1 s or more runs once; repeats stop once a "
+          "setting's runs total 2 s); the time is their median, with a bootstrap 95% interval",
+          Bounds::at_least(1)};
+}
+
 StudyKind work_precision_study_kind() {
   using P = ParamType;
   StudyKind k;
@@ -524,10 +531,7 @@ StudyKind work_precision_study_kind() {
        Bounds::at_least(2)},
       {"rtol_max", P::real, "1e-05", "loosest relative tolerance (< 1)", Bounds::positive()},
       {"atol_factor", P::real, "0.001", "atol = atol_factor * rtol", Bounds::non_negative()},
-      {"repeats", P::integer, "5",
-       "most runs per setting (a first run of 1 s or more runs once; repeats stop once a "
-       "setting's runs total 2 s); wall_s is their median, with a bootstrap 95% interval",
-       Bounds::at_least(1)},
+      timing_repeats_option("5"),
       {"seed", P::integer, "1", "seed of the shuffled run order and of the bootstrap",
        Bounds::non_negative()}};
   k.options.insert(k.options.end(), own.begin(), own.end());

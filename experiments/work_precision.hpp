@@ -85,6 +85,10 @@ struct TimingSpread {
 TimingSpread timing_spread(const std::vector<double>& samples, std::uint64_t seed,
                            std::uint64_t stream, int resamples = kBootstrapResamples);
 
+// The option of the studies timed this way (work-precision, budget): the most runs per
+// setting, declared once.
+ParamSpec timing_repeats_option(const std::string& default_value);
+
 struct WorkPrecisionRow {
   std::string model, integrator, setting;
   double error = 0, mescd = 0;

@@ -1,0 +1,277 @@
+// `stiffbench budget` (issue 27): the grid of configurations, the strain measure against an
+// independent computation, the equal-total families of XPBD (Macklin et al. 2019), the best
+// configuration at the frame budget, the output files and bad input. Small cloths, few frames;
+// no assertion depends on how long anything took.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/driver.hpp"
+#include "core/ode_system.hpp"
+#include "experiments/budget.hpp"
+#include "experiments/catalog.hpp"
+#include "experiments/study.hpp"
+
+namespace stiffbench {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kFrame = 1.0 / 60.0;
+
+BudgetSpec small_cloth(std::vector<std::string> integrators) {
+  BudgetSpec s;
+  s.model = "cloth";
+  s.params = Params{{"n", 8}, {"perturbation", 0.0}};
+  s.integrators = std::move(integrators);
+  s.frame = kFrame;
+  s.frame_count = 3;
+  s.substeps_list = {1, 2, 4};
+  s.iterations_list = {1, 3};
+  s.timing_repeats = 1;
+  return s;
+}
+
+// The grid: every method at every substeps value, the methods with an `iterations` parameter
+// (xpbd) also at every iterations value; h = frame/substeps, total = substeps × iterations.
+TEST(Budget, OneRowPerConfigurationWithItsStepAndTotal) {
+  const BudgetResult r = run_budget(small_cloth({"xpbd", "backward_euler"}), nullptr);
+  ASSERT_EQ(r.rows.size(), 3u * 2u + 3u);
+  std::size_t xpbd = 0, be = 0;
+  for (const auto& row : r.rows) {
+    EXPECT_NEAR(row.h, kFrame / static_cast<double>(row.substeps), 1e-15) << row.integrator;
+    EXPECT_EQ(row.stats.status, Status::ok) << row.stats.message;
+    // The driver took substeps steps per frame.
+    EXPECT_EQ(row.stats.steps, row.substeps * 3);
+    if (row.integrator == "xpbd") {
+      ++xpbd;
+      ASSERT_TRUE(row.iterations.has_value());
+      EXPECT_EQ(*row.total_iterations(), row.substeps * *row.iterations);
+    } else {
+      ++be;
+      EXPECT_FALSE(row.iterations.has_value());
+      EXPECT_FALSE(row.total_iterations().has_value());
+    }
+  }
+  EXPECT_EQ(xpbd, 6u);
+  EXPECT_EQ(be, 3u);
+  const Table t = budget_table(r);
+  EXPECT_EQ(t.rows.size(), r.rows.size());
+  const auto col = static_cast<std::size_t>(
+      std::find(t.columns.begin(), t.columns.end(), "total_iterations") - t.columns.begin());
+  ASSERT_LT(col, t.columns.size());
+  EXPECT_EQ(t.rows.front()[col], std::to_string(*r.rows.front().total_iterations()));
+  EXPECT_EQ(t.rows.back()[col], "");  // backward_euler has no iterations
+}
+
+// The cloth without perturbation starts at its rest lengths (prestretch 1): every spring's
+// |l - L|/L is round-off. The default perturbation (0.003 per coordinate, spacing 0.1) moves
+// points off the grid, so that cloth does not start at rest.
+TEST(Budget, RestStateHasZeroStrain) {
+  const auto at_rest = model_registry().create("cloth", Params{{"n", 8}, {"perturbation", 0.0}});
+  const StrainStats s = spring_strain(*at_rest->spring_network(), at_rest->initial_state());
+  EXPECT_GT(s.springs, 0);
+  EXPECT_LT(s.max, 1e-14);
+  EXPECT_LT(s.rms, 1e-14);
+  const auto perturbed = model_registry().create("cloth", Params{{"n", 8}});
+  EXPECT_GT(spring_strain(*perturbed->spring_network(), perturbed->initial_state()).max, 1e-3);
+}
+
+// The strain reported equals an independent computation: the same configuration run directly
+// through the driver (xpbd with substeps = 1 and 3 iterations, h = frame/2 over 3 frames), and
+// |l - L|/L evaluated with Eigen's norm over the network's springs.
+TEST(Budget, StrainMatchesIndependentComputation) {
+  BudgetSpec spec = small_cloth({"xpbd"});
+  spec.substeps_list = {2};
+  spec.iterations_list = {3};
+  const BudgetResult r = run_budget(spec, nullptr);
+  ASSERT_EQ(r.rows.size(), 1u);
+  EXPECT_EQ(r.initial_strain_max,
+            spring_strain(*model_registry().create("cloth", spec.params)->spring_network(),
+                          model_registry().create("cloth", spec.params)->initial_state())
+                .max);
+
+  const auto sys = model_registry().create("cloth", spec.params);
+  auto integ = integrator_registry().create("xpbd", Params{{"substeps", 1}, {"iterations", 3}});
+  FixedStepOptions opt;
+  opt.t_end = 3 * kFrame;
+  opt.h = kFrame / 2;
+  const RunResult run = run_fixed_step(*sys, *integ, opt);
+  ASSERT_EQ(run.stats.status, Status::ok);
+  const SpringNetworkView& net = *sys->spring_network();
+  double max = 0, sum2 = 0;
+  long n = 0;
+  for (const auto& e : net.springs) {
+    if (e.k <= 0 || e.rest <= 0) continue;
+    const Eigen::Vector3d xi = run.y.segment<3>(3 * e.i), xj = run.y.segment<3>(3 * e.j);
+    const double strain = std::abs((xj - xi).norm() - e.rest) / e.rest;
+    max = std::max(max, strain);
+    sum2 += strain * strain;
+    ++n;
+  }
+  ASSERT_GT(n, 0);
+  EXPECT_GT(max, 1e-6);  // the cloth has moved under gravity
+  EXPECT_NEAR(r.rows[0].strain_max, max, 1e-12 * max);
+  EXPECT_NEAR(r.rows[0].strain_rms, std::sqrt(sum2 / static_cast<double>(n)), 1e-12 * max);
+  EXPECT_GE(r.rows[0].strain_peak, r.rows[0].strain_max);
+}
+
+// Small steps (Macklin, Storey, Lu, Terdiman, Chentanez, Jeschke, Müller, SCA 2019): at a fixed
+// total T = S·I of Gauss-Seidel sweeps per frame, a stiff cloth (α̃ = 1/(k h_s²) ≪ 1/m) is in
+// the under-converged regime, where each substep's prediction stretches the springs by about
+// g h_s² and each sweep removes a fraction 1 - ρ of the error: the error left is about
+// g h_s² ρ^I/(1 - ρ^I) ≈ g h²/(S² · I(1 - ρ)) = g h²/(S T (1 - ρ)), falling as 1/S. With k_struct
+// = 1e4, m = 0.01, h = 1/60: k h² = 2.8 ≫ m. So the family 1×4, 2×2, 4×1 has strictly falling
+// strain (measured 2.60e-2, 1.54e-2, 1.05e-2). The regime ends once the sweeps converge: on this
+// 8-row cloth a total of 8 (2×4: 7.05e-3, 4×2: 9.88e-3) no longer falls, so that family is not
+// asserted.
+TEST(Budget, XpbdEqualTotalFamilyFallsWithSubsteps) {
+  BudgetSpec spec = small_cloth({"xpbd"});
+  spec.params = Params{{"n", 8}, {"perturbation", 0.0}, {"k_struct", 1e4}, {"gravity", 9.81}};
+  spec.frame_count = 10;
+  spec.substeps_list = {1, 2, 4};
+  spec.iterations_list = {1, 2, 4};
+  const BudgetResult r = run_budget(spec, nullptr);
+  ASSERT_EQ(r.rows.size(), 9u);
+  const auto families = equal_total_families(r);
+  const auto four = std::find_if(families.begin(), families.end(),
+                                 [](const BudgetFamily& f) { return f.total == 4; });
+  ASSERT_NE(four, families.end());
+  ASSERT_EQ(four->rows.size(), 3u);
+  EXPECT_EQ(four->rows[0]->substeps, 1);
+  EXPECT_EQ(four->rows[2]->substeps, 4);
+  EXPECT_TRUE(four->all_ok);
+  EXPECT_TRUE(four->falls) << four->rows[0]->strain_max << " " << four->rows[1]->strain_max << " "
+                           << four->rows[2]->strain_max;
+  EXPECT_LT(four->rows[2]->strain_max, four->rows[0]->strain_max);
+
+  // The best configuration at the budget is the smallest strain among the rows that fit, and a
+  // row fits when it is ok and its median time is within the frame.
+  const BudgetRow* best = best_at_budget(r, "xpbd");
+  const BudgetRow* expect = nullptr;
+  for (const auto& row : r.rows) {
+    EXPECT_EQ(row.fits, row.stats.status == Status::ok && row.ms.median <= 1e3 * kFrame);
+    if (row.fits && (!expect || row.strain_max < expect->strain_max)) expect = &row;
+  }
+  EXPECT_EQ(best, expect);
+  if (best) {
+    EXPECT_TRUE(best->fits);
+  }
+
+  const fs::path dir =
+      fs::temp_directory_path() / ("stiffbench_budget_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  write_budget_outputs(dir, spec, r);
+  std::ifstream in(dir / "budget.md");
+  std::stringstream md;
+  md << in.rdbuf();
+  EXPECT_NE(md.str().find("xpbd, total 4: 1×4"), std::string::npos) << md.str();
+  EXPECT_NE(md.str().find("falls monotonically with substeps"), std::string::npos);
+  std::ifstream csv(dir / "budget.csv");
+  std::string line;
+  long lines = 0;
+  while (std::getline(csv, line)) ++lines;
+  EXPECT_EQ(lines, 1 + 9);
+  fs::remove_all(dir);
+}
+
+// A network without springs of k > 0 (the constrained pendulum chain: its links are distance
+// constraints) is measured by its constraint residual. The driver projects onto the
+// constraints after every step (M-SHAKE Newton, models/mass_spring/network.hpp), so the residual
+// at every frame is at round-off; the strain columns are empty.
+TEST(Budget, ConstrainedChainIsMeasuredByItsResidual) {
+  BudgetSpec spec = small_cloth({"symplectic_euler"});
+  spec.model = "pendulum_chain";
+  spec.params = Params{{"constrained", true}};
+  spec.substeps_list = {1, 4};
+  const BudgetResult r = run_budget(spec, nullptr);
+  EXPECT_EQ(r.error_measure, "constraint_residual");
+  ASSERT_EQ(r.rows.size(), 2u);
+  for (const auto& row : r.rows) {
+    ASSERT_EQ(row.stats.status, Status::ok) << row.stats.message;
+    EXPECT_TRUE(std::isnan(row.strain_max));
+    EXPECT_GE(row.constraint, 0.0);
+    EXPECT_LT(row.constraint_peak, 1e-9);
+    EXPECT_LE(row.constraint, row.constraint_peak);
+    EXPECT_EQ(row.error(), row.constraint);
+  }
+}
+
+// Through the study pipeline (run_study, as the command runs it): the files, the recorded spec
+// and one CSV row per configuration.
+TEST(Budget, PipelineWritesTheTablesAndTheSpec) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("stiffbench_budget_pipeline_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  StudyTarget target;
+  target.model = "cloth";
+  target.params = Params{{"n", 4}};
+  target.integrators = {"xpbd", "symplectic_euler"};
+  std::ostringstream out, err;
+  StudyContext ctx;
+  ctx.out = &out;
+  ctx.err = &err;
+  const auto job = run_study(
+      "budget", target,
+      Params{{"frame_count", 2}, {"substeps", "1,3"}, {"iterations", "2"}, {"repeats", 1}}, dir,
+      ctx);
+  for (const char* f : {"budget.csv", "budget.md", "budget.json"})
+    EXPECT_TRUE(fs::exists(dir / f)) << f;
+  EXPECT_EQ(budget_result(*job).rows.size(), 4u);  // (1, 3 substeps) × (xpbd 2 iterations, euler)
+  std::ifstream csv(dir / "budget.csv");
+  std::string line;
+  long lines = 0;
+  while (std::getline(csv, line)) ++lines;
+  EXPECT_EQ(lines, 1 + 4);
+  std::ifstream json(dir / "budget.json");
+  std::stringstream meta;
+  meta << json.rdbuf();
+  EXPECT_NE(meta.str().find("\"frame_count\": 2"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST(Budget, BadInputNamesWhatIsWrong) {
+  const auto message = [](BudgetSpec s) {
+    try {
+      run_budget(s, nullptr);
+    } catch (const BadInput& e) {
+      return std::string(e.what());
+    }
+    return std::string("no BadInput");
+  };
+  EXPECT_NE(message(small_cloth({"no_such_method"})).find("no_such_method"), std::string::npos);
+  BudgetSpec s = small_cloth({"xpbd"});
+  s.frame = 0;
+  EXPECT_NE(message(s).find("--frame"), std::string::npos);
+  s = small_cloth({"backward_euler"});
+  s.model = "robertson";
+  s.params = Params{};
+  EXPECT_NE(message(s).find("mechanical"), std::string::npos);
+  s = small_cloth({"xpbd"});
+  s.params.set("iterations", "3");
+  EXPECT_NE(message(s).find("--iterations"), std::string::npos);
+
+  // The lists of the command line.
+  const StudyTarget target{"cloth", Params{{"n", 8}}, {"xpbd"}, {}};
+  const auto how = [](const std::string& key) { return option_flag(key); };
+  for (const char* bad : {"1,x", "0", "2,2", ""}) {
+    std::string what = "no BadInput";
+    try {
+      make_study(study_kind("budget"), target, Params{{"substeps", bad}}, StudyContext{}, how);
+    } catch (const BadInput& e) {
+      what = e.what();
+    }
+    EXPECT_NE(what.find("--substeps"), std::string::npos) << bad << ": " << what;
+  }
+}
+
+}  // namespace
+}  // namespace stiffbench
