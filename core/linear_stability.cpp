@@ -300,7 +300,7 @@ LinearStability multistep_stability(const std::vector<double>& alpha,
                 "multistep_stability: alpha and beta need the same length k + 1 >= 2");
   LinearStability s;
   s.kind = "linear multistep";
-  s.levels = static_cast<int>(alpha.size()) - 1;
+  s.state_levels = static_cast<int>(alpha.size()) - 1;
   s.amplification = [alpha, beta](cd z) {
     const cd mu = multistep_multiplier(alpha, beta, z);
     return std::isfinite(mu.real()) ? std::abs(mu) : kInf;
@@ -722,7 +722,7 @@ OscillatorResponse oscillator_response(std::complex<double> multiplier, double n
   r.amplification = std::abs(multiplier);
   r.phase = std::abs(std::arg(multiplier));
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  r.damping_ratio = r.phase > 0.0 ? -std::log(r.amplification) / r.phase : nan;
+  r.damping_ratio = r.phase > 0.0 ? -std::log(r.amplification) / r.phase + 0.0 : nan;  // no -0
   r.period_error = r.phase > 0.0 ? nu / r.phase - 1.0 : kInf;
   r.frequency_error = r.phase / nu - 1.0;
   return r;

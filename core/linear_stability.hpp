@@ -76,7 +76,7 @@ struct LinearStability {
   std::function<std::complex<double>(std::complex<double>)> multiplier;
   std::function<std::complex<double>(double h2a, double hb)> mechanical_multiplier;
   // Levels of the state the step map acts on: 1 for one-step methods, k for a k-step method.
-  int levels = 1;
+  int state_levels = 1;
 };
 
 // What one step does to the undamped oscillator x'' = −ω²x at ν = hω, from the step map's

@@ -79,7 +79,7 @@ struct FidelitySpec {
   std::string model;  // empty: the oscillator curves only
   Params params;
   double nu_min = 1e-2, nu_max = 1e2;
-  int points = 41;
+  int curve_points = 41;
   bool measure = true;
   long steps = 400;       // per measured oscillator run
   std::vector<double> h;  // per-mode step sizes (empty: the default above)
