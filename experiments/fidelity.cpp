@@ -67,13 +67,16 @@ std::optional<std::pair<Vec, double>> fit_order(const std::vector<std::vector<do
 }  // namespace
 
 RecurrenceFit fit_step_multiplier(const std::vector<std::vector<double>>& series, int skip,
-                                  double tolerance, int order) {
+                                  double tolerance, int order, double floor) {
   RecurrenceFit fit;
   for (int p = order > 0 ? order : 2; p <= (order > 0 ? order : 6); p += 2) {
     const auto f = order > 0 ? fit_order(series, skip, p, false, kNoiseFloor)
-                             : fit_order(series, skip, p, true, 0.0);
+                             : fit_order(series, skip, p, true, floor);
     if (!f) {
-      fit.reason = "too few samples above underflow for a recurrence of order " + std::to_string(p);
+      fit.reason =
+          "too few samples above the noise floor (round-off or underflow) for a "
+          "recurrence of order " +
+          std::to_string(p);
       return fit;
     }
     fit.order = p;
@@ -158,47 +161,96 @@ void check_param_keys(const FidelitySpec& s) {
                                             key + "'");
 }
 
-// Samples (x_n, v_n) of every step of a fixed-step run of a 1-dof mechanical system.
-struct Samples {
-  std::vector<double> x, v;
-  std::string status;
+// A system with one undamped linear mode on which a method's curve is measured: the deviation
+// of dof `dof` from `rest` and its velocity are the samples; h = ν/ω.
+struct TestOscillator {
+  std::string label;
+  std::unique_ptr<OdeSystem> sys;
+  Index dof = 0;
+  double rest = 0.0, omega = 1.0;
+  // The deviation y(dof) − rest reaches its round-off (u·|rest|) long before it underflows:
+  // equations below this fraction of the start are dropped.
+  double floor = 0.0;
+  double tolerance = 1e-8;  // of the exact fit
 };
 
-Samples run_samples(const OdeSystem& sys, Integrator& integ, double h, long steps) {
+// harmonic_oscillator (m = k = 1, x0 = 1); for methods that need a spring network (xpbd,
+// projective dynamics), a spring_chain of one free mass between two pinned ends (k = m = 1,
+// springs along a line, so the force is linear in the displacement while the springs are not
+// inverted): ω = 2 sin(π/4) = √2.
+std::vector<TestOscillator> test_oscillators() {
+  std::vector<TestOscillator> out;
+  TestOscillator ho;
+  ho.label = "harmonic_oscillator";
+  ho.sys = model_registry().create("harmonic_oscillator", Params{}, nullptr);
+  out.push_back(std::move(ho));
+  TestOscillator chain;
+  chain.label = "spring_chain n=1";
+  chain.sys =
+      model_registry().create("spring_chain", Params{{"n", "1"}, {"amplitude", "0.1"}}, nullptr);
+  const auto rest =
+      model_registry().create("spring_chain", Params{{"n", "1"}, {"mode", "0"}}, nullptr);
+  chain.dof = 1;
+  chain.rest = rest->initial_state()(1);
+  chain.omega = std::sqrt(2.0);
+  chain.tolerance = 1e-7;
+  chain.floor = 1e-6;  // the coordinate 1's round-off 1e-16 is 1e-9 of a deviation of 1e-7
+  out.push_back(std::move(chain));
+  return out;
+}
+
+struct Samples {
+  std::vector<double> x, v;
+};
+
+Samples run_samples(const TestOscillator& osc, Integrator& integ, double h, long steps) {
   Samples s;
   FixedStepOptions fopt;
   fopt.h = h;
   fopt.t_end = h * static_cast<double>(steps);
   fopt.outputs = steps;
   fopt.blowup_factor = 1e100;
-  const RunResult res = run_fixed_step(sys, integ, fopt, [&](double, CVecRef y) {
-    s.x.push_back(y(0));
-    s.v.push_back(y(1));
+  const Index n = static_cast<Index>(osc.sys->dimension() / 2);
+  run_fixed_step(*osc.sys, integ, fopt, [&](double, CVecRef y) {
+    s.x.push_back(y(osc.dof) - osc.rest);
+    s.v.push_back(y(n + osc.dof));
   });
-  s.status = to_string(res.stats.status);
   return s;
 }
 
 void measure_oscillator(const FidelitySpec& spec, FidelityResult& out, Progress& progress) {
-  const auto osc = model_registry().create("harmonic_oscillator", Params{}, nullptr);
+  const std::vector<TestOscillator> oscillators = test_oscillators();
   const std::vector<double> nus = nu_grid(spec);
   for (const auto& name : spec.integrators) {
-    std::unique_ptr<Integrator> probe;
-    try {
-      probe = integrator_registry().create(name, integrator_params(name, spec.params), nullptr);
-      check_compatible(probe->info(), *osc);
-      require_input(probe->supports_fixed_step(), name + " has no fixed-step mode");
-    } catch (const BadInput& e) {
-      out.skipped.emplace_back(name, e.what());
+    const TestOscillator* osc = nullptr;
+    std::string why;
+    for (const auto& candidate : oscillators) {
+      try {
+        const auto probe =
+            integrator_registry().create(name, integrator_params(name, spec.params), nullptr);
+        check_compatible(probe->info(), *candidate.sys);
+        require_input(probe->supports_fixed_step(), name + " has no fixed-step mode");
+        osc = &candidate;
+        break;
+      } catch (const BadInput& e) {
+        why += (why.empty() ? "" : "; ") + candidate.label + ": " + e.what();
+      }
+    }
+    if (!osc) {
+      out.skipped.emplace_back(name, why);
       for (std::size_t i = 0; i < nus.size(); ++i) progress.tick(name + ": skipped");
       continue;
     }
+    out.measured_on.emplace_back(name, osc->label);
     for (double nu : nus) {
       auto integ =
           integrator_registry().create(name, integrator_params(name, spec.params), nullptr);
-      const Samples s = run_samples(*osc, *integ, nu, spec.steps);
-      const RecurrenceFit fit = fit_step_multiplier({s.x, s.v}, 8);
-      if (fit.ok) out.curve.push_back({name, "measured", oscillator_response(fit.multiplier, nu)});
+      const Samples s = run_samples(*osc, *integ, nu / osc->omega, spec.steps);
+      const RecurrenceFit fit = fit_step_multiplier({s.x, s.v}, 8, osc->tolerance, 0, osc->floor);
+      if (fit.ok)
+        out.curve.push_back({name, "measured", oscillator_response(fit.multiplier, nu)});
+      else
+        out.unfitted.push_back({name, nu, fit.reason});
       progress.tick(name + ", nu = " + format_short(nu));
     }
   }
@@ -456,7 +508,8 @@ namespace {
 // measured points (the analytic value recomputed at the measured ν).
 Table agreement_table(const FidelitySpec& spec, const FidelityResult& r) {
   Table t;
-  t.columns = {"integrator", "measured points", "max dA/max(1, A)", "max d(theta)", "on the curve"};
+  t.columns = {"integrator",       "measured on",  "measured points",
+               "max dA/max(1, A)", "max d(theta)", "on the curve"};
   for (const auto& name : spec.integrators) {
     const auto integ =
         integrator_registry().create(name, integrator_params(name, spec.params), nullptr);
@@ -478,7 +531,10 @@ Table agreement_table(const FidelitySpec& spec, const FidelityResult& r) {
       verdict = count == 0 ? "not measured" : (da <= 1e-6 && dt <= 1e-6 ? "yes" : "NO");
     for (const auto& [n, why] : r.skipped)
       if (n == name) verdict = "not measured: " + why;
-    t.rows.push_back({name, std::to_string(count), stab && count ? format_short(da) : "",
+    std::string on;
+    for (const auto& [n, label] : r.measured_on)
+      if (n == name) on = label;
+    t.rows.push_back({name, on, std::to_string(count), stab && count ? format_short(da) : "",
                       stab && count ? format_short(dt) : "", verdict});
   }
   return t;
@@ -545,11 +601,17 @@ std::string markdown(const FidelitySpec& spec, const FidelityResult& r) {
         "e^{i theta} (exact: e^{i nu}). amplification A, damping ratio -ln(A)/theta, period "
         "error nu/theta - 1 (Hilber, Hughes & Taylor 1977). Analytic from the coefficients; "
         "measured from "
-     << spec.steps << "-step runs on harmonic_oscillator (recurrence fit).\n\n"
+     << spec.steps
+     << "-step runs on harmonic_oscillator (spring_chain n=1 for methods that need springs) "
+        "by a recurrence fit.\n\n"
      << "## Analytic values\n\n"
      << glance_table(spec).to_markdown() << "\n"
      << "## Measured against analytic\n\n"
      << agreement_table(spec, r).to_markdown() << "\n";
+  for (const auto& u : r.unfitted)
+    md << "- " << u.integrator << " at nu = " << format_short(u.nu) << ": not measured, "
+       << u.reason << "\n";
+  if (!r.unfitted.empty()) md << "\n";
   if (!r.modes.empty()) {
     md << "## Modes of " << spec.model << "\n\n"
        << "The lowest " << spec.modes

@@ -13,8 +13,9 @@
 //             from nu_min to nu_max;
 //   measured  from one run per ν of `steps` steps on harmonic_oscillator (m = k = 1, x0 = 1,
 //             v0 = 0, so h = ν), for every method that can run it at a fixed step (those
-//             without stability data included: lie/strang need a split and are refused there,
-//             xpbd/projective dynamics need springs). The run's samples (x_n, v_n) are iterates of
+//             without stability data included), else on spring_chain with one free mass
+//             (ω = √2; xpbd, projective dynamics); lie/strang and the IMEX pairs need a split
+//             and are named as not measured. The run's samples (x_n, v_n) are iterates of
 //             one linear map, so each sequence satisfies the linear recurrence of that map's
 //             characteristic polynomial (Cayley–Hamilton): s_{n+p} = Σ_{j<p} c_j s_{n+j}.
 //             fit_step_multiplier() fits it by least squares over both sequences (each equation
@@ -70,9 +71,10 @@ struct RecurrenceFit {
   std::string reason;               // why not ok
 };
 // `order` > 0: fit only that order and accept any residual (it is reported); 0: p = 2, 4, 6
-// until the largest scaled residual is <= tolerance.
+// until the largest scaled residual is <= tolerance, using the equations whose largest term is
+// at least `floor` × the series' largest (0: down to underflow).
 RecurrenceFit fit_step_multiplier(const std::vector<std::vector<double>>& series, int skip,
-                                  double tolerance = 1e-8, int order = 0);
+                                  double tolerance = 1e-8, int order = 0, double floor = 0.0);
 
 struct FidelitySpec {
   std::vector<std::string> integrators;
@@ -109,6 +111,13 @@ struct FidelityResult {
   std::vector<FidelityPoint> curve;
   std::vector<ModePoint> modes;
   std::vector<std::pair<std::string, std::string>> skipped;  // integrator, why no measured curve
+  std::vector<std::pair<std::string, std::string>> measured_on;  // integrator, test system
+  struct Unfitted {
+    std::string integrator;
+    double nu = 0.0;
+    std::string reason;
+  };
+  std::vector<Unfitted> unfitted;  // measured runs the recurrence did not fit (nonlinear method)
   std::vector<double> mode_steps_used;
 };
 
