@@ -465,7 +465,7 @@ std::string opt_field(const std::optional<OscillatorResponse>& r,
 double rel_diff(double measured, double predicted, double floor = 0.0) {
   return std::abs(measured - predicted) / std::max(std::abs(predicted), floor);
 }
-constexpr double kDampingFloor = 1e-3;
+constexpr double kDampingFloor = 1e-4;
 }  // namespace
 
 Table modes_table(const FidelityResult& r) {
@@ -594,6 +594,27 @@ Table glance_table(const FidelitySpec& spec) {
   return t;
 }
 
+// One line per integrator and reason: the points whose runs the recurrence did not fit.
+std::string unfitted_summary(const FidelityResult& r) {
+  std::ostringstream md;
+  for (std::size_t i = 0; i < r.unfitted.size();) {
+    std::size_t j = i;
+    double lo = r.unfitted[i].nu, hi = lo;
+    while (j < r.unfitted.size() && r.unfitted[j].integrator == r.unfitted[i].integrator &&
+           r.unfitted[j].reason == r.unfitted[i].reason) {
+      lo = std::min(lo, r.unfitted[j].nu);
+      hi = std::max(hi, r.unfitted[j].nu);
+      ++j;
+    }
+    md << "- " << r.unfitted[i].integrator << ": " << (j - i) << " point(s) not measured (nu "
+       << format_short(lo) << (j - i > 1 ? " to " + format_short(hi) : std::string())
+       << "): " << r.unfitted[i].reason << "\n";
+    i = j;
+  }
+  if (!r.unfitted.empty()) md << "\n";
+  return md.str();
+}
+
 std::string markdown(const FidelitySpec& spec, const FidelityResult& r) {
   std::ostringstream md;
   md << "# Fidelity: numerical damping and period error\n\n"
@@ -608,10 +629,7 @@ std::string markdown(const FidelitySpec& spec, const FidelityResult& r) {
      << glance_table(spec).to_markdown() << "\n"
      << "## Measured against analytic\n\n"
      << agreement_table(spec, r).to_markdown() << "\n";
-  for (const auto& u : r.unfitted)
-    md << "- " << u.integrator << " at nu = " << format_short(u.nu) << ": not measured, "
-       << u.reason << "\n";
-  if (!r.unfitted.empty()) md << "\n";
+  md << unfitted_summary(r);
   if (!r.modes.empty()) {
     md << "## Modes of " << spec.model << "\n\n"
        << "The lowest " << spec.modes
@@ -662,7 +680,13 @@ class FidelityJob : public StudyJob {
     if (!result_.modes.empty()) out << "\n" << mode_summary(result_).to_markdown();
   }
   std::string report_markdown(const std::string& note) const override {
-    return note + "\n\n" + markdown(spec_, result_);
+    std::string md = note + "\n\n" + glance_table(spec_).to_markdown() + "\n" +
+                     agreement_table(spec_, result_).to_markdown() + "\n" +
+                     unfitted_summary(result_);
+    if (!result_.modes.empty())
+      md += "Per mode of " + spec_.model + " (modes.png, modes.csv):\n\n" +
+            mode_summary(result_).to_markdown() + "\n";
+    return md;
   }
   std::string default_title() const override {
     return "Numerical damping and period error per nu = h*omega";
