@@ -459,6 +459,13 @@ std::vector<BudgetFamily> equal_total_families(const BudgetResult& r) {
     if (!groups.count(key)) order.push_back(key);
     groups[key].push_back(&row);
   }
+  // Each method's families by increasing total, methods in the order of the table.
+  std::map<std::string, std::size_t> first;
+  for (const auto& key : order) first.emplace(key.first, first.size());
+  std::stable_sort(order.begin(), order.end(), [&](const auto& a, const auto& b) {
+    return first.at(a.first) != first.at(b.first) ? first.at(a.first) < first.at(b.first)
+                                                  : a.second < b.second;
+  });
   std::vector<BudgetFamily> out;
   for (const auto& key : order) {
     auto rows = groups[key];
