@@ -145,13 +145,13 @@ void validate_point(const SpecFile& s, const Point& p) {
   const StudyKind& kind = study_kind(s.kind);
   try {
     const ModelRegistry::Entry* model = nullptr;
-    if (kind.takes_model) {
-      const std::string name = text_or(p, "model", "");
-      model = model_registry().find(name);
+    const std::string model_name = kind.takes_model ? text_or(p, "model", "") : "";
+    if (kind.takes_model && (kind.model_required || !model_name.empty())) {
+      model = model_registry().find(model_name);
       if (!model)
         spec_error(*find_entry(s.settings, "model"),
-                   "unknown model '" + name + "'; known: " + join(model_registry().names()));
-    } else if (!p.params.empty()) {
+                   "unknown model '" + model_name + "'; known: " + join(model_registry().names()));
+    } else if (!kind.takes_model && !p.params.empty()) {
       spec_error(s.params.front(), "a " + s.kind + " spec takes no parameters");
     }
     std::vector<const IntegratorRegistry::Entry*> integ;

@@ -202,6 +202,21 @@ TEST(Sweep, FailingUnitIsRecordedAndExitCodeIsThree) {
   EXPECT_NE(csv.find("backward_euler"), std::string::npos);
 }
 
+TEST(Sweep, FidelitySpecWithoutAModelRuns) {
+  // fidelity's model is optional (the oscillator curves need none); a spec without one used to
+  // crash the validation of `run`. 2 points x 2 integrators; each unit holds the analytic and the
+  // measured curve: 2 sources x curve_points rows.
+  const fs::path base = fresh_dir("fidelity");
+  fs::create_directories(base);
+  const fs::path spec = base / "fid.toml";
+  std::ofstream(spec) << "kind = \"fidelity\"\nintegrators = [\"rk4\", \"backward_euler\"]\n"
+                         "curve_points = [3, 5]\nsteps = 100\n";
+  const Outcome o = run("run " + spec.string() + " --out " + (base / "out").string());
+  ASSERT_EQ(o.code, 0) << o.err;
+  const std::string csv = slurp(base / "out/fidelity.csv");
+  EXPECT_EQ(count_lines(csv), 1 + 2 * (2 * 3) + 2 * (2 * 5)) << csv;
+}
+
 struct SpecError {
   std::string text, set, expected;
 };
