@@ -399,12 +399,26 @@ void measure_modes(const MechanicalSystem& mech, const ModalBasis& b, Integrator
   }
 }
 
-void run_modes(const FidelitySpec& spec, FidelityResult& out, std::ostream* progress) {
-  Setup setup = make_setup(spec.model, spec.integrators, spec.params);
-  const auto* mech = dynamic_cast<const MechanicalSystem*>(setup.model.get());
-  require_input(mech != nullptr, "fidelity --model " + spec.model +
-                                     ": per-mode analysis needs a mechanical model (y = [x; v])");
-  const ModalBasis b = modal_basis(*mech, spec);
+// The model, its integrators and its modes, checked and computed before anything runs.
+struct ModalSetup {
+  Setup setup;
+  const MechanicalSystem* mech = nullptr;
+  ModalBasis basis;
+};
+
+ModalSetup prepare_modes(const FidelitySpec& spec) {
+  ModalSetup m;
+  m.setup = make_setup(spec.model, spec.integrators, spec.params);
+  m.mech = dynamic_cast<const MechanicalSystem*>(m.setup.model.get());
+  require_input(m.mech != nullptr, "fidelity --model " + spec.model +
+                                       ": per-mode analysis needs a mechanical model (y = [x; v])");
+  m.basis = modal_basis(*m.mech, spec);
+  return m;
+}
+
+void run_modes(const FidelitySpec& spec, const ModalSetup& m, FidelityResult& out,
+               std::ostream* progress) {
+  const ModalBasis& b = m.basis;
   std::vector<double> hs = spec.h;
   const double top = b.omega(b.omega.size() - 1);
   if (hs.empty()) hs = {0.1 / b.omega(0), 2.0 / top};
@@ -413,7 +427,7 @@ void run_modes(const FidelitySpec& spec, FidelityResult& out, std::ostream* prog
   for (std::size_t i = 0; i < spec.integrators.size(); ++i) {
     for (double h : hs) {
       auto integ = integrator_registry().create(spec.integrators[i], spec.params, nullptr);
-      measure_modes(*mech, b, *integ, spec.integrators[i], h, spec, out);
+      measure_modes(*m.mech, b, *integ, spec.integrators[i], h, spec, out);
       prog.tick(spec.integrators[i] + ", h = " + format_short(h));
     }
   }
@@ -426,6 +440,9 @@ FidelityResult run_fidelity(const FidelitySpec& spec, std::ostream* progress) {
   for (const auto& n : spec.integrators) integrator_registry().at(n);
   if (!spec.model.empty()) model_registry().at(spec.model);
   check_param_keys(spec);
+  // Every refusal of the model (not mechanical, not at rest, damped) comes before any run.
+  std::optional<ModalSetup> modal;
+  if (!spec.model.empty()) modal = prepare_modes(spec);
   FidelityResult out;
   for (const auto& name : spec.integrators) {
     const auto integ =
@@ -440,7 +457,7 @@ FidelityResult run_fidelity(const FidelitySpec& spec, std::ostream* progress) {
                   static_cast<long>(spec.integrators.size()) * spec.curve_points);
     measure_oscillator(spec, out, prog);
   }
-  if (!spec.model.empty()) run_modes(spec, out, progress);
+  if (modal) run_modes(spec, *modal, out, progress);
   return out;
 }
 
