@@ -177,6 +177,57 @@ TEST(LinearStability, StepMapOfEveryOneStepMethodMatchesItsStabilityData) {
   EXPECT_GE(checked, 16 * 6 + 5 * 3);
 }
 
+TEST(LinearStability, MultiplierIsTheEigenvalueWhoseModulusIsTheAmplification) {
+  // The complex multiplier and the modulus are computed separately (R(z) and |R(z)|, the
+  // companion matrix's root and its modulus, the 2×2 kick/drift matrix's eigenvalue and its
+  // spectral radius): they must agree for every method, damped oscillators included.
+  int checked = 0;
+  for (const auto& e : integrator_registry().entries()) {
+    auto integ = make(e.info.name);
+    const auto s = integ->linear_stability();
+    if (!s) continue;
+    ASSERT_TRUE(s->mechanical_multiplier) << e.info.name;
+    for (const double h2a : {-0.01, -1.0, -3.5})
+      for (const double hb : {0.0, -0.3}) {
+        const std::complex<double> mu = s->mechanical_multiplier(h2a, hb);
+        EXPECT_NEAR(std::abs(mu), s->mechanical_amplification(h2a, hb), 1e-12)
+            << e.info.name << " h2a " << h2a << " hb " << hb;
+        EXPECT_GE(mu.imag(), 0.0) << e.info.name;
+        ++checked;
+      }
+    if (s->multiplier) {
+      for (const std::complex<double> z :
+           {std::complex<double>(-0.5, 0.3), {0.0, 1.2}, {-3.0, 0.0}})
+        EXPECT_NEAR(std::abs(s->multiplier(z)), s->amplification(z), 1e-12) << e.info.name;
+    }
+  }
+  EXPECT_GE(checked, 20 * 6);
+}
+
+TEST(LinearStability, OscillatorResponseDefinitions) {
+  // μ = e^{iν}: the exact flow (no damping, no period error). μ = e^{(−ξ + i)θ}: damping ratio ξ
+  // by the definition −ln|μ|/arg μ, period error ν/θ − 1.
+  const OscillatorResponse exact = oscillator_response(std::polar(1.0, 0.7), 0.7);
+  EXPECT_NEAR(exact.amplification, 1.0, 1e-15);
+  EXPECT_NEAR(exact.damping_ratio, 0.0, 1e-15);
+  EXPECT_NEAR(exact.period_error, 0.0, 1e-15);
+  const double xi = 0.05, theta = 0.4, nu = 0.5;
+  const OscillatorResponse r =
+      oscillator_response(std::exp(std::complex<double>(-xi, 1.0) * theta), nu);
+  EXPECT_NEAR(r.damping_ratio, xi, 1e-14);
+  EXPECT_NEAR(r.period_error, nu / theta - 1.0, 1e-14);
+  EXPECT_NEAR(r.frequency_error, theta / nu - 1.0, 1e-14);
+  // Backward Euler from its coefficients: μ = 1/(1 − iν).
+  const auto be = oscillator_response(stability_of("backward_euler"), 2.0);
+  ASSERT_TRUE(be);
+  EXPECT_NEAR(be->amplification, 1.0 / std::sqrt(5.0), 1e-14);
+  EXPECT_NEAR(be->phase, std::atan(2.0), 1e-14);
+  // k substeps: R(z/k)^k.
+  const LinearStability sub = substepped(stability_of("backward_euler"), 4);
+  const std::complex<double> z(0.0, 2.0);
+  EXPECT_NEAR(std::abs(sub.multiplier(z) - std::pow(1.0 / (1.0 - z / 4.0), 4)), 0.0, 1e-14);
+}
+
 TEST(LinearStability, PredictedStepOnTheFixedChainSpectrum) {
   // Fixed–fixed chain, k = m = 1, N = 10: ω_j = 2 sin(jπ/22), eigenvalues ±iω_j
   // (docs/reference-values.md, ω_max = 1.979643). Verlet-type methods: h = 2/ω_max; rk4: 2√2/ω_max.
