@@ -299,16 +299,18 @@ RecommendResult run_recommend(const RecommendSpec& spec_in, std::ostream* progre
 }
 
 Table recommend_table(const RecommendResult& r) {
-  Table t{{"model", "integrator", "family", "setting", "error", "error_rel", "f_evals", "wall_s",
-           "status", "meets_rtol", "on_pareto_wall", "on_pareto_f"},
+  // The first five columns and wall_s (9) where work_precision.csv has them; plots/recommend.gp
+  // reads columns 2, 7, 9 and 11.
+  Table t{{"model", "integrator", "setting", "error", "f_evals", "family", "error_rel", "status",
+           "wall_s", "meets_rtol", "on_pareto_wall", "on_pareto_f"},
           {}};
   for (const auto& row : r.rows) {
     const bool ok = row.run.stats.status == Status::ok;
-    t.rows.push_back({r.model, row.run.integrator, row.family, row.run.setting,
-                      ok ? format_full(row.run.error) : "", ok ? format_full(row.error_rel) : "",
-                      std::to_string(row.run.stats.f_evals), format_full(row.run.wall.median),
-                      to_string(row.run.stats.status), row.meets ? "1" : "0",
-                      row.pareto_wall ? "1" : "0", row.pareto_f ? "1" : "0"});
+    t.rows.push_back(
+        {r.model, row.run.integrator, row.run.setting, ok ? format_full(row.run.error) : "",
+         std::to_string(row.run.stats.f_evals), row.family, ok ? format_full(row.error_rel) : "",
+         to_string(row.run.stats.status), format_full(row.run.wall.median), row.meets ? "1" : "0",
+         row.pareto_wall ? "1" : "0", row.pareto_f ? "1" : "0"});
   }
   return t;
 }
@@ -368,7 +370,15 @@ class RecommendJob : public StudyJob {
     meta["total_wall_s"] = result_.total_wall_s;
     meta["meets_definition"] = "||y - y_ref||_inf / max(1, ||y_ref||_inf) <= rtol at t_end";
     write_file_atomic(dir / "recommend.json", meta.dump(2) + "\n");
-    return plot_work_precision(dir / "recommend.csv", title, plot, err);
+    std::vector<std::string> methods;
+    for (const auto& row : result_.rows)
+      if (std::find(methods.begin(), methods.end(), row.run.integrator) == methods.end())
+        methods.push_back(row.run.integrator);
+    return run_plot("recommend.gp", dir / "recommend",
+                    {{"csvfile", (dir / "recommend.csv").string()},
+                     {"ttl", title},
+                     {"log10_rtol", std::to_string(std::log10(spec_.rtol))}},
+                    {PlotPanel{"all methods", methods}}, plot, err);
   }
   void print_summary(std::ostream& out) const override {
     const std::string md = recommend_markdown(result_);
