@@ -407,11 +407,12 @@ StudyKind recommend_study_kind() {
   k.summary =
       "which integrator at a tolerance: a quick work-precision sweep of the suitable methods "
       "within a time budget, Pareto fronts and the cheapest methods that meet rtol; writes "
-      "recommend.{csv,md,json}";
+      "recommend.{csv,md,json,png}";
   k.integrators_required = false;
   k.options = {
       {"rtol", P::real, "", "the requested tolerance R (error_rel <= R)", Bounds::positive()},
-      {"t_end", P::real, "0", "final time (0: the model's literature end time)",
+      {"t_end", P::real, "0",
+       "final time (0: the model's literature end time, else 1 s for a mechanical scene)",
        Bounds::non_negative()},
       {kBudgetKey, P::real, "60", "wall-time budget of the whole command in s", Bounds::positive()},
       timing_repeats_option("3"),

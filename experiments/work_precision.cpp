@@ -356,7 +356,10 @@ WorkPrecisionRow run_work_precision_setting(const OdeSystem& sys, const std::str
   const std::vector<double> tols = {setting}, hs = {setting};
   const WorkPrecisionContext c{spec, sys, setup, tols, hs, ref, nullptr};
   std::vector<WorkPrecisionPoint> points = {WorkPrecisionPoint{0, 0, adaptive, {}, {}, false, {}}};
-  const RowClock clock(wall_limit_s > 0 ? wall_limit_s : wall_limit());
+  const double global = wall_limit();
+  const double limit =
+      global > 0 && (wall_limit_s <= 0 || global < wall_limit_s) ? global : wall_limit_s;
+  const RowClock clock(limit);
   run_rounds(c, points);
   return work_precision_row(c, points.front(), stream);
 }

@@ -115,7 +115,8 @@ WorkPrecisionResult run_work_precision(WorkPrecisionSpec spec, const SystemFacto
 // `setting` (fixed step) over [t0, t_end], timed like a work-precision point (repeats up to
 // `repeats` under kRepeatLongRun and kRepeatBudget, repeats checked for determinism) and
 // measured against `ref` (error, mescd). All runs of the setting share one row clock of
-// `wall_limit_s` seconds (0: the --max-wall limit), so a slow setting ends as `timeout`.
+// `wall_limit_s` seconds (0: none), or the --max-wall limit when that is smaller, so a slow
+// setting ends as `timeout`.
 WorkPrecisionRow run_work_precision_setting(const OdeSystem& sys, const std::string& model,
                                             const std::string& integrator, const Params& params,
                                             bool adaptive, double setting, double atol_factor,
