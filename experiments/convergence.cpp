@@ -1256,6 +1256,17 @@ void write_convergence_outputs(const std::string& dir, const std::string& name,
   write_file_atomic(d / (name + ".json"), meta.dump(2) + "\n");
 }
 
+Vec adaptive_state_at_end(const OdeSystem& sys, const Params& params, const std::string& method,
+                          std::optional<double> rtol, std::optional<double> atol, double t_end,
+                          std::string* description) {
+  StepStudySpec spec;
+  spec.params = params;
+  spec.reference = method;
+  spec.reference_rtol = rtol;
+  spec.reference_atol = atol;
+  return reference_at_end(spec, sys, t_end, t_end, description);
+}
+
 Vec reference_at_end(const StepStudySpec& spec, const OdeSystem& sys, double t_end, double h_fine,
                      std::string* description) {
   Vec y(sys.dimension());

@@ -146,6 +146,11 @@ struct ConvergenceSpec : StepStudySpec {
 // fixed-step reference at h_fine/16; `description` says which.
 Vec reference_at_end(const StepStudySpec& spec, const OdeSystem& sys, double t_end, double h_fine,
                      std::string* description);
+// The same for a caller without a step study (recommend): `method` ("auto": the exact solution,
+// which the model must have) run adaptively at rtol and atol with `params`.
+Vec adaptive_state_at_end(const OdeSystem& sys, const Params& params, const std::string& method,
+                          std::optional<double> rtol, std::optional<double> atol, double t_end,
+                          std::string* description);
 
 // The floor check's constants (see the top of this file).
 constexpr double kUnitRoundoff = 0x1p-53;

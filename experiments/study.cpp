@@ -22,15 +22,16 @@ StudyKind audit_study_kind();
 StudyKind analyze_study_kind();
 StudyKind fidelity_study_kind();
 StudyKind budget_study_kind();
+StudyKind recommend_study_kind();
 
 namespace {
 
 std::vector<StudyKind>& mutable_study_kinds() {
-  static std::vector<StudyKind> kinds = {convergence_study_kind(),    local_error_study_kind(),
-                                         work_precision_study_kind(), stability_study_kind(),
-                                         region_study_kind(),         energy_study_kind(),
-                                         audit_study_kind(),          analyze_study_kind(),
-                                         fidelity_study_kind(),       budget_study_kind()};
+  static std::vector<StudyKind> kinds = {
+      convergence_study_kind(), local_error_study_kind(), work_precision_study_kind(),
+      stability_study_kind(),   region_study_kind(),      energy_study_kind(),
+      audit_study_kind(),       analyze_study_kind(),     fidelity_study_kind(),
+      budget_study_kind(),      recommend_study_kind()};
   return kinds;
 }
 

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/driver.hpp"
+#include "core/run_control.hpp"
 #include "experiments/catalog.hpp"
 
 namespace stiffbench {
@@ -334,6 +335,33 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
   for (std::size_t idx = 0; idx < points.size(); ++idx)
     res.rows.push_back(work_precision_row(c, points[idx], idx));
   return res;
+}
+
+WorkPrecisionRow run_work_precision_setting(const OdeSystem& sys, const std::string& model,
+                                            const std::string& integrator, const Params& params,
+                                            bool adaptive, double setting, double atol_factor,
+                                            double t_end, const Vec& ref, int repeats,
+                                            unsigned long seed, std::size_t stream,
+                                            double wall_limit_s) {
+  WorkPrecisionSpec spec;
+  spec.model = model;
+  spec.params = params;
+  spec.integrators = {integrator};
+  spec.t_end = t_end;
+  spec.atol_factor = atol_factor;
+  spec.repeats = repeats;
+  spec.seed = seed;
+  Setup setup;
+  setup.integrators.push_back(integrator_registry().create(integrator, params));
+  const std::vector<double> tols = {setting}, hs = {setting};
+  const WorkPrecisionContext c{spec, sys, setup, tols, hs, ref, nullptr};
+  std::vector<WorkPrecisionPoint> points = {WorkPrecisionPoint{0, 0, adaptive, {}, {}, false, {}}};
+  const double global = wall_limit();
+  const double limit =
+      global > 0 && (wall_limit_s <= 0 || global < wall_limit_s) ? global : wall_limit_s;
+  const RowClock clock(limit);
+  run_rounds(c, points);
+  return work_precision_row(c, points.front(), stream);
 }
 
 // The CSV contract: the columns of before issue 24 first, then the solver counters and the

@@ -110,6 +110,19 @@ WorkPrecisionResult run_work_precision(WorkPrecisionSpec spec, const StudyObject
                                        std::ostream* progress);
 WorkPrecisionResult run_work_precision(WorkPrecisionSpec spec, const SystemFactory& system,
                                        std::ostream* progress);
+// One setting of the sweep (recommend): `integrator` (created from the registry with `params`)
+// at tolerance `setting` (adaptive: rtol = setting, atol = atol_factor·setting) or at step
+// `setting` (fixed step) over [t0, t_end], timed like a work-precision point (repeats up to
+// `repeats` under kRepeatLongRun and kRepeatBudget, repeats checked for determinism) and
+// measured against `ref` (error, mescd). All runs of the setting share one row clock of
+// `wall_limit_s` seconds (0: none), or the --max-wall limit when that is smaller, so a slow
+// setting ends as `timeout`.
+WorkPrecisionRow run_work_precision_setting(const OdeSystem& sys, const std::string& model,
+                                            const std::string& integrator, const Params& params,
+                                            bool adaptive, double setting, double atol_factor,
+                                            double t_end, const Vec& ref, int repeats,
+                                            unsigned long seed, std::size_t stream,
+                                            double wall_limit_s);
 Table work_precision_table(const WorkPrecisionResult& r);
 void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpec& spec,
                                   const WorkPrecisionResult& r);
