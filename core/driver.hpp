@@ -76,4 +76,19 @@ RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOp
 // process; the command line exits with kExitRowsFailed (3) when it is not zero.
 long fault_count();
 
+// Timeouts on this thread while an ExpectedTimeouts lives are an outcome the caller planned for
+// (`recommend` gives each setting a share of its budget and reports a setting cut short as
+// dropped): the run still ends with Status::timeout and its message, but fault_count() does not
+// count it, so the command line does not exit 3 for it. Errors are still counted.
+class ExpectedTimeouts {
+ public:
+  ExpectedTimeouts();
+  ~ExpectedTimeouts();
+  ExpectedTimeouts(const ExpectedTimeouts&) = delete;
+  ExpectedTimeouts& operator=(const ExpectedTimeouts&) = delete;
+
+ private:
+  bool previous_ = false;
+};
+
 }  // namespace stiffbench

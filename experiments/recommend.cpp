@@ -280,6 +280,8 @@ RecommendResult run_recommend(const RecommendSpec& spec_in, std::ostream* progre
   std::vector<const RecommendCandidate*> run;
   for (const auto& c : r.candidates)
     if (c.included) run.push_back(&c);
+  // A setting cut short by its share of the budget is dropped with its reason, not a fault.
+  const ExpectedTimeouts planned;
   for (std::size_t i = 0; i < run.size(); ++i) {
     const double left = spec.budget_s * 0.95 - seconds_since(start);
     if (left <= 0) {

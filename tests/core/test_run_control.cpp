@@ -99,6 +99,30 @@ TEST(RunControl, RowOverItsWallLimitEndsWithTimeoutAndTheNextRowRuns) {
   EXPECT_NEAR(ok.y[0], std::exp(-1.0), 1e-9);
 }
 
+// A timeout the caller planned for (recommend's budget shares) ends the run the same way but is
+// not a fault; the scope restores counting when it ends.
+TEST(RunControl, ExpectedTimeoutsAreNotFaults) {
+  SlowDecay slow(std::chrono::milliseconds(1));
+  auto rk4 = make("rk4");
+  FixedStepOptions opt;
+  opt.t_end = 1.0;
+  opt.h = 1e-3;
+  const long faults = fault_count();
+  {
+    const ExpectedTimeouts planned;
+    const RowClock clock(0.05);
+    const RunResult r = run_fixed_step(slow, *rk4, opt);
+    EXPECT_EQ(r.stats.status, Status::timeout);
+    EXPECT_LT(r.t, opt.t_end);
+  }
+  EXPECT_EQ(fault_count(), faults);
+  {
+    const RowClock clock(0.05);
+    EXPECT_EQ(run_fixed_step(slow, *rk4, opt).stats.status, Status::timeout);
+  }
+  EXPECT_EQ(fault_count(), faults + 1);
+}
+
 // The library references are stopped through their C callbacks (the exception is kept there and
 // rethrown when the library returns), and so is an adaptive hand-written method.
 TEST(RunControl, AdaptiveAndLibraryRunsTimeOut) {
