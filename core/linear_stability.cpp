@@ -318,38 +318,38 @@ LinearStability multistep_stability(const std::vector<double>& alpha,
   return with_mechanical_from_scalar(std::move(s));
 }
 
+namespace {
+// The step matrix [m00, m01, m10, m11] of a kick/drift splitting on x'' = a x + b x' in the
+// variables (x, u = h v): a kick u ← u + k(h²a x + hb u) and a drift x ← x + d u are 2×2
+// matrices depending only on (h²a, hb); the step is their product.
+std::array<double, 4> kick_drift_matrix(const std::vector<double>& kick,
+                                        const std::vector<double>& drift, double h2a, double hb) {
+  double m00 = 1, m01 = 0, m10 = 0, m11 = 1;
+  for (std::size_t j = 0; j < kick.size(); ++j) {
+    // kick: [[1, 0], [k h²a, 1 + k hb]] · M
+    const double k = kick[j];
+    const double n10 = k * h2a * m00 + (1 + k * hb) * m10;
+    const double n11 = k * h2a * m01 + (1 + k * hb) * m11;
+    m10 = n10;
+    m11 = n11;
+    // drift: [[1, d], [0, 1]] · M
+    m00 += drift[j] * m10;
+    m01 += drift[j] * m11;
+  }
+  return {m00, m01, m10, m11};
+}
+}  // namespace
+
 LinearStability kick_drift_stability(const KickDriftCoefficients& c) {
-  // On x'' = a x + b x' in the variables (x, u = h v): a kick u ← u + k(h²a x + hb u) and a
-  // drift x ← x + d u are 2×2 matrices depending only on (h²a, hb); the step is their product.
   LinearStability s;
   s.kind = "splitting";
   s.mechanical_amplification = [kick = c.kick, drift = c.drift](double h2a, double hb) {
-    double m00 = 1, m01 = 0, m10 = 0, m11 = 1;  // accumulated step matrix
-    for (std::size_t j = 0; j < kick.size(); ++j) {
-      // kick: [[1, 0], [k h²a, 1 + k hb]] · M
-      const double k = kick[j];
-      const double n10 = k * h2a * m00 + (1 + k * hb) * m10;
-      const double n11 = k * h2a * m01 + (1 + k * hb) * m11;
-      m10 = n10;
-      m11 = n11;
-      // drift: [[1, d], [0, 1]] · M
-      m00 += drift[j] * m10;
-      m01 += drift[j] * m11;
-    }
-    return spectral_radius_2x2(m00, m01, m10, m11);
+    const auto m = kick_drift_matrix(kick, drift, h2a, hb);
+    return spectral_radius_2x2(m[0], m[1], m[2], m[3]);
   };
   s.mechanical_multiplier = [kick = c.kick, drift = c.drift](double h2a, double hb) {
-    double m00 = 1, m01 = 0, m10 = 0, m11 = 1;  // the same product as above
-    for (std::size_t j = 0; j < kick.size(); ++j) {
-      const double k = kick[j];
-      const double n10 = k * h2a * m00 + (1 + k * hb) * m10;
-      const double n11 = k * h2a * m01 + (1 + k * hb) * m11;
-      m10 = n10;
-      m11 = n11;
-      m00 += drift[j] * m10;
-      m01 += drift[j] * m11;
-    }
-    return dominant_eigenvalue_2x2(m00, m01, m10, m11);
+    const auto m = kick_drift_matrix(kick, drift, h2a, hb);
+    return dominant_eigenvalue_2x2(m[0], m[1], m[2], m[3]);
   };
   // The same product with polynomial entries in x = h²a at hb = 0, for the half-trace.
   using P = std::vector<ld>;
