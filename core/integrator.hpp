@@ -116,6 +116,12 @@ class Integrator {
   // spectrum of ∂f_E/∂y when the implicit part is A-stable and does not interact (`stability`
   // predicts from it). Empty for other methods.
   virtual std::optional<LinearStability> explicit_part_stability() const { return std::nullopt; }
+  // The same methods on a mechanical split that puts x' = v in f_I and the acceleration in f_E
+  // (every built-in mechanical split): the step map on x'' = a x + b x', x advanced by the
+  // implicit treatment and v by the explicit one (mechanical-only; for an IMEX pair
+  // partitioned_imex_stability()). On such a split an undamped mode sees this map, not the
+  // explicit treatment's R on ±iω. Empty for other methods.
+  virtual std::optional<LinearStability> partitioned_stability() const { return std::nullopt; }
 
  private:
   MethodInfo info_;

@@ -51,6 +51,8 @@ cd multistep_multiplier(const std::vector<double>& alpha, const std::vector<doub
   return es.eigenvalues()(best);
 }
 
+}  // namespace
+
 // The eigenvalue of largest modulus of a real 2×2 matrix [[p, q], [r, s]]; of a complex pair,
 // the one with Im >= 0.
 cd dominant_eigenvalue_2x2(double p, double q, double r, double s) {
@@ -72,6 +74,8 @@ double spectral_radius_2x2(double p, double q, double r, double s) {
   if (disc >= 0.0) return std::abs(half_tr) + std::sqrt(disc);
   return std::sqrt(det);  // complex pair, |μ|² = det
 }
+
+namespace {
 
 // The first crossing of g(r) > 1 + stability_tolerance for r in (0, cap], scanning outward with
 // steps of 0.2% (never more than 1e-6 absolute near the origin), then bisecting to ~1e-12.
@@ -235,6 +239,40 @@ AxisLimit half_trace_limit(const Polynomial& t, double cap) {
   return limit_from_crossing(first_positive_crossing(f, bound), 2, cap);
 }
 
+// Exact limit on the undamped oscillator of a 2×2 step map with half-trace T and determinant D
+// (polynomials in x = −(hω)²): the first w = (hω)² where one of the Schur–Cohn conditions
+// |D| <= 1, |2T| <= 1 + D fails, i.e. one of D − 1, −D − 1, 2T − 1 − D, −2T − 1 − D turns
+// positive.
+AxisLimit schur_limit(const Polynomial& half_trace, const Polynomial& det, double cap) {
+  const std::size_t n = std::max(half_trace.size(), det.size());
+  std::vector<ld> tw(n, 0.0L), dw(n, 0.0L);  // 2T and D in w = −x
+  for (std::size_t k = 0; k < n; ++k) {
+    const ld sign = k % 2 ? -1.0L : 1.0L;
+    if (k < half_trace.size()) tw[k] = 2.0L * sign * static_cast<ld>(half_trace[k]);
+    if (k < det.size()) dw[k] = sign * static_cast<ld>(det[k]);
+  }
+  std::optional<ld> first;
+  for (const auto& [ct, cd_] : {std::pair{0.0L, 1.0L}, std::pair{0.0L, -1.0L},
+                                std::pair{1.0L, -1.0L}, std::pair{-1.0L, -1.0L}}) {
+    std::vector<ld> f(n), bound(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      f[k] = ct * tw[k] + cd_ * dw[k];
+      bound[k] = std::abs(tw[k]) + std::abs(dw[k]);
+    }
+    f[0] -= 1.0L;
+    bound[0] += 1.0L;
+    const std::optional<ld> w = first_positive_crossing(f, bound);
+    if (w && (!first || *w < *first)) first = w;
+  }
+  return limit_from_crossing(first, 2, cap);
+}
+
+// The oscillator limit from the polynomial data of a kick/drift splitting or a partitioned pair.
+AxisLimit polynomial_oscillator_limit(const LinearStability& s, double cap) {
+  if (s.oscillator_determinant.empty()) return half_trace_limit(s.oscillator_half_trace, cap);
+  return schur_limit(s.oscillator_half_trace, s.oscillator_determinant, cap);
+}
+
 // Eigenvalues with Im >= 0 only (the methods have real coefficients, so the amplification is
 // symmetric under conjugation), sorted by decreasing modulus, near-duplicates removed.
 std::vector<cd> distinct_upper(const std::vector<cd>& eigenvalues) {
@@ -374,6 +412,113 @@ LinearStability kick_drift_stability(const KickDriftCoefficients& c) {
   return s;
 }
 
+namespace {
+// The step matrix [m00, m01, m10, m11] of an additive pair on x'' = a x + b x' with x' = v in
+// f_I, in the variables (x, u = h v): the 2s stage equations (header) solved for the two unit
+// starting states.
+std::array<double, 4> partitioned_matrix(const AdditiveTableau& t, double h2a, double hb) {
+  const Mat& ae = t.explicit_table.a;
+  const Mat& ai = t.implicit_table.a;
+  const Index s = ae.rows();
+  Mat m = Mat::Identity(2 * s, 2 * s);  // unknowns [X; U]
+  m.topRightCorner(s, s) = -ai;
+  m.bottomLeftCorner(s, s) = -h2a * ae;
+  m.bottomRightCorner(s, s) -= hb * ae;
+  Mat rhs = Mat::Zero(2 * s, 2);
+  rhs.col(0).head(s).setOnes();  // (x_n, u_n) = (1, 0)
+  rhs.col(1).tail(s).setOnes();  // (0, 1)
+  const Mat xu = m.partialPivLu().solve(rhs);
+  std::array<double, 4> out{};
+  for (int c = 0; c < 2; ++c) {
+    const Vec x = xu.col(c).head(s), u = xu.col(c).tail(s);
+    out[static_cast<std::size_t>(c)] = (c == 0 ? 1.0 : 0.0) + t.implicit_table.b.dot(u);
+    out[static_cast<std::size_t>(2 + c)] =
+        (c == 1 ? 1.0 : 0.0) + t.explicit_table.b.dot(h2a * x + hb * u);
+  }
+  return out;
+}
+
+// The entries of the map at hb = 0 as polynomials in x = h²a (and, with `abs`, the same sums
+// over the coefficients' magnitudes: the round-off bound of each coefficient). U solves
+// U = c + x N U with N = A_E A_I strictly lower triangular, so U = Σ_{k<s} x^k N^k c.
+std::array<std::vector<ld>, 4> partitioned_polynomials(const AdditiveTableau& t, bool abs) {
+  using MatL = Eigen::Matrix<ld, Eigen::Dynamic, Eigen::Dynamic>;
+  using VecL = Eigen::Matrix<ld, Eigen::Dynamic, 1>;
+  auto cast = [abs](const auto& m) {
+    MatL out = m.template cast<ld>();
+    return abs ? MatL(out.cwiseAbs()) : out;
+  };
+  const MatL ae = cast(t.explicit_table.a), ai = cast(t.implicit_table.a);
+  const MatL be = cast(Mat(t.explicit_table.b.transpose())),
+             bi = cast(Mat(t.implicit_table.b.transpose()));
+  const Index s = ae.rows();
+  const MatL n = ae * ai;
+  const VecL e = VecL::Ones(s), ae1 = ae * e;
+  std::vector<ld> m00(s + 1, 0.0L), m01(s, 0.0L), m10(s + 2, 0.0L), m11(s + 1, 0.0L);
+  m00[0] = m11[0] = 1.0L;
+  m10[1] = (be * e)(0);
+  VecL nk_e = e, nk_ae = ae1;  // N^k 1 and N^k A_E 1
+  for (Index k = 0; k < s; ++k) {
+    const auto kk = static_cast<std::size_t>(k);
+    m01[kk] = (bi * nk_e)(0);
+    m11[kk + 1] = (be * ai * nk_e)(0);
+    m00[kk + 1] = (bi * nk_ae)(0);
+    m10[kk + 2] = (be * ai * nk_ae)(0);
+    nk_e = n * nk_e;
+    nk_ae = n * nk_ae;
+  }
+  return {m00, m01, m10, m11};
+}
+
+std::vector<ld> poly_product(const std::vector<ld>& a, const std::vector<ld>& b) {
+  std::vector<ld> out(a.size() + b.size() - 1, 0.0L);
+  for (std::size_t j = 0; j < a.size(); ++j)
+    for (std::size_t k = 0; k < b.size(); ++k) out[j + k] += a[j] * b[k];
+  return out;
+}
+
+std::vector<ld> poly_sum(std::vector<ld> a, const std::vector<ld>& b, ld scale) {
+  if (a.size() < b.size()) a.resize(b.size(), 0.0L);
+  for (std::size_t k = 0; k < b.size(); ++k) a[k] += scale * b[k];
+  return a;
+}
+
+// A polynomial's coefficients, those at round-off level of `bound` set to zero, trailing zeros
+// dropped.
+Polynomial cleaned(std::vector<ld> c, const std::vector<ld>& bound) {
+  for (std::size_t k = 0; k < c.size(); ++k)
+    if (std::abs(c[k]) <= 1e-13L * bound[k]) c[k] = 0.0L;
+  while (c.size() > 1 && c.back() == 0.0L) c.pop_back();
+  return Polynomial(c.begin(), c.end());
+}
+}  // namespace
+
+LinearStability partitioned_imex_stability(const AdditiveTableau& t) {
+  LinearStability s;
+  s.kind = "partitioned IMEX (x implicit, v explicit)";
+  s.mechanical_amplification = [t](double h2a, double hb) {
+    const auto m = partitioned_matrix(t, h2a, hb);
+    return spectral_radius_2x2(m[0], m[1], m[2], m[3]);
+  };
+  s.mechanical_multiplier = [t](double h2a, double hb) {
+    const auto m = partitioned_matrix(t, h2a, hb);
+    return dominant_eigenvalue_2x2(m[0], m[1], m[2], m[3]);
+  };
+  // Polynomial entries exist when N = A_E A_I is nilpotent (A_E strictly lower, A_I lower).
+  const Mat n = t.explicit_table.a * t.implicit_table.a;
+  if (n.isLowerTriangular(0.0) && n.diagonal().isZero(0.0)) {
+    const auto m = partitioned_polynomials(t, false), b = partitioned_polynomials(t, true);
+    std::vector<ld> half = poly_sum(m[0], m[3], 1.0L), half_b = poly_sum(b[0], b[3], 1.0L);
+    for (ld& x : half) x *= 0.5L;
+    const std::vector<ld> det = poly_sum(poly_product(m[0], m[3]), poly_product(m[1], m[2]), -1.0L);
+    const std::vector<ld> det_b =
+        poly_sum(poly_product(b[0], b[3]), poly_product(b[1], b[2]), 1.0L);
+    s.oscillator_half_trace = cleaned(half, half_b);
+    s.oscillator_determinant = cleaned(det, det_b);
+  }
+  return s;
+}
+
 LinearStability with_mechanical_from_scalar(LinearStability s) {
   if (!s.amplification) return s;
   s.mechanical_amplification = [amp = s.amplification](double h2a, double hb) {
@@ -466,7 +611,7 @@ AxisLimit imaginary_axis_limit(const LinearStability& s, double cap) {
 AxisLimit oscillator_limit(const LinearStability& s, double cap) {
   // The oscillator's eigenvalues are ±iω: for a one-step method the imaginary-axis limit.
   if (s.rational) return rational_ray_limit(*s.rational, cd(0.0, 1.0), cap);
-  if (!s.oscillator_half_trace.empty()) return half_trace_limit(s.oscillator_half_trace, cap);
+  if (!s.oscillator_half_trace.empty()) return polynomial_oscillator_limit(s, cap);
   if (!s.mechanical_amplification) return {};
   return first_crossing([&](double r) { return s.mechanical_amplification(-r * r, 0.0); }, cap);
 }
@@ -500,7 +645,7 @@ StepLimit predicted_step_limit(const LinearStability& s,
     if (s.rational) {
       lim = rational_ray_limit(*s.rational, unit, best.h * m);
     } else if (mechanical && l.real() == 0.0 && !s.oscillator_half_trace.empty()) {
-      lim = half_trace_limit(s.oscillator_half_trace, best.h * m);
+      lim = polynomial_oscillator_limit(s, best.h * m);
     } else {
       lim = first_crossing([&](double r) { return amplification_on_ray(s, unit, r, mechanical); },
                            best.h * m);

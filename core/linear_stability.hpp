@@ -66,9 +66,13 @@ struct LinearStability {
   std::function<std::complex<double>(double theta)> boundary_locus;
   // One-step methods: R = P/Q (exact limits). Empty for multistep and mechanical-only methods.
   std::optional<RationalForm> rational;
-  // Kick/drift splittings: half-trace T(x) of the step map on x'' = −ω²x, x = −(hω)² (its
-  // determinant is 1). Empty otherwise.
+  // Kick/drift splittings and partitioned IMEX pairs: half-trace T(x) of the step map on
+  // x'' = −ω²x, x = −(hω)², as a polynomial in x. Empty otherwise.
   Polynomial oscillator_half_trace;
+  // Its determinant D(x), a polynomial in x too; empty: D = 1 (a kick/drift splitting, whose
+  // stages are shears). With both, the undamped oscillator's limit is exact (Schur–Cohn: both
+  // eigenvalues of a real 2×2 map lie in the closed unit disk iff |D| <= 1 and |2T| <= 1 + D).
+  Polynomial oscillator_determinant;
   // The step map's dominant eigenvalue itself (complex), for damping and phase: on y' = λy,
   // R(z) for one-step methods and the root of largest modulus of ρ(ζ) − zσ(ζ) for multistep
   // ones (empty for mechanical-only methods); on x'' = a x + b x', the eigenvalue of largest
@@ -103,6 +107,11 @@ OscillatorResponse oscillator_response(std::complex<double> multiplier, double n
 // the method has no stability data.
 std::optional<OscillatorResponse> oscillator_response(const LinearStability& s, double nu);
 
+// The eigenvalue of largest modulus of a real 2×2 matrix [[p, q], [r, s]] (of a complex pair,
+// the one with Im >= 0), and its spectral radius.
+std::complex<double> dominant_eigenvalue_2x2(double p, double q, double r, double s);
+double spectral_radius_2x2(double p, double q, double r, double s);
+
 // R = P/Q of a Runge–Kutta stage matrix and weights (Rosenbrock: A = α + Γ).
 RationalForm runge_kutta_rational_form(const Mat& a, const Vec& b);
 
@@ -115,6 +124,16 @@ LinearStability multistep_stability(const std::vector<double>& alpha,
                                     const std::vector<double>& beta);
 // Kick/drift splitting (mechanical-only).
 LinearStability kick_drift_stability(const KickDriftCoefficients& c);
+// An additive (IMEX) Runge–Kutta pair on a mechanical split that puts x' = v in f_I and the
+// acceleration in f_E (every built-in mechanical split): on x'' = a x + b x' the pair is a
+// partitioned Runge–Kutta method, x advanced with the implicit table and v with the explicit
+// one. Stages X = x_n 1 + A_I U, U = u_n 1 + A_E(h²a X + hb U) (u = h v), x_{n+1} = x_n + b_Iᵀ U,
+// u_{n+1} = u_n + b_Eᵀ(h²a X + hb U): a 2×2 step map in (h²a, hb). Mechanical-only
+// (`amplification` empty). At hb = 0 and a DIRK implicit table, A_E A_I is nilpotent, so the
+// map's entries are polynomials in x = h²a: oscillator_half_trace and oscillator_determinant
+// are set and the oscillator limit is exact. Its limit is not the explicit table's on ±iω
+// (ARS(2,3,2): hω = 2.843 against 1.414; ARK3(2)4L[2]SA: unstable for every hω > 0).
+LinearStability partitioned_imex_stability(const AdditiveTableau& t);
 // Fills mechanical_amplification of a method that has `amplification`.
 LinearStability with_mechanical_from_scalar(LinearStability s);
 // k steps of size h/k as one step of size h: R_k(z) = R(z/k)^k (its limits along every ray are k

@@ -42,6 +42,9 @@ struct Spectrum {
   std::vector<cd> eigenvalues;
   double omega = 0;    // largest modulus (0: unknown)
   std::string source;  // how it was obtained
+  // f_E's spectrum on a mechanical split (core/ode_system.hpp: a = a_E + a_I with x' = v in
+  // f_I): the explicit acceleration's modes under x' = v, tested on the partitioned map.
+  bool mechanical_split = false;
 };
 
 Spectrum spectrum_of(const OdeSystem& sys, double t0, const Vec& y0, const StabilitySpec& spec) {
@@ -99,18 +102,29 @@ Spectrum spectrum_of(const OdeSystem& sys, double t0, const Vec& y0, const Stabi
 
 // The spectrum of ∂f_E/∂y of a split model: the eigenvalues of J - J_I when both are analytic and
 // the dimension is at most the dense limit, else the model's explicit_part_spectrum() estimate.
+// On a mechanical split the explicit acceleration's oscillation under x' = v: the eigenvalues of
+// [[0, I], [∂a_E/∂x, ∂a_E/∂v]] (J_E itself is nilpotent in x when x' = v is in f_I).
 Spectrum explicit_spectrum_of(const OdeSystem& sys, double t0, const Vec& y0,
                               const StabilitySpec& spec) {
   Spectrum s;
+  s.mechanical_split = sys.as_mechanical() != nullptr;
   const Index n = sys.dimension();
   if (n <= spec.dense_limit && sys.has_jacobian() && sys.has_implicit_part_jacobian()) {
     SparseMat j, ji;
     sys.jacobian(t0, y0, j);
     sys.implicit_part_jacobian(t0, y0, ji);
-    const Mat je = Mat(j) - Mat(ji);
+    Mat je = Mat(j) - Mat(ji);
+    if (s.mechanical_split) {
+      const Index d = n / 2;
+      je.topRows(d).setZero();
+      je.topRightCorner(d, d).setIdentity();
+    }
     const Eigen::EigenSolver<Mat> es(je, false);
     for (Index k = 0; k < n; ++k) s.eigenvalues.push_back(es.eigenvalues()(k));
-    s.source = "eigenvalues of J - J_I (analytic) at the perturbed initial state";
+    s.source = !s.mechanical_split
+                   ? "eigenvalues of J - J_I (analytic) at the perturbed initial state"
+                   : "eigenvalues of [[0, I], [da_E/dx, da_E/dv]] (a_E from J - J_I, analytic) "
+                     "at the perturbed initial state";
   } else if (const auto est = sys.explicit_part_spectrum(t0, y0)) {
     if (est->ray == SpectrumEstimate::Ray::imaginary) {
       s.eigenvalues = {cd(0, est->radius), cd(0, -est->radius)};
@@ -247,9 +261,14 @@ std::function<double(double, CVecRef)> energy_criterion(const OdeSystem& sys,
 // treats f_E explicitly on a split model, its explicit treatment's limit on the spectrum of f_E.
 void predict(const Integrator& integ, const Spectrum& spec_sys, const Spectrum* spec_explicit,
              bool mechanical, double h_cap, StabilityRow& row) {
-  if (auto le = integ.explicit_part_stability(); le && spec_explicit) {
-    row.predicted_on = "f_E";
-    if (spec_explicit->eigenvalues.empty()) return;
+  if (integ.explicit_part_stability() && spec_explicit) {
+    // A mechanical split puts x' = v in f_I, so the method acts on the explicit acceleration's
+    // modes as a partitioned method (x implicit, v explicit): Integrator::partitioned_stability(),
+    // not the explicit treatment's R on ±iω (no prediction for a method without one).
+    const bool partitioned = spec_explicit->mechanical_split;
+    row.predicted_on = partitioned ? "f_E, partitioned (x' = v in f_I)" : "f_E";
+    const auto le = partitioned ? integ.partitioned_stability() : integ.explicit_part_stability();
+    if (!le || spec_explicit->eigenvalues.empty()) return;
     const StepLimit lim = predicted_step_limit(*le, spec_explicit->eigenvalues, mechanical, h_cap);
     if (lim.unbounded)
       row.predicted_unbounded = true;

@@ -58,7 +58,11 @@
 // analytic, dimension <= dense_limit), else the model's explicit_part_spectrum() estimate on its
 // ray. It neglects the coupling of the parts (exact when they commute and f_I damps, e.g.
 // advection and diffusion on a periodic grid: the measured limit can only be at or above it).
-// stability.json says per row what the prediction was made on (`predicted_on`: f or f_E).
+// On a mechanical split (x' = v in f_I) the spectrum is that of [[0, I], [∂a_E/∂x, ∂a_E/∂v]] and
+// the method's map is its partitioned one (Integrator::partitioned_stability(): x by the implicit
+// treatment, v by the explicit one), not the explicit table's R on ±iω.
+// stability.json says per row what the prediction was made on (`predicted_on`: f, f_E, or
+// "f_E, partitioned (x' = v in f_I)").
 //
 // Counters: the solver counters (SolveStats::counter_names()) of the run at h_max_measured are
 // columns of stability.csv after status; empty where no step ran stably.

@@ -45,6 +45,10 @@ std::optional<LinearStability> ImexArkIntegrator::explicit_part_stability() cons
   return tableau_stability(tab_.explicit_table);
 }
 
+std::optional<LinearStability> ImexArkIntegrator::partitioned_stability() const {
+  return partitioned_imex_stability(tab_);
+}
+
 void ImexArkIntegrator::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   check_compatible(info(), sys);
   require_split(sys, "integrator '" + info().name + "'");

@@ -53,6 +53,7 @@ class ImexArkIntegrator final : public Integrator {
 
   const AdditiveTableau* additive_tableau() const override { return &tab_; }
   std::optional<LinearStability> explicit_part_stability() const override;
+  std::optional<LinearStability> partitioned_stability() const override;
   bool supports_adaptive() const override { return adaptive_; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;

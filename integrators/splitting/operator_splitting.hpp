@@ -51,6 +51,8 @@ class OperatorSplitting final : public Integrator {
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   // lie: the explicit sub-integrator's R(z); strang: its two half steps, R(z/2)².
   std::optional<LinearStability> explicit_part_stability() const override;
+  // On a mechanical split with x' = v in f_I: kick–drift maps with R-damped kicks (the .cpp).
+  std::optional<LinearStability> partitioned_stability() const override;
 
   const Integrator& explicit_integrator() const { return *explicit_; }
   const Integrator& implicit_integrator() const { return *implicit_; }
