@@ -343,8 +343,9 @@ std::string section_html(const HtmlSection& s, std::size_t index) {
         inline_svg(s.svgs[k], "s" + std::to_string(index) + "p" + std::to_string(k));
     if (svg.empty()) continue;
     out << "<figure class=\"plot\">" << svg << "<figcaption>" << html_escape(s.title)
-        << " (hover a curve for its name; the values are in the table "
-           "below)</figcaption></figure>\n";
+        << (s.data_csv.empty() ? " (hover a curve for its name)"
+                               : " (hover a curve for its name; the values are in the table below)")
+        << "</figcaption></figure>\n";
   }
   std::size_t total = 0;
   const std::string data = s.data_csv.empty() ? "" : csv_table(s.data_csv, s.data_max_rows, total);

@@ -29,11 +29,12 @@ check_page() {
   # --no-sandbox: Chromium's sandbox refuses to run as root (CI). A fresh profile per load.
   local flags=(--headless --no-sandbox --disable-gpu --no-first-run --hide-scrollbars
                --enable-logging=stderr --v=0)
-  if ! "$chromium" "${flags[@]}" --user-data-dir="$work/profile-$tag-dom" \
+  # timeout: a hung browser fails the check rather than the CI job's time limit.
+  if ! timeout 120 "$chromium" "${flags[@]}" --user-data-dir="$work/profile-$tag-dom" \
       --dump-dom "file://$page#selftest" >"$work/$tag.dom.html" 2>"$work/$tag.dom.log"; then
     tail -n 20 "$work/$tag.dom.log" >&2; echo "check-html: chromium --dump-dom failed" >&2; return 1
   fi
-  if ! "$chromium" "${flags[@]}" --user-data-dir="$work/profile-$tag-shot" --window-size=1280,4000 \
+  if ! timeout 120 "$chromium" "${flags[@]}" --user-data-dir="$work/profile-$tag-shot" --window-size=1280,4000 \
       --screenshot="$shot" "file://$page" >/dev/null 2>"$work/$tag.shot.log"; then
     tail -n 20 "$work/$tag.shot.log" >&2; echo "check-html: chromium --screenshot failed" >&2; return 1
   fi
@@ -82,8 +83,9 @@ if dom.sections != want_sections:
     failures.append(f"sections: {len(dom.sections)} in the page, {len(want_sections)} in REPORT.md; missing {missing}")
 if dom.plots != want_plots:
     failures.append(f"plots: {dom.plots} inline SVG in the page, {want_plots} in REPORT.md")
-if not os.path.isfile(shot) or os.path.getsize(shot) < 10000:
-    failures.append("no screenshot " + shot)
+# A blank 1280x4000 page is about 23 kB as PNG; report --quick gives about 690 kB.
+if not os.path.isfile(shot) or os.path.getsize(shot) < 100000:
+    failures.append("no screenshot with content (under 100 kB): " + shot)
 if failures:
     print("check-html: FAIL " + dom_file, file=sys.stderr)
     for f in failures: print("  " + f, file=sys.stderr)
