@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 using namespace stiffbench;
@@ -191,4 +192,48 @@ TEST(Html, MetadataFromJson) {
   EXPECT_EQ(rows[1], (std::pair<std::string, std::string>{"threads", "2"}));
   EXPECT_EQ(rows[2], (std::pair<std::string, std::string>{"version", "0.1"}));
   EXPECT_EQ(html_metadata({{"k", "abcdef"}}, 3)[0].second, "abc...");
+}
+
+// Malformed input stays text: unclosed links, marks and fences render literally (the expected
+// strings follow the rules in html.hpp), and every '<' of the output opens one of the renderer's
+// own tags (an input tag is always escaped).
+TEST(Html, MalformedMarkdownStaysEscapedText) {
+  EXPECT_EQ(markdown_to_html("[unclosed"), "<p>[unclosed</p>\n");
+  EXPECT_EQ(markdown_to_html("[a]("), "<p>[a](</p>\n");
+  EXPECT_EQ(markdown_to_html("**bold"), "<p>**bold</p>\n");
+  EXPECT_EQ(markdown_to_html("``a`"), "<p>``a`</p>\n");
+  EXPECT_EQ(markdown_to_html("a\\"), "<p>a\\</p>\n");
+  EXPECT_EQ(markdown_to_html("```\nno end"), "<pre><code>no end\n</code></pre>\n");
+  EXPECT_EQ(markdown_to_html("####### seven"), "<p>####### seven</p>\n");
+  const std::vector<std::string> own = {"<p>",         "</p>",
+                                        "<h1>",        "</h1>",
+                                        "<h2>",        "</h2>",
+                                        "<code>",      "</code>",
+                                        "<em>",        "</em>",
+                                        "<strong>",    "</strong>",
+                                        "<a href=\"",  "</a>",
+                                        "<img src=\"", "<ul>",
+                                        "</ul>",       "<ol>",
+                                        "</ol>",       "<li>",
+                                        "</li>",       "<pre>",
+                                        "</pre>",      "<div class=\"table-wrap\">",
+                                        "</div>",      "<table class=\"sortable\">",
+                                        "</table>",    "<thead>",
+                                        "</thead>",    "<tbody>",
+                                        "</tbody>",    "<tr>",
+                                        "</tr>",       "<th>",
+                                        "<th style",   "</th>",
+                                        "<td>",        "<td style",
+                                        "</td>"};
+  for (const std::string md :
+       {"[unclosed", "![x](", "*", "`", "| a |\n|---|", "|", "- ", "1.", "\\", "***x***",
+        "<img src=x onerror=alert(1)>", "[<b>](<i>)", "| a | b |\n|---|---|\n| <x> | `<y>` |",
+        "- <li>\n- [z](javascript:x)", "*<em>*", "# <h1>"}) {
+    const std::string html = markdown_to_html(md);
+    for (std::size_t p = html.find('<'); p != std::string::npos; p = html.find('<', p + 1)) {
+      bool known = false;
+      for (const auto& tag : own) known = known || html.compare(p, tag.size(), tag) == 0;
+      EXPECT_TRUE(known) << md << " -> " << html;
+    }
+  }
 }
