@@ -21,6 +21,9 @@ void add_report_command(CLI::App& app) {
   report->add_flag("--quick", opt->quick,
                    "apply each spec's [quick] overrides (fewer step sizes: a smoke run)");
   report->add_flag("--svg", opt->svg, "also write each plot as SVG");
+  report->add_flag("--html", opt->html,
+                   "also write DIR/report.html: one self-contained page with every section, the "
+                   "plots as inline SVG, sortable tables and the run metadata (implies --svg)");
   report->callback([opt]() {
     opt->force = force_output();
     cmd_report(*opt, std::cout, std::cerr);

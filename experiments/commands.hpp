@@ -18,6 +18,7 @@ struct ReportOptions {
   std::string out_dir = "results";
   bool quick = false;
   bool svg = false;
+  bool html = false;   // also write DIR/report.html (experiments/html.hpp; implies SVG plots)
   bool force = false;  // --force: replace a report of another suite in out_dir
   // Spec files and folders of spec files (each folder's *.toml in name order), one section per
   // spec; empty: the built-in suite (experiments/specs/report/, compiled in).
@@ -37,8 +38,8 @@ std::vector<ReportSection> load_report_suite(const std::vector<std::string>& sui
 
 // The spec `report` records in DIR/report.json ({"suite": "quick" | "full"}, plus the canonical
 // form of each spec file of a user suite) and compares with check_existing_results before it
-// runs (BadInput for a report of another suite in DIR unless force_output(); --svg is not part of
-// it).
+// runs (BadInput for a report of another suite in DIR unless force_output(); --svg and --html are
+// not part of it).
 nlohmann::json report_spec(const ReportOptions& opt);
 void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err);
 

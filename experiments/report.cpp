@@ -11,6 +11,7 @@
 
 #include "experiments/build_info.hpp"
 #include "experiments/commands.hpp"
+#include "experiments/html.hpp"
 #include "experiments/spec_file.hpp"
 #include "experiments/study.hpp"
 #include "experiments/sweep.hpp"
@@ -34,6 +35,38 @@ std::string section_name(const std::string& file) {
 }
 
 constexpr const char* kBuiltInSuite = "experiments/specs/report/";
+
+// A section's run metadata (DIR/NAME/STEM.json) as rows for the HTML page; none when unreadable.
+HtmlMetadata section_metadata(const fs::path& json_file) {
+  std::ifstream in(json_file);
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  return j.is_discarded() ? HtmlMetadata{} : html_metadata(j);
+}
+
+// DIR/report.html (--html): the page's metadata is the report's own (report.json), its
+// introduction the paragraphs of REPORT.md before the first section.
+void write_report_html(const fs::path& out_dir, const nlohmann::json& report_json,
+                       const std::string& intro, const std::vector<HtmlSection>& sections,
+                       std::ostream& out) {
+  HtmlMetadata meta;
+  const nlohmann::json& spec = report_json["spec"];
+  meta.emplace_back(
+      "suite",
+      spec.value("suite", "") +
+          (spec.contains("spec_files")
+               ? ", user suite of " + std::to_string(spec["spec_files"].size()) + " spec files"
+               : ", built-in suite"));
+  meta.emplace_back("sections", std::to_string(sections.size()));
+  const HtmlMetadata all = html_metadata(report_json);
+  for (const std::string key : {"stiffbench_version", "git_revision", "compiler", "build_type",
+                                "flags", "eigen_version", "threads", "date", "command_line"})
+    for (const auto& [k, v] : all)
+      if (k == key) meta.emplace_back(k, v);
+  const fs::path page = out_dir / "report.html";
+  write_html_page(page, "stiffbench report", meta, sections,
+                  "[REPORT.md](REPORT.md) · [report.json](report.json)\n\n" + intro);
+  out << "wrote " << page.string() << "\n";
+}
 
 }  // namespace
 
@@ -105,21 +138,25 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
   // suite is refused unless --force. Plot formats (--svg) are not part of it, as for the
   // studies. Written before the suite runs, so an interrupted report is identified too.
   const nlohmann::json spec = report_spec(opt);
-  check_existing_results(opt.out_dir, "report.json", {"REPORT.md"}, spec, opt.force, &err);
-  write_file_atomic(fs::path(opt.out_dir) / "report.json",
-                    run_metadata("report", spec).dump(2) + "\n");
+  check_existing_results(opt.out_dir, "report.json", {"REPORT.md", "report.html"}, spec, opt.force,
+                         &err);
+  const nlohmann::json report_json = run_metadata("report", spec);
+  write_file_atomic(fs::path(opt.out_dir) / "report.json", report_json.dump(2) + "\n");
+  std::ostringstream intro;
+  intro << "stiffbench " << STIFFBENCH_VERSION << ", revision " << git_revision() << ", "
+        << (opt.suite.empty() ? "" : "user suite, ") << (opt.quick ? "quick" : "full")
+        << " settings. Each section links its full-precision CSV, Markdown table and JSON metadata "
+           "(spec, versions, compiler, flags, date); its spec file reproduces it with `stiffbench "
+           "run`.\n\n";
+  intro << "Errors are max-norms against the exact solution or the named reference; 'observed "
+           "order' is log(e_k/e_{k+1})/log(h_k/h_{k+1}) between consecutive step sizes. A "
+           "convergence section's order is a least-squares fit over its asymptotic window "
+           "(consecutive levels above the round-off floor and the reference's accuracy whose "
+           "observed orders agree), shown with its standard error and h range; rows at a floor "
+           "have status `floor`.\n\n";
   std::ostringstream md;
-  md << "# stiffbench report\n\n";
-  md << "stiffbench " << STIFFBENCH_VERSION << ", revision " << git_revision() << ", "
-     << (opt.suite.empty() ? "" : "user suite, ") << (opt.quick ? "quick" : "full")
-     << " settings. Each section links its full-precision CSV, Markdown table and JSON metadata "
-        "(spec, versions, compiler, flags, date); its spec file reproduces it with `stiffbench "
-        "run`.\n\n";
-  md << "Errors are max-norms against the exact solution or the named reference; 'observed order' "
-        "is log(e_k/e_{k+1})/log(h_k/h_{k+1}) between consecutive step sizes. A convergence "
-        "section's order is a least-squares fit over its asymptotic window (consecutive levels "
-        "above the round-off floor and the reference's accuracy whose observed orders agree), "
-        "shown with its standard error and h range; rows at a floor have status `floor`.\n\n";
+  md << "# stiffbench report\n\n" << intro.str();
+  std::vector<HtmlSection> html;
   for (std::size_t i = 0; i < sections.size(); ++i) {
     const ReportSection& s = sections[i];
     err << "== [" << i + 1 << "/" << sections.size() << "] " << s.name << "\n";
@@ -127,7 +164,7 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
     auto job = make_spec_job(s.spec, "");
     job->run(&err);
     const fs::path dir = fs::path(opt.out_dir) / s.name;
-    const bool plotted = job->write(dir, s.spec.title, {opt.svg}, err);
+    const bool plotted = job->write(dir, s.spec.title, {opt.svg || opt.html}, err);
     md << "## " << s.spec.title << "\n\n";
     std::vector<std::string> files = {kind.stem + ".csv"};
     files.insert(files.end(), kind.extra_files.begin(), kind.extra_files.end());
@@ -137,10 +174,19 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
       md << (f ? " · " : "") << "[" << files[f] << "](" << s.name << "/" << files[f] << ")";
     md << "\n\n";
     if (plotted) md << "![" << s.spec.title << "](" << s.name << "/" << kind.stem << ".png)\n\n";
-    md << job->report_markdown(s.spec.note);
+    const std::string text = job->report_markdown(s.spec.note);
+    md << text;
+    if (!opt.html) continue;
+    // The note opens the section's text (report_markdown), so it is not repeated.
+    HtmlSection h{s.name, s.spec.title, "", text, {}, dir / (kind.stem + ".csv"), 300, {}, {}};
+    if (plotted) h.svgs.push_back(dir / (kind.stem + ".svg"));
+    for (const auto& f : files) h.links.push_back({f, s.name + "/" + f});
+    h.metadata = section_metadata(dir / (kind.stem + ".json"));
+    html.push_back(std::move(h));
   }
   write_file_atomic(fs::path(opt.out_dir) / "REPORT.md", md.str());
   out << "wrote " << (fs::path(opt.out_dir) / "REPORT.md").string() << "\n";
+  if (opt.html) write_report_html(opt.out_dir, report_json, intro.str(), html, out);
 }
 
 }  // namespace stiffbench

@@ -9,6 +9,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev
   googletest libgtest-dev libgmock-dev libbenchmark-dev
   gnuplot-nox clang-format
+  chromium
   clang libclang-rt-14-dev
   python3
 )

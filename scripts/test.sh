@@ -24,10 +24,10 @@ echo "== Function lengths: none in experiments/ over 120 lines (the five longest
 python3 "$root/scripts/function_lengths.py" -n 5 --max 120 "$root"/experiments/*.cpp
 echo "== Install check (cmake --install, examples/user_system with find_package, add_subdirectory)"
 "$root/scripts/check-install.sh" "$root/build"
-echo "== stiffbench report --quick (every experiment kind with its plot)"
+echo "== stiffbench report --quick --html (every experiment kind with its plot)"
 rm -rf "$root/build/report-quick"
 start=$(date +%s)
-if ! "$root/build/experiments/stiffbench" report --quick --out "$root/build/report-quick" \
+if ! "$root/build/experiments/stiffbench" report --quick --html --out "$root/build/report-quick" \
     2>"$root/build/report-quick.log"; then
   tail -n 30 "$root/build/report-quick.log" >&2
   exit 1
@@ -39,6 +39,8 @@ for kind in convergence local_error energy region stability work_precision; do
     exit 1
   fi
 done
+echo "== report.html in headless Chromium (sections, plots, no console error, sorting, screenshot)"
+"$root/scripts/check-html.sh" "$root/build/report-quick"
 
 # --- Determinism and fuzzing (issue 14): the same command twice and 1 vs 2 threads give
 # identical CSVs (about 20 s); the libFuzzer targets of fuzz/ built with clang (about a minute

@@ -148,6 +148,49 @@ TEST(ReportSuite, PendulumSectionEqualsRunOnItsSpec) {
   fs::remove_all(dir);
 }
 
+// --html: DIR/report.html holds both sections (titles escaped), one inline SVG per plotted
+// section (the region study draws one; the plot needs gnuplot, so the count is the number of
+// SVG files written), the links to each section's files and the run metadata.
+TEST(ReportSuite, HtmlPageHoldsEverySection) {
+  const fs::path dir = fresh_dir("suite", "html");
+  fs::create_directories(dir / "suite");
+  std::ofstream(dir / "suite" / "01_osc.toml")
+      << "kind = \"convergence\"\ntitle = \"Oscillator <k & m>\"\nnote = \"Slopes.\"\n"
+         "model = \"harmonic_oscillator\"\nintegrators = [\"rk4\", \"heun\"]\n"
+         "t_end = 1.0\nh = 0.1\nlevels = 2\n";
+  std::ofstream(dir / "suite" / "02_regions.toml")
+      << "kind = \"region\"\ntitle = \"Regions\"\nintegrators = [\"rk4\"]\nresolution = 40\n";
+  const auto r = run_cli("report " + shell_quote((dir / "suite").string()) + " --html --out " +
+                         shell_quote((dir / "out").string()));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("report.html"), std::string::npos) << r.out;
+  const std::string page = slurp(dir / "out" / "report.html");
+  EXPECT_NE(page.find("<h2>Oscillator &lt;k &amp; m&gt;</h2>"), std::string::npos);
+  EXPECT_NE(page.find("<section class=\"report-section\" id=\"sec-regions\">\n<h2>Regions</h2>"),
+            std::string::npos);
+  std::size_t svgs = 0, plots = 0;
+  for (const char* s : {"osc/convergence.svg", "regions/region.svg"})
+    svgs += fs::exists(dir / "out" / s) ? 1 : 0;
+  for (auto p = page.find("<figure class=\"plot\"><svg"); p != std::string::npos;
+       p = page.find("<figure class=\"plot\"><svg", p + 1))
+    ++plots;
+  EXPECT_EQ(plots, svgs);
+  EXPECT_NE(page.find("<a href=\"osc/convergence.csv\">convergence.csv</a>"), std::string::npos);
+  EXPECT_NE(page.find("<a href=\"regions/region.json\">region.json</a>"), std::string::npos);
+  EXPECT_NE(page.find("<th scope=\"row\">stiffbench_version</th><td>" STIFFBENCH_VERSION "</td>"),
+            std::string::npos);
+  EXPECT_NE(page.find("<th scope=\"row\">suite</th><td>full, user suite of 2 spec files</td>"),
+            std::string::npos);
+  // The note opens the section's text once (not repeated as a separate paragraph).
+  EXPECT_NE(page.find("<p>Slopes. Reference: exact."), std::string::npos);
+  // Without --html no page is written.
+  const auto plain = run_cli("report " + shell_quote((dir / "suite").string()) + " --out " +
+                             shell_quote((dir / "plain").string()));
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  EXPECT_FALSE(fs::exists(dir / "plain" / "report.html"));
+  fs::remove_all(dir);
+}
+
 TEST(ReportSuite, BadSuitesAreRefusedBeforeAnythingRuns) {
   const fs::path dir = fresh_dir("suite", "bad");
   fs::create_directories(dir / "empty");
