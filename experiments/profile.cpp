@@ -92,26 +92,43 @@ std::pair<nlohmann::json, nlohmann::json> split_settings(const SpecFile& s) {
   return {shared, problem};
 }
 
+// The settings as "key" or "table.key" -> value (params and quick one level down).
+std::map<std::string, nlohmann::json> flatten(const nlohmann::json& j) {
+  std::map<std::string, nlohmann::json> out;
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    if (it.value().is_object()) {
+      for (auto in = it.value().begin(); in != it.value().end(); ++in)
+        out[in.key().rfind(it.key() + ".", 0) == 0 ? in.key() : it.key() + "." + in.key()] =
+            in.value();
+    } else {
+      out[it.key()] = it.value();
+    }
+  }
+  return out;
+}
+
 // "no per-problem tuning": every file's study settings equal the first file's.
 void check_uniform(const ProfileSuite& suite, const std::vector<std::string>& files,
                    const std::vector<nlohmann::json>& shared) {
+  const auto first = flatten(shared[0]);
   for (std::size_t i = 1; i < shared.size(); ++i) {
     if (shared[i] == shared[0]) continue;
+    const auto other = flatten(shared[i]);
     std::set<std::string> keys;
-    for (const auto* j : {&shared[0], &shared[i]})
-      for (auto it = j->begin(); it != j->end(); ++it) keys.insert(it.key());
-    std::string key;
-    for (const auto& k : keys)
-      if (shared[0].value(k, nlohmann::json()) != shared[i].value(k, nlohmann::json())) {
-        key = k;
-        break;
-      }
-    throw BadInput("profile: suite " + suite.name + " tunes per problem: " + files[i] +
-                   " differs from " + files[0] + " in '" + key + "' (" +
-                   shared[i].value(key, nlohmann::json()).dump() + " against " +
-                   shared[0].value(key, nlohmann::json()).dump() +
-                   "); every file of a suite must share integrators and study settings, only "
-                   "model, the model's [params] and t_end may differ");
+    for (const auto* m : {&first, &other})
+      for (const auto& [k, v] : *m) keys.insert(k);
+    auto value = [](const std::map<std::string, nlohmann::json>& m, const std::string& k) {
+      const auto it = m.find(k);
+      return it == m.end() ? std::string("(not set)") : it->second.dump();
+    };
+    for (const auto& k : keys) {
+      if (value(first, k) == value(other, k)) continue;
+      throw BadInput("profile: suite " + suite.name + " tunes per problem: " + files[i] +
+                     " differs from " + files[0] + " in '" + k + "' (" + value(other, k) +
+                     " against " + value(first, k) +
+                     "); every file of a suite must share integrators and study settings, only "
+                     "model, the model's [params] and t_end may differ");
+    }
   }
 }
 
@@ -411,15 +428,14 @@ void plot_profiles(const ProfileResult& r, const fs::path& dir, const PlotOption
     }
 }
 
+// What DIR/profile.json records and compares: the suite (its problems' specs), not tau and cost,
+// which only change the profiles drawn from the same rows (another --tau reuses every problem
+// and rewrites profile.{csv,md,json}).
 nlohmann::json profile_spec(const ProfileSuite& suite, const ProfileOptions& opt) {
   nlohmann::json problems = nlohmann::json::array();
   for (const auto& p : suite.problems)
     problems.push_back({{"name", p.name}, {"spec", p.spec.to_json()}});
-  return {{"suite", suite.name},
-          {"quick", opt.quick},
-          {"tau", opt.taus},
-          {"cost", opt.costs},
-          {"problems", problems}};
+  return {{"suite", suite.name}, {"quick", opt.quick}, {"problems", problems}};
 }
 
 // Runs or reuses every problem; returns its rows.
@@ -537,6 +553,8 @@ ProfileResult run_profile(const ProfileSuite& suite, const ProfileOptions& opt, 
   write_file_atomic(dir / "profile.csv", profile_csv_table(r).to_csv());
   write_file_atomic(dir / "profile.md", profile_markdown(r));
   nlohmann::json meta = run_metadata("profile", spec);
+  meta["tau"] = opt.taus;
+  meta["cost"] = opt.costs;
   meta["per_problem_settings"] = false;  // checked when the suite was loaded
   // Every setting a spec file states (anything not stated is the study's default).
   meta["shared_settings"] = suite.shared;
