@@ -2,6 +2,7 @@
 # performance profile rho_m(alpha) against alpha (log2), panel 2 the data profile d_m(kappa)
 # against the budget kappa in cost units (log10), one step line per method, for one target
 # accuracy `tau` and one cost measure `cost` (both as written in the CSV). Reads only the CSV.
+# The data panel's axis is linear when some cost is 0 (a log axis cannot show it).
 #
 #   gnuplot -e "csvfile='DIR/profile.csv'; outfile='DIR/profile_1e-06_wall.png'; npanels='2'; \
 #               pmethods1='cvode_bdf radau5'; ptitle1='performance'; pmethods2='cvode_bdf radau5'; \
@@ -26,9 +27,12 @@ do for [K=1:np] {
     set xlabel "alpha (cost / cheapest method's cost)"
     set format x "%g"
   } else {
-    set logscale x 10
+    # A zero cost (no linear solves at all) has no place on a log axis: then the axis is linear.
+    stats csvfile every ::1 using (strcol(1) eq tau && strcol(2) eq cost && strcol(3) eq k && column(5) <= 0 ? 1 : NaN) nooutput
+    nonpositive = exists("STATS_records") ? STATS_records : 0
+    undefine STATS_*
+    if (nonpositive == 0) { set logscale x 10; set format x "10^{%L}" } else { set format x "%g" }
     set xlabel sprintf("budget kappa (%s)", cost) noenhanced
-    set format x "10^{%L}"
   }
   plot for [j=1:n] csvfile every ::1 using (sel(k, j) ? column(5) : NaN):(sel(k, j) ? column(6) : NaN) \
          with steps lt j title word(m, j)
