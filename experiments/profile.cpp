@@ -357,23 +357,28 @@ Table read_rows(const fs::path& csv) {
   return t;
 }
 
-// Whether DIR holds a complete run of `spec` (run.json's hash, every unit in the CSV).
-bool complete_run(const fs::path& dir, const SpecFile& spec) {
+// What DIR holds of `spec`: a run of it (run.json's hash), and every unit of it in the CSV.
+struct HeldRun {
+  bool same_spec = false, complete = false;
+};
+HeldRun held_run(const fs::path& dir, const SpecFile& spec) {
+  HeldRun h;
   std::ifstream in(dir / "run.json");
-  if (!in) return false;
+  if (!in) return h;
   nlohmann::json run;
   try {
     run = nlohmann::json::parse(in);
   } catch (const nlohmann::json::exception&) {
-    return false;
+    return h;
   }
-  if (run.value("spec_hash", "") != spec_hash(spec)) return false;
-  if (!run.value("missing_units", nlohmann::json::array()).empty()) return false;
+  h.same_spec = run.value("spec_hash", "") == spec_hash(spec);
+  if (!h.same_spec || !run.value("missing_units", nlohmann::json::array()).empty()) return h;
   std::ifstream csv_in(dir / "work_precision.csv");
   std::stringstream text;
   text << csv_in.rdbuf();
-  return static_cast<long>(parse_run_csv(text.str()).units.size()) ==
-         static_cast<long>(spec.integrators.size());
+  h.complete = static_cast<long>(parse_run_csv(text.str()).units.size()) ==
+               static_cast<long>(spec.integrators.size());
+  return h;
 }
 
 std::string tau_text(double tau) { return format_short(tau, 0); }
@@ -445,15 +450,18 @@ std::vector<Table> run_problems(ProfileResult& r, const ProfileOptions& opt, std
   for (std::size_t i = 0; i < n; ++i) {
     const ProfileProblem& p = r.suite.problems[i];
     const fs::path dir = fs::path(opt.out_dir) / p.name;
-    if (!opt.force && complete_run(dir, p.spec)) {
+    const HeldRun held = held_run(dir, p.spec);
+    if (held.complete) {
       err << "== [" << i + 1 << "/" << n << "] " << p.name << ": reusing " << dir.string() << "\n";
       r.reused.push_back(p.name);
     } else {
       err << "== [" << i + 1 << "/" << n << "] " << p.name << "\n";
       RunOptions ro;
       ro.out_dir = dir.string();
-      ro.force = opt.force;
-      ro.resume = !opt.force;
+      // The units of this spec already there are kept (--resume); --force replaces only a run
+      // of another spec.
+      ro.force = opt.force && !held.same_spec;
+      ro.resume = !ro.force;
       run_loaded_spec(p.spec, ro, err, err);  // exit code 3 (a failed unit): unsolved there
       r.ran.push_back(p.name);
     }

@@ -15,7 +15,9 @@
 // integrator, DIR/<problem>/{work_precision.csv,run.json}); a folder whose run.json records the
 // same spec hash and whose CSV holds every unit is reused as it is (also the folder of
 // `stiffbench merge` after `run --shard`/`--slurm`), one holding some units is completed
-// (--resume), one holding another spec is refused unless --force.
+// (--resume), one holding another spec is refused unless --force (which replaces it; a run of
+// the same spec is never started over). DIR/profile.json records the suite (not tau and cost):
+// another --tau or --cost on the same DIR reuses every problem and rewrites DIR/profile.*.
 //
 // Cost of method m on problem p at accuracy τ (no interpolation): the least cost among the
 // runs of m on p with status ok and error <= τ (error: the work-precision max-norm error at
@@ -113,7 +115,9 @@ struct ProfileOptions {
   std::vector<std::string> costs = {"f_evals", "wall"};
   std::string out_dir = "results";
   bool quick = false;
-  bool force = false;  // replace results of other specs in DIR/<problem>/ and DIR/profile.*
+  // Replace results of other specs in DIR/<problem>/ and DIR/profile.* (runs of the same spec
+  // are always reused or completed, never started over).
+  bool force = false;
   PlotOptions plot;
   void validate() const;  // BadInput naming --tau or --cost
 };
