@@ -447,6 +447,16 @@ nlohmann::json profile_spec(const ProfileSuite& suite, const ProfileOptions& opt
 std::vector<Table> run_problems(ProfileResult& r, const ProfileOptions& opt, std::ostream& err) {
   std::vector<Table> rows;
   const std::size_t n = r.suite.problems.size();
+  // Output safety before the first problem runs: a folder holding another spec's run is refused
+  // unless --force (`run` would refuse it only when its turn came).
+  for (const auto& p : r.suite.problems) {
+    const fs::path dir = fs::path(opt.out_dir) / p.name;
+    require_input(opt.force || !fs::exists(dir / "run.json") || held_run(dir, p.spec).same_spec,
+                  "--out " + dir.string() + " holds a run of another spec (" +
+                      (dir / "run.json").string() +
+                      "; e.g. --quick against full settings); choose another --out or pass "
+                      "--force to replace it");
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const ProfileProblem& p = r.suite.problems[i];
     const fs::path dir = fs::path(opt.out_dir) / p.name;

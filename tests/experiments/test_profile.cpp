@@ -244,6 +244,15 @@ TEST(Profile, TinySuiteEndToEndAndReused) {
   const nlohmann::json meta2 = nlohmann::json::parse(in2);
   EXPECT_EQ(meta2["reused"].size(), 2u);
   EXPECT_EQ(meta2["ran"].size(), 0u);
+  // Full settings against the quick run's folders (profile.* removed): refused with exit 2
+  // before any problem runs, the quick rows kept.
+  for (const char* f : {"profile.json", "profile.csv", "profile.md"}) fs::remove(out / f);
+  std::vector<std::string> full = args;
+  full.erase(full.begin() + 2);  // --quick
+  EXPECT_EQ(run_cli(full, &o, &e), 2) << e;
+  EXPECT_NE(e.find("another spec"), std::string::npos) << e;
+  std::ifstream run_json(out / "oscillator" / "run.json");
+  EXPECT_EQ(nlohmann::json::parse(run_json)["spec"]["repeats"], 1);
   fs::remove_all(suite);
   fs::remove_all(out);
 }
