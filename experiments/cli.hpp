@@ -26,9 +26,10 @@ void add_common_flags(CLI::App* cmd, CommonFlags& f, bool with_model, bool model
 
 // One subcommand per registered study (experiments/cli_study.cpp).
 void add_study_commands(CLI::App& app);
-void add_list_commands(CLI::App& app);   // list, describe (experiments/cli_list.cpp)
-void add_solve_command(CLI::App& app);   // experiments/cli_solve.cpp
-void add_report_command(CLI::App& app);  // experiments/cli_report.cpp
+void add_list_commands(CLI::App& app);    // list, describe (experiments/cli_list.cpp)
+void add_solve_command(CLI::App& app);    // experiments/cli_solve.cpp
+void add_report_command(CLI::App& app);   // experiments/cli_report.cpp
+void add_profile_command(CLI::App& app);  // experiments/cli_report.cpp
 void add_plot_command(CLI::App& app);
 void add_run_commands(CLI::App& app);  // run SPEC.toml and merge (experiments/cli_run.cpp)
 

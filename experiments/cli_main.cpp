@@ -120,6 +120,7 @@ int cli_main(int argc, char** argv) {
   add_list_commands(app);
   add_solve_command(app);
   add_report_command(app);
+  add_profile_command(app);
   add_study_commands(app);
   add_plot_command(app);
   add_run_commands(app);

@@ -1,10 +1,14 @@
-// `stiffbench report [SUITE...]` (experiments/report.cpp).
+// `stiffbench report [SUITE...]` (experiments/report.cpp) and `stiffbench profile SUITE`
+// (experiments/profile.cpp).
 #include <iostream>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "experiments/cli.hpp"
 #include "experiments/commands.hpp"
 #include "experiments/output.hpp"
+#include "experiments/profile.hpp"
 
 namespace stiffbench {
 
@@ -27,6 +31,47 @@ void add_report_command(CLI::App& app) {
   report->callback([opt]() {
     opt->force = force_output();
     cmd_report(*opt, std::cout, std::cerr);
+  });
+}
+
+void add_profile_command(CLI::App& app) {
+  struct State {
+    ProfileOptions opt;
+    std::vector<std::string> taus = {"1e-3", "1e-6"}, costs = {"f_evals", "wall"};
+  };
+  auto st = std::make_shared<State>();
+  auto* profile = app.add_subcommand(
+      "profile",
+      "performance and data profiles over a suite of work-precision specs (built in: stiff, "
+      "mechanical; or a folder): runs or reuses DIR/<problem>/, writes DIR/profile.{csv,md,json} "
+      "and plots, prints the rankings");
+  profile->add_option("suite", st->opt.suite, "a built-in suite (stiff, mechanical) or a folder")
+      ->required();
+  profile->add_option("--tau", st->taus, "target accuracies, comma-separated (error <= tau)")
+      ->delimiter(',')
+      ->capture_default_str();
+  profile->add_option("--cost", st->costs, "cost measures: f_evals, wall, linear_solves")
+      ->delimiter(',')
+      ->capture_default_str();
+  profile->add_option("--out", st->opt.out_dir, "output directory")->capture_default_str();
+  profile->add_flag("--quick", st->opt.quick, "apply each spec's [quick] overrides");
+  profile->add_flag("--svg", st->opt.plot.svg, "also write each plot as SVG");
+  profile->callback([st]() {
+    st->opt.taus.clear();
+    for (const auto& t : st->taus) {
+      std::size_t used = 0;
+      double v = 0;
+      try {
+        v = std::stod(t, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      require_input(used == t.size() && !t.empty(), "--tau: '" + t + "' is not a number");
+      st->opt.taus.push_back(v);
+    }
+    st->opt.costs = st->costs;
+    st->opt.force = force_output();
+    cmd_profile(st->opt, std::cout, std::cerr);
   });
 }
 

@@ -80,6 +80,10 @@ Table experiments_table() {
   t.rows.push_back({"report", "DIR/REPORT.md and one folder per study",
                     "the default suite: convergence, local error, energy drift, stability "
                     "limits and regions, work-precision"});
+  t.rows.push_back(
+      {"profile", "DIR/profile.{csv,md,json}, profile_<tau>_<cost>.png, one run folder per problem",
+       "performance and data profiles over a suite of work-precision specs (stiff, "
+       "mechanical or a folder) at each --tau and --cost, rankings"});
   // Studies registered from outside the library (register_study).
   for (const auto& k : study_kinds()) {
     bool listed = false;

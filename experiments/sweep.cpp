@@ -213,10 +213,14 @@ std::string md_name(const std::string& kind) {
   return fs::path(csv_name(kind)).replace_extension(".md").string();
 }
 
+}  // namespace
+
 // The spec's hash; with the method files it names (so a changed file is a different spec).
 std::string spec_hash(const SpecFile& s) {
   return hex16(fnv1a64(with_method_files(s.to_json()).dump()));
 }
+
+namespace {
 
 // `spec` with the method files among its integrators registered and replaced by their names;
 // relative paths are relative to the spec file's folder (catalog.hpp).
@@ -557,7 +561,12 @@ void run_units(const SpecFile& spec, const Expansion& ex, const std::vector<long
 }  // namespace
 
 int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
-  const SpecFile spec = with_method_names(load_spec_file(opt.spec_file, opt.sets));
+  return run_loaded_spec(load_spec_file(opt.spec_file, opt.sets), opt, out, err);
+}
+
+int run_loaded_spec(const SpecFile& loaded, const RunOptions& opt, std::ostream& out,
+                    std::ostream& err) {
+  const SpecFile spec = with_method_names(loaded);
   const Expansion ex = expand(spec);
   for (const auto& p : ex.points) validate_point(spec, p);
   if (opt.slurm_tasks < 0) throw BadInput("--slurm: expected a number of tasks >= 1");

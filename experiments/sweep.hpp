@@ -56,6 +56,14 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err);
 int merge_shards(const std::string& out_dir, const std::vector<std::string>& dirs,
                  std::ostream& out, std::ostream& err, bool force = false);
 
+// The same for a spec already loaded (a suite's spec, built in or with [quick] applied:
+// `stiffbench profile`); opt.spec_file and opt.sets are not used.
+int run_loaded_spec(const SpecFile& spec, const RunOptions& opt, std::ostream& out,
+                    std::ostream& err);
+// The hash `run` records in OUT/run.json (spec_hash): of the canonical spec with the method
+// files it names.
+std::string spec_hash(const SpecFile& spec);
+
 // "I/N" of --shard (BadInput naming --shard unless 0 <= I < N).
 void parse_shard(const std::string& arg, int& index, int& count);
 

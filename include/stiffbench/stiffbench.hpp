@@ -31,6 +31,8 @@
 //   experiments/audit.hpp, experiments/analyze.hpp
 //                                           the studies: spec in, records out, CSV/Markdown/JSON
 //                                           writers
+//   experiments/profile.hpp                 performance and data profiles over a suite of
+//                                           work-precision specs (run_profile, make_profile_suite)
 //   experiments/output.hpp, experiments/plotting.hpp
 //                                           tables, atomic files, run metadata, gnuplot plots
 //   experiments/cli_main.hpp                the whole command line as cli_main(argc, argv)
@@ -58,6 +60,7 @@
 #include "experiments/energy.hpp"
 #include "experiments/output.hpp"
 #include "experiments/plotting.hpp"
+#include "experiments/profile.hpp"
 #include "experiments/region.hpp"
 #include "experiments/stability.hpp"
 #include "experiments/study.hpp"
