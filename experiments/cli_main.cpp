@@ -54,8 +54,8 @@ class InterruptHandlers {
 // --max-memory, --max-wall and --force on the commands that build models, run integrators and
 // write results (docs/common.md: sizes and memory, faults, existing results).
 void add_run_limits(CLI::App& app) {
-  std::vector<std::string> builds_models = {"solve", "run", "report"};
-  std::vector<std::string> writes = {"solve", "run", "merge", "report"};
+  std::vector<std::string> builds_models = {"solve", "run", "report", "profile"};
+  std::vector<std::string> writes = {"solve", "run", "merge", "report", "profile"};
   for (const auto& k : study_kinds()) {
     if (k.takes_model) builds_models.push_back(k.name);
     writes.push_back(k.name);

@@ -56,6 +56,9 @@ void add_profile_command(CLI::App& app) {
   profile->add_option("--out", st->opt.out_dir, "output directory")->capture_default_str();
   profile->add_flag("--quick", st->opt.quick, "apply each spec's [quick] overrides");
   profile->add_flag("--svg", st->opt.plot.svg, "also write each plot as SVG");
+  profile->add_flag("--html", st->opt.html,
+                    "also write DIR/profile.html: one self-contained page with every profile "
+                    "(inline SVG), the cost tables and rankings (implies --svg)");
   profile->callback([st]() {
     st->opt.taus.clear();
     for (const auto& t : st->taus) {

@@ -2,6 +2,8 @@
 // studies (experiments/profile.hpp).
 #include "experiments/profile.hpp"
 
+#include "experiments/html.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -19,6 +21,7 @@
 #include "experiments/build_info.hpp"
 #include "experiments/catalog.hpp"
 #include "experiments/csv.hpp"
+#include "experiments/html.hpp"
 #include "experiments/study.hpp"
 #include "experiments/sweep.hpp"
 
@@ -496,6 +499,50 @@ Table profile_csv_table(const ProfileResult& r) {
   return t;
 }
 
+std::string section_title(const ProfileResult& r, std::size_t i, std::size_t c) {
+  return "tau = " + tau_text(r.taus[i]) + ", cost = " + r.costs[c];
+}
+
+std::string plot_stem(const ProfileResult& r, std::size_t i, std::size_t c) {
+  return "profile_" + tau_text(r.taus[i]) + "_" + r.costs[c];
+}
+
+// The cost table (cheapest per problem in bold) and the ranking of one τ and cost measure.
+std::string section_markdown(const CostTable& t) {
+  std::ostringstream md;
+  Table cost{{"problem"}, {}};
+  cost.columns.insert(cost.columns.end(), t.methods.begin(), t.methods.end());
+  for (std::size_t p = 0; p < t.problems.size(); ++p) {
+    std::vector<std::string> row = {t.problems[p]};
+    for (std::size_t m = 0; m < t.methods.size(); ++m) {
+      const double x = t.cost[p][m];
+      const bool best = std::isfinite(x) && x == best_cost(t, p);
+      row.push_back(!std::isfinite(x)
+                        ? "- (" + t.note[p][m] + ")"
+                        : (best ? "**" : "") + format_short(x, 3) + (best ? "**" : ""));
+    }
+    cost.rows.push_back(row);
+  }
+  md << cost.to_markdown() << "\n";
+  Table rank{{"rank", "method", "rho(1)", "rho(2)", "rho(10)", "area", "solved"}, {}};
+  int k = 0;
+  for (const std::size_t m : profile_ranking(t))
+    rank.rows.push_back(
+        {std::to_string(++k), t.methods[m], format_short(performance_profile(t, m, 1), 3),
+         format_short(performance_profile(t, m, 2), 3),
+         format_short(performance_profile(t, m, 10), 3), format_short(performance_area(t, m), 3),
+         format_short(data_profile(t, m, std::numeric_limits<double>::max()), 3)});
+  md << rank.to_markdown() << "\n";
+  return md.str();
+}
+
+std::string disagreement_markdown(const ProfileResult& r) {
+  std::ostringstream md;
+  if (r.disagreements.empty()) md << "The rankings agree.\n";
+  for (const auto& d : r.disagreements) md << "- " << d << "\n";
+  return md.str();
+}
+
 std::string profile_markdown(const ProfileResult& r) {
   std::ostringstream md;
   md << "# Performance and data profiles: suite " << r.suite.name << "\n\n";
@@ -510,39 +557,48 @@ std::string profile_markdown(const ProfileResult& r) {
         "under rho over log2 alpha.\n\n";
   for (std::size_t i = 0; i < r.taus.size(); ++i)
     for (std::size_t c = 0; c < r.costs.size(); ++c) {
-      const CostTable& t = r.table(i, c);
-      md << "## tau = " << tau_text(r.taus[i]) << ", cost = " << r.costs[c] << "\n\n";
-      Table cost{{"problem"}, {}};
-      cost.columns.insert(cost.columns.end(), t.methods.begin(), t.methods.end());
-      for (std::size_t p = 0; p < t.problems.size(); ++p) {
-        std::vector<std::string> row = {t.problems[p]};
-        for (std::size_t m = 0; m < t.methods.size(); ++m) {
-          const double x = t.cost[p][m];
-          const bool best = std::isfinite(x) && x == best_cost(t, p);
-          row.push_back(!std::isfinite(x)
-                            ? "- (" + t.note[p][m] + ")"
-                            : (best ? "**" : "") + format_short(x, 3) + (best ? "**" : ""));
-        }
-        cost.rows.push_back(row);
-      }
-      md << cost.to_markdown() << "\n";
-      Table rank{{"rank", "method", "rho(1)", "rho(2)", "rho(10)", "area", "solved"}, {}};
-      int k = 0;
-      for (const std::size_t m : profile_ranking(t))
-        rank.rows.push_back(
-            {std::to_string(++k), t.methods[m], format_short(performance_profile(t, m, 1), 3),
-             format_short(performance_profile(t, m, 2), 3),
-             format_short(performance_profile(t, m, 10), 3),
-             format_short(performance_area(t, m), 3),
-             format_short(data_profile(t, m, std::numeric_limits<double>::max()), 3)});
-      md << rank.to_markdown() << "\n";
-      const std::string png = "profile_" + tau_text(r.taus[i]) + "_" + r.costs[c] + ".png";
-      md << "![profiles](" << png << ")\n\n";
+      md << "## " << section_title(r, i, c) << "\n\n" << section_markdown(r.table(i, c));
+      md << "![profiles](" << plot_stem(r, i, c) << ".png)\n\n";
     }
-  md << "## Wall time against counters\n\n";
-  if (r.disagreements.empty()) md << "The rankings agree.\n";
-  for (const auto& d : r.disagreements) md << "- " << d << "\n";
+  md << "## Wall time against counters\n\n" << disagreement_markdown(r);
   return md.str();
+}
+
+// DIR/profile.html (--html): one section per τ and cost (its plots inline, the cost table and
+// the ranking), then the wall-time/counter disagreements; metadata from profile.json.
+void write_profile_html(const ProfileResult& r, const fs::path& dir, const nlohmann::json& meta,
+                        std::ostream& out) {
+  std::vector<HtmlSection> sections;
+  const std::vector<HtmlLink> links = {{"profile.csv", "profile.csv"},
+                                       {"profile.md", "profile.md"},
+                                       {"profile.json", "profile.json"}};
+  for (std::size_t i = 0; i < r.taus.size(); ++i)
+    for (std::size_t c = 0; c < r.costs.size(); ++c) {
+      HtmlSection h;
+      h.id = plot_stem(r, i, c);
+      h.title = section_title(r, i, c);
+      h.markdown = section_markdown(r.table(i, c));
+      h.svgs = {dir / (plot_stem(r, i, c) + ".svg")};
+      h.links = links;
+      sections.push_back(std::move(h));
+    }
+  HtmlSection agree;
+  agree.id = "wall-against-counters";
+  agree.title = "Wall time against counters";
+  agree.markdown = disagreement_markdown(r);
+  sections.push_back(std::move(agree));
+  HtmlMetadata md;
+  for (const auto& [k, v] : html_metadata(meta))
+    if (k != "shared_settings" && k != "problem_settings" && k != "spec") md.emplace_back(k, v);
+  const fs::path page = dir / "profile.html";
+  std::ostringstream intro;
+  intro << "Suite " << r.suite.name << " (" << r.suite.source << "), " << r.suite.problems.size()
+        << " problems, methods " << join(r.suite.methods)
+        << ". Cost of a method on a problem: the least cost among its runs with status ok and "
+           "error <= tau; rho_m(alpha) (Dolan & More 2002) and d_m(kappa) (More & Wild 2009) as "
+           "in [profile.md](profile.md).\n";
+  write_html_page(page, "stiffbench profile: suite " + r.suite.name, md, sections, intro.str());
+  out << "wrote " << page.string() << "\n";
 }
 
 ProfileResult run_profile(const ProfileSuite& suite, const ProfileOptions& opt, std::ostream& out,
@@ -551,8 +607,8 @@ ProfileResult run_profile(const ProfileSuite& suite, const ProfileOptions& opt, 
   require_input(!suite.problems.empty(), "profile: suite " + suite.name + " is empty");
   require_output_dir(opt.out_dir);
   const nlohmann::json spec = profile_spec(suite, opt);
-  check_existing_results(opt.out_dir, "profile.json", {"profile.csv", "profile.md"}, spec,
-                         opt.force, &err);
+  check_existing_results(opt.out_dir, "profile.json", {"profile.csv", "profile.md", "profile.html"},
+                         spec, opt.force, &err);
   const auto start = std::chrono::steady_clock::now();
   ProfileResult r;
   r.suite = suite;
@@ -582,7 +638,10 @@ ProfileResult run_profile(const ProfileSuite& suite, const ProfileOptions& opt, 
   meta["disagreements"] = r.disagreements;
   meta["wall_s"] = r.wall_s;
   write_file_atomic(dir / "profile.json", meta.dump(2) + "\n");
-  plot_profiles(r, dir, opt.plot, err);
+  PlotOptions plot = opt.plot;
+  plot.svg = plot.svg || opt.html;
+  plot_profiles(r, dir, plot, err);
+  if (opt.html) write_profile_html(r, dir, meta, out);
   out << "wrote " << (dir / "profile.md").string() << ", profile.csv, profile.json ("
       << format_short(r.wall_s, 3) << " s)\n";
   return r;

@@ -11,11 +11,15 @@
 # and writes REPORT_DIR/report.png (a 1280x4000 screenshot). Then a negative control: the same
 # page with one deliberate JavaScript error appended must fail the same check (so the check
 # cannot pass silently, e.g. with a Chromium that runs no script or logs nothing).
-# Exit 1 on any failure. Usage: scripts/check-html.sh REPORT_DIR
-# (CHROMIUM=/path/to/chromium to use another binary)
+# Exit 1 on any failure. Usage: scripts/check-html.sh DIR [PAGE MARKDOWN]
+# (default PAGE report.html, MARKDOWN REPORT.md; `stiffbench profile --html`: profile.html
+# profile.md; the screenshot is PAGE with .png; CHROMIUM=/path/to/chromium for another binary)
 set -euo pipefail
-dir="$(cd "${1:?usage: check-html.sh REPORT_DIR}" && pwd)"
-[ -f "$dir/report.html" ] || { echo "check-html: no $dir/report.html" >&2; exit 1; }
+dir="$(cd "${1:?usage: check-html.sh DIR [PAGE MARKDOWN]}" && pwd)"
+page_name="${2:-report.html}"
+md_name="${3:-REPORT.md}"
+[ -f "$dir/$page_name" ] || { echo "check-html: no $dir/$page_name" >&2; exit 1; }
+[ -f "$dir/$md_name" ] || { echo "check-html: no $dir/$md_name" >&2; exit 1; }
 chromium="${CHROMIUM:-$(command -v chromium || true)}"
 [ -n "$chromium" ] || { echo "check-html: chromium not found (scripts/install-deps.sh installs it)" >&2; exit 1; }
 work="$(mktemp -d)"
@@ -38,7 +42,7 @@ check_page() {
       --screenshot="$shot" "file://$page" >/dev/null 2>"$work/$tag.shot.log"; then
     tail -n 20 "$work/$tag.shot.log" >&2; echo "check-html: chromium --screenshot failed" >&2; return 1
   fi
-  python3 - "$dir/REPORT.md" "$work/$tag.dom.html" "$work/$tag.dom.log" "$work/$tag.shot.log" "$shot" <<'PY'
+  python3 - "$dir/$md_name" "$work/$tag.dom.html" "$work/$tag.dom.log" "$work/$tag.shot.log" "$shot" <<'PY'
 import html.parser, os, sys
 report_md, dom_file, *logs, shot = sys.argv[1:]
 md = open(report_md, encoding="utf-8").read()
@@ -96,14 +100,14 @@ PY
 }
 
 start=$(date +%s%N)
-check_page "$dir/report.html" "$dir/report.png"
+check_page "$dir/$page_name" "$dir/${page_name%.html}.png"
 echo "check-html: the page took $(( ($(date +%s%N) - start) / 1000000 )) ms (two Chromium loads)"
 
 # Negative control: a copy of the page (beside the original, so its relative links resolve the
 # same) with a script calling an undefined function must fail, with the error recorded.
 broken="$dir/.check-html-broken.html"
 trap 'rm -rf "$work" "$broken"' EXIT
-sed 's|</body>|<script>stiffbenchDeliberateError();</script></body>|' "$dir/report.html" >"$broken"
+sed 's|</body>|<script>stiffbenchDeliberateError();</script></body>|' "$dir/$page_name" >"$broken"
 if check_page "$broken" "$work/broken.png" 2>"$work/broken.err"; then
   echo "check-html: the negative control (a page with a deliberate error) passed the check" >&2
   exit 1

@@ -41,6 +41,16 @@ for kind in convergence local_error energy region stability work_precision; do
 done
 echo "== report.html in headless Chromium (sections, plots, no console error, sorting, screenshot)"
 "$root/scripts/check-html.sh" "$root/build/report-quick"
+echo "== stiffbench profile stiff --quick --html, and profile.html in headless Chromium"
+rm -rf "$root/build/profile-quick"
+start=$(date +%s)
+if ! "$root/build/experiments/stiffbench" profile stiff --quick --html --out "$root/build/profile-quick" \
+    >"$root/build/profile-quick.log" 2>&1; then
+  tail -n 30 "$root/build/profile-quick.log" >&2
+  exit 1
+fi
+echo "profile stiff --quick took $(( $(date +%s) - start )) s"
+"$root/scripts/check-html.sh" "$root/build/profile-quick" profile.html profile.md
 
 # --- Determinism and fuzzing (issue 14): the same command twice and 1 vs 2 threads give
 # identical CSVs (about 20 s); the libFuzzer targets of fuzz/ built with clang (about a minute
