@@ -69,6 +69,7 @@ void BudgetSpec::validate() const {
                 "--substeps and --iterations must each list at least one value");
   require_input(timing_repeats >= 1, "the number of timed runs must be >= 1");
   require_input(max_strain > 0, "--max-strain must be > 0");
+  require_input(ref_substeps >= 0, "--ref-substeps must be >= 0");
   require_input(!integrators.empty(), "--integrators: give at least one integrator");
   for (const char* key : {kIterationsKey, kSubstepsKey})
     if (params.contains(key))
@@ -87,12 +88,13 @@ nlohmann::json BudgetSpec::to_json() const {
           {kIterationsKey, iterations_list},
           {"timing_repeats", timing_repeats},
           {"seed", seed},
-          {"max_strain", max_strain}};
+          {"max_strain", max_strain},
+          {"ref_integrator", ref_integrator},
+          {"ref_substeps", ref_substeps}};
 }
 
-StrainStats spring_strain(const SpringNetworkView& net, CVecRef x) {
-  StrainStats s;
-  double sum2 = 0;
+std::vector<double> spring_strains(const SpringNetworkView& net, CVecRef x) {
+  std::vector<double> out;
   for (const SpringElement& e : net.springs) {
     if (!(e.k > 0) || !(e.rest > 0)) continue;
     double l2 = 0;
@@ -100,7 +102,15 @@ StrainStats spring_strain(const SpringNetworkView& net, CVecRef x) {
       const double d = x[net.dim * e.j + c] - x[net.dim * e.i + c];
       l2 += d * d;
     }
-    const double strain = std::abs(std::sqrt(l2) - e.rest) / e.rest;
+    out.push_back(std::abs(std::sqrt(l2) - e.rest) / e.rest);
+  }
+  return out;
+}
+
+StrainStats spring_strain(const SpringNetworkView& net, CVecRef x) {
+  StrainStats s;
+  double sum2 = 0;
+  for (const double strain : spring_strains(net, x)) {
     s.max = std::isnan(strain) ? strain : std::max(s.max, strain);
     sum2 += strain * strain;
     ++s.springs;
@@ -110,6 +120,7 @@ StrainStats spring_strain(const SpringNetworkView& net, CVecRef x) {
 }
 
 double BudgetRow::error() const {
+  if (!std::isnan(strain_error_max)) return strain_error_max;
   if (!std::isnan(strain_max)) return strain_max;
   return constraint;
 }
@@ -134,6 +145,7 @@ struct BudgetContext {
   const BudgetSpec& spec;
   const OdeSystem& sys;
   std::ostream* progress;
+  const std::vector<double>* ref_strains = nullptr;  // empty or null: no reference
 };
 
 // The grid in the rows' order: per method, substeps ascending as given, then iterations.
@@ -277,6 +289,7 @@ void measure_errors(const BudgetContext& c, const std::vector<Vec>& f, BudgetRow
   const OdeSystem& sys = c.sys;
   const double t_end = sys.initial_time() + c.spec.frame * static_cast<double>(c.spec.frame_count);
   row.strain_max = row.strain_rms = row.strain_peak = kNaN;
+  row.strain_error_max = row.strain_error_rms = kNaN;
   row.constraint = row.constraint_peak = kNaN;
   row.energy_rel = kNaN;
   const SpringNetworkView* net = sys.spring_network();
@@ -286,6 +299,17 @@ void measure_errors(const BudgetContext& c, const std::vector<Vec>& f, BudgetRow
     const StrainStats last = spring_strain(*net, f.back());
     row.strain_max = last.max;
     row.strain_rms = last.rms;
+    if (c.ref_strains && !c.ref_strains->empty()) {
+      const std::vector<double> s = spring_strains(*net, f.back());
+      double big = 0, sum2 = 0;
+      for (std::size_t i = 0; i < s.size(); ++i) {
+        const double d = std::abs(s[i] - (*c.ref_strains)[i]);
+        big = std::isnan(d) ? d : std::max(big, d);
+        sum2 += d * d;
+      }
+      row.strain_error_max = big;
+      row.strain_error_rms = std::sqrt(sum2 / static_cast<double>(s.size()));
+    }
   } else if (sys.has_constraints()) {
     row.constraint_peak = 0;
     for (const Vec& y : f)
@@ -335,6 +359,7 @@ BudgetRow budget_row(const BudgetContext& c, const BudgetPoint& p, std::size_t i
   }
   if (row.stats.status != Status::ok) {
     row.strain_max = row.strain_rms = row.strain_peak = kNaN;
+    row.strain_error_max = row.strain_error_rms = kNaN;
     row.constraint = row.constraint_peak = row.energy_rel = kNaN;
     row.angular_drift.reset();
   }
@@ -342,11 +367,49 @@ BudgetRow budget_row(const BudgetContext& c, const BudgetPoint& p, std::size_t i
   return row;
 }
 
+// The reference strains at the last frame: the scene run with spec.ref_integrator at
+// ref_substeps steps per frame, and at ref_substeps/2 as its check (BudgetResult::ref_check).
+// No reference (error measure strain_max) when ref_substeps is 0 or either run fails.
+void make_reference(const BudgetSpec& spec, const OdeSystem& sys, Integrator& integ,
+                    BudgetResult& res, std::ostream* progress) {
+  const SpringNetworkView& net = *sys.spring_network();
+  const double t_end = sys.initial_time() + spec.frame * static_cast<double>(spec.frame_count);
+  std::vector<double> strains[2];
+  for (int k = 0; k < 2; ++k) {
+    const long steps = std::max<long>(1, spec.ref_substeps / (k == 0 ? 1 : 2));
+    FixedStepOptions opt;
+    opt.t_end = t_end;
+    opt.h = spec.frame / static_cast<double>(steps);
+    const RunResult r = run_fixed_step(sys, integ, opt, {});
+    if (r.stats.status != Status::ok) {
+      res.ref_note = "no reference: " + spec.ref_integrator + " at " + std::to_string(steps) +
+                     " steps per frame ended with " + to_string(r.stats.status) + " (" +
+                     r.stats.message + "); the error is the strain itself";
+      return;
+    }
+    strains[k] = spring_strains(net, r.y);
+  }
+  res.ref_check = 0;
+  for (std::size_t i = 0; i < strains[0].size(); ++i)
+    res.ref_check = std::max(res.ref_check, std::abs(strains[0][i] - strains[1][i]));
+  res.ref_strains = std::move(strains[0]);
+  res.error_measure = "strain_error_max";
+  res.ref_note = "reference: " + spec.ref_integrator + " at " + std::to_string(spec.ref_substeps) +
+                 " steps per frame; its largest strain difference from the run at half as many "
+                 "steps is " +
+                 format_short(res.ref_check) + " (a bound of its own strain error)";
+  if (progress) *progress << "budget: " << res.ref_note << "\n" << std::flush;
+}
+
 }  // namespace
 
 BudgetResult run_budget(const BudgetSpec& spec, std::ostream* progress) {
   spec.validate();
-  Setup setup = make_setup(spec.model, spec.integrators, spec.params);
+  std::vector<std::string> names = spec.integrators;
+  names.push_back(spec.ref_integrator);  // checked with the others, before anything runs
+  Setup setup = make_setup(spec.model, names, spec.params);
+  const std::unique_ptr<Integrator> ref = std::move(setup.integrators.back());
+  setup.integrators.pop_back();
   const OdeSystem& sys = *setup.model;
   require_input(sys.as_mechanical() != nullptr,
                 "--model " + spec.model +
@@ -369,7 +432,9 @@ BudgetResult run_budget(const BudgetSpec& spec, std::ostream* progress) {
   } else {
     res.initial_strain_max = kNaN;
   }
-  const BudgetContext c{spec, sys, progress};
+  if (res.error_measure == "strain_max" && spec.ref_substeps > 0)
+    make_reference(spec, sys, *ref, res, progress);
+  const BudgetContext c{spec, sys, progress, &res.ref_strains};
   std::vector<BudgetPoint> points = budget_points(c);
   if (progress)
     *progress << "budget: " << points.size() << " configurations of " << spec.model << ", "
@@ -406,6 +471,8 @@ Table budget_table(const BudgetResult& r) {
            "strain_max",
            "strain_rms",
            "strain_peak",
+           "strain_error_max",
+           "strain_error_rms",
            "constraint_residual",
            "constraint_residual_peak",
            "energy_rel",
@@ -430,6 +497,8 @@ Table budget_table(const BudgetResult& r) {
                       opt_full(row.strain_max),
                       opt_full(row.strain_rms),
                       opt_full(row.strain_peak),
+                      opt_full(row.strain_error_max),
+                      opt_full(row.strain_error_rms),
                       opt_full(row.constraint),
                       opt_full(row.constraint_peak),
                       opt_full(row.energy_rel),
@@ -497,12 +566,14 @@ std::string ms_text(const BudgetRow& row) {
 }
 
 Table budget_markdown_table(const BudgetResult& r) {
-  const bool springs = r.error_measure == "strain_max";
+  const bool has_ref = r.error_measure == "strain_error_max";
+  const bool springs = has_ref || r.error_measure == "strain_max";
   const bool constraints = r.error_measure == "constraint_residual";
   bool angular = false;
   for (const auto& row : r.rows) angular = angular || row.angular_drift.has_value();
   Table t{{"integrator", "substeps × iterations", "total", "h", "ms/frame median [min, max]"}, {}};
   if (springs) t.columns.insert(t.columns.end(), {"strain max", "strain rms", "strain peak"});
+  if (has_ref) t.columns.insert(t.columns.end(), {"strain error max", "strain error rms"});
   if (constraints) t.columns.insert(t.columns.end(), {"constraint", "constraint peak"});
   t.columns.push_back("energy rel");
   if (angular) t.columns.push_back("L drift");
@@ -515,6 +586,8 @@ Table budget_markdown_table(const BudgetResult& r) {
     if (springs)
       for (double v : {row.strain_max, row.strain_rms, row.strain_peak})
         out.push_back(opt_short(v));
+    if (has_ref)
+      for (double v : {row.strain_error_max, row.strain_error_rms}) out.push_back(opt_short(v));
     if (constraints)
       for (double v : {row.constraint, row.constraint_peak}) out.push_back(opt_short(v));
     out.push_back(opt_short(row.energy_rel));
@@ -587,16 +660,22 @@ void write_budget_outputs(const std::filesystem::path& dir, const BudgetSpec& sp
         "median [min, max] over up to "
      << spec.timing_repeats << " runs per configuration in rounds shuffled with seed " << spec.seed
      << ". ";
-  if (r.error_measure == "strain_max") {
+  if (r.error_measure == "strain_max" || r.error_measure == "strain_error_max") {
     md << "Strain: |l - L|/L over every spring with k > 0 and L > 0 (the cloth: structural, shear "
           "and bend), largest and RMS at the last frame, peak: the largest over the frames; the "
           "initial state's largest strain is "
        << format_short(r.initial_strain_max) << ". ";
     // 1e-12: above the round-off of a grid at its rest lengths (~1e-15).
-    if (r.initial_strain_max > 1e-12)
+    if (r.error_measure == "strain_error_max")
+      md << "Strain error: |strain_i - strain_i(reference)| over the springs at the last frame, "
+            "largest and RMS: the error of the motion's stretch, not the stretch itself (which "
+            "holds the true motion's own strain, e.g. of the cloth's `perturbation`); "
+         << r.ref_note << ". ";
+    else if (r.initial_strain_max > 1e-12)
       md << "The scene does not start at its rest lengths (e.g. the cloth's `perturbation`), so "
             "the strain measured includes what is left of that initial stretch, which larger "
-            "steps damp faster; start at rest to compare solver error alone. ";
+            "steps damp faster ("
+         << r.ref_note << "). ";
   } else if (r.error_measure == "constraint_residual")
     md << "Constraint: the model's constraint residual max |C| at the last frame and its peak "
           "over the frames. ";
@@ -622,6 +701,8 @@ void write_budget_outputs(const std::filesystem::path& dir, const BudgetSpec& sp
   nlohmann::json meta = run_metadata("budget", spec.to_json());
   meta["error_measure"] = r.error_measure;
   meta["initial_strain_max"] = r.initial_strain_max;
+  meta["strain_reference"] = r.ref_note;
+  if (!r.ref_strains.empty()) meta["strain_reference_check"] = r.ref_check;
   meta["timing"] = {{"seed", spec.seed},
                     {"max_runs", spec.timing_repeats},
                     {"repeat_long_run_s", kRepeatLongRun},
@@ -638,6 +719,9 @@ bool plot_budget(const std::filesystem::path& csv, const std::string& title, con
   stem.replace_extension();
   const auto model = csv_column_values(csv, "model");
   const auto strain = csv_column_values(csv, "strain_max");
+  const auto strain_error = csv_column_values(csv, "strain_error_max");
+  bool has_ref = false;
+  for (const auto& v : strain_error) has_ref = has_ref || !v.empty();
   const auto constraint = csv_column_values(csv, "constraint_residual");
   const bool springs = strain.size() > 1 || (strain.size() == 1 && !strain[0].empty());
   const bool constrained =
@@ -658,15 +742,19 @@ bool plot_budget(const std::filesystem::path& csv, const std::string& title, con
   } catch (const std::exception&) {
   }
   const std::vector<std::string> methods = csv_column_values(csv, "integrator");
-  return run_plot("budget.gp", stem,
-                  {{"csvfile", csv.string()},
-                   {"ttl", title},
-                   {"xcol", index("ms_per_frame_median")},
-                   {"ycol", index(springs ? "strain_max" : "constraint_residual")},
-                   {"ylab", springs ? "largest relative strain |l - L|/L at the last frame"
-                                    : "constraint residual max |C| at the last frame"},
-                   {"budget_ms", format_full(1e3 * frame)}},
-                  {PlotPanel{"all methods", methods}}, opt, err);
+  return run_plot(
+      "budget.gp", stem,
+      {{"csvfile", csv.string()},
+       {"ttl", title},
+       {"xcol", index("ms_per_frame_median")},
+       {"ycol", index(has_ref   ? "strain_error_max"
+                      : springs ? "strain_max"
+                                : "constraint_residual")},
+       {"ylab", has_ref   ? "largest strain error |strain - strain(ref)| at the last frame"
+                : springs ? "largest relative strain |l - L|/L at the last frame"
+                          : "constraint residual max |C| at the last frame"},
+       {"budget_ms", format_full(1e3 * frame)}},
+      {PlotPanel{"all methods", methods}}, opt, err);
 }
 
 namespace {
@@ -721,7 +809,13 @@ StudyKind budget_study_kind() {
       {"seed", P::integer, "1", "seed of the shuffled run order and of the bootstrap",
        Bounds::non_negative()},
       {"max_strain", P::real, format_full(d.max_strain),
-       "a strain above this at any frame makes the configuration unstable", Bounds::positive()}};
+       "a strain above this at any frame makes the configuration unstable", Bounds::positive()},
+      {"ref_integrator", P::text, d.ref_integrator,
+       "reference of the strain error (spring networks): this integrator at --ref-substeps"},
+      {"ref_substeps", P::integer, std::to_string(d.ref_substeps),
+       "steps per frame of the reference (checked against half as many); 0: no reference, the "
+       "error is the strain itself",
+       Bounds::non_negative()}};
   k.unit_columns = budget_table(BudgetResult{}).columns;
   k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
     BudgetSpec spec;
@@ -735,6 +829,8 @@ StudyKind budget_study_kind() {
     spec.timing_repeats = static_cast<int>(o.integer(timing_repeats_option("").key));
     spec.seed = static_cast<unsigned long>(o.integer("seed"));
     spec.max_strain = o.real("max_strain");
+    spec.ref_integrator = o.text("ref_integrator");
+    spec.ref_substeps = o.integer("ref_substeps");
     return std::make_unique<BudgetJob>(std::move(spec));
   };
   return k;

@@ -36,9 +36,16 @@
 //   status         ok; unstable (non-finite, the driver's blow-up bound, or strain_peak above
 //                  max_strain); or the failure the driver reports (newton_failed, error, ...);
 //   fits           status ok and ms_per_frame (median) <= frame.
-// The error of a configuration (Pareto plot, best configuration) is strain_max when the model
-// has springs, else constraint_residual when it has constraints, else there is none and the
-// plot is not drawn.
+//   strain_error   for a spring network with a reference: |strain_i - strain_i(ref)| over the
+//                  springs at the last frame, max and RMS. The reference is the same scene run
+//                  with ref_integrator (default rk4) at ref_substeps (default 200) steps per
+//                  frame; its run at half as many steps is its check (ref_check, in the JSON and
+//                  the Markdown). A scene that does not start at its rest lengths (the cloth's
+//                  `perturbation`) keeps some strain that is not error: the strain of the true
+//                  motion; strain_error measures each method against it.
+// The error of a configuration (Pareto plot, best configuration) is strain_error_max when the
+// model has springs and the reference ran ok, else strain_max, else constraint_residual when it
+// has constraints, else there is none and the plot is not drawn.
 #pragma once
 
 #include <cstdint>
@@ -74,6 +81,10 @@ struct BudgetSpec {
   int timing_repeats = 3;  // most runs per configuration (see work-precision's timing)
   unsigned long seed = 1;
   double max_strain = 10.0;  // strain_peak above this is `unstable` (spring networks)
+  // Reference of the strain error (spring networks): the same scene run with `ref_integrator`
+  // at ref_substeps steps per frame, checked against its own run at ref_substeps/2 (0: none).
+  std::string ref_integrator = "rk4";
+  long ref_substeps = 200;
 
   void validate() const;  // BadInput naming the flag
   nlohmann::json to_json() const;
@@ -86,6 +97,8 @@ struct StrainStats {
   long springs = 0;
 };
 StrainStats spring_strain(const SpringNetworkView& net, CVecRef x);
+// |l - L|/L of every spring with k > 0 and L > 0, in the order of net.springs.
+std::vector<double> spring_strains(const SpringNetworkView& net, CVecRef x);
 
 struct BudgetRow {
   std::string integrator;
@@ -96,6 +109,8 @@ struct BudgetRow {
   double ms_max = 0;
   // Errors (NaN when the model has no springs / constraints, or the run did not end ok).
   double strain_max = 0, strain_rms = 0, strain_peak = 0;
+  // |strain_i - strain_i(reference)| over the springs at the last frame (NaN without a reference).
+  double strain_error_max = 0, strain_error_rms = 0;
   double constraint = 0, constraint_peak = 0;
   double energy_rel = 0;                // NaN without an energy invariant
   std::optional<double> angular_drift;  // models with angular momentum invariants
@@ -106,15 +121,23 @@ struct BudgetRow {
     if (!iterations) return std::nullopt;
     return substeps * *iterations;
   }
-  double error() const;  // strain_max, else constraint, else NaN (see the header comment)
+  // strain_error_max, else strain_max, else constraint, else NaN (see the header comment).
+  double error() const;
 };
 
 struct BudgetResult {
   std::string model;
   double frame = 0;
   long frame_count = 0;
-  std::string error_measure;      // "strain_max", "constraint_residual" or "" (none)
+  // "strain_error_max", "strain_max", "constraint_residual" or "" (none)
+  std::string error_measure;
   double initial_strain_max = 0;  // of the initial state (spring networks)
+  // The reference's strains at the last frame (per spring with k > 0 and L > 0; empty: none) and
+  // its self-check: max |strain_i(ref_substeps) - strain_i(ref_substeps/2)|, an upper bound of
+  // the reference's own strain error for a method of order >= 1.
+  std::vector<double> ref_strains;
+  double ref_check = 0;
+  std::string ref_note;  // how the reference was made, or why there is none
   std::string energy_scale_note;
   std::vector<BudgetRow> rows;
 };
