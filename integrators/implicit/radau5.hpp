@@ -65,15 +65,14 @@
 #pragma once
 
 #include <Eigen/LU>
-#include <Eigen/SparseLU>
 #include <complex>
-#include <memory>
 #include <string>
 
 #include "core/integrator.hpp"
 #include "core/tableau.hpp"
 #include "integrators/adaptive/controller.hpp"
 #include "integrators/implicit/implicit_core.hpp"
+#include "integrators/implicit/sparse_refactor_lu.hpp"
 
 namespace stiffbench {
 
@@ -104,7 +103,10 @@ Radau5Constants radau5_constants(const ButcherTableau& tableau);
 // Those of radau5_tableau().
 const Radau5Constants& radau5_constants();
 
-// M = shift·I - J factored, for a real or complex shift; dense or sparse.
+// M = shift·I - J factored, for a real or complex shift; dense (Eigen PartialPivLU) or sparse
+// (SparseRefactorLu: the pattern of J ∪ diagonal analysed once, later factorisations numeric
+// into the same storage, values written into sm_'s fixed pattern; no allocation after the
+// first factorisation while J's pattern stays).
 template <class Scalar>
 class ShiftedSolver {
  public:
@@ -123,7 +125,8 @@ class ShiftedSolver {
   SparseM sm_;
   std::vector<int> jac_pos_, diag_pos_;  // value positions in sm_ of J's entries and the diagonal
   std::vector<SparseMat::StorageIndex> jac_inner_;  // J's pattern when sm_ was built
-  std::unique_ptr<Eigen::SparseLU<SparseM, Eigen::COLAMDOrdering<int>>> slu_;
+  bool analyzed_ = false;                           // slu_ has sm_'s pattern
+  SparseRefactorLu<Scalar> slu_;
 };
 
 class Radau5 final : public Integrator {

@@ -118,6 +118,34 @@ TEST(Allocations, NoneInsideSteps) {
   EXPECT_GE(checked, 30);  // every family is covered (about 24 methods on three models)
 }
 
+// radau5, gauss4 and gauss6 on their sparse path (linear_solver=sparse_lu) on the cloth 32²
+// (6144 unknowns): the symbolic analysis and the first pivoting factorisation happen in the
+// first step; the later steps refactorise numerically into the same storage (issue #29).
+TEST(Allocations, NoneInsideSparseImplicitSteps) {
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(2);
+  auto sys = model("cloth", {"n=32"});
+  for (const std::string name : {"radau5", "gauss4", "gauss6"}) {
+    auto integ =
+        integrator_registry().create(name, Params::from_assignments({"linear_solver=sparse_lu"}));
+    Vec y = sys->initial_state();
+    SolveStats stats;
+    const double h = 1e-3;
+    integ->reset(*sys, 0.0, y);
+    ASSERT_EQ(integ->step(*sys, 0.0, y, h, stats), Status::ok) << name;
+    long allocations = 0;
+    const long setups = stats.linear_setups;
+    {
+      CountAllocations c;
+      for (int i = 1; i < 4; ++i) integ->step(*sys, h * i, y, h, stats);
+      allocations = c.count();
+    }
+    EXPECT_GT(stats.linear_setups, setups) << name;  // the steps refactorised
+    EXPECT_EQ(allocations, 0) << name << ": " << allocations / 3.0 << " a step";
+  }
+  omp_set_num_threads(threads);
+}
+
 // The adaptive methods (integrators/adaptive/; radau5 on its dense path, the Rosenbrock pairs
 // ros3p, rodas4 on their default velocity-form LDLT path and the ESDIRK pairs trbdf2, esdirk43 on
 // their default velocity-form solver, on the spring chain whose force Jacobians are written
