@@ -21,8 +21,9 @@
 // ((a - ib)/h I - J)(ΔW_2 + iΔW_3) = r_2 + i r_3 (HW IV.8, eq. (8.16)–(8.18)): two LU
 // factorisations per new h or J instead of one of size 3n.
 // Linear solvers: dense LU (Eigen PartialPivLU, real and std::complex<double>) up to 200
-// unknowns or with linear_solver=dense_lu; Eigen SparseLU (COLAMD) over the pattern of J
-// otherwise or with linear_solver=sparse_lu (symbolic analysis once per run). J comes from the
+// unknowns or with linear_solver=dense_lu; SparseRefactorLu (sparse_refactor_lu.hpp: COLAMD,
+// pivoting once, then numeric refactorisation) over the pattern of J ∪ diagonal otherwise or with
+// linear_solver=sparse_lu (symbolic analysis once per run). J comes from the
 // shared ImplicitCore (analytic, or finite differences dense / column-grouped; always the
 // first-order form of mechanical systems).
 //
@@ -60,8 +61,8 @@
 // Counting: f evaluations at the system boundary (3 per Newton iteration, f(t_n, y_n) once per
 // new point, finite-difference Jacobian columns); jac_evals; newton_iters; newton_conv_failures;
 // linear_setups +2 per factorisation pair; lin_solves +2 per Newton iteration (+1 per error
-// estimate); steps and error_test_failures. The dense path allocates nothing per step; Eigen's
-// SparseLU allocates in factorize().
+// estimate); steps and error_test_failures. Neither path allocates in a step after the first
+// (tests/integrators/test_allocations.cpp).
 #pragma once
 
 #include <Eigen/LU>
