@@ -88,9 +88,9 @@ TEST(Allocations, NoneInsideSteps) {
         continue;
       auto integ = integrator_registry().create(entry.info.name, Params());
       if (!integ->supports_fixed_step()) continue;
-      // radau5 above 200 unknowns factors with Eigen's SparseLU, which allocates in factorize();
-      // its dense path is covered here (spring_chain) and in NoneInsideAdaptiveSteps.
-      // gauss4 and gauss6 share radau5's linear solvers (the same limit).
+      // radau5, gauss4 and gauss6 above 200 unknowns take the sparse path, covered on smaller
+      // cloths below (NoneInsideSparse…; its LU on the cloth 48² would make this test slow);
+      // their dense path is covered here (spring_chain) and in NoneInsideAdaptiveSteps.
       const std::string& nm = entry.info.name;
       if ((nm == "radau5" || nm == "gauss4" || nm == "gauss6") && sys->dimension() > 200) continue;
       try {
