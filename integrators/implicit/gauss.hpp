@@ -26,7 +26,7 @@
 // with r = (T⁻¹ ⊗ I) F - h⁻¹ (Λ ⊗ I) W, the transformation of radau5 (HW II §IV.8). Gauss4's
 // A⁻¹ has one complex pair (one complex n×n system per iteration), gauss6's one real
 // eigenvalue and one pair (one real and one complex system). The linear solvers are radau5's
-// ShiftedSolver: dense LU up to 200 unknowns or with linear_solver=dense_lu, Eigen SparseLU over
+// ShiftedSolver: dense LU up to 200 unknowns or with linear_solver=dense_lu, SparseRefactorLu over
 // the pattern of J otherwise or with linear_solver=sparse_lu.
 //
 // The tableau is checked at construction (BadInput naming it): ButcherTableau::validate (sizes,
@@ -55,7 +55,7 @@
 // Counting: s f evaluations per Newton iteration; linear_setups +1 per factorisation (real or
 // complex), lin_solves +1 per system solved; J at every step (analytic, or finite differences
 // through the shared ImplicitCore, always the first-order form of mechanical systems). The
-// dense path allocates nothing per step; Eigen's SparseLU allocates in factorize().
+// dense and the sparse path allocate nothing in a step after the first.
 #pragma once
 
 #include <complex>

@@ -4,7 +4,8 @@
 // matrix or on a matrix-free operator (a Jacobian-vector product).
 //
 //   dense_lu   Eigen PartialPivLU on the dense copy (small systems)
-//   sparse_lu  Eigen SparseLU (COLAMD ordering), symbolic analysis reused across steps
+//   sparse_lu  SparseRefactorLu (COLAMD ordering, pivoting once, then numeric refactorisation
+//              without allocation; sparse_refactor_lu.hpp)
 //   ldlt       Eigen SimplicialLDLT (AMD ordering): symmetric matrices only
 //   cg         preconditioned conjugate gradients: symmetric positive definite matrices only
 //   bicgstab   preconditioned BiCGSTAB (van der Vorst 1992)

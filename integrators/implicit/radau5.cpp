@@ -125,7 +125,7 @@ void ShiftedSolver<Scalar>::reset(Index n, bool dense) {
   n_ = n;
   dense_ = dense;
   jac_inner_.clear();
-  slu_.reset();
+  analyzed_ = false;
   if (dense_) {
     m_.resize(n, n);
     lu_ = Eigen::PartialPivLU<DenseM>(n);
@@ -147,7 +147,7 @@ bool ShiftedSolver<Scalar>::factor(Scalar shift, const SparseMat& jac) {
   const auto nnz = static_cast<std::size_t>(jac.nonZeros());
   const bool same = nnz == jac_inner_.size() &&
                     std::equal(jac_inner_.begin(), jac_inner_.end(), jac.innerIndexPtr()) &&
-                    slu_ != nullptr;
+                    analyzed_;
   if (!same) {
     // Pattern of J ∪ diagonal, the value positions of both, and the symbolic analysis (once per
     // run unless the model's pattern changes).
@@ -174,16 +174,15 @@ bool ShiftedSolver<Scalar>::factor(Scalar shift, const SparseMat& jac) {
     diag_pos_.resize(static_cast<std::size_t>(n_));
     for (Index i = 0; i < n_; ++i) diag_pos_[static_cast<std::size_t>(i)] = position(i, i);
     jac_inner_.assign(jac.innerIndexPtr(), jac.innerIndexPtr() + nnz);
-    slu_ = std::make_unique<Eigen::SparseLU<SparseM, Eigen::COLAMDOrdering<int>>>();
-    slu_->analyzePattern(sm_);
+    slu_.analyze(sm_);
+    analyzed_ = true;
   }
   Scalar* v = sm_.valuePtr();
   std::fill(v, v + sm_.nonZeros(), Scalar(0));
   const double* jv = jac.valuePtr();
   for (std::size_t k = 0; k < nnz; ++k) v[jac_pos_[k]] = -jv[k];
   for (const int p : diag_pos_) v[p] += shift;
-  slu_->factorize(sm_);
-  return slu_->info() == Eigen::Success;
+  return slu_.factor(sm_);
 }
 
 template <class Scalar>
@@ -191,7 +190,7 @@ void ShiftedSolver<Scalar>::solve(const CVector& rhs, CVector& out) {
   if (dense_)
     out.noalias() = lu_.solve(rhs);
   else
-    out = slu_->solve(rhs);
+    slu_.solve(rhs, out);
 }
 
 template class ShiftedSolver<double>;

@@ -21,8 +21,9 @@
 // ((a - ib)/h I - J)(ΔW_2 + iΔW_3) = r_2 + i r_3 (HW IV.8, eq. (8.16)–(8.18)): two LU
 // factorisations per new h or J instead of one of size 3n.
 // Linear solvers: dense LU (Eigen PartialPivLU, real and std::complex<double>) up to 200
-// unknowns or with linear_solver=dense_lu; Eigen SparseLU (COLAMD) over the pattern of J
-// otherwise or with linear_solver=sparse_lu (symbolic analysis once per run). J comes from the
+// unknowns or with linear_solver=dense_lu; SparseRefactorLu (sparse_refactor_lu.hpp: COLAMD,
+// pivoting once, then numeric refactorisation) over the pattern of J ∪ diagonal otherwise or with
+// linear_solver=sparse_lu (symbolic analysis once per run). J comes from the
 // shared ImplicitCore (analytic, or finite differences dense / column-grouped; always the
 // first-order form of mechanical systems).
 //
@@ -60,20 +61,19 @@
 // Counting: f evaluations at the system boundary (3 per Newton iteration, f(t_n, y_n) once per
 // new point, finite-difference Jacobian columns); jac_evals; newton_iters; newton_conv_failures;
 // linear_setups +2 per factorisation pair; lin_solves +2 per Newton iteration (+1 per error
-// estimate); steps and error_test_failures. The dense path allocates nothing per step; Eigen's
-// SparseLU allocates in factorize().
+// estimate); steps and error_test_failures. Neither path allocates in a step after the first
+// (tests/integrators/test_allocations.cpp).
 #pragma once
 
 #include <Eigen/LU>
-#include <Eigen/SparseLU>
 #include <complex>
-#include <memory>
 #include <string>
 
 #include "core/integrator.hpp"
 #include "core/tableau.hpp"
 #include "integrators/adaptive/controller.hpp"
 #include "integrators/implicit/implicit_core.hpp"
+#include "integrators/implicit/sparse_refactor_lu.hpp"
 
 namespace stiffbench {
 
@@ -104,7 +104,10 @@ Radau5Constants radau5_constants(const ButcherTableau& tableau);
 // Those of radau5_tableau().
 const Radau5Constants& radau5_constants();
 
-// M = shift·I - J factored, for a real or complex shift; dense or sparse.
+// M = shift·I - J factored, for a real or complex shift; dense (Eigen PartialPivLU) or sparse
+// (SparseRefactorLu: the pattern of J ∪ diagonal analysed once, later factorisations numeric
+// into the same storage, values written into sm_'s fixed pattern; no allocation after the
+// first factorisation while J's pattern stays).
 template <class Scalar>
 class ShiftedSolver {
  public:
@@ -123,7 +126,8 @@ class ShiftedSolver {
   SparseM sm_;
   std::vector<int> jac_pos_, diag_pos_;  // value positions in sm_ of J's entries and the diagonal
   std::vector<SparseMat::StorageIndex> jac_inner_;  // J's pattern when sm_ was built
-  std::unique_ptr<Eigen::SparseLU<SparseM, Eigen::COLAMDOrdering<int>>> slu_;
+  bool analyzed_ = false;                           // slu_ has sm_'s pattern
+  SparseRefactorLu<Scalar> slu_;
 };
 
 class Radau5 final : public Integrator {

@@ -88,9 +88,9 @@ TEST(Allocations, NoneInsideSteps) {
         continue;
       auto integ = integrator_registry().create(entry.info.name, Params());
       if (!integ->supports_fixed_step()) continue;
-      // radau5 above 200 unknowns factors with Eigen's SparseLU, which allocates in factorize();
-      // its dense path is covered here (spring_chain) and in NoneInsideAdaptiveSteps.
-      // gauss4 and gauss6 share radau5's linear solvers (the same limit).
+      // radau5, gauss4 and gauss6 above 200 unknowns take the sparse path, covered on smaller
+      // cloths below (NoneInsideSparse…; its LU on the cloth 48² would make this test slow);
+      // their dense path is covered here (spring_chain) and in NoneInsideAdaptiveSteps.
       const std::string& nm = entry.info.name;
       if ((nm == "radau5" || nm == "gauss4" || nm == "gauss6") && sys->dimension() > 200) continue;
       try {
@@ -116,6 +116,70 @@ TEST(Allocations, NoneInsideSteps) {
   }
   omp_set_num_threads(threads);
   EXPECT_GE(checked, 30);  // every family is covered (about 24 methods on three models)
+}
+
+// Steps of `name` with linear_solver=sparse_lu after a first one (the symbolic analysis and the
+// pivoting factorisation): allocations in two further steps, which refactorise.
+long sparse_lu_step_allocations(const OdeSystem& sys, const std::string& name) {
+  auto integ =
+      integrator_registry().create(name, Params::from_assignments({"linear_solver=sparse_lu"}));
+  Vec y = sys.initial_state();
+  SolveStats stats;
+  const double h = 1e-3;
+  integ->reset(sys, 0.0, y);
+  EXPECT_EQ(integ->step(sys, 0.0, y, h, stats), Status::ok) << name;
+  const long setups = stats.linear_setups;
+  long allocations = 0;
+  {
+    CountAllocations c;
+    for (int i = 1; i < 3; ++i) integ->step(sys, h * i, y, h, stats);
+    allocations = c.count();
+  }
+  EXPECT_GT(stats.linear_setups, setups) << name;  // the steps refactorised
+  return allocations;
+}
+
+// radau5 and gauss6 on their sparse path (linear_solver=sparse_lu) on the cloth 32² (6144
+// unknowns), issue #29; before SparseRefactorLu (Eigen's SparseLU) 82 a step each.
+TEST(Allocations, NoneInsideSparseImplicitSteps) {
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(2);
+  auto sys = model("cloth", {"n=32"});
+  for (const std::string name : {"radau5", "gauss6"})
+    EXPECT_EQ(sparse_lu_step_allocations(*sys, name), 0) << name;
+  omp_set_num_threads(threads);
+}
+
+// Every other implicit or graphics method that takes linear_solver=sparse_lu (gauss4's
+// ShiftedSolver; the LinearSolver of linear_solver.hpp for the others) on a cloth 12² (864
+// unknowns, above the dense limit of 200); before SparseRefactorLu 64 (gauss4) and 16 to 43 a
+// step on the cloth 32².
+TEST(Allocations, NoneInsideSparseLuLinearSolverSteps) {
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(2);
+  auto sys = model("cloth", {"n=12"});
+  int checked = 0;
+  for (const auto& entry : integrator_registry().entries()) {
+    const std::string& name = entry.info.name;
+    const Family f = entry.info.family;
+    // xpbd solves no linear system; projective_dynamics factors once per run (covered above).
+    if ((f != Family::implicit && f != Family::graphics) || name == "radau5" || name == "gauss6" ||
+        name == "xpbd" || name == "projective_dynamics")
+      continue;
+    std::unique_ptr<Integrator> probe;
+    try {
+      probe =
+          integrator_registry().create(name, Params::from_assignments({"linear_solver=sparse_lu"}));
+      if (!probe->supports_fixed_step()) continue;
+      check_compatible(probe->info(), *sys);
+    } catch (const BadInput&) {
+      continue;  // no linear_solver key, or not for this model
+    }
+    EXPECT_EQ(sparse_lu_step_allocations(*sys, name), 0) << name;
+    ++checked;
+  }
+  EXPECT_GE(checked, 10);  // backward_euler, the SDIRKs, BDF2, the Rosenbrocks, baraff_witkin, …
+  omp_set_num_threads(threads);
 }
 
 // The adaptive methods (integrators/adaptive/; radau5 on its dense path, the Rosenbrock pairs
