@@ -4,11 +4,10 @@
 #include <Eigen/LU>
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCholesky>
+#include <Eigen/SparseLU>
 #include <algorithm>
 #include <cmath>
 #include <vector>
-
-#include "integrators/implicit/sparse_refactor_lu.hpp"
 
 namespace stiffbench {
 
@@ -303,38 +302,26 @@ class DenseLu final : public LinearSolver {
   Eigen::PartialPivLU<Mat> lu_;
 };
 
-// SparseRefactorLu (sparse_refactor_lu.hpp): the pattern analysed once, the first matrix
-// factored with pivoting, later ones refactorised numerically into the same storage without
-// allocation. A matrix that is not compressed in the analysed pattern (a caller breaking the
-// contract of analyze()) is copied and analysed afresh, which allocates but stays correct.
 class SparseLu final : public LinearSolver {
  public:
   void analyze(const SparseMat& p) override {
     SparseMat c = p;
     c.makeCompressed();
-    lu_.analyze(c);
+    lu_.analyzePattern(c);
   }
   bool factor(const SparseMat& w) override {
-    bool ok = false;
-    if (lu_.same_pattern(w)) {
-      ok = lu_.factor(w);
-    } else {
-      SparseMat c = w;
-      c.makeCompressed();
-      lu_.analyze(c);
-      ok = lu_.factor(c);
-    }
-    if (!ok) error_ = "sparse_lu: matrix singular (no nonzero pivot in a column)";
-    return ok;
+    lu_.factorize(w);
+    if (lu_.info() != Eigen::Success) error_ = "sparse_lu: " + lu_.lastErrorMessage();
+    return lu_.info() == Eigen::Success;
   }
   LinearSolveResult solve(CVecRef b, VecRef x) override {
-    lu_.solve(b.data(), x.data());  // contiguous (Ref's inner stride 1)
-    return {};
+    x = lu_.solve(b);
+    return {lu_.info() == Eigen::Success, 0, 0};
   }
   LinearSolverKind kind() const override { return LinearSolverKind::sparse_lu; }
 
  private:
-  SparseRefactorLu<double> lu_;
+  Eigen::SparseLU<SparseMat, Eigen::COLAMDOrdering<int>> lu_;
 };
 
 // Sparse LDLᵀ of a symmetric matrix: approximate minimum degree ordering (Eigen's AMD) and the

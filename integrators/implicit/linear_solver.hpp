@@ -4,8 +4,7 @@
 // matrix or on a matrix-free operator (a Jacobian-vector product).
 //
 //   dense_lu   Eigen PartialPivLU on the dense copy (small systems)
-//   sparse_lu  SparseRefactorLu (COLAMD ordering, pivoting once, then numeric refactorisation
-//              without allocation; sparse_refactor_lu.hpp)
+//   sparse_lu  Eigen SparseLU (COLAMD ordering), symbolic analysis reused across steps
 //   ldlt       Eigen SimplicialLDLT (AMD ordering): symmetric matrices only
 //   cg         preconditioned conjugate gradients: symmetric positive definite matrices only
 //   bicgstab   preconditioned BiCGSTAB (van der Vorst 1992)

@@ -7,20 +7,6 @@
 
 namespace stiffbench {
 
-namespace {
-
-// x -= l·u. For complex values written out (the textbook product, which is what the compiler's
-// own product computes unless a result is NaN, where it calls __muldc3 (C99 Annex G)): no branch
-// in the innermost loop.
-inline void sub_product(double& x, double l, double u) { x -= l * u; }
-inline void sub_product(std::complex<double>& x, const std::complex<double>& l,
-                        const std::complex<double>& u) {
-  x = {x.real() - (l.real() * u.real() - l.imag() * u.imag()),
-       x.imag() - (l.real() * u.imag() + l.imag() * u.real())};
-}
-
-}  // namespace
-
 template <class Scalar>
 void SparseRefactorLu<Scalar>::analyze(const SparseM& pattern) {
   n_ = static_cast<int>(pattern.cols());
@@ -213,7 +199,7 @@ bool SparseRefactorLu<Scalar>::refactor(const SparseM& a) {
       x[j] = 0;
       ux[p] = u;
       if (u == Scalar(0)) continue;  // x -= L(:, j)·0 changes nothing
-      for (int q = lp[j] + 1; q < lp[j + 1]; ++q) sub_product(x[li[q]], lx[q], u);
+      for (int q = lp[j] + 1; q < lp[j + 1]; ++q) x[li[q]] -= lx[q] * u;
     }
     const Scalar pivot = x[k];
     x[k] = 0;
@@ -236,21 +222,7 @@ bool SparseRefactorLu<Scalar>::refactor(const SparseM& a) {
 }
 
 template <class Scalar>
-bool SparseRefactorLu<Scalar>::same_pattern(const SparseM& a) const {
-  return a.isCompressed() && a.cols() == n_ && a.rows() == n_ &&
-         static_cast<std::size_t>(a.nonZeros()) == a_inner_.size() &&
-         std::equal(a_outer_.begin(), a_outer_.end(), a.outerIndexPtr()) &&
-         std::equal(a_inner_.begin(), a_inner_.end(), a.innerIndexPtr());
-}
-
-template <class Scalar>
 void SparseRefactorLu<Scalar>::solve(const CVector& b, CVector& out) {
-  out.resize(n_);
-  solve(b.data(), out.data());
-}
-
-template <class Scalar>
-void SparseRefactorLu<Scalar>::solve(const Scalar* b, Scalar* out) {
   Scalar* y = x_.data();
   for (int i = 0; i < n_; ++i) y[pinv_[static_cast<std::size_t>(i)]] = b[i];
   for (int k = 0; k < n_; ++k) {  // L y = P b
@@ -266,6 +238,7 @@ void SparseRefactorLu<Scalar>::solve(const Scalar* b, Scalar* out) {
     for (int p = up_[static_cast<std::size_t>(k)]; p < uend; ++p)
       y[ui_[static_cast<std::size_t>(p)]] -= ux_[static_cast<std::size_t>(p)] * zk;
   }
+  out.resize(n_);
   for (int k = 0; k < n_; ++k) {
     out[q_[static_cast<std::size_t>(k)]] = y[k];
     y[k] = 0;

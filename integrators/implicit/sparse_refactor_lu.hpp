@@ -1,7 +1,6 @@
 // Sparse LU with one symbolic analysis per pattern and numeric refactorisation without
 // allocation, for the shifted systems (shift·I - J) of radau5 and the implicit Runge–Kutta
-// methods on their sparse path (linear_solver=sparse_lu), real or complex, and the sparse_lu
-// LinearSolver of the other implicit methods (linear_solver.hpp).
+// methods on their sparse path (linear_solver=sparse_lu), real or complex.
 //
 //   analyze(A)  COLAMD column ordering of A's pattern (Eigen's COLAMDOrdering, the one of
 //               Eigen::SparseLU); the pattern is kept.
@@ -40,11 +39,8 @@ class SparseRefactorLu {
   void analyze(const SparseM& pattern);
   // False if A is numerically singular (no nonzero pivot in a column).
   bool factor(const SparseM& a);
-  // x = A⁻¹ b with the last factorisation (b is read whole before x is written: x may be b).
+  // x = A⁻¹ b with the last factorisation (x may not alias b).
   void solve(const CVector& b, CVector& x);
-  void solve(const Scalar* b, Scalar* x);
-  // Whether `a` is compressed with the pattern given to analyze() (same sizes and indices).
-  bool same_pattern(const SparseM& a) const;
 
   // Pivoting factorisations after the first (the refactorisation's pivot test failed).
   long repivots() const { return repivots_; }
