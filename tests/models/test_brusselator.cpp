@@ -148,5 +148,19 @@ TEST(Brusselator, CvodeAndRadau5Agree) {
   EXPECT_GT((results[0] - sys->initial_state()).lpNorm<Eigen::Infinity>(), 0.1);
 }
 
+// Bad parameters are BadInput naming the parameter (the registry's bounds: n >= 1, α > 0).
+TEST(Brusselator, BadParametersAreRefused) {
+  for (const char* bad : {"n=0", "n=-3", "alpha=0", "alpha=-0.02"}) {
+    SCOPED_TRACE(bad);
+    try {
+      model("brusselator", {bad});
+      ADD_FAILURE() << "no BadInput";
+    } catch (const BadInput& e) {
+      const std::string key = std::string(bad).substr(0, std::string(bad).find('='));
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace stiffbench
