@@ -22,7 +22,7 @@ const IntegratorRegistry& integrator_registry();
 // locked). A name already registered is a std::logic_error. The entry's factory receives the
 // declared parameters with their defaults filled in, exactly as the built-in models do:
 //
-//   register_model({ModelInfo{"brusselator", "1D Brusselator (Hairer-Wanner II)"},
+//   register_model({ModelInfo{"my_brusselator", "1D Brusselator (Hairer-Wanner II)"},
 //                   {{"n", ParamType::integer, "32", "grid points"}},
 //                   [](const Params& p) { return std::make_unique<Brusselator>(p.integer("n"));
 //                   }});

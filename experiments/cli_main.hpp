@@ -4,7 +4,7 @@
 // its models get `list`, `describe`, `solve` and every experiment by name:
 //
 //   int main(int argc, char** argv) {
-//     stiffbench::register_model({{"brusselator", "..."}, {/* ParamSpecs */}, factory});
+//     stiffbench::register_model({{"my_brusselator", "..."}, {/* ParamSpecs */}, factory});
 //     return stiffbench::cli_main(argc, argv);
 //   }
 //

@@ -1,6 +1,8 @@
 // A user's own ODE studied with stiffbench: the 1D Brusselator of Hairer & Wanner, Solving ODEs
 // II, §IV.1 (N = 32, α = 1/50, t in [0, 10]), with an analytic sparse Jacobian, registered as a
 // model and run through a convergence study (with a CVODE reference) and a work-precision study.
+// The library has the same problem built in as the model `brusselator`; a model registered by a
+// user needs a name of its own (a name registered twice is a std::logic_error).
 // Usage: user_system [OUT_DIR]  (writes OUT_DIR/convergence/ and OUT_DIR/work_precision/).
 #include <cmath>
 #include <iostream>
@@ -13,7 +15,7 @@ using namespace stiffbench;
 class Brusselator final : public OdeSystem {
  public:
   explicit Brusselator(int n) : n_(n), c_((n + 1.0) * (n + 1.0) / 50.0) {}
-  std::string name() const override { return "brusselator"; }
+  std::string name() const override { return "my_brusselator"; }
   Index dimension() const override { return 2 * n_; }
   bool autonomous() const override { return true; }
   bool has_jacobian() const override { return true; }
@@ -53,13 +55,14 @@ class Brusselator final : public OdeSystem {
 
 int main(int argc, char** argv) {
   const std::string out = argc > 1 ? argv[1] : "results";
-  register_model({{"brusselator", "1D Brusselator, Hairer-Wanner II IV.1", false, false, "HW II"},
-                  {{"n", ParamType::integer, "32", "grid points"}},
-                  [](const Params& p) {
-                    return std::make_unique<Brusselator>(static_cast<int>(p.integer("n")));
-                  }});
+  register_model(
+      {{"my_brusselator", "1D Brusselator, Hairer-Wanner II IV.1", false, false, "HW II"},
+       {{"n", ParamType::integer, "32", "grid points"}},
+       [](const Params& p) {
+         return std::make_unique<Brusselator>(static_cast<int>(p.integer("n")));
+       }});
   ConvergenceSpec conv;
-  conv.model = "brusselator";
+  conv.model = "my_brusselator";
   conv.integrators = {"backward_euler", "sdirk3", "bdf2"};
   conv.t_end = 10;
   conv.h = 0.1;
@@ -67,7 +70,7 @@ int main(int argc, char** argv) {
   conv.reference = "cvode_bdf";
   convergence_study(conv, out + "/convergence", false, &std::cerr, std::cerr);
   WorkPrecisionSpec wp;
-  wp.model = "brusselator";
+  wp.model = "my_brusselator";
   wp.integrators = {"sdirk3", "radau5", "cvode_bdf"};
   wp.t_end = 10;
   wp.h = 0.05;

@@ -1,6 +1,7 @@
 #include <algorithm>
 
 #include "models/problems/advection_diffusion.hpp"
+#include "models/problems/brusselator.hpp"
 #include "models/problems/dahlquist.hpp"
 #include "models/problems/e5.hpp"
 #include "models/problems/harmonic_oscillator.hpp"
@@ -169,10 +170,31 @@ void register_problem_models(ModelRegistry& reg) {
                                                          p.real("a"), p.real("nu"), p.real("r"),
                                                          static_cast<int>(p.integer("k")));
            }});
+  reg.add({{"brusselator",
+            "1D Brusselator with diffusion: u' = 1 + u²v - 4u + α(N+1)² Δu, v' = 3u - u²v + "
+            "α(N+1)² Δv on N interior points, u = 1, v = 3 at both ends, u(0) = 1 + sin(2πx), "
+            "v(0) = 3; unknowns interleaved (banded Jacobian); end time 10",
+            false, false,
+            "Hairer, Nørsett & Wanner I §I.16; Hairer & Wanner II §IV.1 (BRUSS, N = 500 in "
+            "§IV.10)"},
+           {{"n", P::integer, "32", "interior grid points N (x_i = i/(N+1); 2N unknowns)",
+             B::in(1, 10000000)},
+            {"alpha", P::real, "0.02", "diffusion coefficient α (1/50 in the literature)",
+             B::positive()}},
+           [](const Params& p) {
+             return std::make_unique<Brusselator>(static_cast<int>(p.integer("n")),
+                                                  p.real("alpha"));
+           }});
   // advection_diffusion: n unknowns, the tridiagonal Jacobian (3n nonzeros of 12 bytes).
   reg.find_mutable("advection_diffusion")->info.size = [](const Params& p) {
     const double n = std::max(static_cast<double>(p.integer("n")), 0.0);
     return ModelSize{n, 12.0 * 3.0 * n + 32.0 * n, 3.0 * n, "n=" + std::to_string(p.integer("n"))};
+  };
+  // brusselator: 2n unknowns, the banded Jacobian (8n - 4 nonzeros of 12 bytes).
+  reg.find_mutable("brusselator")->info.size = [](const Params& p) {
+    const double n = std::max(static_cast<double>(p.integer("n")), 0.0);
+    return ModelSize{2.0 * n, 12.0 * 8.0 * n + 64.0 * n, 8.0 * n,
+                     "n=" + std::to_string(p.integer("n"))};
   };
   // Fixed-size problems: at most 20 unknowns (POLLU), whatever their parameters.
   for (const auto& name : reg.names()) {
