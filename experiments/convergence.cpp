@@ -951,6 +951,16 @@ std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, 
              ": something other than the truncation error sets it there (a solver "
              "tolerance, order reduction or the reference); pairwise orders " +
              all;
+  // Above the classical order by more than half an order down to the finest pair: more accurate
+  // than the order promises (an error term vanishes on this problem), not a pre-asymptotic
+  // approach from above (whose finest pairs come within half an order).
+  else if (slope > expected + kOrderReductionSpread && q_last > expected + 0.5)
+    reason = "a higher order than the classical " + std::to_string(expected_slope) + ": " +
+             format_fixed(slope, 2) +
+             " on this problem (a leading error term vanishes on it, e.g. a splitting whose "
+             "parts commute on the solution's manifold, or a superconvergent point); pairwise "
+             "orders " +
+             all;
   else if (w_hi - w_lo <= kOrderTolerance)
     reason = "a steady order of " + format_fixed(slope, 2) + ", not " +
              std::to_string(expected_slope) +

@@ -1,5 +1,7 @@
 #include "integrators/splitting/operator_splitting.hpp"
 
+#include <algorithm>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -32,18 +34,23 @@ const char* scheme_name(SplittingScheme s) { return s == SplittingScheme::lie ? 
 
 // The registered MethodInfo (sub-integrators: the defaults) or, with their names, that of an
 // instance, whose description names its sub-integrators.
+// The order is the splitting's (1 or 2) unless a sub-integrator's is lower: each substep's local
+// error O(h^(q+1)) adds to the splitting's, so the scheme converges with min(scheme, q_E, q_I)
+// (Hairer, Lubich & Wanner, Geometric Numerical Integration, 2nd ed. 2006, §III.5; McLachlan &
+// Quispel, Acta Numerica 11, 2002). Strang with forward and backward Euler is of order 1.
 MethodInfo splitting_info(SplittingScheme scheme, int explicit_stages, int implicit_stages,
                           const std::string& explicit_name = {},
-                          const std::string& implicit_name = {}) {
+                          const std::string& implicit_name = {}, int sub_order = 2) {
   const bool lie = scheme == SplittingScheme::lie;
   Requirements needs;
   needs.split = true;
-  MethodInfo info = method_info(scheme_name(scheme), Family::operator_splitting, lie ? 1 : 2,
-                                (lie ? 1 : 2) * explicit_stages + implicit_stages, needs,
-                                lie ? kLieText : kStrangText);
+  MethodInfo info = method_info(
+      scheme_name(scheme), Family::operator_splitting, std::min(lie ? 1 : 2, sub_order),
+      (lie ? 1 : 2) * explicit_stages + implicit_stages, needs, lie ? kLieText : kStrangText);
   if (!explicit_name.empty())
     info.description = std::string(lie ? "Lie" : "Strang") + " splitting: f_E by " + explicit_name +
-                       ", f_I by " + implicit_name + "; fixed step";
+                       ", f_I by " + implicit_name + "; fixed step, order " +
+                       std::to_string(info.order);
   return info;
 }
 
@@ -101,8 +108,10 @@ void reset_sub(Integrator& sub, const OdeSystem& view, double t, CVecRef y, cons
 OperatorSplitting::OperatorSplitting(SplittingScheme scheme,
                                      std::unique_ptr<Integrator> explicit_part,
                                      std::unique_ptr<Integrator> implicit_part)
-    : Integrator(splitting_info(scheme, explicit_part->info().stages, implicit_part->info().stages,
-                                explicit_part->info().name, implicit_part->info().name)),
+    : Integrator(
+          splitting_info(scheme, explicit_part->info().stages, implicit_part->info().stages,
+                         explicit_part->info().name, implicit_part->info().name,
+                         std::min(explicit_part->info().order, implicit_part->info().order))),
       scheme_(scheme),
       explicit_(std::move(explicit_part)),
       implicit_(std::move(implicit_part)) {}
