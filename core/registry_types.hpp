@@ -7,6 +7,9 @@
 #include "core/registry.hpp"
 
 #include <functional>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace stiffbench {
 
@@ -30,6 +33,11 @@ struct ModelInfo {
   // Every built-in model has one (a test checks); a model registered from outside without one
   // is not size-checked.
   ModelSizeEstimate size = nullptr;
+  // Parameter values that make the initial state an equilibrium at rest (no load, no
+  // displacement), e.g. cloth {gravity 0, perturbation 0}: the per-mode analysis of
+  // `fidelity` linearises there and applies those the user did not set. Empty: the defaults
+  // already start at rest, or the model has no such state.
+  std::vector<std::pair<std::string, std::string>> rest_state = {};
 };
 
 using ModelRegistry = Registry<OdeSystem, ModelInfo>;

@@ -185,6 +185,11 @@ void cmd_describe(const std::string& name, std::ostream& out) {
     std::vector<std::string> obs;
     for (const auto& o : sys->observables()) obs.push_back(o.name);
     if (!obs.empty()) out << "observables: " << join(obs) << "\n";
+    if (!m->info.rest_state.empty()) {
+      std::vector<std::string> rest;
+      for (const auto& [k, v] : m->info.rest_state) rest.push_back(k + "=" + v);
+      out << "rest state (fidelity's modes; applied where not given): " << join(rest) << "\n";
+    }
     describe_splits(name, m->params, *sys, out);
     print_params(m->params, out);
     return;

@@ -298,11 +298,16 @@ ModalBasis modal_basis(const MechanicalSystem& mech, const FidelitySpec& spec) {
   const double acc = f.tail(n).cwiseAbs().maxCoeff();
   const Mat kd = Mat(k);
   const double scale = (kd * b.x0).cwiseAbs().maxCoeff() + kd.cwiseAbs().maxCoeff();
-  require_input(acc <= 1e-9 * std::max(scale, 1.0),
-                who + "the initial state is not at rest (max |a| = " + format_short(acc) +
-                    "): the modes are those of an equilibrium; start the model at rest by "
-                    "setting what loads or displaces it to 0 (gravity, perturbation, an excited "
-                    "mode)");
+  std::string rest;
+  for (const auto& [key, value] : model_registry().at(spec.model).info.rest_state)
+    rest += (rest.empty() ? "" : ", ") + key + "=" + value;
+  require_input(
+      acc <= 1e-9 * std::max(scale, 1.0),
+      who + "the initial state is not at rest (max |a| = " + format_short(acc) +
+          "): the modes are those of an equilibrium; start the model at rest by "
+          "setting what loads or displaces it to 0 (" +
+          (rest.empty() ? "gravity, perturbation, an excited mode" : "its rest state: " + rest) +
+          ")");
   const Vec masses = mech.masses();
   b.mass.resize(m);
   Mat a(m, m);
@@ -435,7 +440,18 @@ void run_modes(const FidelitySpec& spec, const ModalSetup& m, FidelityResult& ou
 
 }  // namespace
 
-FidelityResult run_fidelity(const FidelitySpec& spec, std::ostream* progress) {
+FidelitySpec with_rest_state(FidelitySpec spec, std::vector<std::string>* applied) {
+  if (spec.model.empty()) return spec;
+  for (const auto& [key, value] : model_registry().at(spec.model).info.rest_state)
+    if (!spec.params.contains(key)) {
+      spec.params.set(key, value);
+      if (applied) applied->push_back(key + "=" + value);
+    }
+  return spec;
+}
+
+FidelityResult run_fidelity(const FidelitySpec& user_spec, std::ostream* progress) {
+  const FidelitySpec spec = with_rest_state(user_spec);
   spec.validate();
   for (const auto& n : spec.integrators) integrator_registry().at(n);
   if (!spec.model.empty()) model_registry().at(spec.model);
@@ -632,6 +648,12 @@ std::string unfitted_summary(const FidelityResult& r) {
   return md.str();
 }
 
+std::string param_list(const Params& p) {
+  std::string out;
+  for (const auto& [k, v] : p.values()) out += (out.empty() ? "" : ", ") + k + "=" + v;
+  return out.empty() ? "the defaults" : out;
+}
+
 std::string markdown(const FidelitySpec& spec, const FidelityResult& r) {
   std::ostringstream md;
   md << "# Fidelity: numerical damping and period error\n\n"
@@ -650,8 +672,9 @@ std::string markdown(const FidelitySpec& spec, const FidelityResult& r) {
   if (!r.modes.empty()) {
     md << "## Modes of " << spec.model << "\n\n"
        << "The lowest " << spec.modes
-       << " modes of -M K phi = omega^2 M phi at rest; measured by projecting one run per step "
-          "on each mode.\n\n"
+       << " modes of -M K phi = omega^2 M phi at rest (parameters: " << param_list(spec.params)
+       << "; the model's rest state, shown by `describe`, fills the loads not given); measured "
+          "by projecting one run per step on each mode.\n\n"
        << mode_summary(r).to_markdown() << "\n";
   }
   return md.str();
@@ -674,7 +697,10 @@ bool plot_fidelity(const fs::path& dir, const std::string& title, const PlotOpti
 
 class FidelityJob : public StudyJob {
  public:
-  explicit FidelityJob(FidelitySpec spec) : spec_(std::move(spec)) { spec_.validate(); }
+  // The model's rest state is applied here, so that fidelity.json records the parameters run.
+  explicit FidelityJob(FidelitySpec spec) : spec_(with_rest_state(std::move(spec), &rest_)) {
+    spec_.validate();
+  }
   nlohmann::json spec_json() const override { return spec_.to_json(); }
   void run(std::ostream* progress) override { result_ = run_fidelity(spec_, progress); }
   Table unit_table() const override { return fidelity_table(result_); }
@@ -685,6 +711,7 @@ class FidelityJob : public StudyJob {
                       modes_table(result_).to_csv());  // header only without --model
     write_file_atomic(dir / "fidelity.md", markdown(spec_, result_));
     nlohmann::json meta = run_metadata("fidelity", spec_.to_json());
+    meta["rest_state_applied"] = rest_;
     meta["mode_steps_used"] = result_.mode_steps_used;
     nlohmann::json skipped = nlohmann::json::object();
     for (const auto& [n, why] : result_.skipped) skipped[n] = why;
@@ -693,6 +720,7 @@ class FidelityJob : public StudyJob {
     return plot_fidelity(dir, title, plot, err, spec_.integrators, !spec_.model.empty());
   }
   void print_summary(std::ostream& out) const override {
+    if (!rest_.empty()) out << rest_note() << "\n\n";
     out << agreement_table(spec_, result_).to_markdown();
     if (!result_.modes.empty()) out << "\n" << mode_summary(result_).to_markdown();
   }
@@ -711,6 +739,13 @@ class FidelityJob : public StudyJob {
   const FidelityResult& result() const { return result_; }
 
  private:
+  std::string rest_note() const {
+    std::string list;
+    for (const auto& kv : rest_) list += (list.empty() ? "" : ", ") + kv;
+    return "Modes of " + spec_.model + " at its rest state: " + list +
+           " applied (the defaults load or displace it; the modes are those of an equilibrium).";
+  }
+  std::vector<std::string> rest_;  // key=value of the model's rest state the user did not set
   FidelitySpec spec_;
   FidelityResult result_;
 };

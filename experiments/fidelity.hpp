@@ -121,6 +121,11 @@ struct FidelityResult {
   std::vector<double> mode_steps_used;
 };
 
+// The spec with the model's rest state (ModelInfo::rest_state) applied to the parameters the
+// user did not set, so that the per-mode analysis linearises at an equilibrium at rest (the
+// defaults of cloth load it with gravity and a random perturbation). `applied` lists the
+// key=value pairs added. run_fidelity applies it itself; the command records the result.
+FidelitySpec with_rest_state(FidelitySpec spec, std::vector<std::string>* applied = nullptr);
 FidelityResult run_fidelity(const FidelitySpec& spec, std::ostream* progress = nullptr);
 Table fidelity_table(const FidelityResult& r);
 Table modes_table(const FidelityResult& r);

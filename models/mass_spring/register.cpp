@@ -117,6 +117,7 @@ void register_mass_spring_models(ModelRegistry& reg) {
              o.split = split_param(p);
              return make_spring_chain(o);
            }});
+  reg.find_mutable("spring_chain")->info.rest_state = {{"mode", "0"}, {"perturbation", "0"}};
   reg.find_mutable("spring_chain")->info.size = [](const Params& p) {
     return lattice_size(count(p, "n"), 1, 1, "n=" + std::to_string(p.integer("n")));
   };
@@ -190,6 +191,7 @@ void register_mass_spring_models(ModelRegistry& reg) {
              o.split = split_param(p);
              return make_cloth(o);
            }});
+  reg.find_mutable("cloth")->info.rest_state = {{"gravity", "0"}, {"perturbation", "0"}};
   reg.find_mutable("cloth")->info.size = [](const Params& p) {
     const double n = count(p, "n"), m = p.integer("m") == 0 ? n : count(p, "m");
     return lattice_size(n * m, 3, 6,
@@ -258,6 +260,7 @@ void register_mass_spring_models(ModelRegistry& reg) {
              o.split = split_param(p);
              return make_soft_cube(o);
            }});
+  reg.find_mutable("soft_cube")->info.rest_state = {{"gravity", "0"}, {"spin", "0"}};
   reg.find_mutable("soft_cube")->info.size = [](const Params& p) {
     const double n = count(p, "n");
     return lattice_size(n * n * n, 3, 13, "n=" + std::to_string(p.integer("n")));

@@ -170,10 +170,16 @@ TEST(Fidelity, ClothModesAgreeWithTheCurveWithinFivePercent) {
   // Issue 27's check on a small cloth (the command runs it on n = 16): each linear mode of a
   // linear method evolves on its own, so the measured damping ratio and frequency of every
   // mode match the analytic curve at ν = hω_k up to the run's nonlinearity (amplitude 1e-4).
+  // The defaults load the cloth (gravity, a random perturbation): the model's rest state
+  // (gravity=0, perturbation=0) is applied, as the command does.
   FidelitySpec s;
   s.integrators = {"backward_euler", "bdf2"};
   s.model = "cloth";
-  s.params = Params{{"n", "6"}, {"gravity", "0"}, {"perturbation", "0"}};
+  s.params = Params{{"n", "6"}};
+  std::vector<std::string> applied;
+  EXPECT_EQ(with_rest_state(s, &applied).params.values(),
+            (Params{{"n", "6"}, {"gravity", "0"}, {"perturbation", "0"}}.values()));
+  EXPECT_EQ(applied, (std::vector<std::string>{"gravity=0", "perturbation=0"}));
   s.measure = false;
   s.curve_points = 2;
   s.modes = 20;
@@ -195,13 +201,15 @@ TEST(Fidelity, RefusesBadInput) {
   s.nu_max = 1;
   EXPECT_THROW(run_fidelity(s), BadInput);
   s = oscillator_spec({"backward_euler"});
-  s.model = "cloth";  // gravity on by default: not at rest
-  s.params = Params{{"n", "4"}};
+  s.model = "cloth";  // gravity set explicitly: not at rest, and the rest state is not applied
+  s.params = Params{{"n", "4"}, {"gravity", "1"}};
   try {
     run_fidelity(s);
     ADD_FAILURE() << "a cloth under gravity is not at rest";
   } catch (const BadInput& e) {
-    EXPECT_NE(std::string(e.what()).find("gravity"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("its rest state: gravity=0, perturbation=0"),
+              std::string::npos)
+        << e.what();
   }
   s.params = Params{{"n", "4"}, {"gravity", "0"}, {"perturbation", "0"}, {"damping", "0.1"}};
   EXPECT_THROW(run_fidelity(s), BadInput);  // damped
