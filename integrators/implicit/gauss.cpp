@@ -156,8 +156,9 @@ std::vector<ParamSpec> gauss_param_specs() {
       {"linear_solver",
        P::text,
        "auto",
-       "dense_lu or sparse_lu for the transformed n x n systems; auto: dense_lu up to 200 "
-       "unknowns",
+       "dense_lu or sparse_lu for the transformed n x n systems; auto: dense_lu up to 50 "
+       "unknowns, and up to 200 unless the Jacobian's pattern fills under 10%; sparse_lu "
+       "otherwise",
        {"auto", "dense_lu", "sparse_lu"}},
   };
 }
@@ -235,8 +236,11 @@ void ImplicitRungeKutta::reset(const OdeSystem& sys, double t0, CVecRef y0) {
                     std::to_string(LinearSolverOptions{}.dense_max) +
                     " unknowns (give jacobian=fd_dense to use a dense one)");
   core_.reset(sys, t0, y0);
-  const bool dense = opt_.linear == LinearSolverKind::dense_lu ||
-                     (opt_.linear == LinearSolverKind::automatic && !large);
+  LinearSolverOptions automatic;
+  automatic.pattern_density = jacobian_pattern_density(sys, automatic);
+  const bool dense =
+      opt_.linear == LinearSolverKind::dense_lu ||
+      (opt_.linear == LinearSolverKind::automatic && automatic_is_dense(automatic, n_));
   for (auto& r : real_) r.reset(n_, dense);
   for (auto& c : complex_) c.reset(n_, dense);
   for (Mat* m : {&z_, &w_, &f_, &z_prev_}) m->setZero(n_, s_);

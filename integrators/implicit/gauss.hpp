@@ -26,8 +26,8 @@
 // with r = (T⁻¹ ⊗ I) F - h⁻¹ (Λ ⊗ I) W, the transformation of radau5 (HW II §IV.8). Gauss4's
 // A⁻¹ has one complex pair (one complex n×n system per iteration), gauss6's one real
 // eigenvalue and one pair (one real and one complex system). The linear solvers are radau5's
-// ShiftedSolver: dense LU up to 200 unknowns or with linear_solver=dense_lu, SparseRefactorLu over
-// the pattern of J otherwise or with linear_solver=sparse_lu.
+// ShiftedSolver: dense LU where automatic_is_dense says so or with linear_solver=dense_lu,
+// SparseRefactorLu over the pattern of J otherwise or with linear_solver=sparse_lu.
 //
 // The tableau is checked at construction (BadInput naming it): ButcherTableau::validate (sizes,
 // c = row sums, the claimed order); A invertible (smallest singular value above 1e-12 of the

@@ -57,8 +57,9 @@ std::vector<ParamSpec> implicit_param_specs(bool with_newton) {
   specs.push_back(
       {"linear_solver", P::text, "auto",
        "auto (velocity form: ldlt up to 2000 dofs, cg above for symmetric force Jacobians, "
-       "dense_lu/sparse_lu otherwise; first-order form: dense_lu up to 200 unknowns, sparse_lu "
-       "above), dense_lu, sparse_lu, ldlt, cg, bicgstab, gmres",
+       "dense_lu/sparse_lu otherwise; first-order form: dense_lu up to 50 unknowns, and up to "
+       "200 unless the Jacobian's pattern fills under 10%, sparse_lu otherwise), dense_lu, "
+       "sparse_lu, ldlt, cg, bicgstab, gmres",
        linear_solver_names()});
   specs.push_back({"preconditioner",
                    P::text,
@@ -234,9 +235,19 @@ void ImplicitCore::setup_velocity_form(const MechanicalSystem& mech, LinearSolve
   opt_.linear = lin;
 }
 
-void ImplicitCore::setup_first_order(const OdeSystem& sys, const LinearSolverOptions& lin,
-                                     double t0, CVecRef y0) {
+double jacobian_pattern_density(const OdeSystem& sys, const LinearSolverOptions& opt) {
   const Index n = sys.dimension();
+  if (opt.kind != LinearSolverKind::automatic || n <= opt.dense_small || n > opt.dense_max ||
+      !sys.has_jacobian_pattern())
+    return 1.0;
+  const SparseMat pattern = sys.jacobian_pattern();
+  return static_cast<double>(pattern.nonZeros()) / (static_cast<double>(n) * n);
+}
+
+void ImplicitCore::setup_first_order(const OdeSystem& sys, LinearSolverOptions lin, double t0,
+                                     CVecRef y0) {
+  const Index n = sys.dimension();
+  lin.pattern_density = jacobian_pattern_density(sys, lin);
   solver_ = make_linear_solver(lin, n);
   opt_.linear = lin;
   identity_.resize(n, n);

@@ -115,6 +115,11 @@ std::string describe_newton_failure(const NewtonAttempt& a, double tol);
 std::vector<ParamSpec> implicit_param_specs(bool with_newton);
 ImplicitOptions read_implicit_options(const Params& p, bool with_newton);
 
+// nonzeros / n² of the model's Jacobian pattern, or 1 without one (LinearSolverOptions::
+// pattern_density). Evaluated only where automatic_is_dense depends on it (dense_small < n <=
+// dense_max): the default pattern costs one Jacobian evaluation (not counted).
+double jacobian_pattern_density(const OdeSystem& sys, const LinearSolverOptions& opt);
+
 // Greedy column grouping for finite-difference Jacobians (Curtis, Powell & Reid 1974): columns
 // that share no row get the same colour and are perturbed together.
 std::vector<int> color_columns(const SparseMat& pattern, int* n_colors);
@@ -172,8 +177,7 @@ class ImplicitCore {
   void restrict_to_matrix_free(LinearSolverOptions& lin) const;
   void setup_velocity_form(const MechanicalSystem& mech, LinearSolverOptions lin, double t0,
                            CVecRef y0);
-  void setup_first_order(const OdeSystem& sys, const LinearSolverOptions& lin, double t0,
-                         CVecRef y0);
+  void setup_first_order(const OdeSystem& sys, LinearSolverOptions lin, double t0, CVecRef y0);
   void map_force_jacobians(const MechanicalSystem& mech, double t0, CVecRef y0);
   void allocate_workspaces(Index n);
   void fd_jacobian(const OdeSystem& sys, double t, CVecRef y, CVecRef fy);

@@ -579,10 +579,15 @@ LinearSolveResult krylov_solve(LinearSolverKind kind, const LinearOperator& op, 
   return krylov_dispatch(kind, op, diag, b, x, opt, ws);
 }
 
+bool automatic_is_dense(const LinearSolverOptions& opt, Index n) {
+  return n <= opt.dense_small ||
+         (n <= opt.dense_max && opt.pattern_density >= kSparsePatternDensity);
+}
+
 std::unique_ptr<LinearSolver> make_linear_solver(const LinearSolverOptions& opt, Index n) {
   LinearSolverKind k = opt.kind;
   if (k == LinearSolverKind::automatic)
-    k = n <= opt.dense_max ? LinearSolverKind::dense_lu : LinearSolverKind::sparse_lu;
+    k = automatic_is_dense(opt, n) ? LinearSolverKind::dense_lu : LinearSolverKind::sparse_lu;
   switch (k) {
     case LinearSolverKind::dense_lu:
       return std::make_unique<DenseLu>();

@@ -227,7 +227,8 @@ std::vector<ParamSpec> radau5_param_specs() {
                P::text,
                "auto",
                "dense_lu or sparse_lu for the real and the complex system; auto: dense_lu up to "
-               "200 unknowns",
+               "50 unknowns, and up to 200 unless the Jacobian's pattern fills under 10%; "
+               "sparse_lu otherwise",
                {"auto", "dense_lu", "sparse_lu"}});
   return s;
 }
@@ -308,8 +309,11 @@ void Radau5::reset(const OdeSystem& sys, double t0, CVecRef y0) {
                     std::to_string(LinearSolverOptions{}.dense_max) +
                     " unknowns (give jacobian=fd_dense to use a dense one)");
   core_.reset(sys, t0, y0);
-  const bool dense = opt_.linear == LinearSolverKind::dense_lu ||
-                     (opt_.linear == LinearSolverKind::automatic && !large);
+  LinearSolverOptions automatic;
+  automatic.pattern_density = jacobian_pattern_density(sys, automatic);
+  const bool dense =
+      opt_.linear == LinearSolverKind::dense_lu ||
+      (opt_.linear == LinearSolverKind::automatic && automatic_is_dense(automatic, n_));
   real_.reset(n_, dense);
   complex_.reset(n_, dense);
   for (Mat* m : {&z_, &w_, &f_, &z_prev_}) m->setZero(n_, 3);

@@ -12,6 +12,8 @@
 
 #include "core/driver.hpp"
 #include "integrators/implicit/gauss.hpp"
+#include "integrators/implicit/implicit_core.hpp"
+#include "integrators/implicit/linear_solver.hpp"
 #include "integrators/implicit/radau5.hpp"
 #include "tests/test_support.hpp"
 
@@ -309,6 +311,47 @@ TEST(Radau5FromTableau, StructureIsCheckedNamingTheTableau) {
   const std::string la = message(lobatto_iiia3());
   EXPECT_NE(la.find("tableau 'lobatto_iiia3': RADAU5 needs an invertible A"), std::string::npos)
       << la;
+}
+
+}  // namespace
+}  // namespace stiffbench
+
+namespace stiffbench {
+namespace {
+
+// `linear_solver=auto` between dense and sparse LU (automatic_is_dense): dense up to 50
+// unknowns, and up to 200 unless the Jacobian's pattern fills under 10%. The Brusselator with
+// diffusion at N = 100 (200 interleaved unknowns) has 4 nonzeros in each row but the 4 boundary
+// rows (u_i: u_{i-1}, u_i, u_{i+1}, v_i; v_i: u_i, v_{i-1}, v_i, v_{i+1}; Hairer & Wanner II
+// §IV.1): 8N - 4 = 796 of 200², density 0.0199, so auto is sparse — radau5's auto run is then
+// bit for bit its sparse_lu run, and its dense_lu run agrees to round-off.
+// HIRES (8 unknowns) stays dense whatever its pattern.
+TEST(ImplicitRungeKutta, AutomaticLinearSolverFollowsThePatternDensity) {
+  const auto bruss = testing_support::model("brusselator", {"n=100"});
+  LinearSolverOptions o;
+  const double density = jacobian_pattern_density(*bruss, o);
+  EXPECT_DOUBLE_EQ(density, 796.0 / (200.0 * 200.0));
+  o.pattern_density = density;
+  EXPECT_FALSE(automatic_is_dense(o, 200));
+  EXPECT_TRUE(automatic_is_dense(o, 50));
+  o.pattern_density = 1.0;
+  EXPECT_TRUE(automatic_is_dense(o, 200));
+  EXPECT_FALSE(automatic_is_dense(o, 201));
+  const auto hires = testing_support::model("hires");
+  EXPECT_DOUBLE_EQ(jacobian_pattern_density(*hires, LinearSolverOptions{}), 1.0);  // n <= 50
+
+  FixedStepOptions opt;
+  opt.t_end = 0.02;
+  opt.h = 0.01;
+  const auto run = [&](const std::string& ls) {
+    const auto r5 = testing_support::make("radau5", {"linear_solver=" + ls});
+    const RunResult r = run_fixed_step(*bruss, *r5, opt);
+    EXPECT_EQ(r.stats.status, Status::ok) << ls << ": " << r.stats.message;
+    return r.y;
+  };
+  const Vec automatic = run("auto"), sparse = run("sparse_lu"), dense = run("dense_lu");
+  EXPECT_EQ((automatic - sparse).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_LE((automatic - dense).cwiseAbs().maxCoeff(), 1e-12 * dense.cwiseAbs().maxCoeff());
 }
 
 }  // namespace
