@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
@@ -455,6 +456,25 @@ nlohmann::json with_method_files(nlohmann::json spec) {
       files[n] = {{"file", it->second.path}, {"fnv1a64", hex16(fnv1a64(it->second.text))}};
   if (!files.empty()) spec["method_files"] = files;
   return spec;
+}
+
+double parse_real(const std::string& text, const std::string& flag) {
+  std::size_t used = 0;
+  double v = std::numeric_limits<double>::quiet_NaN();
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  require_input(!text.empty() && used == text.size() && std::isfinite(v),
+                flag + ": '" + text + "' is not a finite number");
+  return v;
+}
+
+std::vector<double> parse_real_list(const std::string& text, const std::string& flag) {
+  std::vector<double> out;
+  for (const auto& item : split_list(text, flag)) out.push_back(parse_real(item, flag));
+  return out;
 }
 
 std::vector<std::string> split_list(const std::string& s, const std::string& flag) {

@@ -130,4 +130,10 @@ nlohmann::json with_method_files(nlohmann::json spec);
 // Splits "a,b,c" (empty items are BadInput naming the flag).
 std::vector<std::string> split_list(const std::string& s, const std::string& flag);
 
+// The whole of `text` as a finite number, else BadInput "FLAG: 'text' is not a finite number"
+// (`flag` names the option, and where it helps the item's place, e.g. "--sweep h").
+double parse_real(const std::string& text, const std::string& flag);
+// "a,b,c" of finite numbers (split_list, then parse_real on each).
+std::vector<double> parse_real_list(const std::string& text, const std::string& flag);
+
 }  // namespace stiffbench

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "experiments/catalog.hpp"
 #include "experiments/cli.hpp"
 #include "experiments/commands.hpp"
 #include "experiments/output.hpp"
@@ -61,17 +62,7 @@ void add_profile_command(CLI::App& app) {
                     "(inline SVG), the cost tables and rankings (implies --svg)");
   profile->callback([st]() {
     st->opt.taus.clear();
-    for (const auto& t : st->taus) {
-      std::size_t used = 0;
-      double v = 0;
-      try {
-        v = std::stod(t, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      require_input(used == t.size() && !t.empty(), "--tau: '" + t + "' is not a number");
-      st->opt.taus.push_back(v);
-    }
+    for (const auto& t : st->taus) st->opt.taus.push_back(parse_real(t, "--tau"));
     st->opt.costs = st->costs;
     st->opt.force = force_output();
     cmd_profile(st->opt, std::cout, std::cerr);

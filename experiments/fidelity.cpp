@@ -753,16 +753,8 @@ class FidelityJob : public StudyJob {
 std::vector<double> parse_steps(const std::string& text) {
   std::vector<double> out;
   for (const auto& item : split_list(text, "--h")) {
-    std::size_t used = 0;
-    double x = kNaN;
-    try {
-      x = std::stod(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    require_input(used == item.size() && std::isfinite(x) && x > 0,
-                  "--h: '" + item + "' is not a positive number");
-    out.push_back(x);
+    out.push_back(parse_real(item, "--h"));
+    require_input(out.back() > 0, "--h: '" + item + "' is not a positive number");
   }
   return out;
 }

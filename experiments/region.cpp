@@ -89,22 +89,10 @@ RegionBox parse_region_box(const std::string& arg) {
   const std::string usage =
       "--box: expected re_min,re_max,im_min,im_max (four numbers), got '" + arg + "'";
   std::vector<double> v;
-  std::size_t start = 0;
-  while (true) {
-    const auto comma = arg.find(',', start);
-    const std::string item =
-        arg.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    std::size_t used = 0;
-    double x = 0;
-    try {
-      x = std::stod(item, &used);
-    } catch (const std::exception&) {
-      throw BadInput(usage);
-    }
-    require_input(used == item.size(), usage);
-    v.push_back(x);
-    if (comma == std::string::npos) break;
-    start = comma + 1;
+  try {
+    v = parse_real_list(arg, "--box");
+  } catch (const BadInput&) {
+    throw BadInput(usage);
   }
   require_input(v.size() == 4, usage);
   return {v[0], v[1], v[2], v[3]};

@@ -494,15 +494,7 @@ void cmd_solve(const SolveOptions& given, std::ostream& out, std::ostream& err) 
 }
 
 std::vector<double> parse_times(const std::string& list) {
-  std::vector<double> out;
-  for (const auto& item : split_list(list, "--times")) {
-    char* end = nullptr;
-    const double t = std::strtod(item.c_str(), &end);
-    require_input(end != item.c_str() && *end == '\0',
-                  "--times: '" + item + "' is not a number (expected t1,t2,...)");
-    out.push_back(t);
-  }
-  return out;
+  return parse_real_list(list, "--times");
 }
 
 std::vector<double> log_output_times(double t0, double t_end, long n, double first) {

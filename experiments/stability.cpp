@@ -25,16 +25,7 @@ using cd = std::complex<double>;
 std::string num(double x) { return format_short(x, 4); }
 
 double parse_number(const std::string& s, const std::string& what) {
-  std::size_t used = 0;
-  double v = std::numeric_limits<double>::quiet_NaN();
-  try {
-    v = std::stod(s, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  require_input(used == s.size() && !s.empty() && std::isfinite(v),
-                "--sweep: '" + s + "' in " + what + " is not a finite number");
-  return v;
+  return parse_real(s, "--sweep " + what);
 }
 
 // The spectrum linear theory is evaluated on.
