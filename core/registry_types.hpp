@@ -43,4 +43,9 @@ struct ModelInfo {
 using ModelRegistry = Registry<OdeSystem, ModelInfo>;
 using IntegratorRegistry = Registry<Integrator, MethodInfo>;
 
+// Both registries are instantiated once, in the library (core/registry_types.cpp): a program
+// that creates models and integrators by name does not compile the members again.
+extern template class Registry<OdeSystem, ModelInfo>;
+extern template class Registry<Integrator, MethodInfo>;
+
 }  // namespace stiffbench

@@ -1,5 +1,7 @@
 #include "integrators/symplectic/rattle.hpp"
 
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseLU>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -53,9 +55,17 @@ constexpr MethodText kRattleText{
                   "molecular dynamics calculations, J. Comput. Phys. 52 (1983) 24-34",
                   "; ", cite(kGeometricIntegration, "Sect. VII.1"))};
 
+struct Rattle::Solvers {
+  Eigen::SparseLU<SparseMat> lu;
+  Eigen::SimplicialLDLT<SparseMat> ldlt;
+};
+
 Rattle::Rattle(RattleOptions opt)
     : Integrator(method_info("rattle", Family::symplectic, 2, 1, kRattleNeeds, kRattleText)),
-      opt_(opt) {}
+      opt_(opt),
+      solvers_(std::make_unique<Solvers>()) {}
+
+Rattle::~Rattle() = default;
 
 void Rattle::reset(const OdeSystem& sys, double, CVecRef) {
   check_compatible(info(), sys);
@@ -81,15 +91,15 @@ bool Rattle::project_velocity(VecRef v, SolveStats& stats) {
   // A = G W Gᵀ at x_{n+1}: symmetric positive definite for independent constraints.
   const SparseMat wg = w_.asDiagonal() * SparseMat(g_new_.transpose());
   const SparseMat a = g_new_ * wg;
-  ldlt_.compute(a);
+  solvers_->ldlt.compute(a);
   ++stats.linear_setups;
-  if (ldlt_.info() != Eigen::Success) return false;
+  if (solvers_->ldlt.info() != Eigen::Success) return false;
   const double tol = opt_.constraint_tol * std::max(1.0, max_abs(v));
   for (int pass = 0; pass < 3; ++pass) {
     g_val_ = g_new_ * v;  // G v, the velocity residual
     if (!g_val_.allFinite()) return false;
     if (max_abs(g_val_) <= tol) return true;
-    lambda_ = ldlt_.solve(g_val_);
+    lambda_ = solvers_->ldlt.solve(g_val_);
     ++stats.lin_solves;
     v -= wg * lambda_;
   }
@@ -135,14 +145,14 @@ Status Rattle::step(const OdeSystem& sys, double t, VecRef y, double h, SolveSta
     if (iter == opt_.newton_max_iter) break;
     cons_->constraint_jacobian(step_, g_new_);
     const SparseMat jac = g_new_ * wgt_;  // ∂g(x̄ - W G_nᵀ Λ)/∂Λ = -G(x^k) W G_nᵀ
-    lu_.compute(jac);
+    solvers_->lu.compute(jac);
     ++stats.linear_setups;
     ++stats.newton_iters;
-    if (lu_.info() != Eigen::Success) {
+    if (solvers_->lu.info() != Eigen::Success) {
       singular = true;
       break;
     }
-    lambda_ += lu_.solve(g_val_);
+    lambda_ += solvers_->lu.solve(g_val_);
     ++stats.lin_solves;
     step_ = x_bar_ - wgt_ * lambda_;
   }

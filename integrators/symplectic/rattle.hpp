@@ -35,8 +35,7 @@
 // test (tests/test_allocations.cpp) runs on unconstrained models, which rattle refuses.
 #pragma once
 
-#include <Eigen/SparseCholesky>
-#include <Eigen/SparseLU>
+#include <memory>
 #include <vector>
 
 #include "core/constraints.hpp"
@@ -56,6 +55,7 @@ RattleOptions read_rattle_options(const Params& p);
 class Rattle final : public Integrator {
  public:
   explicit Rattle(RattleOptions opt);
+  ~Rattle() override;
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
 
@@ -70,8 +70,10 @@ class Rattle final : public Integrator {
   Vec acc_, x_bar_, x_last_, g_val_, lambda_, step_;
   SparseMat g_old_, g_new_;  // G(x_n), G(x_{n+1})
   SparseMat wgt_;            // W G(x_n)ᵀ (dofs × m)
-  Eigen::SparseLU<SparseMat> lu_;
-  Eigen::SimplicialLDLT<SparseMat> ldlt_;
+  // Eigen's SparseLU and SimplicialLDLT, defined in rattle.cpp: their headers stay out of this
+  // installed header and of the files that include it.
+  struct Solvers;
+  std::unique_ptr<Solvers> solvers_;
   bool started_ = false;
 };
 
