@@ -60,6 +60,10 @@ SphFluid::SphFluid(std::string name, SphScene scene, SphOptions options)
   require_input(scene_.fluid_v.size() == scene_.fluid_x.size(),
                 who + "one velocity per fluid particle is required");
 
+  // The neighbour lists hold 32-bit slots.
+  require_input(scene_.fluid_x.size() < (std::size_t{1} << 32) &&
+                    scene_.boundary_x.size() < (std::size_t{1} << 32),
+                who + "more than 2^32 - 1 fluid or boundary particles");
   n_ = static_cast<Index>(scene_.fluid_x.size());
   wd_ = sph::Kernel(opt_.density_kernel, dim_, opt_.support);
   wg_ = sph::Kernel(opt_.gradient_kernel, dim_, opt_.support);
@@ -358,7 +362,7 @@ void SphFluid::density_pass(const double* x) const {
     for (std::size_t k = first; k < last; ++k) {
       const double* xi = spos_.data() + D * k;
       const std::uint32_t* c = cand_.data() + k * cap;
-      Index* idx = nb_index_.data() + k * cap;
+      std::uint32_t* idx = nb_index_.data() + k * cap;
       double* dist = nb_dist_.data() + k * cap;
       std::size_t count = 0;
       double sum = 0.0;
@@ -371,7 +375,7 @@ void SphFluid::density_pass(const double* x) const {
         if (!(r2 < h2)) continue;
         const double r = std::sqrt(r2);
         sum += sm_[j] * wd.w_as<KD>(r);
-        idx[count] = static_cast<Index>(j);
+        idx[count] = static_cast<std::uint32_t>(j);
         dist[count++] = r;
       }
       const std::size_t fluid_count = count;
@@ -384,7 +388,7 @@ void SphFluid::density_pass(const double* x) const {
         if (!(r2 < h2)) continue;
         const double r = std::sqrt(r2);
         bsum += sbvol_[b] * wd.w_as<KD>(r);
-        idx[count] = static_cast<Index>(b);
+        idx[count] = static_cast<std::uint32_t>(b);
         dist[count++] = r;
       }
       const double rho = nall > nf ? sum + rho0 * bsum : sum;
@@ -439,7 +443,7 @@ void SphFluid::force_pass(const double* v, double* a) const {
       std::array<double, D> acc;
       for (int d = 0; d < D; ++d)
         acc[d] = with_explicit ? opt_.gravity[static_cast<std::size_t>(d)] : 0.0;
-      const Index* idx = nb_index_.data() + k * cap;
+      const std::uint32_t* idx = nb_index_.data() + k * cap;
       const double* dist = nb_dist_.data() + k * cap;
       for (std::size_t q = 0; q < nb_count_[k]; ++q) {
         const double r = dist[q];

@@ -319,7 +319,7 @@ class SphFluid final : public MechanicalSystem {
   mutable std::vector<std::uint32_t> cand_count_, cand_bcount_;
   mutable std::vector<std::size_t> cand_prefix_;
   std::vector<double> sbvol_;  // boundary volumes in boundary-grid slot order
-  mutable std::vector<Index> nb_index_;
+  mutable std::vector<std::uint32_t> nb_index_;
   mutable std::vector<double> nb_dist_;
   mutable sph::NeighbourGrid<2> grid2_, bgrid2_;
   mutable sph::NeighbourGrid<3> grid3_, bgrid3_;
