@@ -372,11 +372,15 @@ void SphFluid::density_pass(const double* x) const {
         const double* xj = spos_.data() + D * j;
         double r2 = 0.0;
         for (int d = 0; d < D; ++d) r2 += (xi[d] - xj[d]) * (xi[d] - xj[d]);
-        if (!(r2 < h2)) continue;
+        // Branch-free: every candidate is written, and kept (count advanced) only within h;
+        // a rejected one adds +0.0, which leaves the sum unchanged bit for bit.
+        const bool in = r2 < h2;
         const double r = std::sqrt(r2);
-        sum += sm_[j] * wd.w_as<KD>(r);
+        const double w = sm_[j] * wd.w_as<KD>(r);
+        sum += in ? w : 0.0;
         idx[count] = static_cast<std::uint32_t>(j);
-        dist[count++] = r;
+        dist[count] = r;
+        count += in ? 1 : 0;
       }
       const std::size_t fluid_count = count;
       double bsum = 0.0;
@@ -385,11 +389,13 @@ void SphFluid::density_pass(const double* x) const {
         const double* xb = bx + D * b;
         double r2 = 0.0;
         for (int d = 0; d < D; ++d) r2 += (xi[d] - xb[d]) * (xi[d] - xb[d]);
-        if (!(r2 < h2)) continue;
+        const bool in = r2 < h2;
         const double r = std::sqrt(r2);
-        bsum += sbvol_[b] * wd.w_as<KD>(r);
+        const double w = sbvol_[b] * wd.w_as<KD>(r);
+        bsum += in ? w : 0.0;
         idx[count] = static_cast<std::uint32_t>(b);
-        dist[count++] = r;
+        dist[count] = r;
+        count += in ? 1 : 0;
       }
       const double rho = nall > nf ? sum + rho0 * bsum : sum;
       nb_count_[k] = fluid_count;
@@ -462,7 +468,9 @@ void SphFluid::force_pass(const double* v, double* a) const {
         if (artificial) {
           double vr = 0.0;
           for (int d = 0; d < D; ++d) vr += (vi[d] - vj[d]) * dx[d];
-          if (vr < 0.0) coef -= m * av * vr / (0.5 * (rhoi + srho_[j]) * (r * r + eps2));
+          // Branch-free (approaching pairs only): subtracting +0.0 leaves coef unchanged.
+          const double pi_ij = m * av * vr / (0.5 * (rhoi + srho_[j]) * (r * r + eps2));
+          coef -= vr < 0.0 ? pi_ij : 0.0;
         }
         for (int d = 0; d < D; ++d) acc[d] -= coef * dwr * dx[d];
         if (muller) {
@@ -485,7 +493,8 @@ void SphFluid::force_pass(const double* v, double* a) const {
         if (artificial) {
           double vr = 0.0;
           for (int d = 0; d < D; ++d) vr += vi[d] * dx[d];
-          if (vr < 0.0) coef -= rho0 * vb * av * vr / (0.5 * (rhoi + rho0) * (r * r + eps2));
+          const double pi_ib = rho0 * vb * av * vr / (0.5 * (rhoi + rho0) * (r * r + eps2));
+          coef -= vr < 0.0 ? pi_ib : 0.0;
         }
         for (int d = 0; d < D; ++d) acc[d] -= coef * dwr * dx[d];
         if (muller) {
