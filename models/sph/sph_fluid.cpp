@@ -261,6 +261,9 @@ void SphFluid::build_list(const double* x) const {
   grid.build(x, n_, radius);
   list_x_.assign(x, x + n * D);
   list_order_ = grid.order();
+  slot_of_.resize(n);
+  for (std::size_t k = 0; k < n; ++k)
+    slot_of_[static_cast<std::size_t>(list_order_[k])] = static_cast<std::uint32_t>(k);
   cand_count_.resize(n);
   cand_bcount_.resize(n);
   cand_prefix_.resize(n + 1);
@@ -277,8 +280,9 @@ void SphFluid::build_list(const double* x) const {
       std::uint32_t* c = cand_.data() + k * cap;
       std::size_t count = 0;
       const double* xi = grid.positions() + D * k;
+      // Fluid candidates as particle indices first (sorted below, then mapped to slots).
       grid.for_each_neighbour_slot(xi, radius, [&](std::size_t j, double, const auto&) {
-        if (count < cap) c[count] = static_cast<std::uint32_t>(j);
+        if (count < cap) c[count] = static_cast<std::uint32_t>(order[j]);
         ++count;
       });
       const std::size_t fluid = count;
@@ -291,8 +295,8 @@ void SphFluid::build_list(const double* x) const {
       if (count > cap) continue;
       // Fluid candidates by particle index, boundary ones by boundary slot: orders that do not
       // depend on the positions at the build.
-      std::sort(c, c + fluid,
-                [&](std::uint32_t a, std::uint32_t b) { return order[a] < order[b]; });
+      std::sort(c, c + fluid);
+      for (std::size_t q = 0; q < fluid; ++q) c[q] = slot_of_[c[q]];
       std::sort(c + fluid, c + count);
       cand_count_[k] = static_cast<std::uint32_t>(fluid);
       cand_bcount_[k] = static_cast<std::uint32_t>(count - fluid);

@@ -314,6 +314,7 @@ class SphFluid final : public MechanicalSystem {
   mutable long list_builds_ = 0;
   mutable std::vector<double> list_x_, spos_;
   mutable std::vector<Index> list_order_;
+  mutable std::vector<std::uint32_t> slot_of_;  // particle index -> slot
   mutable std::size_t cand_capacity_ = 64;
   mutable std::vector<std::uint32_t> cand_;
   mutable std::vector<std::uint32_t> cand_count_, cand_bcount_;
