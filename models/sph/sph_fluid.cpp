@@ -363,8 +363,12 @@ void SphFluid::density_pass(const double* x) const {
       sm_[k] = m_[i];
     }
     const auto [first, last] = thread_range();
+    // Local pointers: the loop's stores could alias the vectors' own pointers otherwise.
+    const double* spos = spos_.data();
+    const double* sm = sm_.data();
+    const double* sbvol = sbvol_.data();
     for (std::size_t k = first; k < last; ++k) {
-      const double* xi = spos_.data() + D * k;
+      const double* xi = spos + D * k;
       const std::uint32_t* c = cand_.data() + k * cap;
       std::uint32_t* idx = nb_index_.data() + k * cap;
       double* dist = nb_dist_.data() + k * cap;
@@ -373,14 +377,14 @@ void SphFluid::density_pass(const double* x) const {
       const std::size_t nf = cand_count_[k], nall = nf + cand_bcount_[k];
       for (std::size_t q = 0; q < nf; ++q) {
         const std::size_t j = c[q];
-        const double* xj = spos_.data() + D * j;
+        const double* xj = spos + D * j;
         double r2 = 0.0;
         for (int d = 0; d < D; ++d) r2 += (xi[d] - xj[d]) * (xi[d] - xj[d]);
         // Branch-free: every candidate is written, and kept (count advanced) only within h;
         // a rejected one adds +0.0, which leaves the sum unchanged bit for bit.
         const bool in = r2 < h2;
         const double r = std::sqrt(r2);
-        const double w = sm_[j] * wd.w_as<KD>(r);
+        const double w = sm[j] * wd.w_inside_as<KD>(r);
         sum += in ? w : 0.0;
         idx[count] = static_cast<std::uint32_t>(j);
         dist[count] = r;
@@ -395,7 +399,7 @@ void SphFluid::density_pass(const double* x) const {
         for (int d = 0; d < D; ++d) r2 += (xi[d] - xb[d]) * (xi[d] - xb[d]);
         const bool in = r2 < h2;
         const double r = std::sqrt(r2);
-        const double w = sbvol_[b] * wd.w_as<KD>(r);
+        const double w = sbvol[b] * wd.w_inside_as<KD>(r);
         bsum += in ? w : 0.0;
         idx[count] = static_cast<std::uint32_t>(b);
         dist[count] = r;
@@ -446,50 +450,56 @@ void SphFluid::force_pass(const double* v, double* a) const {
         sv_[D * static_cast<std::size_t>(s) + static_cast<std::size_t>(d)] =
             v[D * order[static_cast<std::size_t>(s)] + static_cast<Index>(d)];
     const auto [first, last] = thread_range();
+    // Local pointers: the stores to a could alias the vectors' own pointers otherwise.
+    const double *sm = sm_.data(), *sv = sv_.data(), *srho = srho_.data(), *sp = sp_.data(),
+                 *spr2 = spr2_.data(), *sinv_rho = sinv_rho_.data(), *nb_dist = nb_dist_.data();
+    const std::uint32_t* nb_index = nb_index_.data();
+    const std::size_t *nb_count = nb_count_.data(), *nb_bcount = nb_bcount_.data();
+    const double* sbvol = sbvol_.data();
     for (std::size_t k = first; k < last; ++k) {
       const double* xi = sx + D * k;
-      const double* vi = sv_.data() + D * k;
-      const double rhoi = srho_[k], pi = sp_[k], pr2i = spr2_[k], inv_rhoi = sinv_rho_[k];
+      const double* vi = sv + D * k;
+      const double rhoi = srho[k], pi = sp[k], pr2i = spr2[k], inv_rhoi = sinv_rho[k];
       std::array<double, D> acc;
       for (int d = 0; d < D; ++d)
         acc[d] = with_explicit ? opt_.gravity[static_cast<std::size_t>(d)] : 0.0;
-      const std::uint32_t* idx = nb_index_.data() + k * cap;
-      const double* dist = nb_dist_.data() + k * cap;
-      for (std::size_t q = 0; q < nb_count_[k]; ++q) {
+      const std::uint32_t* idx = nb_index + k * cap;
+      const double* dist = nb_dist + k * cap;
+      for (std::size_t q = 0; q < nb_count[k]; ++q) {
         const double r = dist[q];
         if (r == 0.0) continue;  // self, or a coincident particle: no direction
         const std::size_t j = static_cast<std::size_t>(idx[q]);
-        const double m = sm_[j];
+        const double m = sm[j];
         const double* xj = sx + D * j;
-        const double* vj = sv_.data() + D * j;
+        const double* vj = sv + D * j;
         std::array<double, D> dx;
         for (int d = 0; d < D; ++d) dx[d] = xi[d] - xj[d];
         const double dwr = wg.dw_over_r_as<KG>(r);  // ∇W_ij = dwr · (x_i - x_j)
         double coef = 0.0;
         if constexpr (with_explicit)
-          coef = variational ? m * (pr2i + spr2_[j])
-                             : 0.5 * m * (pi + sp_[j]) * inv_rhoi * sinv_rho_[j];
+          coef =
+              variational ? m * (pr2i + spr2[j]) : 0.5 * m * (pi + sp[j]) * inv_rhoi * sinv_rho[j];
         if (artificial) {
           double vr = 0.0;
           for (int d = 0; d < D; ++d) vr += (vi[d] - vj[d]) * dx[d];
           // Branch-free (approaching pairs only): subtracting +0.0 leaves coef unchanged.
-          const double pi_ij = m * av * vr / (0.5 * (rhoi + srho_[j]) * (r * r + eps2));
+          const double pi_ij = m * av * vr / (0.5 * (rhoi + srho[j]) * (r * r + eps2));
           coef -= vr < 0.0 ? pi_ij : 0.0;
         }
         for (int d = 0; d < D; ++d) acc[d] -= coef * dwr * dx[d];
         if (muller) {
-          const double cv = mu * inv_rhoi * m * sinv_rho_[j] * wv.laplacian(r);
+          const double cv = mu * inv_rhoi * m * sinv_rho[j] * wv.laplacian(r);
           for (int d = 0; d < D; ++d) acc[d] += cv * (vj[d] - vi[d]);
         }
       }
-      const std::size_t end = nb_count_[k] + nb_bcount_[k];
-      for (std::size_t q = nb_count_[k]; q < end; ++q) {
+      const std::size_t end = nb_count[k] + nb_bcount[k];
+      for (std::size_t q = nb_count[k]; q < end; ++q) {
         const double r = dist[q];
         if (r == 0.0) continue;
         const std::size_t b = static_cast<std::size_t>(idx[q]);
         std::array<double, D> dx;
         for (int d = 0; d < D; ++d) dx[d] = xi[d] - bx[D * b + static_cast<std::size_t>(d)];
-        const double vb = sbvol_[b];
+        const double vb = sbvol[b];
         const double dwr = wg.dw_over_r_as<KG>(r);
         double coef = 0.0;
         if constexpr (with_explicit)
