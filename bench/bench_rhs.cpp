@@ -13,6 +13,7 @@
 
 #include "bench/bench_common.hpp"
 #include "bench/plain_cloth.hpp"
+#include "bench/plain_sph.hpp"
 #include "experiments/catalog.hpp"
 #include "models/sph/neighbour_grid.hpp"
 #include "models/sph/sph_fluid.hpp"
@@ -131,6 +132,11 @@ void sph_rhs(benchmark::State& st, const std::string& model, long n_param, int w
   const Index n = fluid->dofs();
   Vec a(n);
   const auto x = cm.warm.head(n), v = cm.warm.tail(n);
+  // Verlet-list builds so far: on a fresh model (the first benchmark of each scene), those of
+  // the warm-up's symplectic Euler steps (one acceleration each) plus this state's, if any.
+  fluid->acceleration(0.0, x, v, a);
+  st.counters["list_builds_before"] = static_cast<double>(fluid->neighbour_list_builds());
+  st.counters["warm_steps"] = warm;
   for (auto _ : st) {
     fluid->acceleration(0.0, x, v, a);
     benchmark::DoNotOptimize(a.data());
@@ -145,6 +151,69 @@ void sph_rhs(benchmark::State& st, const std::string& model, long n_param, int w
   st.counters["boundary"] = static_cast<double>(fluid->boundary_particles());
   set_time_per(st, "s/particle", particles);
   set_rate(st, "pairs/s", static_cast<double>(pairs));
+  st.counters["threads"] = threads;
+}
+
+// The plain 3D SPH gather (plain_sph.hpp) on the same model and warm state, checked once against
+// the testbed's acceleration there (the two sum the same terms in different orders: agreement
+// to round-off, 1e-8 of the largest acceleration; a failed check fails the benchmark).
+void plain_sph_rhs(benchmark::State& st, const std::string& model, long n_param, int warm,
+                   int threads) {
+  OmpThreads omp(threads);
+  const CachedModel& cm = cached_model(model, {{"n", std::to_string(n_param)}}, warm);
+  const auto* fluid = dynamic_cast<const SphFluid*>(cm.sys.get());
+  const Index n = fluid->dofs();
+  const PlainSph3d plain(*fluid);
+  Vec a(n), ref(n);
+  fluid->acceleration(0.0, cm.warm.head(n), cm.warm.tail(n), ref);
+  plain.acceleration(cm.warm.data(), cm.warm.data() + n, a.data());
+  const double diff = (a - ref).cwiseAbs().maxCoeff(), scale = ref.cwiseAbs().maxCoeff();
+  if (!(diff <= 1e-8 * scale)) {
+    st.SkipWithError("plain SPH RHS differs from the testbed's acceleration");
+    return;
+  }
+  for (auto _ : st) {
+    plain.acceleration(cm.warm.data(), cm.warm.data() + n, a.data());
+    benchmark::DoNotOptimize(a.data());
+    benchmark::ClobberMemory();
+  }
+  const long pairs =
+      count_pairs<3>(cm.warm.data(), fluid->fluid_particles(), fluid->options().support);
+  set_rate(st, "pairs/s", static_cast<double>(pairs));
+  set_time_per(st, "s/particle", static_cast<double>(fluid->fluid_particles()));
+  st.counters["max_diff_vs_testbed"] = diff / scale;
+  st.counters["threads"] = threads;
+}
+
+// The testbed's SPH right-hand side when every call rebuilds the Verlet list: calls alternate
+// between the warm state and a copy with one particle moved by 0.6 skins (more than the half
+// skin that triggers a build). rhs/ measures the calls that reuse the list; this, the calls
+// that build it (the counter list_builds checks that each did).
+void sph_rhs_rebuilding(benchmark::State& st, const std::string& model, long n_param, int warm,
+                        int threads) {
+  OmpThreads omp(threads);
+  const CachedModel& cm = cached_model(model, {{"n", std::to_string(n_param)}}, warm);
+  const auto* fluid = dynamic_cast<const SphFluid*>(cm.sys.get());
+  const Index n = fluid->dofs();
+  Vec a(n);
+  Vec moved = cm.warm;
+  moved[0] += 0.6 * fluid->neighbour_skin();
+  // Start from a list built at the warm state, so that the first timed call (at `moved`)
+  // rebuilds it, and so does every call after it.
+  fluid->acceleration(0.0, cm.warm.head(n), cm.warm.tail(n), a);
+  const long before = fluid->neighbour_list_builds();
+  bool flip = true;
+  for (auto _ : st) {
+    const Vec& y = flip ? moved : cm.warm;
+    flip = !flip;
+    fluid->acceleration(0.0, y.head(n), y.tail(n), a);
+    benchmark::DoNotOptimize(a.data());
+    benchmark::ClobberMemory();
+  }
+  st.counters["list_builds_per_call"] =
+      static_cast<double>(fluid->neighbour_list_builds() - before) /
+      static_cast<double>(st.iterations());
+  set_time_per(st, "s/particle", static_cast<double>(fluid->fluid_particles()));
   st.counters["threads"] = threads;
 }
 
@@ -264,6 +333,17 @@ void register_rhs_benchmarks(const Config& cfg) {
             sph_neighbours<2>(st, c.model, c.n, c.warm, t, build_only);
           });
       }
+  }
+  // The 3D dam break's plain peer (issue #29) and its RHS with a Verlet-list build at every call.
+  for (const int t : {1, 2}) {
+    add(
+        "peer/plain_sph_3d/n:46" + omp_suffix(t),
+        [t](benchmark::State& st) { plain_sph_rhs(st, "sph_dam_break_3d", 46, 5, t); },
+        kMillisecond);
+    add(
+        "rhs_list_build/sph_dam_break_3d/n:46" + omp_suffix(t),
+        [t](benchmark::State& st) { sph_rhs_rebuilding(st, "sph_dam_break_3d", 46, 5, t); },
+        kMillisecond);
   }
 }
 

@@ -21,6 +21,9 @@ struct EvalCounters {
   long jac_evals = 0;  // analytic jacobian() and implicit_part_jacobian() calls
   long fe_evals = 0;   // calls of the explicit part f_E of an additive split (also in f_evals)
   long fi_evals = 0;   // calls of the implicit part f_I (also in f_evals)
+  // Neighbour-list builds of particle models that reuse a list across evaluations (SphFluid's
+  // Verlet list; 0 for every other model).
+  long neighbour_builds = 0;
 };
 
 // An additive split f = f_E + f_I of a model (OdeSystem::imex_split()): its name (the model's
@@ -246,6 +249,7 @@ class OdeSystem : public ProblemMetadata, public FrameOutput {
     ++counters_.f_evals;
     poll_run_control();
   }
+  void count_neighbour_build() const { ++counters_.neighbour_builds; }
   void count_split_eval(bool explicit_part) const {
     count_f_eval();
     ++(explicit_part ? counters_.fe_evals : counters_.fi_evals);

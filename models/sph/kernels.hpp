@@ -145,6 +145,19 @@ class Kernel {
     }
   }
 
+  // w_as without the support test where the kernel allows (Wendland C2), the same bits for
+  // r < h: for branch-free loops that discard r >= h themselves (the value there is garbage).
+  template <KernelType T>
+  double w_inside_as(double r) const {
+    if constexpr (T == KernelType::wendland_c2) {
+      const double q = r * inv_h_;
+      const double d = 1.0 - q, d2 = d * d;
+      return norm_ * d2 * d2 * (4.0 * q + 1.0);
+    } else {
+      return w_as<T>(r);
+    }
+  }
+
   template <KernelType T>
   double dw_as(double r) const {
     if (r >= h_) return 0.0;

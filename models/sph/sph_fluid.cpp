@@ -4,7 +4,9 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <utility>
 
+#include <omp.h>
 #include <Eigen/IterativeLinearSolvers>
 
 #include "models/detail/with_dim.hpp"
@@ -47,6 +49,7 @@ SphFluid::SphFluid(std::string name, SphScene scene, SphOptions options)
                 who + "tait_gamma must be > 1");
   require_input(std::isfinite(opt_.mu) && opt_.mu >= 0, who + "mu must be >= 0");
   require_input(std::isfinite(opt_.alpha) && opt_.alpha >= 0, who + "alpha must be >= 0");
+  require_input(std::isfinite(opt_.skin) && opt_.skin >= 0, who + "skin must be >= 0");
   require_input(opt_.density_kernel != sph::KernelType::viscosity,
                 who + "the viscosity kernel is singular at r = 0: not a density kernel");
   require_input(opt_.gradient_kernel != sph::KernelType::viscosity,
@@ -57,11 +60,16 @@ SphFluid::SphFluid(std::string name, SphScene scene, SphOptions options)
   require_input(scene_.fluid_v.size() == scene_.fluid_x.size(),
                 who + "one velocity per fluid particle is required");
 
+  // The neighbour lists hold 32-bit slots.
+  require_input(scene_.fluid_x.size() < (std::size_t{1} << 32) &&
+                    scene_.boundary_x.size() < (std::size_t{1} << 32),
+                who + "more than 2^32 - 1 fluid or boundary particles");
   n_ = static_cast<Index>(scene_.fluid_x.size());
   wd_ = sph::Kernel(opt_.density_kernel, dim_, opt_.support);
   wg_ = sph::Kernel(opt_.gradient_kernel, dim_, opt_.support);
   wv_ = sph::Kernel(sph::KernelType::viscosity, dim_, opt_.support);
   hs_ = 0.5 * opt_.support;
+  skin_ = opt_.skin * opt_.support;
   mass_ = opt_.rho0 / lattice_sum(wd_, dim_, opt_.spacing);
   m_.assign(static_cast<std::size_t>(n_), mass_);
 
@@ -117,6 +125,12 @@ SphFluid::SphFluid(std::string name, SphScene scene, SphOptions options)
                              [&](Index, double r2, const auto&) { sum += wd_.w(std::sqrt(r2)); });
         bvol_[static_cast<std::size_t>(b)] = 1.0 / sum;
       }
+      // The Verlet list's boundary candidates come from this grid with cells h + s: rebuilt
+      // once here (the volumes above keep the cells h), with the volumes in its slot order.
+      g.build(bx_.data(), nb, opt_.support + skin_);
+      sbvol_.resize(bvol_.size());
+      for (std::size_t k = 0; k < sbvol_.size(); ++k)
+        sbvol_[k] = bvol_[static_cast<std::size_t>(g.order()[k])];
     });
   }
   if (opt_.equilibrium_masses) solve_equilibrium_masses();
@@ -212,21 +226,121 @@ double SphFluid::internal_energy(double rho) const {
          (std::pow(rho, g - 1.0) / std::pow(r0, g) + (g - 1.0) / rho - g / r0);
 }
 
-// Both passes work in cell order: slot k is particle order[k], and every per-particle array
-// they use (positions, velocities, masses, densities, pressures, neighbour slots) is indexed by
-// slot, so the neighbours of consecutive particles sit in nearby memory. The state's order never
-// changes: densities and pressures are also written by particle index, accelerations by
-// particle index.
-template <int D, sph::KernelType KD>
-void SphFluid::density_pass(const double* x) const {
+// The Verlet list (see the header comment). update_list() rebuilds it when some particle has
+// moved more than s/2 since the last build (or at the first call, or when a coordinate is not
+// finite: the comparison fails).
+template <int D>
+void SphFluid::update_list(const double* x) const {
+  const std::size_t n = static_cast<std::size_t>(n_);
+  bool stale = list_x_.size() != n * D;
+  if (!stale) {
+    const double half = 0.5 * skin_, half2 = half * half;
+    double worst = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : worst) if (parallel_)
+    for (Index i = 0; i < n_; ++i) {
+      double d2 = 0.0;
+      for (int d = 0; d < D; ++d) {
+        const double e = x[D * i + d] - list_x_[static_cast<std::size_t>(D * i + d)];
+        d2 += e * e;
+      }
+      // A NaN displacement counts as stale (max would drop it).
+      worst = std::max(worst, d2 == d2 ? d2 : std::numeric_limits<double>::infinity());
+    }
+    stale = !(worst <= half2);
+  }
+  if (stale) build_list<D>(x);
+}
+
+template <int D>
+void SphFluid::build_list(const double* x) const {
+  ++list_builds_;
+  count_neighbour_build();
+  const std::size_t n = static_cast<std::size_t>(n_);
+  const double radius = opt_.support + skin_;
   auto& grid = const_cast<sph::NeighbourGrid<D>&>(fluid_grid<D>());
-  grid.build(x, n_, opt_.support);
-  const auto& order = grid.order();
-  const double* sx = grid.positions();
+  grid.build(x, n_, radius);
+  list_x_.assign(x, x + n * D);
+  list_order_ = grid.order();
+  slot_of_.resize(n);
+  for (std::size_t k = 0; k < n; ++k)
+    slot_of_[static_cast<std::size_t>(list_order_[k])] = static_cast<std::uint32_t>(k);
+  cand_count_.resize(n);
+  cand_bcount_.resize(n);
+  cand_prefix_.resize(n + 1);
+  const auto& order = list_order_;
   const auto& bgrid = boundary_grid<D>();
   const bool with_boundary = !bvol_.empty();
-  const double h = opt_.support, rho0 = opt_.rho0;
+  while (true) {
+    const std::size_t cap = cand_capacity_;
+    cand_.resize(n * cap);
+    std::size_t most = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(max : most) if (parallel_)
+    for (Index s = 0; s < n_; ++s) {
+      const std::size_t k = static_cast<std::size_t>(s);
+      std::uint32_t* c = cand_.data() + k * cap;
+      std::size_t count = 0;
+      const double* xi = grid.positions() + D * k;
+      // Fluid candidates as particle indices first (sorted below, then mapped to slots).
+      grid.for_each_neighbour_slot(xi, radius, [&](std::size_t j, double, const auto&) {
+        if (count < cap) c[count] = static_cast<std::uint32_t>(order[j]);
+        ++count;
+      });
+      const std::size_t fluid = count;
+      if (with_boundary)
+        bgrid.for_each_neighbour_slot(xi, radius, [&](std::size_t b, double, const auto&) {
+          if (count < cap) c[count] = static_cast<std::uint32_t>(b);
+          ++count;
+        });
+      most = std::max(most, count);
+      if (count > cap) continue;
+      // Fluid candidates by particle index, boundary ones by boundary slot: orders that do not
+      // depend on the positions at the build.
+      std::sort(c, c + fluid);
+      for (std::size_t q = 0; q < fluid; ++q) c[q] = slot_of_[c[q]];
+      std::sort(c + fluid, c + count);
+      cand_count_[k] = static_cast<std::uint32_t>(fluid);
+      cand_bcount_[k] = static_cast<std::uint32_t>(count - fluid);
+    }
+    if (most <= cap) break;
+    cand_capacity_ = most + most / 4;
+  }
+  cand_prefix_[0] = 0;
+  for (std::size_t k = 0; k < n; ++k)
+    cand_prefix_[k + 1] = cand_prefix_[k] + cand_count_[k] + cand_bcount_[k];
+  nb_index_.resize(n * cand_capacity_);
+  nb_dist_.resize(n * cand_capacity_);
+}
+
+// The calling thread's slots [first, last): contiguous ranges holding equal numbers of
+// candidates (the cost of both passes), split by binary search in their running total.
+std::pair<std::size_t, std::size_t> SphFluid::thread_range() const {
   const std::size_t n = static_cast<std::size_t>(n_);
+  const int nt = parallel_ ? omp_get_num_threads() : 1;
+  const int t = parallel_ ? omp_get_thread_num() : 0;
+  if (nt <= 1) return {0, n};
+  const std::size_t total = cand_prefix_[n];
+  const auto at = [&](int part) -> std::size_t {
+    if (part >= nt) return n;
+    const std::size_t goal = total / static_cast<std::size_t>(nt) * static_cast<std::size_t>(part);
+    return static_cast<std::size_t>(
+        std::lower_bound(cand_prefix_.begin(), cand_prefix_.end() - 1, goal) -
+        cand_prefix_.begin());
+  };
+  return {at(t), at(t + 1)};
+}
+
+// Both passes work in slot order (the Verlet list's cell order): slot k is particle
+// list_order_[k], and every per-particle array they use (positions, velocities, masses,
+// densities, pressures, neighbour slots) is indexed by slot, so the neighbours of consecutive
+// particles sit in nearby memory. The state's order never changes: densities and pressures are
+// also written by particle index, accelerations by particle index.
+template <int D, sph::KernelType KD>
+void SphFluid::density_pass(const double* x) const {
+  update_list<D>(x);
+  const auto& order = list_order_;
+  const double* bx = boundary_grid<D>().positions();
+  const double h2 = opt_.support * opt_.support, rho0 = opt_.rho0;
+  const std::size_t n = static_cast<std::size_t>(n_), cap = cand_capacity_;
   rho_.resize(n);
   p_.resize(n);
   sm_.resize(n);
@@ -236,53 +350,64 @@ void SphFluid::density_pass(const double* x) const {
   sinv_rho_.resize(n);
   nb_count_.resize(n);
   nb_bcount_.resize(n);
-  for (std::size_t k = 0; k < n; ++k) sm_[k] = m_[static_cast<std::size_t>(order[k])];
+  spos_.resize(n * D);
   // A local copy: the loop's stores through double pointers could alias the member kernel's
   // constants, and the compiler would reload them for every pair.
   const sph::Kernel wd = wd_;
-  // The fluid neighbours of each particle (self included) with their distances, then its
-  // boundary neighbours, kept for the force pass. Capacity per particle grows (and the pass
-  // repeats) when a particle has more.
-  while (true) {
-    const std::size_t cap = nb_capacity_;
-    nb_index_.resize(n * cap);
-    nb_dist_.resize(n * cap);
-    std::size_t most = 0;
-#pragma omp parallel for schedule(static) reduction(max : most) if (parallel_)
+#pragma omp parallel if (parallel_)
+  {
+#pragma omp for schedule(static)
     for (Index s = 0; s < n_; ++s) {
-      const std::size_t k = static_cast<std::size_t>(s);
-      const double* xi = sx + D * k;
-      Index* idx = nb_index_.data() + k * cap;
+      const std::size_t k = static_cast<std::size_t>(s), i = static_cast<std::size_t>(order[k]);
+      for (int d = 0; d < D; ++d) spos_[D * k + static_cast<std::size_t>(d)] = x[D * i + d];
+      sm_[k] = m_[i];
+    }
+    const auto [first, last] = thread_range();
+    // Local pointers: the loop's stores could alias the vectors' own pointers otherwise.
+    const double* spos = spos_.data();
+    const double* sm = sm_.data();
+    const double* sbvol = sbvol_.data();
+    for (std::size_t k = first; k < last; ++k) {
+      const double* xi = spos + D * k;
+      const std::uint32_t* c = cand_.data() + k * cap;
+      std::uint32_t* idx = nb_index_.data() + k * cap;
       double* dist = nb_dist_.data() + k * cap;
       std::size_t count = 0;
       double sum = 0.0;
-      grid.for_each_neighbour_slot(xi, h, [&](std::size_t j, double r2, const auto&) {
+      const std::size_t nf = cand_count_[k], nall = nf + cand_bcount_[k];
+      for (std::size_t q = 0; q < nf; ++q) {
+        const std::size_t j = c[q];
+        const double* xj = spos + D * j;
+        double r2 = 0.0;
+        for (int d = 0; d < D; ++d) r2 += (xi[d] - xj[d]) * (xi[d] - xj[d]);
+        // Branch-free: every candidate is written, and kept (count advanced) only within h;
+        // a rejected one adds +0.0, which leaves the sum unchanged bit for bit.
+        const bool in = r2 < h2;
         const double r = std::sqrt(r2);
-        sum += sm_[j] * wd.w_as<KD>(r);
-        if (count < cap) {
-          idx[count] = static_cast<Index>(j);
-          dist[count] = r;
-        }
-        ++count;
-      });
-      double rho = sum;
-      const std::size_t fluid_count = count;
-      if (with_boundary) {
-        double bsum = 0.0;
-        bgrid.for_each_neighbour(xi, h, [&](Index b, double r2, const auto&) {
-          const double r = std::sqrt(r2);
-          bsum += bvol_[static_cast<std::size_t>(b)] * wd.w_as<KD>(r);
-          if (count < cap) {
-            idx[count] = b;
-            dist[count] = r;
-          }
-          ++count;
-        });
-        rho += rho0 * bsum;
+        const double w = sm[j] * wd.w_inside_as<KD>(r);
+        sum += in ? w : 0.0;
+        idx[count] = static_cast<std::uint32_t>(j);
+        dist[count] = r;
+        count += in ? 1 : 0;
       }
+      const std::size_t fluid_count = count;
+      double bsum = 0.0;
+      for (std::size_t q = nf; q < nall; ++q) {
+        const std::size_t b = c[q];
+        const double* xb = bx + D * b;
+        double r2 = 0.0;
+        for (int d = 0; d < D; ++d) r2 += (xi[d] - xb[d]) * (xi[d] - xb[d]);
+        const bool in = r2 < h2;
+        const double r = std::sqrt(r2);
+        const double w = sbvol[b] * wd.w_inside_as<KD>(r);
+        bsum += in ? w : 0.0;
+        idx[count] = static_cast<std::uint32_t>(b);
+        dist[count] = r;
+        count += in ? 1 : 0;
+      }
+      const double rho = nall > nf ? sum + rho0 * bsum : sum;
       nb_count_[k] = fluid_count;
       nb_bcount_[k] = count - fluid_count;
-      most = std::max(most, count);
       const double p = pressure(rho);
       srho_[k] = rho;
       sp_[k] = p;
@@ -292,8 +417,6 @@ void SphFluid::density_pass(const double* x) const {
       rho_[iu] = rho;
       p_[iu] = p;
     }
-    if (most <= cap) break;
-    nb_capacity_ = most + most / 4;
   }
 }
 
@@ -304,10 +427,10 @@ template <int D, sph::KernelType KG, SphFluid::Part P>
 void SphFluid::force_pass(const double* v, double* a) const {
   constexpr bool with_explicit = P != Part::implicit_part;
   constexpr bool with_implicit = P != Part::explicit_part;
-  const auto& grid = fluid_grid<D>();
-  const auto& order = grid.order();
-  const double* sx = grid.positions();
-  const std::size_t n = static_cast<std::size_t>(n_), cap = nb_capacity_;
+  const auto& order = list_order_;
+  const double* sx = spos_.data();
+  const double* bx = boundary_grid<D>().positions();
+  const std::size_t n = static_cast<std::size_t>(n_), cap = cand_capacity_;
   const bool penalty = opt_.boundary == SphBoundary::penalty;
   const bool variational = opt_.form == SphPressureForm::variational;
   const bool muller = with_implicit && opt_.viscosity == SphViscosity::muller && opt_.mu > 0;
@@ -319,81 +442,94 @@ void SphFluid::force_pass(const double* v, double* a) const {
   const double bfac = opt_.mirror_boundary_pressure ? 2.0 : 1.0;
   const sph::Kernel wg = wg_, wv = wv_;  // local copies (see density_pass)
   sv_.resize(n * D);
-  for (std::size_t k = 0; k < n; ++k)
-    for (int d = 0; d < D; ++d)
-      sv_[D * k + static_cast<std::size_t>(d)] = v[D * order[k] + static_cast<Index>(d)];
-#pragma omp parallel for schedule(static) if (parallel_)
-  for (Index s = 0; s < n_; ++s) {
-    const std::size_t k = static_cast<std::size_t>(s);
-    const double* xi = sx + D * k;
-    const double* vi = sv_.data() + D * k;
-    const double rhoi = srho_[k], pi = sp_[k], pr2i = spr2_[k], inv_rhoi = sinv_rho_[k];
-    std::array<double, D> acc;
-    for (int d = 0; d < D; ++d)
-      acc[d] = with_explicit ? opt_.gravity[static_cast<std::size_t>(d)] : 0.0;
-    const Index* idx = nb_index_.data() + k * cap;
-    const double* dist = nb_dist_.data() + k * cap;
-    for (std::size_t q = 0; q < nb_count_[k]; ++q) {
-      const double r = dist[q];
-      if (r == 0.0) continue;  // self, or a coincident particle: no direction
-      const std::size_t j = static_cast<std::size_t>(idx[q]);
-      const double m = sm_[j];
-      const double* xj = sx + D * j;
-      const double* vj = sv_.data() + D * j;
-      std::array<double, D> dx;
-      for (int d = 0; d < D; ++d) dx[d] = xi[d] - xj[d];
-      const double dwr = wg.dw_over_r_as<KG>(r);  // ∇W_ij = dwr · (x_i - x_j)
-      double coef = 0.0;
-      if constexpr (with_explicit)
-        coef =
-            variational ? m * (pr2i + spr2_[j]) : 0.5 * m * (pi + sp_[j]) * inv_rhoi * sinv_rho_[j];
-      if (artificial) {
-        double vr = 0.0;
-        for (int d = 0; d < D; ++d) vr += (vi[d] - vj[d]) * dx[d];
-        if (vr < 0.0) coef -= m * av * vr / (0.5 * (rhoi + srho_[j]) * (r * r + eps2));
-      }
-      for (int d = 0; d < D; ++d) acc[d] -= coef * dwr * dx[d];
-      if (muller) {
-        const double cv = mu * inv_rhoi * m * sinv_rho_[j] * wv.laplacian(r);
-        for (int d = 0; d < D; ++d) acc[d] += cv * (vj[d] - vi[d]);
-      }
-    }
-    const std::size_t end = nb_count_[k] + nb_bcount_[k];
-    for (std::size_t q = nb_count_[k]; q < end; ++q) {
-      const double r = dist[q];
-      if (r == 0.0) continue;
-      const std::size_t b = static_cast<std::size_t>(idx[q]);
-      std::array<double, D> dx;
-      for (int d = 0; d < D; ++d) dx[d] = xi[d] - bx_[D * b + static_cast<std::size_t>(d)];
-      const double vb = bvol_[b];
-      const double dwr = wg.dw_over_r_as<KG>(r);
-      double coef = 0.0;
-      if constexpr (with_explicit)
-        coef = bfac * rho0 * vb * pr2i;  // -f ρ0 V_b p_i/ρ_i² ∇W_ib, f = 2 or 1
-      if (artificial) {
-        double vr = 0.0;
-        for (int d = 0; d < D; ++d) vr += vi[d] * dx[d];
-        if (vr < 0.0) coef -= rho0 * vb * av * vr / (0.5 * (rhoi + rho0) * (r * r + eps2));
-      }
-      for (int d = 0; d < D; ++d) acc[d] -= coef * dwr * dx[d];
-      if (muller) {
-        const double cv = mu * inv_rhoi * vb * wv.laplacian(r);  // m_b/ρ_b = V_b, v_b = 0
-        for (int d = 0; d < D; ++d) acc[d] -= cv * vi[d];
-      }
-    }
-    if (with_explicit && penalty) {
-      for (const auto& wall : scene_.walls) {
-        double sd = -wall.offset;
-        for (int d = 0; d < D; ++d) sd += wall.normal[static_cast<std::size_t>(d)] * xi[d];
-        if (sd < d0) {
-          const double qw = 1.0 - sd / d0;
-          for (int d = 0; d < D; ++d)
-            acc[d] += k_wall * qw * qw * wall.normal[static_cast<std::size_t>(d)];
+#pragma omp parallel if (parallel_)
+  {
+#pragma omp for schedule(static)
+    for (Index s = 0; s < n_; ++s)
+      for (int d = 0; d < D; ++d)
+        sv_[D * static_cast<std::size_t>(s) + static_cast<std::size_t>(d)] =
+            v[D * order[static_cast<std::size_t>(s)] + static_cast<Index>(d)];
+    const auto [first, last] = thread_range();
+    // Local pointers: the stores to a could alias the vectors' own pointers otherwise.
+    const double *sm = sm_.data(), *sv = sv_.data(), *srho = srho_.data(), *sp = sp_.data(),
+                 *spr2 = spr2_.data(), *sinv_rho = sinv_rho_.data(), *nb_dist = nb_dist_.data();
+    const std::uint32_t* nb_index = nb_index_.data();
+    const std::size_t *nb_count = nb_count_.data(), *nb_bcount = nb_bcount_.data();
+    const double* sbvol = sbvol_.data();
+    for (std::size_t k = first; k < last; ++k) {
+      const double* xi = sx + D * k;
+      const double* vi = sv + D * k;
+      const double rhoi = srho[k], pi = sp[k], pr2i = spr2[k], inv_rhoi = sinv_rho[k];
+      std::array<double, D> acc;
+      for (int d = 0; d < D; ++d)
+        acc[d] = with_explicit ? opt_.gravity[static_cast<std::size_t>(d)] : 0.0;
+      const std::uint32_t* idx = nb_index + k * cap;
+      const double* dist = nb_dist + k * cap;
+      for (std::size_t q = 0; q < nb_count[k]; ++q) {
+        const double r = dist[q];
+        if (r == 0.0) continue;  // self, or a coincident particle: no direction
+        const std::size_t j = static_cast<std::size_t>(idx[q]);
+        const double m = sm[j];
+        const double* xj = sx + D * j;
+        const double* vj = sv + D * j;
+        std::array<double, D> dx;
+        for (int d = 0; d < D; ++d) dx[d] = xi[d] - xj[d];
+        const double dwr = wg.dw_over_r_as<KG>(r);  // ∇W_ij = dwr · (x_i - x_j)
+        double coef = 0.0;
+        if constexpr (with_explicit)
+          coef =
+              variational ? m * (pr2i + spr2[j]) : 0.5 * m * (pi + sp[j]) * inv_rhoi * sinv_rho[j];
+        if (artificial) {
+          double vr = 0.0;
+          for (int d = 0; d < D; ++d) vr += (vi[d] - vj[d]) * dx[d];
+          // Branch-free (approaching pairs only): subtracting +0.0 leaves coef unchanged.
+          const double pi_ij = m * av * vr / (0.5 * (rhoi + srho[j]) * (r * r + eps2));
+          coef -= vr < 0.0 ? pi_ij : 0.0;
+        }
+        for (int d = 0; d < D; ++d) acc[d] -= coef * dwr * dx[d];
+        if (muller) {
+          const double cv = mu * inv_rhoi * m * sinv_rho[j] * wv.laplacian(r);
+          for (int d = 0; d < D; ++d) acc[d] += cv * (vj[d] - vi[d]);
         }
       }
+      const std::size_t end = nb_count[k] + nb_bcount[k];
+      for (std::size_t q = nb_count[k]; q < end; ++q) {
+        const double r = dist[q];
+        if (r == 0.0) continue;
+        const std::size_t b = static_cast<std::size_t>(idx[q]);
+        std::array<double, D> dx;
+        for (int d = 0; d < D; ++d) dx[d] = xi[d] - bx[D * b + static_cast<std::size_t>(d)];
+        const double vb = sbvol[b];
+        const double dwr = wg.dw_over_r_as<KG>(r);
+        double coef = 0.0;
+        if constexpr (with_explicit)
+          coef = bfac * rho0 * vb * pr2i;  // -f ρ0 V_b p_i/ρ_i² ∇W_ib, f = 2 or 1
+        if (artificial) {
+          double vr = 0.0;
+          for (int d = 0; d < D; ++d) vr += vi[d] * dx[d];
+          const double pi_ib = rho0 * vb * av * vr / (0.5 * (rhoi + rho0) * (r * r + eps2));
+          coef -= vr < 0.0 ? pi_ib : 0.0;
+        }
+        for (int d = 0; d < D; ++d) acc[d] -= coef * dwr * dx[d];
+        if (muller) {
+          const double cv = mu * inv_rhoi * vb * wv.laplacian(r);  // m_b/ρ_b = V_b, v_b = 0
+          for (int d = 0; d < D; ++d) acc[d] -= cv * vi[d];
+        }
+      }
+      if (with_explicit && penalty) {
+        for (const auto& wall : scene_.walls) {
+          double sd = -wall.offset;
+          for (int d = 0; d < D; ++d) sd += wall.normal[static_cast<std::size_t>(d)] * xi[d];
+          if (sd < d0) {
+            const double qw = 1.0 - sd / d0;
+            for (int d = 0; d < D; ++d)
+              acc[d] += k_wall * qw * qw * wall.normal[static_cast<std::size_t>(d)];
+          }
+        }
+      }
+      const Index i = order[k];
+      for (int d = 0; d < D; ++d) a[D * i + d] = acc[d];
     }
-    const Index i = order[k];
-    for (int d = 0; d < D; ++d) a[D * i + d] = acc[d];
   }
 }
 

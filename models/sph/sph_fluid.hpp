@@ -100,14 +100,24 @@
 // and the penalty force, E is conserved in continuous time: energy drift then measures the
 // integrator. The mirrored wall (f = 2) does work that is not the gradient of E.
 //
-// Neighbour search (neighbour_grid.hpp): a uniform grid of cells h (1 + 1e-6) — dense over the
-// particles' bounding box, hashed when that box is large — rebuilt from the
-// positions at every right-hand-side evaluation (stage positions differ); the boundary particles'
-// grid is built once. Both passes (density, then forces) gather per particle in cell order with
-// OpenMP when there are at least `parallel_threshold` particles; every particle's sums run in an
-// order fixed by the positions alone, so results are bitwise identical for any thread count. The
-// state vector's order never changes. Nothing edits positions or velocities outside the
-// right-hand side: boundaries are forces, and there is no velocity clamping.
+// Neighbour search: a Verlet list with a skin s = SphOptions::skin · h (default 0.2 h; Verlet
+// 1967). At a build, a uniform grid of cells (h + s)(1 + 1e-6) (neighbour_grid.hpp) sorts the
+// fluid particles by cell (the slot order of every per-particle array the passes use), and each
+// particle's candidates are listed: the fluid particles and the (static) boundary particles
+// within h + s of it, the boundary ones from the boundary grid built once with cells h + s. The
+// list is reused until some particle has moved more than s/2 from where it was at the build
+// (checked at every evaluation; any pair closer than h now was closer than h + s then), so
+// stage positions inside the skin need no search; neighbour_list_builds() and the counter
+// EvalCounters::neighbour_builds count the builds. Each particle's fluid candidates are sorted
+// by particle index and its boundary candidates by boundary slot (the boundary grid never
+// changes): a particle's sums run over its neighbours within h in an order fixed by the
+// positions alone, whenever the list was built, so the right-hand side is a function of the
+// state, bit for bit. Both passes (density, then forces) gather per particle over the list
+// with OpenMP when there are at least `parallel_threshold` particles, the threads taking
+// contiguous ranges of slots with equal numbers of candidates (measured at the build), so
+// results are bitwise identical for any thread count. The state vector's order never changes.
+// Nothing edits positions or velocities outside the right-hand side: boundaries are forces, and
+// there is no velocity clamping.
 //
 // velocity_dependent() is true exactly when a viscosity is on (μ > 0 or α > 0).
 // stiffness(): c/h (acoustic) + 8ν/h_s² (viscous, ν = μ/ρ0 or Monaghan's effective
@@ -119,7 +129,9 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/ode_system.hpp"
@@ -157,6 +169,7 @@ struct SphOptions {
   bool equilibrium_masses = false;
   bool mirror_boundary_pressure = false;  // f = 2 in the boundary pressure force (see above)
   Index parallel_threshold = 512;         // particles; below this the passes run serially
+  double skin = 0.2;                      // Verlet list skin, a fraction of the support h
   SphSplit split = SphSplit::none;        // additive split (see the header comment)
 };
 
@@ -226,6 +239,10 @@ class SphFluid final : public MechanicalSystem {
   double kinetic_energy(CVecRef y) const;
   Vec linear_momentum(CVecRef y) const;
   Vec angular_momentum(CVecRef y) const;  // 2D: 1 component Σ m (x v_y - y v_x); 3D: Σ m x × v
+  // The Verlet list (see the header comment): its skin s (absolute) and how many times it was
+  // built since construction (also counted in counters().neighbour_builds).
+  double neighbour_skin() const { return skin_; }
+  long neighbour_list_builds() const { return list_builds_; }
   // ω_max of the pressure waves on the uniform lattice at rest (see the header comment).
   double acoustic_rate() const { return acoustic_rate_; }
   double max_density_error(CVecRef y) const;  // max_i |ρ_i/ρ0 - 1| (free surfaces included)
@@ -256,6 +273,12 @@ class SphFluid final : public MechanicalSystem {
   void acceleration_impl(const double* x, const double* v, double* a) const;
   double lattice_acoustic_rate() const;
   template <int D>
+  void update_list(const double* x) const;  // rebuilds the Verlet list when it is stale
+  template <int D>
+  void build_list(const double* x) const;
+  // The threads' share [first, last) of the slots: equal numbers of candidates.
+  std::pair<std::size_t, std::size_t> thread_range() const;
+  template <int D>
   const sph::NeighbourGrid<D>& fluid_grid() const;
   template <int D>
   const sph::NeighbourGrid<D>& boundary_grid() const;
@@ -279,12 +302,25 @@ class SphFluid final : public MechanicalSystem {
   mutable std::vector<double> rho_, p_;  // ρ and p by particle index (observables)
   // The same in cell order (slot k = particle order()[k]) with p/ρ², 1/ρ, masses, velocities.
   mutable std::vector<double> srho_, sp_, spr2_, sinv_rho_, sm_, sv_;
-  // Neighbours of each slot from the density pass: fluid slots (self included) in
-  // [k·capacity, k·capacity + count_k) of the index and distance arrays, then boundary particle
-  // indices in the next bcount_k entries.
-  mutable std::size_t nb_capacity_ = 32;
+  // Neighbours within h of each slot from the density pass, in its candidates' order: fluid
+  // slots (self included) in [k·cand_capacity_, k·cand_capacity_ + nb_count_k) of the index and
+  // distance arrays, then boundary slots in the next nb_bcount_k entries.
   mutable std::vector<std::size_t> nb_count_, nb_bcount_;  // fluid, then boundary neighbours
-  mutable std::vector<Index> nb_index_;
+  // The Verlet list: positions at its build (by particle index), slot order (slot k holds
+  // particle list_order_[k]), current positions in slot order, and per slot its candidates in
+  // [k·cand_capacity_, ... + cand_count_k) (fluid slots, by particle index) followed by
+  // cand_bcount_k boundary slots (ascending); cand_prefix_ = running total of both (n + 1).
+  double skin_ = 0.0;
+  mutable long list_builds_ = 0;
+  mutable std::vector<double> list_x_, spos_;
+  mutable std::vector<Index> list_order_;
+  mutable std::vector<std::uint32_t> slot_of_;  // particle index -> slot
+  mutable std::size_t cand_capacity_ = 64;
+  mutable std::vector<std::uint32_t> cand_;
+  mutable std::vector<std::uint32_t> cand_count_, cand_bcount_;
+  mutable std::vector<std::size_t> cand_prefix_;
+  std::vector<double> sbvol_;  // boundary volumes in boundary-grid slot order
+  mutable std::vector<std::uint32_t> nb_index_;
   mutable std::vector<double> nb_dist_;
   mutable sph::NeighbourGrid<2> grid2_, bgrid2_;
   mutable sph::NeighbourGrid<3> grid3_, bgrid3_;
