@@ -235,6 +235,7 @@ class MassSpringNetwork final : public MechanicalSystem {
                    double* k_values, double* d_values) const;
   void fill_blocks(const Structure& st, double gamma, CVecRef x, CVecRef v, SparseMat* k,
                    SparseMat* d) const;
+  void pack_rhs_springs();        // rhs_springs_, part_start_, cross_start_ (constructor)
   void ensure_structure() const;  // builds the members marked "on first use" once
   Structure build_structure(const std::vector<Spring>& springs) const;
   const Structure& implicit_structure() const {
@@ -257,16 +258,25 @@ class MassSpringNetwork final : public MechanicalSystem {
   std::vector<double> inv_mass_;  // per point, 0 for pinned points
   DistanceConstraints distance_constraints_;
 
-  // Right-hand side springs (see the header comment): partition q's interior springs are
-  // packed_[part_start_[q] .. part_start_[q+1]), the springs between partitions follow.
+  // Right-hand side springs (see the header comment), in structure-of-arrays order: partition
+  // q's interior springs are [part_start_[q], part_start_[q+1]); the springs between partitions
+  // follow in groups cross_start_[g] .. cross_start_[g+1]: first the groups of springs joining
+  // partitions (q, q+1) for even q (disjoint points: run in parallel), then those for odd q, then
+  // one group of all other cross springs (serial).
   static constexpr Index kRhsPartitions = 32;
-  struct PackedSpring {
-    std::int32_t i, j;
-    double k, rest;
+  struct RhsSprings {
+    std::vector<std::int32_t> i, j;  // end points
+    std::vector<std::int32_t> kind;  // index into k and rest: the distinct (k, L) pairs
+    std::vector<double> k, rest;
+    std::vector<double> damping;  // per spring; empty without dashpots
+    std::size_t size() const { return i.size(); }
   };
-  std::vector<PackedSpring> packed_;
-  std::vector<double> packed_damping_;  // dashpot coefficients (empty without dashpots)
+  RhsSprings rhs_springs_;
   std::vector<Index> part_start_;
+  std::vector<Index> cross_start_;
+  Index even_groups_ = 0, odd_groups_ = 0;
+  std::vector<double> point_mass_;             // per point
+  std::vector<std::uint8_t> pinned_;           // per point
   std::vector<std::uint8_t> packed_implicit_;  // per packed spring: in a_I (split only)
   bool implicit_dashpots_ = false;             // some implicit spring has a dashpot
 
