@@ -433,6 +433,26 @@ void spring_range(const SpringArgs& s, Index e0, Index e1, const double* x, cons
   spring_range_portable<D>(s, e0, e1, x, v, f);
 }
 
+// Points [p0, p1): force sums into accelerations, a = g + (f - γ v)/m (Springs: f/m only), 0 for
+// pinned points, in a loop the compiler vectorises (the pinned select is a bit mask).
+template <int D, bool Springs>
+void finish_points(double* __restrict a, const double* __restrict v, const double* __restrict mass,
+                   const std::uint8_t* __restrict pinned, const double* g, double gamma, Index p0,
+                   Index p1) {
+  const double g0 = g[0], g1 = D > 1 ? g[1] : 0.0, g2 = D > 2 ? g[2] : 0.0;
+#pragma omp simd
+  for (Index p = p0; p < p1; ++p) {
+    const std::uint64_t keep = std::uint64_t{0} - static_cast<std::uint64_t>(pinned[p] == 0);
+    const double m = mass[p];
+#pragma GCC unroll 3
+    for (int c = 0; c < D; ++c) {
+      const double gc = c == 0 ? g0 : c == 1 ? g1 : g2;
+      const double ac = Springs ? a[D * p + c] / m : gc + (a[D * p + c] - gamma * v[D * p + c]) / m;
+      a[D * p + c] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(ac) & keep);
+    }
+  }
+}
+
 }  // namespace
 
 template <int D, MassSpringNetwork::Part P>
@@ -467,19 +487,8 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
   const auto partition = [&](Index q) {
     spring_range<D>(args, part_start_[static_cast<std::size_t>(q)],
                     part_start_[static_cast<std::size_t>(q) + 1], x, v, a);
-    for (Index p = np * q / parts; p < np * (q + 1) / parts; ++p) {
-      double* ap = a + D * p;
-      if (pinned[p]) {
-        for (int c = 0; c < D; ++c) ap[c] = 0.0;
-        continue;
-      }
-      const double* vp = v + D * p;
-      if constexpr (P == Part::implicit_part) {  // springs and dashpots only
-        for (int c = 0; c < D; ++c) ap[c] /= mass[p];
-      } else {
-        for (int c = 0; c < D; ++c) ap[c] = g[c] + (ap[c] - gamma * vp[c]) / mass[p];
-      }
-    }
+    finish_points<D, P == Part::implicit_part>(a, v, mass, pinned, g, gamma, np * q / parts,
+                                               np * (q + 1) / parts);
   };
   const Index ne = even_groups_, no = odd_groups_;
   const Index n = D * np;
