@@ -401,9 +401,12 @@ void spring_range_portable(const SpringArgs& s, Index e0, Index e1, const double
     spring_range_impl<D, false>(s, e0, e1, x, v, f);
 }
 
-#if defined(__GNUC__) && defined(__x86_64__)
-// The same kernel compiled for AVX2 (4 springs per vector, hardware gathers), chosen at run time
-// when the processor has it. Without -ffp-contract (ISO C++ mode: off) the compiler fuses no
+// A build for AVX2 or better (-march, e.g. STIFFBENCH_NATIVE) uses the portable kernel as is.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__AVX2__)
+#define STIFFBENCH_SPRING_AVX2_DISPATCH 1
+// The same kernel compiled for AVX2 (4 springs per vector; GCC loads the end points lane by
+// lane: its vgatherdpd version measured 25% slower on the project's AMD EPYC), chosen at run
+// time when the processor has it. Without -ffp-contract (ISO C++ mode: off) the compiler fuses no
 // multiply-add, and sqrt and division are correctly rounded, so both versions give the same bits.
 template <int D>
 __attribute__((target("avx2"))) void spring_range_avx2(const SpringArgs& s, Index e0, Index e1,
@@ -424,7 +427,7 @@ bool has_avx2() {
 template <int D>
 void spring_range(const SpringArgs& s, Index e0, Index e1, const double* x, const double* v,
                   double* f) {
-#if defined(__GNUC__) && defined(__x86_64__)
+#ifdef STIFFBENCH_SPRING_AVX2_DISPATCH
   if (has_avx2()) {
     spring_range_avx2<D>(s, e0, e1, x, v, f);
     return;
