@@ -6,6 +6,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <type_traits>
 #include <unordered_map>
 #include <utility>
@@ -163,6 +164,8 @@ void MassSpringNetwork::pack_rhs_springs() {
   // The distinct (k, L) pairs (by bits): a short linear search while there are few, then a hash.
   RhsSprings& rs = rhs_springs_;
   const std::size_t ns = springs_.size();
+  require_input(dofs() <= std::numeric_limits<std::int32_t>::max(),
+                name_ + ": more than 2^31 - 1 coordinates (the springs store 32-bit offsets)");
   rs.i.resize(ns);
   rs.j.resize(ns);
   rs.kind.resize(ns);
@@ -199,8 +202,8 @@ void MassSpringNetwork::pack_rhs_springs() {
   std::vector<Index> next(start.begin(), start.end() - 1);
   for (const Spring& sp : springs_) {
     const auto slot = static_cast<std::size_t>(next[static_cast<std::size_t>(group_of(sp))]++);
-    rs.i[slot] = static_cast<std::int32_t>(sp.i);
-    rs.j[slot] = static_cast<std::int32_t>(sp.j);
+    rs.i[slot] = static_cast<std::int32_t>(dim_ * sp.i);
+    rs.j[slot] = static_cast<std::int32_t>(dim_ * sp.j);
     rs.kind[slot] = kind_of(sp.k, sp.rest);
     if (has_dashpots_) rs.damping[slot] = sp.damping;
     if (opt_.split != NetworkSplit::none) packed_implicit_[slot] = implicit_spring(sp) ? 1 : 0;
@@ -328,8 +331,8 @@ namespace {
 // coordinates), then the additions in spring order, so the sums run in the same order as a
 // one-spring-at-a-time loop and do not depend on the vector width.
 struct SpringArgs {
-  const std::int32_t* i;
-  const std::int32_t* j;
+  const std::int32_t* i;  // first end's first coordinate: D × point
+  const std::int32_t* j;  // second end's
   const std::int32_t* kind;
   const double* k;
   const double* rest;
@@ -351,7 +354,7 @@ template <int D, bool Dashpots>
     const std::int32_t* kind = s.kind + b0;
 #pragma omp simd
     for (int b = 0; b < nb; ++b) {
-      const Index pi = D * static_cast<Index>(si[b]), pj = D * static_cast<Index>(sj[b]);
+      const Index pi = si[b], pj = sj[b];
       double r[D], l2 = 0.0;
       for (int c = 0; c < D; ++c) {
         r[c] = x[pj + c] - x[pi + c];
@@ -374,14 +377,14 @@ template <int D, bool Dashpots>
     double fc[D] = {};
     for (int b = 0; b < nb; ++b) {
       if (s.implicit && s.implicit[b0 + b] != s.want) continue;
-      const Index pi = D * static_cast<Index>(si[b]);
+      const Index pi = si[b];
       if (pi != cur) {
         if (cur >= 0)
           for (int c = 0; c < D; ++c) f[cur + c] = fc[c];
         cur = pi;
         for (int c = 0; c < D; ++c) fc[c] = f[cur + c];
       }
-      double* fj = f + D * static_cast<Index>(sj[b]);
+      double* fj = f + sj[b];
       for (int c = 0; c < D; ++c) {
         fc[c] += cr[c][b];
         fj[c] -= cr[c][b];

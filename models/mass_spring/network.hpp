@@ -276,7 +276,7 @@ class MassSpringNetwork final : public MechanicalSystem {
   // one group of all other cross springs (serial).
   static constexpr Index kRhsPartitions = 32;
   struct RhsSprings {
-    std::vector<std::int32_t> i, j;  // end points
+    std::vector<std::int32_t> i, j;  // end points' first coordinates (dim × point index)
     std::vector<std::int32_t> kind;  // index into k and rest: the distinct (k, L) pairs
     std::vector<double> k, rest;
     std::vector<double> damping;  // per spring; empty without dashpots
