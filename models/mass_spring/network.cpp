@@ -478,7 +478,7 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
                         static_cast<std::uint8_t>(P == Part::implicit_part ? 1 : 0)};
   // a first holds the force sums.
   // 1. The springs between partitions, group by group in a fixed order (the groups of one
-  //    parity touch disjoint points), into a cleared array.
+  //    parity touch disjoint points); the even groups first clear their points (below).
   const auto group = [&](Index g) {
     spring_range<D>(args, cross_start_[static_cast<std::size_t>(g)],
                     cross_start_[static_cast<std::size_t>(g) + 1], x, v, a);
@@ -497,25 +497,42 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
                                                np * (q + 1) / parts);
   };
   const Index ne = even_groups_, no = odd_groups_;
-  const Index n = D * np;
+  // Even group e touches the points of partitions 2e and 2e + 1 only: it clears them just before
+  // its springs. Partitions no even group covers (an odd count: only the single partition of a
+  // small network) are cleared in the same stage.
+  const auto clear = [&](Index q) {
+    std::fill(a + D * (np * q / parts), a + D * (np * (q + 1) / parts), 0.0);
+  };
+  const auto first_stage = [&](Index e) {
+    if (e < ne) {
+      clear(2 * e);
+      clear(2 * e + 1);
+      group(e);
+    } else {
+      clear(2 * ne + (e - ne));
+    }
+  };
+  const Index first = ne + (parts - 2 * ne);
+  const bool rest = cross_start_[static_cast<std::size_t>(ne + no)] <
+                    cross_start_[static_cast<std::size_t>(ne + no) + 1];
   if (parallel()) {
     // One parallel region, its stages separated by the work-sharing loops' barriers.
 #pragma omp parallel
     {
 #pragma omp for schedule(static)
-      for (Index i = 0; i < n; ++i) a[i] = 0.0;
-#pragma omp for schedule(static)
-      for (Index e = 0; e < ne; ++e) group(e);
+      for (Index e = 0; e < first; ++e) first_stage(e);
 #pragma omp for schedule(static)
       for (Index e = ne; e < ne + no; ++e) group(e);
+      if (rest) {  // the same on every thread
 #pragma omp single
-      group(ne + no);
+        group(ne + no);
+      }
 #pragma omp for schedule(static)
       for (Index q = 0; q < parts; ++q) partition(q);
     }
   } else {
-    std::fill(a, a + n, 0.0);
-    for (Index e = 0; e <= ne + no; ++e) group(e);
+    for (Index e = 0; e < first; ++e) first_stage(e);
+    for (Index e = ne; e <= ne + no; ++e) group(e);
     for (Index q = 0; q < parts; ++q) partition(q);
   }
 }

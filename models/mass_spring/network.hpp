@@ -64,11 +64,11 @@
 // registers. Neither changes the order of any point's additions, and without contracted
 // multiply-adds (ISO C++ mode) both builds give the same bits. Networks with at least
 // `parallel_threshold` points split their points into kRhsPartitions contiguous index ranges.
-// A parallel region clears a; adds the springs between partitions q and q + 1 for even q (one
-// thread per pair: their points are disjoint), then for odd q, then any other cross springs in a
-// fixed order; then each partition adds its interior springs and turns its points' sums into
-// a = g + (f - γv)/m while they are in cache. The partition count depends on the network, not on
-// the threads, so every point's sum runs in the same order for any thread count: results are
+// A parallel region clears the points of partitions q and q + 1 and adds the springs between them
+// for even q (one thread per pair: their points are disjoint), then for odd q, then any other cross
+// springs in a fixed order; then each partition adds its interior springs and turns its points'
+// sums into a = g + (f - γv)/m while they are in cache. The partition count depends on the network,
+// not on the threads, so every point's sum runs in the same order for any thread count: results are
 // bitwise identical for 1 and 2 threads and on the serial path (tested against a
 // one-spring-at-a-time evaluation in tests/models/test_spring_kernel.cpp). K and D are filled
 // per point (network.cpp).
