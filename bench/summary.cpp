@@ -141,8 +141,10 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
           "; plain RHS " + fmt("%.3g", L.sec("rhs/plain_cloth/n:512/omp:2") * 1e3) + " ms" +
           one_thread(rhs_ratio(1), "%.3g") + ")");
   const double springs = L.counter("rhs/cloth/n:512/omp:2", "springs");
-  row("cloth 512² springs/s in a symplectic_euler step", springs / se_step(2), "%.3g", ">= 5e8",
-      springs / se_step(2) >= 5e8, "(" + one_thread(springs / se_step(1), "%.3g").substr(2) + ")");
+  // Issue 29, "Done when" point 1: >= 4e8 springs/s (its "Why" paragraph mentions 5e8; the
+  // done-when criterion is the target).
+  row("cloth 512² springs/s in a symplectic_euler step", springs / se_step(2), "%.3g", ">= 4e8",
+      springs / se_step(2) >= 4e8, "(" + one_thread(springs / se_step(1), "%.3g").substr(2) + ")");
   const auto rk_ratio = [&](int t) { return rk_step(t) / (4.0 * se_step(t)); };
   row("cloth 512² rk4 step / (4 x symplectic_euler step), driver", rk_ratio(2), "%.3g", "<= 1.06",
       rk_ratio(2) <= 1.06,

@@ -141,15 +141,19 @@ RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0
     r.t = (k + 1 == n) ? opt.t_end : t0 + static_cast<double>(k + 1) * r.h;
     ++r.stats.steps;
     // Methods that enforce the constraints themselves (rattle) are not projected afterwards.
-    if (s == Status::ok && sys.has_constraints() && !integ.info().requires_.constraints)
-      sys.project(r.t, r.y);
+    const bool projected =
+        s == Status::ok && sys.has_constraints() && !integ.info().requires_.constraints;
+    if (projected) sys.project(r.t, r.y);
     if (s != Status::ok) {
       r.stats.status = s;
       if (r.stats.message.empty())
         r.stats.message = to_string(s) + " in the step ending at t = " + std::to_string(r.t);
       break;
     }
-    const double norm = max_norm(r.y);  // NaN propagates to a failed comparison
+    // NaN propagates to a failed comparison. The method's own ‖y‖∞ when it has one (computed
+    // while it wrote y) and the projection did not move y since.
+    const std::optional<double> known = projected ? std::nullopt : integ.last_step_max_norm();
+    const double norm = known ? *known : max_norm(r.y);
     if (!(norm <= bound)) {
       r.stats.status = Status::unstable;
       std::ostringstream msg;

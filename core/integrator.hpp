@@ -7,6 +7,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -97,6 +98,11 @@ class Integrator {
   // newton_failed); it never returns a silently wrong step. Integrator-side counters (Newton
   // iterations, linear solves) are added to `stats`; the driver counts steps and evaluations.
   virtual Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) = 0;
+
+  // ‖y‖∞ of the state the last step() returned (NaN when an entry is NaN), when the method
+  // computed it while writing that state: the fixed-step driver's blow-up check then skips its
+  // own pass over y. nullopt (the default) when the method did not.
+  virtual std::optional<double> last_step_max_norm() const { return std::nullopt; }
 
   // Adaptive mode (the library references): after reset(), advance_to() integrates from the
   // current time to t_out with the method's own step-size control, writes y(t_out) and sets

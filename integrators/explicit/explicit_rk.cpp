@@ -1,48 +1,63 @@
 #include "integrators/explicit/explicit_rk.hpp"
 
+#include <cmath>
+#include <limits>
+
 namespace stiffbench {
 
 namespace {
 
 // out_e = base_e + c_0 k_0e + c_1 k_1e + … (left to right) for e in [begin, end). out may be
-// base. M > 0 is the term count known at compile time, M = 0 a runtime count m.
-template <int M>
+// base. M > 0 is the term count known at compile time, M = 0 a runtime count m. With Norm, also
+// max |out_e| into mx (nan set when an entry is NaN).
+template <int M, bool Norm>
 void combine_range(Index begin, Index end, const double* base, int m, const double* const* k,
-                   const double* c, double* out) {
+                   const double* c, double* out, double& mx, bool& nan) {
   const int terms = M > 0 ? M : m;
   for (Index e = begin; e < end; ++e) {
     double acc = base[e];
     for (int j = 0; j < terms; ++j) acc += c[j] * k[j][e];
     out[e] = acc;
+    if constexpr (Norm) {
+      const double a = std::abs(acc);
+      nan = nan || std::isnan(a);
+      mx = a > mx ? a : mx;
+    }
   }
 }
 
-template <int M>
-void combine_all(Index n, const double* base, int m, const double* const* k, const double* c,
-                 double* out) {
+// The combination over all entries; returns ‖out‖∞ with Norm (NaN when an entry is NaN; max is
+// order-independent, so the same for any thread count), 0 without.
+template <int M, bool Norm>
+double combine_all(Index n, const double* base, int m, const double* const* k, const double* c,
+                   double* out) {
+  double mx = 0.0;
+  bool nan = false;
   if (n >= ExplicitRungeKutta::kParallelEntries) {
     const Index chunks = 64;  // contiguous ranges; each entry's arithmetic is the same anyway
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) reduction(max : mx) reduction(|| : nan)
     for (Index q = 0; q < chunks; ++q)
-      combine_range<M>(n * q / chunks, n * (q + 1) / chunks, base, m, k, c, out);
+      combine_range<M, Norm>(n * q / chunks, n * (q + 1) / chunks, base, m, k, c, out, mx, nan);
   } else {
-    combine_range<M>(0, n, base, m, k, c, out);
+    combine_range<M, Norm>(0, n, base, m, k, c, out, mx, nan);
   }
+  return nan ? std::numeric_limits<double>::quiet_NaN() : mx;
 }
 
-void combine(Index n, const double* base, int m, const double* const* k, const double* c,
-             double* out) {
+template <bool Norm>
+double combine(Index n, const double* base, int m, const double* const* k, const double* c,
+               double* out) {
   switch (m) {
     case 1:
-      return combine_all<1>(n, base, m, k, c, out);
+      return combine_all<1, Norm>(n, base, m, k, c, out);
     case 2:
-      return combine_all<2>(n, base, m, k, c, out);
+      return combine_all<2, Norm>(n, base, m, k, c, out);
     case 3:
-      return combine_all<3>(n, base, m, k, c, out);
+      return combine_all<3, Norm>(n, base, m, k, c, out);
     case 4:
-      return combine_all<4>(n, base, m, k, c, out);
+      return combine_all<4, Norm>(n, base, m, k, c, out);
     default:
-      return combine_all<0>(n, base, m, k, c, out);
+      return combine_all<0, Norm>(n, base, m, k, c, out);
   }
 }
 
@@ -75,12 +90,13 @@ void ExplicitRungeKutta::reset(const OdeSystem& sys, double, CVecRef) {
   check_compatible(info(), sys);
   k_.resize(sys.dimension(), tableau_.stages());
   ytmp_.resize(sys.dimension());
+  norm_valid_ = false;
 }
 
 Status ExplicitRungeKutta::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats&) {
   const int s = tableau_.stages();
   const Index n = y.size();
-  // base + Σ (h c_j) k_j over row i's non-zero terms into out.
+  // base + Σ (h c_j) k_j over row i's non-zero terms into out; ‖out‖∞ for the final update.
   const auto combine_row = [&](int i, const double* base, double* out) {
     const auto& terms = terms_[static_cast<std::size_t>(i)];
     const auto& coefs = coefs_[static_cast<std::size_t>(i)];
@@ -89,8 +105,10 @@ Status ExplicitRungeKutta::step(const OdeSystem& sys, double t, VecRef y, double
       cols_[static_cast<std::size_t>(j)] = k_.col(terms[static_cast<std::size_t>(j)]).data();
       scaled_[static_cast<std::size_t>(j)] = h * coefs[static_cast<std::size_t>(j)];
     }
-    combine(n, base, m, cols_.data(), scaled_.data(), out);
+    if (i == s) return combine<true>(n, base, m, cols_.data(), scaled_.data(), out);
+    return combine<false>(n, base, m, cols_.data(), scaled_.data(), out);
   };
+  norm_valid_ = false;
   for (int i = 0; i < s; ++i) {
     const double ti = t + tableau_.c[i] * h;
     if (terms_[static_cast<std::size_t>(i)].empty()) {
@@ -100,7 +118,10 @@ Status ExplicitRungeKutta::step(const OdeSystem& sys, double t, VecRef y, double
       sys.rhs(ti, ytmp_, k_.col(i));
     }
   }
-  if (!terms_[static_cast<std::size_t>(s)].empty()) combine_row(s, y.data(), y.data());
+  if (!terms_[static_cast<std::size_t>(s)].empty()) {
+    last_norm_ = combine_row(s, y.data(), y.data());
+    norm_valid_ = true;
+  }
   return Status::ok;
 }
 

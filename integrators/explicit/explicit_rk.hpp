@@ -7,7 +7,8 @@
 // operations per entry as a sequence of axpy passes), over OpenMP threads when the system has at
 // least kParallelEntries entries. The per-entry arithmetic does not depend on the thread count,
 // so results are bitwise the same for any number of threads. A stage whose row of A is zero (the
-// first) evaluates f at y itself, without a copy.
+// first) evaluates f at y itself, without a copy. The final update also takes ‖y⁺‖∞ (the
+// driver's blow-up check: last_step_max_norm()).
 #pragma once
 
 #include <vector>
@@ -31,6 +32,9 @@ class ExplicitRungeKutta final : public Integrator {
   std::optional<LinearStability> linear_stability() const override {
     return tableau_stability(tableau_);
   }
+  std::optional<double> last_step_max_norm() const override {
+    return norm_valid_ ? std::optional<double>(last_norm_) : std::nullopt;
+  }
 
  private:
   ButcherTableau tableau_;
@@ -42,6 +46,8 @@ class ExplicitRungeKutta final : public Integrator {
   std::vector<std::vector<double>> coefs_;
   std::vector<const double*> cols_;  // workspace: the stage columns of one combination
   std::vector<double> scaled_;       // workspace: h times the coefficients
+  double last_norm_ = 0.0;           // ‖y‖∞ after the last step (NaN when an entry is NaN)
+  bool norm_valid_ = false;
 };
 
 }  // namespace stiffbench

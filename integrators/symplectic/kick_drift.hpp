@@ -46,6 +46,8 @@ class KickDriftIntegrator final : public Integrator {
   std::optional<LinearStability> linear_stability() const override {
     return kick_drift_stability(coeffs_);
   }
+  // ‖y‖∞ taken by the last stages that wrote x and v (in the same pass).
+  std::optional<double> last_step_max_norm() const override;
 
  private:
   KickDriftCoefficients coeffs_;
@@ -55,6 +57,10 @@ class KickDriftIntegrator final : public Integrator {
   Vec cached_x_;  // position at which acc_ was last evaluated (constrained systems only)
   const double* cached_y_ = nullptr;  // storage of the state acc_ belongs to
   bool cache_valid_ = false;
+  static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  std::size_t last_kick_ = kNone, last_drift_ = kNone;  // the last stages that write v and x
+  double last_norm_ = 0.0;                              // ‖y‖∞ after the last step
+  bool norm_valid_ = false;
 };
 
 }  // namespace stiffbench

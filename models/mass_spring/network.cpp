@@ -3,9 +3,12 @@
 #include "models/detail/with_dim.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <type_traits>
+#include <unordered_map>
 #include <utility>
 
 namespace stiffbench {
@@ -107,55 +110,104 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
     }
   }
 
-  // Springs for the right-hand side, grouped by partition of the points (see the header).
-  {
-    // The partition count depends on the size only (not on the threads or on the parallel
-    // threshold), so the serial and the parallel path sum in the same order.
-    const Index parts = np >= 64 * kRhsPartitions ? kRhsPartitions : 1;
-    const auto part_of = [&](Index p) { return static_cast<Index>((p * parts) / np); };
-    // part_of(p) inverts p0 = np·q/parts: the first q with np·(q+1)/parts > p.
-    const auto owner = [&](Index p) {
-      Index q = part_of(p);
-      while (q + 1 < parts && np * (q + 1) / parts <= p) ++q;
-      while (q > 0 && np * q / parts > p) --q;
-      return q;
-    };
-    std::vector<std::int32_t> part(static_cast<std::size_t>(np));
-    for (Index p = 0; p < np; ++p)
-      part[static_cast<std::size_t>(p)] = static_cast<std::int32_t>(owner(p));
-    std::vector<Index> count(static_cast<std::size_t>(parts) + 1, 0);
-    for (const Spring& sp : springs_) {
-      const Index qi = part[static_cast<std::size_t>(sp.i)],
-                  qj = part[static_cast<std::size_t>(sp.j)];
-      ++count[static_cast<std::size_t>(qi == qj ? qi : parts)];
-    }
-    part_start_.assign(static_cast<std::size_t>(parts) + 1, 0);
-    for (Index q = 0; q < parts; ++q)
-      part_start_[static_cast<std::size_t>(q) + 1] =
-          part_start_[static_cast<std::size_t>(q)] + count[static_cast<std::size_t>(q)];
-    std::vector<Index> next(part_start_.begin(), part_start_.end() - 1);
-    next.push_back(part_start_.back());  // cross springs after the partitions' own
-    packed_.resize(springs_.size());
-    packed_damping_.assign(has_dashpots_ ? springs_.size() : 0, 0.0);
-    for (const Spring& sp : springs_) {
-      const Index qi = part[static_cast<std::size_t>(sp.i)],
-                  qj = part[static_cast<std::size_t>(sp.j)];
-      const auto slot =
-          static_cast<std::size_t>(next[static_cast<std::size_t>(qi == qj ? qi : parts)]++);
-      packed_[slot] = {static_cast<std::int32_t>(sp.i), static_cast<std::int32_t>(sp.j), sp.k,
-                       sp.rest};
-      if (has_dashpots_) packed_damping_[slot] = sp.damping;
-      if (opt_.split != NetworkSplit::none) {
-        packed_implicit_.resize(springs_.size(), 0);
-        packed_implicit_[slot] = implicit_spring(sp) ? 1 : 0;
-      }
-    }
+  point_mass_.resize(points_.size());
+  pinned_.resize(points_.size());
+  for (std::size_t p = 0; p < points_.size(); ++p) {
+    point_mass_[p] = points_[p].mass;
+    pinned_[p] = points_[p].pinned ? 1 : 0;
   }
+  pack_rhs_springs();
   for (const Spring& sp : springs_)
     implicit_dashpots_ = implicit_dashpots_ || (implicit_spring(sp) && sp.damping != 0.0);
 
   // The adjacency lists and the Jacobian pattern are built on first use (build_structure): an
   // explicit run never needs them, and for a 512² cloth they are most of the construction cost.
+}
+
+// Springs of the right-hand side in structure-of-arrays order, grouped by partition of the
+// points (see the header comment and RhsSprings).
+void MassSpringNetwork::pack_rhs_springs() {
+  const Index np = num_points();
+  // The partition count depends on the size only (not on the threads or on the parallel
+  // threshold), so the serial and the parallel path sum in the same order.
+  const Index parts = np >= 64 * kRhsPartitions ? kRhsPartitions : 1;
+  // part_of(p) inverts p0 = np·q/parts: the first q with np·(q+1)/parts > p.
+  const auto owner = [&](Index p) {
+    Index q = (p * parts) / np;
+    while (q + 1 < parts && np * (q + 1) / parts <= p) ++q;
+    while (q > 0 && np * q / parts > p) --q;
+    return q;
+  };
+  std::vector<std::int32_t> part(static_cast<std::size_t>(np));
+  for (Index p = 0; p < np; ++p)
+    part[static_cast<std::size_t>(p)] = static_cast<std::int32_t>(owner(p));
+  // Group of a spring: its partition q (both ends in q); parts + lo/2 for a spring between lo
+  // and lo + 1 with lo even, parts + ne + lo/2 with lo odd; parts + ne + no for all others.
+  even_groups_ = parts / 2;
+  odd_groups_ = (parts - 1) / 2;
+  const Index groups = parts + even_groups_ + odd_groups_ + 1;
+  const auto group_of = [&](const Spring& sp) {
+    const Index qi = part[static_cast<std::size_t>(sp.i)],
+                qj = part[static_cast<std::size_t>(sp.j)];
+    if (qi == qj) return qi;
+    const Index lo = std::min(qi, qj), hi = std::max(qi, qj);
+    if (hi != lo + 1) return groups - 1;
+    return parts + (lo % 2 == 0 ? lo / 2 : even_groups_ + lo / 2);
+  };
+  std::vector<Index> start(static_cast<std::size_t>(groups) + 1, 0);
+  for (const Spring& sp : springs_) ++start[static_cast<std::size_t>(group_of(sp)) + 1];
+  for (Index g = 0; g < groups; ++g)
+    start[static_cast<std::size_t>(g) + 1] += start[static_cast<std::size_t>(g)];
+  part_start_.assign(start.begin(), start.begin() + parts + 1);
+  cross_start_.assign(start.begin() + parts, start.end());
+
+  // The distinct (k, L) pairs (by bits): a short linear search while there are few, then a hash.
+  RhsSprings& rs = rhs_springs_;
+  const std::size_t ns = springs_.size();
+  require_input(dofs() <= std::numeric_limits<std::int32_t>::max(),
+                name_ + ": more than 2^31 - 1 coordinates (the springs store 32-bit offsets)");
+  rs.i.resize(ns);
+  rs.j.resize(ns);
+  rs.kind.resize(ns);
+  rs.damping.assign(has_dashpots_ ? ns : 0, 0.0);
+  if (opt_.split != NetworkSplit::none) packed_implicit_.assign(ns, 0);
+  struct KeyHash {
+    std::size_t operator()(const std::pair<std::uint64_t, std::uint64_t>& key) const {
+      return std::hash<std::uint64_t>()(key.first * 0x9E3779B97F4A7C15ULL ^ key.second);
+    }
+  };
+  std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, std::int32_t, KeyHash> kinds;
+  const auto kind_of = [&](double k, double rest) {
+    const std::pair<std::uint64_t, std::uint64_t> key{std::bit_cast<std::uint64_t>(k),
+                                                      std::bit_cast<std::uint64_t>(rest)};
+    if (kinds.empty()) {
+      for (std::size_t t = 0; t < rs.k.size(); ++t)
+        if (std::bit_cast<std::uint64_t>(rs.k[t]) == key.first &&
+            std::bit_cast<std::uint64_t>(rs.rest[t]) == key.second)
+          return static_cast<std::int32_t>(t);
+      if (rs.k.size() == 16)  // from now on, a hash table
+        for (std::size_t t = 0; t < rs.k.size(); ++t)
+          kinds.emplace(std::pair{std::bit_cast<std::uint64_t>(rs.k[t]),
+                                  std::bit_cast<std::uint64_t>(rs.rest[t])},
+                        static_cast<std::int32_t>(t));
+    } else if (const auto it = kinds.find(key); it != kinds.end()) {
+      return it->second;
+    }
+    const auto t = static_cast<std::int32_t>(rs.k.size());
+    rs.k.push_back(k);
+    rs.rest.push_back(rest);
+    if (!kinds.empty()) kinds.emplace(key, t);
+    return t;
+  };
+  std::vector<Index> next(start.begin(), start.end() - 1);
+  for (const Spring& sp : springs_) {
+    const auto slot = static_cast<std::size_t>(next[static_cast<std::size_t>(group_of(sp))]++);
+    rs.i[slot] = static_cast<std::int32_t>(dim_ * sp.i);
+    rs.j[slot] = static_cast<std::int32_t>(dim_ * sp.j);
+    rs.kind[slot] = kind_of(sp.k, sp.rest);
+    if (has_dashpots_) rs.damping[slot] = sp.damping;
+    if (opt_.split != NetworkSplit::none) packed_implicit_[slot] = implicit_spring(sp) ? 1 : 0;
+  }
 }
 
 const SpringNetworkView* MassSpringNetwork::spring_network() const {
@@ -270,82 +322,219 @@ MassSpringNetwork::Structure MassSpringNetwork::build_structure(
 // ---------------------------------------------------------------------------------------------
 // Forces.
 
+namespace {
+
+// The spring kernel of the right-hand side (see the header comment): springs [e0, e1) add
+// f_i += c r and f_j -= c r, r = x_j - x_i, c = k (l - L)/l (+ c_d (u·r)/l² with a dashpot).
+// kBlock springs at a time: first their c r in a loop without dependences between springs
+// (`omp simd`: the compiler evaluates several springs per SIMD lane, gathering the end points'
+// coordinates), then the additions in spring order, so the sums run in the same order as a
+// one-spring-at-a-time loop and do not depend on the vector width.
+struct SpringArgs {
+  const std::int32_t* i;  // first end's first coordinate: D × point
+  const std::int32_t* j;  // second end's
+  const std::int32_t* kind;
+  const double* k;
+  const double* rest;
+  const double* damping;         // nullptr without dashpots
+  const std::uint8_t* implicit;  // per spring; nullptr: add every spring
+  std::uint8_t want;             // with `implicit`: add the springs with implicit[e] == want
+};
+
+constexpr int kBlock = 128;
+
+template <int D, bool Dashpots>
+[[gnu::always_inline]] inline void spring_range_impl(const SpringArgs& s, Index e0, Index e1,
+                                                     const double* x, const double* v, double* f) {
+  alignas(64) double cr[D][kBlock];
+  for (Index b0 = e0; b0 < e1; b0 += kBlock) {
+    const int nb = static_cast<int>(std::min<Index>(kBlock, e1 - b0));
+    const std::int32_t* si = s.i + b0;
+    const std::int32_t* sj = s.j + b0;
+    const std::int32_t* kind = s.kind + b0;
+#pragma omp simd
+    for (int b = 0; b < nb; ++b) {
+      const Index pi = si[b], pj = sj[b];
+      double r[D], l2 = 0.0;
+      for (int c = 0; c < D; ++c) {
+        r[c] = x[pj + c] - x[pi + c];
+        l2 += r[c] * r[c];
+      }
+      const double l = std::sqrt(l2);
+      double coef = s.k[kind[b]] * (l - s.rest[kind[b]]) / l;
+      if constexpr (Dashpots) {
+        double ur = 0.0;
+        for (int c = 0; c < D; ++c) ur += (v[pj + c] - v[pi + c]) * r[c];
+        const double cd = s.damping[b0 + b];
+        coef += cd != 0.0 ? cd * ur / l2 : 0.0;
+      }
+      for (int c = 0; c < D; ++c) cr[c][b] = coef * r[c];
+    }
+    // The additions, in spring order. Consecutive springs with the same first end (a point's
+    // springs are listed together) keep f_i in registers: the same additions in the same order
+    // as through memory, without waiting for each store to reach the next load.
+    Index cur = -1;
+    double fc[D] = {};
+    for (int b = 0; b < nb; ++b) {
+      if (s.implicit && s.implicit[b0 + b] != s.want) continue;
+      const Index pi = si[b];
+      if (pi != cur) {
+        if (cur >= 0)
+          for (int c = 0; c < D; ++c) f[cur + c] = fc[c];
+        cur = pi;
+        for (int c = 0; c < D; ++c) fc[c] = f[cur + c];
+      }
+      double* fj = f + sj[b];
+      for (int c = 0; c < D; ++c) {
+        fc[c] += cr[c][b];
+        fj[c] -= cr[c][b];
+      }
+    }
+    if (cur >= 0)
+      for (int c = 0; c < D; ++c) f[cur + c] = fc[c];
+  }
+}
+
+template <int D>
+void spring_range_portable(const SpringArgs& s, Index e0, Index e1, const double* x,
+                           const double* v, double* f) {
+  if (s.damping)
+    spring_range_impl<D, true>(s, e0, e1, x, v, f);
+  else
+    spring_range_impl<D, false>(s, e0, e1, x, v, f);
+}
+
+// A build for AVX2 or better (-march, e.g. STIFFBENCH_NATIVE) uses the portable kernel as is.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__AVX2__)
+#define STIFFBENCH_SPRING_AVX2_DISPATCH 1
+// The same kernel compiled for AVX2 (4 springs per vector; GCC loads the end points lane by
+// lane: its vgatherdpd version measured 25% slower on the project's AMD EPYC), chosen at run
+// time when the processor has it. Without -ffp-contract (ISO C++ mode: off) the compiler fuses no
+// multiply-add, and sqrt and division are correctly rounded, so both versions give the same bits.
+template <int D>
+__attribute__((target("avx2"))) void spring_range_avx2(const SpringArgs& s, Index e0, Index e1,
+                                                       const double* x, const double* v,
+                                                       double* f) {
+  if (s.damping)
+    spring_range_impl<D, true>(s, e0, e1, x, v, f);
+  else
+    spring_range_impl<D, false>(s, e0, e1, x, v, f);
+}
+
+bool has_avx2() {
+  static const bool yes = __builtin_cpu_supports("avx2");
+  return yes;
+}
+#endif
+
+template <int D>
+void spring_range(const SpringArgs& s, Index e0, Index e1, const double* x, const double* v,
+                  double* f) {
+#ifdef STIFFBENCH_SPRING_AVX2_DISPATCH
+  if (has_avx2()) {
+    spring_range_avx2<D>(s, e0, e1, x, v, f);
+    return;
+  }
+#endif
+  spring_range_portable<D>(s, e0, e1, x, v, f);
+}
+
+// Points [p0, p1): force sums into accelerations, a = g + (f - γ v)/m (Springs: f/m only), 0 for
+// pinned points, in a loop the compiler vectorises (the pinned select is a bit mask).
+template <int D, bool Springs>
+void finish_points(double* __restrict a, const double* __restrict v, const double* __restrict mass,
+                   const std::uint8_t* __restrict pinned, const double* g, double gamma, Index p0,
+                   Index p1) {
+  const double g0 = g[0], g1 = D > 1 ? g[1] : 0.0, g2 = D > 2 ? g[2] : 0.0;
+#pragma omp simd
+  for (Index p = p0; p < p1; ++p) {
+    const std::uint64_t keep = std::uint64_t{0} - static_cast<std::uint64_t>(pinned[p] == 0);
+    const double m = mass[p];
+#pragma GCC unroll 3
+    for (int c = 0; c < D; ++c) {
+      const double gc = c == 0 ? g0 : c == 1 ? g1 : g2;
+      const double ac = Springs ? a[D * p + c] / m : gc + (a[D * p + c] - gamma * v[D * p + c]) / m;
+      a[D * p + c] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(ac) & keep);
+    }
+  }
+}
+
+}  // namespace
+
 template <int D, MassSpringNetwork::Part P>
 void MassSpringNetwork::acceleration_impl(const double* x, const double* v, double* a) const {
   const double gamma = opt_.point_damping;
-  const MassPoint* pts = points_.data();
-  const PackedSpring* sp = packed_.data();
-  const double* damp = packed_damping_.data();
-  const bool dashpots = has_dashpots_;
   const Index np = num_points();
   const Index parts = static_cast<Index>(part_start_.size()) - 1;
-  // a first holds the force sums. Each spring once: coef = k (l - L)/l (+ c (u·r)/l²), f_i +=
-  // coef r, f_j -= coef r (exactly opposite).
-  const std::uint8_t* in_implicit = packed_implicit_.data();
-  const auto spring = [&](Index e) {
-    // A part of the split sums its own springs only (springs: all in a_I, none in a_E).
-    if constexpr (P == Part::implicit_part) {
-      if (!in_implicit[e]) return;
-    } else if constexpr (P == Part::explicit_part) {
-      if (in_implicit[e]) return;
-    }
-    const PackedSpring& s = sp[e];
-    const double* xi = x + D * static_cast<Index>(s.i);
-    const double* xj = x + D * static_cast<Index>(s.j);
-    double r[D], l2 = 0.0;
-    for (int c = 0; c < D; ++c) {
-      r[c] = xj[c] - xi[c];
-      l2 += r[c] * r[c];
-    }
-    const double l = std::sqrt(l2);
-    double coef = s.k * (l - s.rest) / l;
-    if (dashpots && damp[e] != 0.0) {
-      const double* vi = v + D * static_cast<Index>(s.i);
-      const double* vj = v + D * static_cast<Index>(s.j);
-      double ur = 0.0;
-      for (int c = 0; c < D; ++c) ur += (vj[c] - vi[c]) * r[c];
-      coef += damp[e] * ur / l2;
-    }
-    double* fi = a + D * static_cast<Index>(s.i);
-    double* fj = a + D * static_cast<Index>(s.j);
-    for (int c = 0; c < D; ++c) {
-      fi[c] += coef * r[c];
-      fj[c] -= coef * r[c];
-    }
+  const RhsSprings& rs = rhs_springs_;
+  // A part of the split adds its own springs only (springs: all in a_I, none in a_E).
+  const SpringArgs args{rs.i.data(),
+                        rs.j.data(),
+                        rs.kind.data(),
+                        rs.k.data(),
+                        rs.rest.data(),
+                        has_dashpots_ ? rs.damping.data() : nullptr,
+                        P == Part::all ? nullptr : packed_implicit_.data(),
+                        static_cast<std::uint8_t>(P == Part::implicit_part ? 1 : 0)};
+  // a first holds the force sums.
+  // 1. The springs between partitions, group by group in a fixed order (the groups of one
+  //    parity touch disjoint points); the even groups first clear their points (below).
+  const auto group = [&](Index g) {
+    spring_range<D>(args, cross_start_[static_cast<std::size_t>(g)],
+                    cross_start_[static_cast<std::size_t>(g) + 1], x, v, a);
   };
-  // 1. Each partition of points (contiguous index ranges, a count fixed by the network's size,
-  //    not by the threads) clears its points and adds its interior springs.
+  // 2. Each partition of points (contiguous index ranges, a count fixed by the network's size,
+  //    not by the threads) adds its interior springs, then turns its points' force sums into
+  //    accelerations while they are in cache: a = g + (f - γ v)/m; pinned points do not move.
+  const double* mass = point_mass_.data();
+  const std::uint8_t* pinned = pinned_.data();
+  double g[D];
+  for (int c = 0; c < D; ++c) g[c] = opt_.gravity[static_cast<std::size_t>(c)];
   const auto partition = [&](Index q) {
-    const Index p0 = np * q / parts, p1 = np * (q + 1) / parts;
-    std::fill(a + D * p0, a + D * p1, 0.0);
-    for (Index e = part_start_[static_cast<std::size_t>(q)];
-         e < part_start_[static_cast<std::size_t>(q) + 1]; ++e)
-      spring(e);
+    spring_range<D>(args, part_start_[static_cast<std::size_t>(q)],
+                    part_start_[static_cast<std::size_t>(q) + 1], x, v, a);
+    finish_points<D, P == Part::implicit_part>(a, v, mass, pinned, g, gamma, np * q / parts,
+                                               np * (q + 1) / parts);
   };
-  if (parts > 1 && parallel()) {
-#pragma omp parallel for schedule(static)
-    for (Index q = 0; q < parts; ++q) partition(q);
+  const Index ne = even_groups_, no = odd_groups_;
+  // Even group e touches the points of partitions 2e and 2e + 1 only: it clears them just before
+  // its springs. Partitions no even group covers (an odd count: only the single partition of a
+  // small network) are cleared in the same stage.
+  const auto clear = [&](Index q) {
+    std::fill(a + D * (np * q / parts), a + D * (np * (q + 1) / parts), 0.0);
+  };
+  const auto first_stage = [&](Index e) {
+    if (e < ne) {
+      clear(2 * e);
+      clear(2 * e + 1);
+      group(e);
+    } else {
+      clear(2 * ne + (e - ne));
+    }
+  };
+  const Index first = ne + (parts - 2 * ne);
+  const bool rest = cross_start_[static_cast<std::size_t>(ne + no)] <
+                    cross_start_[static_cast<std::size_t>(ne + no) + 1];
+  if (parallel()) {
+    // One parallel region, its stages separated by the work-sharing loops' barriers.
+#pragma omp parallel
+    {
+#pragma omp for schedule(static)
+      for (Index e = 0; e < first; ++e) first_stage(e);
+#pragma omp for schedule(static)
+      for (Index e = ne; e < ne + no; ++e) group(e);
+      if (rest) {  // the same on every thread
+#pragma omp single
+        group(ne + no);
+      }
+#pragma omp for schedule(static)
+      for (Index q = 0; q < parts; ++q) partition(q);
+    }
   } else {
+    for (Index e = 0; e < first; ++e) first_stage(e);
+    for (Index e = ne; e <= ne + no; ++e) group(e);
     for (Index q = 0; q < parts; ++q) partition(q);
   }
-  // 2. Springs between partitions, in a fixed order.
-  for (Index e = part_start_.back(); e < static_cast<Index>(packed_.size()); ++e) spring(e);
-  // 3. a = g + (f - γ v)/m; pinned points do not move.
-  for_points(np, parallel(), [&](Index p) {
-    double* ap = a + D * p;
-    const MassPoint& pt = pts[p];
-    if (pt.pinned) {
-      for (int c = 0; c < D; ++c) ap[c] = 0.0;
-      return;
-    }
-    const double* vp = v + D * p;
-    if constexpr (P == Part::implicit_part) {  // springs and dashpots only
-      for (int c = 0; c < D; ++c) ap[c] /= pt.mass;
-    } else {
-      for (int c = 0; c < D; ++c)
-        ap[c] = opt_.gravity[static_cast<std::size_t>(c)] + (ap[c] - gamma * vp[c]) / pt.mass;
-    }
-  });
 }
 
 void MassSpringNetwork::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a) const {
