@@ -1,5 +1,6 @@
 #include "integrators/explicit/explicit_rk.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -96,30 +97,65 @@ void ExplicitRungeKutta::reset(const OdeSystem& sys, double, CVecRef) {
 Status ExplicitRungeKutta::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats&) {
   const int s = tableau_.stages();
   const Index n = y.size();
-  // base + Σ (h c_j) k_j over row i's non-zero terms into out; ‖out‖∞ for the final update.
-  const auto combine_row = [&](int i, const double* base, double* out) {
+  // base + Σ (h c_j) k_j over row i's non-zero terms, entries [lo, lo + len) of base, out and
+  // the columns of k_. With y_v (the mechanical path below, x-part only), a stage whose row of A
+  // is zero contributes y's v-part in place of its column.
+  const auto combine_rows = [&](int i, Index lo, Index len, const double* base, double* out,
+                                const double* y_v) {
     const auto& terms = terms_[static_cast<std::size_t>(i)];
     const auto& coefs = coefs_[static_cast<std::size_t>(i)];
     const int m = static_cast<int>(terms.size());
     for (int j = 0; j < m; ++j) {
-      cols_[static_cast<std::size_t>(j)] = k_.col(terms[static_cast<std::size_t>(j)]).data();
+      const int col = terms[static_cast<std::size_t>(j)];
+      const bool at_y = y_v != nullptr && terms_[static_cast<std::size_t>(col)].empty();
+      cols_[static_cast<std::size_t>(j)] = at_y ? y_v : k_.col(col).data() + lo;
       scaled_[static_cast<std::size_t>(j)] = h * coefs[static_cast<std::size_t>(j)];
     }
-    if (i == s) return combine<true>(n, base, m, cols_.data(), scaled_.data(), out);
-    return combine<false>(n, base, m, cols_.data(), scaled_.data(), out);
+    if (i == s) return combine<true>(len, base + lo, m, cols_.data(), scaled_.data(), out);
+    return combine<false>(len, base + lo, m, cols_.data(), scaled_.data(), out);
   };
   norm_valid_ = false;
+  const MechanicalSystem* mech = sys.as_mechanical();
+  if (mech == nullptr) {
+    for (int i = 0; i < s; ++i) {
+      const double ti = t + tableau_.c[i] * h;
+      if (terms_[static_cast<std::size_t>(i)].empty()) {
+        sys.rhs(ti, y, k_.col(i));  // the stage argument is y itself
+      } else {
+        combine_rows(i, 0, n, y.data(), ytmp_.data(), nullptr);
+        sys.rhs(ti, ytmp_, k_.col(i));
+      }
+    }
+    if (!terms_[static_cast<std::size_t>(s)].empty()) {
+      last_norm_ = combine_rows(s, 0, n, y.data(), y.data(), nullptr);
+      norm_valid_ = true;
+    }
+    return Status::ok;
+  }
+  // y = [x; v], f = [v; a] (MechanicalSystem::eval_rhs is final): the x-part of k_i is stage
+  // i's velocity V_i itself. Stage i writes X_i into ytmp_'s head and V_i straight into k_i's
+  // x-part, so no stage copies v into k; a stage with a zero row of A (the first) has V = y's
+  // v-part, read from y. Every entry gets the same operations as on the general path above, so
+  // the results are bitwise the same (the test compares); only the copies are gone.
+  const Index d = mech->dofs();
+  const double* y_v = y.data() + d;
   for (int i = 0; i < s; ++i) {
     const double ti = t + tableau_.c[i] * h;
+    auto a_i = k_.col(i).tail(d);
     if (terms_[static_cast<std::size_t>(i)].empty()) {
-      sys.rhs(ti, y, k_.col(i));  // the stage argument is y itself
-    } else {
-      combine_row(i, y.data(), ytmp_.data());
-      sys.rhs(ti, ytmp_, k_.col(i));
+      mech->acceleration(ti, y.head(d), y.tail(d), a_i);
+      continue;
     }
+    combine_rows(i, 0, d, y.data(), ytmp_.data(), y_v);          // X_i
+    combine_rows(i, d, d, y.data(), k_.col(i).data(), nullptr);  // V_i
+    mech->acceleration(ti, ytmp_.head(d), k_.col(i).head(d), a_i);
   }
   if (!terms_[static_cast<std::size_t>(s)].empty()) {
-    last_norm_ = combine_row(s, y.data(), y.data());
+    // The x-part first: it reads y's v-part (V of a zero-row stage) before the v-part is updated.
+    const double mx = combine_rows(s, 0, d, y.data(), y.data(), y_v);
+    const double mv = combine_rows(s, d, d, y.data(), y.data() + d, nullptr);
+    last_norm_ = std::isnan(mx) || std::isnan(mv) ? std::numeric_limits<double>::quiet_NaN()
+                                                  : std::max(mx, mv);
     norm_valid_ = true;
   }
   return Status::ok;

@@ -8,7 +8,9 @@
 // least kParallelEntries entries. The per-entry arithmetic does not depend on the thread count,
 // so results are bitwise the same for any number of threads. A stage whose row of A is zero (the
 // first) evaluates f at y itself, without a copy. The final update also takes ‖y⁺‖∞ (the
-// driver's blow-up check: last_step_max_norm()).
+// driver's blow-up check: last_step_max_norm()). On a MechanicalSystem the stages call
+// acceleration() and keep their velocities as the x-part of k (no copy of v per stage; bitwise
+// the same results, see step()).
 #pragma once
 
 #include <vector>

@@ -373,38 +373,31 @@ void SphFluid::density_pass(const double* x) const {
       std::uint32_t* idx = nb_index_.data() + k * cap;
       double* dist = nb_dist_.data() + k * cap;
       std::size_t count = 0;
-      double sum = 0.0;
+      // Candidates [from, to) at positions pos with weights wt (masses for fluid candidates,
+      // boundary volumes for boundary ones): Σ wt_j W(r_ij) within h, and the kept neighbours.
+      // Branch-free: every candidate is written, and kept (count advanced) only within h; a
+      // rejected one adds +0.0, which leaves the sum unchanged bit for bit.
+      const auto scan = [&](std::size_t from, std::size_t to, const double* pos, const double* wt) {
+        double sum = 0.0;
+        for (std::size_t q = from; q < to; ++q) {
+          const std::size_t j = c[q];
+          const double* xj = pos + D * j;
+          double r2 = 0.0;
+          for (int d = 0; d < D; ++d) r2 += (xi[d] - xj[d]) * (xi[d] - xj[d]);
+          const bool in = r2 < h2;
+          const double r = std::sqrt(r2);
+          const double w = wt[j] * wd.w_inside_as<KD>(r);
+          sum += in ? w : 0.0;
+          idx[count] = static_cast<std::uint32_t>(j);
+          dist[count] = r;
+          count += in ? 1 : 0;
+        }
+        return sum;
+      };
       const std::size_t nf = cand_count_[k], nall = nf + cand_bcount_[k];
-      for (std::size_t q = 0; q < nf; ++q) {
-        const std::size_t j = c[q];
-        const double* xj = spos + D * j;
-        double r2 = 0.0;
-        for (int d = 0; d < D; ++d) r2 += (xi[d] - xj[d]) * (xi[d] - xj[d]);
-        // Branch-free: every candidate is written, and kept (count advanced) only within h;
-        // a rejected one adds +0.0, which leaves the sum unchanged bit for bit.
-        const bool in = r2 < h2;
-        const double r = std::sqrt(r2);
-        const double w = sm[j] * wd.w_inside_as<KD>(r);
-        sum += in ? w : 0.0;
-        idx[count] = static_cast<std::uint32_t>(j);
-        dist[count] = r;
-        count += in ? 1 : 0;
-      }
+      const double sum = scan(0, nf, spos, sm);
       const std::size_t fluid_count = count;
-      double bsum = 0.0;
-      for (std::size_t q = nf; q < nall; ++q) {
-        const std::size_t b = c[q];
-        const double* xb = bx + D * b;
-        double r2 = 0.0;
-        for (int d = 0; d < D; ++d) r2 += (xi[d] - xb[d]) * (xi[d] - xb[d]);
-        const bool in = r2 < h2;
-        const double r = std::sqrt(r2);
-        const double w = sbvol[b] * wd.w_inside_as<KD>(r);
-        bsum += in ? w : 0.0;
-        idx[count] = static_cast<std::uint32_t>(b);
-        dist[count] = r;
-        count += in ? 1 : 0;
-      }
+      const double bsum = scan(nf, nall, bx, sbvol);
       const double rho = nall > nf ? sum + rho0 * bsum : sum;
       nb_count_[k] = fluid_count;
       nb_bcount_[k] = count - fluid_count;

@@ -3,6 +3,10 @@
 // of its own pass). Checked against ‖y‖∞ computed here from the returned state, on a cloth large
 // enough for the OpenMP path of both (130²: 50,700 coordinates, 101,400 entries) and on a small
 // one (serial path), and NaN when the state has a NaN entry.
+//
+// The explicit Runge-Kutta methods take a mechanical system's stage velocities as the x-part of
+// their stage derivatives instead of copying them (integrators/explicit/explicit_rk.cpp); the
+// states must be bitwise those of the same methods run on the system's first-order face only.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -36,6 +40,50 @@ TEST(StepNorm, EqualsMaxNormOfTheReturnedState) {
       integ->step(*sys, 3e-3, y, 1e-3, stats);
       ASSERT_TRUE(integ->last_step_max_norm().has_value());
       EXPECT_TRUE(std::isnan(*integ->last_step_max_norm())) << method;
+    }
+  }
+}
+
+// The system's first-order face only: as_mechanical() is null, so an integrator takes its general
+// path and sees f = [v; a] through rhs(), the copy of v included.
+class FirstOrderFace final : public OdeSystem {
+ public:
+  explicit FirstOrderFace(const OdeSystem& inner) : inner_(inner) {}
+  std::string name() const override { return inner_.name(); }
+  Index dimension() const override { return inner_.dimension(); }
+  Vec initial_state() const override { return inner_.initial_state(); }
+
+ protected:
+  void eval_rhs(double t, CVecRef y, VecRef f) const override { inner_.rhs(t, y, f); }
+
+ private:
+  const OdeSystem& inner_;
+};
+
+TEST(StepNorm, MechanicalPathIsBitwiseTheFirstOrderPath) {
+  // 8²: serial passes; 130²: 50,700 coordinates, the threaded passes of both paths.
+  for (const std::string n : {"8", "130"}) {
+    const auto sys = testing_support::model("cloth", {"n=" + n, "perturbation=0.01"});
+    ASSERT_NE(sys->as_mechanical(), nullptr);
+    const FirstOrderFace plain(*sys);
+    for (const std::string method : {"rk4", "rk38", "heun", "ssprk3", "kutta3", "euler"}) {
+      auto a = testing_support::make(method);
+      auto b = testing_support::make(method);
+      Vec ya = sys->initial_state(), yb = ya;
+      a->reset(*sys, 0.0, ya);
+      b->reset(plain, 0.0, yb);
+      SolveStats sa, sb;
+      // The face's rhs() also counts on sys: a's evaluations are counted before b runs.
+      const long f0 = sys->counters().f_evals;
+      for (int k = 0; k < 4; ++k) ASSERT_EQ(a->step(*sys, k * 2e-3, ya, 2e-3, sa), Status::ok);
+      const long fa = sys->counters().f_evals - f0, fb0 = plain.counters().f_evals;
+      for (int k = 0; k < 4; ++k) ASSERT_EQ(b->step(plain, k * 2e-3, yb, 2e-3, sb), Status::ok);
+      // One f evaluation a stage on both paths.
+      EXPECT_EQ(fa, plain.counters().f_evals - fb0) << method;
+      EXPECT_EQ(fa, 4L * a->info().stages) << method;
+      EXPECT_EQ((ya - yb).cwiseAbs().maxCoeff(), 0.0) << method << " n=" << n;
+      EXPECT_GT((ya - sys->initial_state()).cwiseAbs().maxCoeff(), 0.0) << method;
+      EXPECT_EQ(*a->last_step_max_norm(), *b->last_step_max_norm()) << method;
     }
   }
 }
