@@ -100,8 +100,9 @@ TEST(Sweep, ShardsMergedReproduceTheUnshardedRun) {
 
 TEST(Sweep, KilledRunResumesToTheSameCsv) {
   const fs::path base = fresh_dir("resume");
-  // Larger than the spec's default (about 3 s here) so that the kill lands mid-sweep.
-  const std::string sets = " --set t_end=20 --set levels=6 --set 'params.n=[16,32,64,128]' --out ";
+  // Larger than the spec's default so that the kill lands mid-sweep (about 2.5 s a run in a Release
+  // build, the 9 units after the third well over the 5 ms the loop below polls at).
+  const std::string sets = " --set t_end=10 --set levels=6 --set 'params.n=[16,32,64,128]' --out ";
   const Outcome full = run("run " + kSweep + sets + (base / "full").string());
   ASSERT_EQ(full.code, 0) << full.err;
   const std::string csv = slurp(base / "full/convergence.csv");
@@ -112,7 +113,7 @@ TEST(Sweep, KilledRunResumesToTheSameCsv) {
   ASSERT_GE(pid, 0);
   if (pid == 0) {
     const std::string out = part.string();
-    ::execl(STIFFBENCH_BIN, STIFFBENCH_BIN, "run", kSweep.c_str(), "--set", "t_end=20", "--set",
+    ::execl(STIFFBENCH_BIN, STIFFBENCH_BIN, "run", kSweep.c_str(), "--set", "t_end=10", "--set",
             "levels=6", "--set", "params.n=[16,32,64,128]", "--out", out.c_str(),
             static_cast<char*>(nullptr));
     ::_exit(127);
