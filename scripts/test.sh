@@ -80,7 +80,7 @@ if [ "${STIFFBENCH_SKIP_SANITIZE:-0}" != "1" ]; then
   # Without precompiled headers: this build keeps the three GCC warnings the PCH build switches
   # off (cmake/pch.cmake) and checks that every file includes what it uses. -g1 (line tables,
   # all the sanitizers' stack traces need) instead of RelWithDebInfo's -g: full debug info made
-  # this build a third slower (radau5.cpp: 266 s against 187 s on a 2-core CI machine).
+  # this build about 40 % slower (radau5.cpp: 266 s against 187 s on a 2-core CI machine).
   CMAKE_BUILD_TYPE=RelWithDebInfo "$root/scripts/build.sh" "$root/build-sanitize" \
     -DSTIFFBENCH_SANITIZE=ON -DSTIFFBENCH_BUILD_BENCH=OFF -DSTIFFBENCH_PCH=OFF \
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG"

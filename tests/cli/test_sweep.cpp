@@ -101,8 +101,12 @@ TEST(Sweep, ShardsMergedReproduceTheUnshardedRun) {
 TEST(Sweep, KilledRunResumesToTheSameCsv) {
   const fs::path base = fresh_dir("resume");
   // Larger than the spec's default so that the kill lands mid-sweep (about 2.5 s a run in a Release
-  // build, the 9 units after the third well over the 5 ms the loop below polls at).
-  const std::string sets = " --set t_end=10 --set levels=6 --set 'params.n=[16,32,64,128]' --out ";
+  // build, the 9 units after the third well over the 5 ms the loop below polls at). The same
+  // settings for the shell command lines and the killed child's argument vector.
+  const std::vector<std::string> larger = {"t_end=10", "levels=6", "params.n=[16,32,64,128]"};
+  std::string sets;
+  for (const std::string& s : larger) sets += " --set '" + s + "'";
+  sets += " --out ";
   const Outcome full = run("run " + kSweep + sets + (base / "full").string());
   ASSERT_EQ(full.code, 0) << full.err;
   const std::string csv = slurp(base / "full/convergence.csv");
@@ -113,9 +117,10 @@ TEST(Sweep, KilledRunResumesToTheSameCsv) {
   ASSERT_GE(pid, 0);
   if (pid == 0) {
     const std::string out = part.string();
-    ::execl(STIFFBENCH_BIN, STIFFBENCH_BIN, "run", kSweep.c_str(), "--set", "t_end=10", "--set",
-            "levels=6", "--set", "params.n=[16,32,64,128]", "--out", out.c_str(),
-            static_cast<char*>(nullptr));
+    std::vector<const char*> argv = {STIFFBENCH_BIN, "run", kSweep.c_str()};
+    for (const std::string& s : larger) argv.insert(argv.end(), {"--set", s.c_str()});
+    argv.insert(argv.end(), {"--out", out.c_str(), nullptr});
+    ::execv(STIFFBENCH_BIN, const_cast<char* const*>(argv.data()));
     ::_exit(127);
   }
   // Wait for 3 complete units (18 rows), then SIGKILL.
