@@ -1,5 +1,7 @@
 #include "core/integrator.hpp"
 
+#include "core/springs.hpp"
+
 namespace stiffbench {
 
 std::string to_string(Family f) {
@@ -48,10 +50,10 @@ void check_compatible(const MethodInfo& info, const OdeSystem& sys) {
                    "' is not one");
   }
   if (info.requires_.velocity_independent && mech && mech->velocity_dependent()) {
-    throw BadInput(who + " needs an acceleration that does not depend on velocity; model '" +
-                   sys.name() +
-                   "' has velocity-dependent forces (damping): use symplectic_euler "
-                   "or a general method");
+    throw BadInput(
+        who + " needs an acceleration that does not depend on velocity; model '" + sys.name() +
+        "' has velocity-dependent forces (damping, drag or viscosity): use symplectic_euler "
+        "or a general method");
   }
   if (info.requires_.jacobian && !sys.has_jacobian()) {
     throw BadInput(who + " needs an analytic Jacobian; model '" + sys.name() + "' has none");
@@ -67,6 +69,10 @@ void check_compatible(const MethodInfo& info, const OdeSystem& sys) {
                    " needs a spring network (a mass-spring model listing its springs, "
                    "e.g. cloth, spring_chain, soft_cube, pendulum_chain); model '" +
                    sys.name() + "' is not one");
+  }
+  if (info.requires_.spring_network && !sys.spring_network()->other_forces.empty()) {
+    throw BadInput(who + " works on a network's springs, gravity and point damping alone; model '" +
+                   sys.name() + "' also has " + sys.spring_network()->other_forces);
   }
   if (info.requires_.grid_fluid && !sys.as_grid_fluid()) {
     throw BadInput(who +

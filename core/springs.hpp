@@ -16,6 +16,7 @@
 #pragma once
 
 #include <array>
+#include <string>
 #include <vector>
 
 #include "core/types.hpp"
@@ -36,6 +37,9 @@ struct SpringNetworkView {
   std::vector<SpringElement> springs;
   std::array<double, 3> gravity{};  // uniform external acceleration g (components beyond dim 0)
   double point_damping = 0.0;       // γ >= 0: force -γ v on every free point
+  // Forces the model has beyond the springs, gravity and point damping (e.g. "air drag"); empty
+  // when there are none. Solvers that work on this view alone refuse a model that has any.
+  std::string other_forces;
 
   Index points() const { return static_cast<Index>(mass.size()); }
   // 1/m for free points, 0 for pinned ones (infinite mass), as position-based methods weight.

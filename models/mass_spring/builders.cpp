@@ -109,6 +109,7 @@ std::unique_ptr<MassSpringNetwork> make_cloth(const ClothOptions& o) {
         ">= 0 and < spacing/4");
   check(non_negative(o.point_damping), model, "damping", ">= 0");
   check(non_negative(o.dashpot), model, "dashpot", ">= 0");
+  check(non_negative(o.air_drag), model, "drag", ">= 0");
   check(o.parallel_threshold >= 1, model, "parallel_threshold", ">= 1");
 
   const long nx = o.n, ny = o.m;
@@ -153,7 +154,21 @@ std::unique_ptr<MassSpringNetwork> make_cloth(const ClothOptions& o) {
   net.compressed_dd_only = o.compressed_dd_only;
   net.parallel_threshold = o.parallel_threshold;
   net.split = o.split;
-  return std::make_unique<MassSpringNetwork>(model, 3, std::move(points), std::move(springs), net);
+  net.air_drag = o.air_drag;
+  // Air drag's triangles: each cell cut along its shear spring (i, j)-(i+1, j+1), both halves
+  // with normal +z in the initial plane.
+  std::vector<Triangle> triangles;
+  if (o.air_drag > 0.0) {
+    triangles.reserve(static_cast<std::size_t>(2 * (nx - 1) * (ny - 1)));
+    for (long j = 0; j + 1 < ny; ++j)
+      for (long i = 0; i + 1 < nx; ++i) {
+        triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+        triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+      }
+  }
+  return std::make_unique<MassSpringNetwork>(model, 3, std::move(points), std::move(springs), net,
+                                             std::vector<DistanceConstraint>{},
+                                             std::move(triangles));
 }
 
 std::unique_ptr<MassSpringNetwork> make_soft_cube(const SoftCubeOptions& o) {

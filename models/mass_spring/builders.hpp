@@ -21,7 +21,9 @@
 //   (> 1: initially stretched). Pins: `top_edge` = the whole row j = m-1, `corners` = the two
 //   ends of that row, `none`. Gravity -g e_z. A seeded uniform random displacement in
 //   [-perturbation, perturbation] of every coordinate of every free point. Point damping γ and a
-//   dashpot c on every spring (both 0 by default, so the Verlet family applies). Starts at rest.
+//   dashpot c on every spring (both 0 by default, so the Verlet family applies). Air drag
+//   (`drag` = β_d = ½ρC_d, 0 by default): each cell cut into two triangles along its shear spring
+//   (i, j)-(i+1, j+1), each feeling F = -β_d A (v̄·n)|v̄·n| n (network.hpp). Starts at rest.
 //   Defaults: 16 × 16, s = 0.1, m = 0.01, k = 12 / 1 / 0.5 (structural / shear / bend), top
 //   edge pinned, g = 1, perturbation 0.003 (3% of s): a soft nondimensional cloth, chosen so
 //   that the convergence study (T = 1, h = 1e-3 … 6.25e-5) is in the asymptotic range
@@ -82,6 +84,7 @@ struct ClothOptions {
   double perturbation = 0.003;
   unsigned long seed = 1;
   double point_damping = 0.0, dashpot = 0.0;
+  double air_drag = 0.0;  // β_d = ½ρC_d of the quadratic drag on the cells' triangles (network.hpp)
   bool compressed_dd_only = false;
   long parallel_threshold = 2048;
   NetworkSplit split = NetworkSplit::none;  // none, springs or stretch (network.hpp)

@@ -28,6 +28,12 @@ struct Spring {
   SpringKind kind = SpringKind::structural;
 };
 
+// A triangle of points (a, b, c) that air drag acts on (3D networks only); its normal is
+// (x_b - x_a) × (x_c - x_a).
+struct Triangle {
+  Index a = 0, b = 0, c = 0;
+};
+
 struct DistanceConstraint {
   Index i = 0, j = 0;
   double length = 0.0;  // L > 0

@@ -35,11 +35,13 @@ std::string item(const char* what, std::size_t index) {
 
 MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<MassPoint> points,
                                      std::vector<Spring> springs, NetworkOptions options,
-                                     std::vector<DistanceConstraint> constraints)
+                                     std::vector<DistanceConstraint> constraints,
+                                     std::vector<Triangle> triangles)
     : name_(std::move(name)),
       dim_(dim),
       points_(std::move(points)),
       springs_(std::move(springs)),
+      triangles_(std::move(triangles)),
       opt_(options) {
   const std::string who = name_ + ": ";
   // Per-item checks build their message only when they fail (a 512² cloth has 1.5 M springs).
@@ -91,8 +93,9 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
   }
 
   distance_constraints_ = DistanceConstraints(dim_, points_, std::move(constraints));
+  check_triangles();
 
-  velocity_dependent_ = opt_.point_damping != 0.0;
+  velocity_dependent_ = opt_.point_damping != 0.0 || drag();
   for (const Spring& s : springs_) has_dashpots_ = has_dashpots_ || s.damping != 0.0;
   velocity_dependent_ = velocity_dependent_ || has_dashpots_;
 
@@ -122,6 +125,36 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
 
   // The adjacency lists and the Jacobian pattern are built on first use (build_structure): an
   // explicit run never needs them, and for a 512² cloth they are most of the construction cost.
+}
+
+// Air drag's triangles: valid points, and with drag every edge a spring (its blocks must be in
+// the pattern of K and D).
+void MassSpringNetwork::check_triangles() const {
+  const std::string who = name_ + ": ";
+  require_input(std::isfinite(opt_.air_drag) && opt_.air_drag >= 0,
+                who + "air drag coefficient must be >= 0");
+  if (triangles_.empty()) return;
+  require_input(dim_ == 3, who + "triangles (air drag) need a 3D network");
+  const Index np = num_points();
+  std::unordered_map<std::uint64_t, int> edges;
+  const auto key = [](Index i, Index j) {
+    return (static_cast<std::uint64_t>(std::min(i, j)) << 32) |
+           static_cast<std::uint64_t>(std::max(i, j));
+  };
+  if (opt_.air_drag > 0.0)
+    for (const Spring& sp : springs_) edges.emplace(key(sp.i, sp.j), 0);
+  for (std::size_t t = 0; t < triangles_.size(); ++t) {
+    const Triangle& tr = triangles_[t];
+    const Index v[3] = {tr.a, tr.b, tr.c};
+    bool ok = tr.a != tr.b && tr.b != tr.c && tr.a != tr.c;
+    for (Index p : v) ok = ok && p >= 0 && p < np;
+    if (!ok) throw BadInput(who + item("triangle", t) + ": bad points");
+    if (opt_.air_drag > 0.0)
+      for (int e = 0; e < 3; ++e)
+        if (!edges.count(key(v[e], v[(e + 1) % 3])))
+          throw BadInput(who + item("triangle", t) +
+                         ": an edge is not a spring (air drag's Jacobian blocks need it)");
+  }
 }
 
 // Springs of the right-hand side in structure-of-arrays order, grouped by partition of the
@@ -223,6 +256,7 @@ const SpringNetworkView* MassSpringNetwork::spring_network() const {
     for (const Spring& s : springs_) view_.springs.push_back({s.i, s.j, s.rest, s.k, s.damping});
     view_.gravity = opt_.gravity;
     view_.point_damping = opt_.point_damping;
+    if (drag()) view_.other_forces = "air drag (parameter drag > 0)";
   });
   return &view_;
 }
@@ -231,19 +265,19 @@ const SpringNetworkView* MassSpringNetwork::spring_network() const {
 // value positions of every block, built once, on first use, by whichever thread gets there first.
 void MassSpringNetwork::ensure_structure() const {
   std::call_once(structure_once_, [this] {
-    structure_ = build_structure(springs_);
+    structure_ = build_structure(springs_, drag());
     if (opt_.split == NetworkSplit::stretch) {
       std::vector<Spring> implicit, explicit_springs;
       for (const Spring& sp : springs_)
         (implicit_spring(sp) ? implicit : explicit_springs).push_back(sp);
-      implicit_structure_ = build_structure(implicit);
+      implicit_structure_ = build_structure(implicit, false);
       explicit_adjacency_ = SpringAdjacency::build(num_points(), explicit_springs);
     }
   });
 }
 
-MassSpringNetwork::Structure MassSpringNetwork::build_structure(
-    const std::vector<Spring>& springs) const {
+MassSpringNetwork::Structure MassSpringNetwork::build_structure(const std::vector<Spring>& springs,
+                                                                bool with_faces) const {
   const Index np = num_points();
   const Index n = dofs();
   Structure st;
@@ -314,6 +348,15 @@ MassSpringNetwork::Structure MassSpringNetwork::build_structure(
       block(p, q, st.adj_pos, static_cast<std::size_t>(e * d * d));
       // The transposed block (rows of q, columns of p), element [a][b] at (q a, p b).
       block(q, p, st.adj_pos_t, static_cast<std::size_t>(e * d * d));
+    }
+  }
+  if (with_faces) {
+    st.face_pos.resize(9 * triangles_.size());
+    for (std::size_t t = 0; t < triangles_.size(); ++t) {
+      const Triangle& tr = triangles_[t];
+      const Index v[3] = {tr.a, tr.b, tr.c};
+      for (int p = 0; p < 3; ++p)
+        for (int q = 0; q < 3; ++q) st.face_pos[9 * t + 3 * p + q] = position(d * v[p], d * v[q]);
     }
   }
   return st;
@@ -535,6 +578,8 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
     for (Index e = ne; e <= ne + no; ++e) group(e);
     for (Index q = 0; q < parts; ++q) partition(q);
   }
+  // Air drag is in a_E (and in a); the constructor allows it in 3D only.
+  if (P != Part::implicit_part && drag()) add_drag(x, v, a);
 }
 
 void MassSpringNetwork::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a) const {
@@ -689,8 +734,8 @@ void MassSpringNetwork::blocks_impl(const Structure& st, double gamma, const dou
   });
 }
 
-void MassSpringNetwork::fill_blocks(const Structure& st, double gamma, CVecRef x, CVecRef v,
-                                    SparseMat* k, SparseMat* d) const {
+void MassSpringNetwork::fill_blocks(const Structure& st, double gamma, bool with_drag, CVecRef x,
+                                    CVecRef v, SparseMat* k, SparseMat* d) const {
   // A matrix that already has this pattern (same size and number of nonzeros, compressed: a
   // previous result of this network) keeps its storage; only the values are written. Without
   // dashpots D = -(γ/m) I is diagonal and gets a diagonal pattern.
@@ -700,15 +745,18 @@ void MassSpringNetwork::fill_blocks(const Structure& st, double gamma, CVecRef x
         m->nonZeros() != pattern.nonZeros() || !m->isCompressed())
       *m = pattern;
   };
+  with_drag = with_drag && drag();
+  const bool full_d = st.dashpots || with_drag;  // D on K's pattern
   ensure(k, st.pattern);
-  ensure(d, st.dashpots ? st.pattern : st.diag_pattern);
+  ensure(d, full_d ? st.pattern : st.diag_pattern);
   double* kv = k ? k->valuePtr() : nullptr;
-  double* dv = d && st.dashpots ? d->valuePtr() : nullptr;
+  double* dv = d && full_d ? d->valuePtr() : nullptr;
   if (kv || dv)
     detail::with_dim<1, 3>(dim_, [&](auto dim) {
       blocks_impl<decltype(dim)::value>(st, gamma, x.data(), v.data(), kv, dv);
     });
-  if (d && !st.dashpots) {
+  if (with_drag) add_drag_blocks(st, x.data(), v.data(), kv, dv);
+  if (d && !full_d) {
     double* dd = d->valuePtr();
     for (Index p = 0; p < num_points(); ++p)
       for (int c = 0; c < dim_; ++c)
@@ -718,33 +766,132 @@ void MassSpringNetwork::fill_blocks(const Structure& st, double gamma, CVecRef x
 
 void MassSpringNetwork::stiffness_block(double, CVecRef x, CVecRef v, SparseMat& k) const {
   ensure_structure();
-  fill_blocks(structure_, opt_.point_damping, x, v, &k, nullptr);
+  fill_blocks(structure_, opt_.point_damping, true, x, v, &k, nullptr);
 }
 
 void MassSpringNetwork::damping_block(double, CVecRef x, CVecRef v, SparseMat& d) const {
   ensure_structure();
-  fill_blocks(structure_, opt_.point_damping, x, v, nullptr, &d);
+  fill_blocks(structure_, opt_.point_damping, true, x, v, nullptr, &d);
 }
 
 void MassSpringNetwork::force_jacobians(double, CVecRef x, CVecRef v, SparseMat& k,
                                         SparseMat& d) const {
   ensure_structure();
-  fill_blocks(structure_, opt_.point_damping, x, v, &k, &d);
+  fill_blocks(structure_, opt_.point_damping, true, x, v, &k, &d);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Air drag (see the header comment for the force and its derivatives).
+
+namespace {
+
+// One triangle's drag at (x, v): N, v̄, u = v̄·N, w = 1/|N|² (0 for a triangle of zero area) and
+// the force F = -β u|u| w N, β = β_d/2.
+struct FaceDrag {
+  double n[3], vbar[3], u, w, f[3];
+};
+
+FaceDrag face_drag(const double* x, const double* v, const Triangle& t, double beta) {
+  FaceDrag r{};
+  const double* xa = x + 3 * t.a;
+  const double* xb = x + 3 * t.b;
+  const double* xc = x + 3 * t.c;
+  const double e1[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
+  const double e2[3] = {xc[0] - xa[0], xc[1] - xa[1], xc[2] - xa[2]};
+  r.n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+  r.n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+  r.n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+  const double n2 = r.n[0] * r.n[0] + r.n[1] * r.n[1] + r.n[2] * r.n[2];
+  r.w = n2 > 0.0 ? 1.0 / n2 : 0.0;
+  r.u = 0.0;
+  for (int c = 0; c < 3; ++c) {
+    r.vbar[c] = (v[3 * t.a + c] + v[3 * t.b + c] + v[3 * t.c + c]) / 3.0;
+    r.u += r.vbar[c] * r.n[c];
+  }
+  const double scale = -beta * r.u * std::abs(r.u) * r.w;
+  for (int c = 0; c < 3; ++c) r.f[c] = scale * r.n[c];
+  return r;
+}
+
+}  // namespace
+
+// In triangle order, serially: each point's additions in a fixed order for any thread count.
+void MassSpringNetwork::add_drag(const double* x, const double* v, double* a) const {
+  const double beta = 0.5 * opt_.air_drag;
+  const double* inv_mass = inv_mass_.data();  // 0 for pinned points
+  for (const Triangle& t : triangles_) {
+    const FaceDrag fd = face_drag(x, v, t, beta);
+    for (const Index p : {t.a, t.b, t.c}) {
+      if (pinned_[static_cast<std::size_t>(p)]) continue;
+      const double s = inv_mass[p] / 3.0;
+      for (int c = 0; c < 3; ++c) a[3 * p + c] += s * fd.f[c];
+    }
+  }
+}
+
+void MassSpringNetwork::add_drag_blocks(const Structure& st, const double* x, const double* v,
+                                        double* k_values, double* d_values) const {
+  const double beta = 0.5 * opt_.air_drag;
+  const auto* outer = st.pattern.outerIndexPtr();
+  for (std::size_t t = 0; t < triangles_.size(); ++t) {
+    const Triangle& tr = triangles_[t];
+    const Index pts[3] = {tr.a, tr.b, tr.c};
+    const FaceDrag fd = face_drag(x, v, tr, beta);
+    const double* n = fd.n;
+    const double au = std::abs(fd.u), uau = fd.u * au, w = fd.w;
+    // ∂F/∂v_q (the same for every q) and G = ∂F/∂N.
+    double dv[3][3], g[3][3];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) {
+        dv[r][c] = -(2.0 * beta * au * w / 3.0) * n[r] * n[c];
+        g[r][c] = -beta * (2.0 * au * w * n[r] * fd.vbar[c] + (r == c ? uau * w : 0.0) -
+                           2.0 * uau * w * w * n[r] * n[c]);
+      }
+    // S_q = [s_q]× with s_a = e2 - e1 = x_c - x_b, s_b = -e2 = x_a - x_c, s_c = e1 = x_b - x_a.
+    double side[3][3];
+    for (int c = 0; c < 3; ++c) {
+      side[0][c] = x[3 * tr.c + c] - x[3 * tr.b + c];
+      side[1][c] = x[3 * tr.a + c] - x[3 * tr.c + c];
+      side[2][c] = x[3 * tr.b + c] - x[3 * tr.a + c];
+    }
+    for (int qi = 0; qi < 3; ++qi) {
+      const double* sq = side[qi];
+      const double cross[3][3] = {{0.0, -sq[2], sq[1]}, {sq[2], 0.0, -sq[0]}, {-sq[1], sq[0], 0.0}};
+      double kx[3][3];  // ∂F/∂x_q = G S_q
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+          kx[r][c] = g[r][0] * cross[0][c] + g[r][1] * cross[1][c] + g[r][2] * cross[2][c];
+      const Index q = pts[qi];
+      const Index len = outer[3 * q + 1] - outer[3 * q];
+      for (int pi = 0; pi < 3; ++pi) {
+        const Index p = pts[pi];
+        if (pinned_[static_cast<std::size_t>(p)]) continue;  // zero rows
+        const double s = inv_mass_[static_cast<std::size_t>(p)] / 3.0;
+        const Index base = st.face_pos[9 * t + static_cast<std::size_t>(3 * pi + qi)];
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) {
+            if (k_values) k_values[base + r + c * len] += s * kx[r][c];
+            if (d_values) d_values[base + r + c * len] += s * dv[r][c];
+          }
+      }
+    }
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
 // Additive split (see the header comment).
 
 std::optional<SplitInfo> MassSpringNetwork::imex_split() const {
+  const std::string damping = drag() ? "point damping and air drag" : "point damping";
   switch (opt_.split) {
     case NetworkSplit::none:
       return std::nullopt;
     case NetworkSplit::springs:
-      return SplitInfo{"springs", "gravity and point damping",
-                       "springs and dashpots (with x' = v)"};
+      return SplitInfo{"springs", "gravity and " + damping, "springs and dashpots (with x' = v)"};
     case NetworkSplit::stretch:
       return SplitInfo{"stretch",
-                       "shear and bend springs (and their dashpots), gravity and point damping",
+                       std::string("shear and bend springs (and their dashpots), gravity") +
+                           (drag() ? ", point damping and air drag" : " and point damping"),
                        "structural springs and their dashpots (with x' = v)"};
   }
   return std::nullopt;
@@ -755,16 +902,29 @@ void MassSpringNetwork::implicit_force_jacobians(double, CVecRef x, CVecRef v, S
                                                  SparseMat& d) const {
   require_input(has_imex_split(), name_ + ": no split (parameter split=none)");
   ensure_structure();
-  fill_blocks(implicit_structure(), 0.0, x, v, &k, &d);
+  fill_blocks(implicit_structure(), 0.0, false, x, v, &k, &d);
 }
 
 std::optional<SpectrumEstimate> MassSpringNetwork::explicit_part_spectrum(double, CVecRef y) const {
   if (opt_.split == NetworkSplit::springs) {
-    // f_E = [0; g - γ v/m]: ∂f_E/∂y has eigenvalues 0 and -γ/m_i (free points).
-    double rate = 0.0;
+    // f_E = [0; g - γ v/m + drag/m]: ∂f_E/∂y has eigenvalues 0 and those of D_E, real and <= 0
+    // (point damping: -γ/m_i); each row's sum of block norms bounds them: γ/m_p plus, per
+    // triangle of p, 3 blocks of norm 2β|u|/3 (‖w N Nᵀ‖ = 1) times 1/(3 m_p).
+    std::vector<double> rate(points_.size(), opt_.point_damping);
+    if (drag()) {
+      const Index n = dofs();
+      const double* x = y.data();
+      const double* v = y.data() + n;
+      const double beta = 0.5 * opt_.air_drag;
+      for (const Triangle& t : triangles_) {
+        const double r = 2.0 * beta * std::abs(face_drag(x, v, t, beta).u) / 3.0;
+        for (const Index p : {t.a, t.b, t.c}) rate[static_cast<std::size_t>(p)] += r;
+      }
+    }
+    double radius = 0.0;
     for (std::size_t p = 0; p < points_.size(); ++p)
-      rate = std::max(rate, opt_.point_damping * inv_mass_[p]);
-    return SpectrumEstimate{rate, SpectrumEstimate::Ray::negative_real};
+      radius = std::max(radius, rate[p] * inv_mass_[p]);
+    return SpectrumEstimate{radius, SpectrumEstimate::Ray::negative_real};
   }
   if (opt_.split == NetworkSplit::stretch) {
     // The explicit springs alone oscillate at up to ω_max (eigenvalues ±iω of [[0, I], [K_E, 0]]);
@@ -844,7 +1004,7 @@ std::vector<Invariant> MassSpringNetwork::invariants() const {
   out.push_back({"energy", [this](double, CVecRef y) { return energy(y); }});
   bool pinned = false;
   for (const MassPoint& pt : points_) pinned = pinned || pt.pinned;
-  if (pinned || opt_.point_damping != 0.0) return out;
+  if (pinned || opt_.point_damping != 0.0 || drag()) return out;
   static const char* const axis[] = {"x", "y", "z"};
   const auto& g = opt_.gravity;
   for (int c = 0; c < dim_; ++c) {

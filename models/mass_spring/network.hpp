@@ -9,6 +9,14 @@
 //   dashpot (i, j):   f_i = c ((v_j - v_i)·d) d
 //   point damping:    f_i = -γ v_i
 //   gravity:          f_i = m_i g              (g a vector)
+//   air drag (3D, on the network's triangles, NetworkOptions::air_drag = β_d > 0): triangle
+//     (a, b, c) with N = (x_b - x_a) × (x_c - x_a) (|N| = 2 × area A, unit normal n = N/|N|) and
+//     mean velocity v̄ = (v_a + v_b + v_c)/3 feels the quadratic drag of still air
+//       F = -β_d A (v̄·n)|v̄·n| n = -(β_d/2) u|u| N/|N|²,  u = v̄·N
+//     (β_d = ½ ρ C_d: air density ρ, drag coefficient C_d; the aerodynamic model of cloth
+//     simulation, e.g. Keckeisen et al. 2004, without lift), shared equally: f_p += F/3 for
+//     p = a, b, c. A triangle of zero area feels none. It dissipates: its power is
+//     F·v̄ = -β_d A |v̄·n|³ <= 0.
 // and a_i = f_i / m_i. The spring and dashpot forces on j are exactly -f_i (internal forces).
 // A spring needs l > 0: at l = 0 the direction d is undefined and the force is NaN, which the
 // driver reports as a blow-up.
@@ -29,22 +37,31 @@
 // and D = M⁻¹ ∂f/∂v - (γ/m) I. K is returned with one fixed pattern, computed once: a dim×dim
 // block for every point's diagonal and for every ordered pair of points joined by a spring
 // (explicit zeros where a value happens to vanish); D has the same pattern when the network has
-// dashpots and the diagonal pattern otherwise. A matrix passed in that already has the pattern
-// keeps its storage (values written in place, each point's rows by the thread that owns the
+// dashpots or air drag and the diagonal pattern otherwise. A matrix passed in that already has the
+// pattern keeps its storage (values written in place, each point's rows by the thread that owns the
 // point), so implicit solvers evaluate K and D every step without allocating;
 // force_jacobians() fills both in one pass over the springs.
+// Air drag's blocks, with β = β_d/2, w = 1/|N|², for each pair (p, q) of a triangle's points:
+//   ∂F/∂v_q = -(2β|u|w/3) N Nᵀ,
+//   ∂F/∂x_q = G S_q,  G = ∂F/∂N = -β [2|u| w N v̄ᵀ + u|u| w I - 2 u|u| w² N Nᵀ],
+//   S_a = [e_2 - e_1]×, S_b = -[e_2]×, S_c = [e_1]× (e_1 = x_b - x_a, e_2 = x_c - x_a; [s]× y =
+//   s × y, from dN = (e_2 - e_1) × dx_a - e_2 × dx_b + e_1 × dx_c),
+// added to K and D as (1/(3 m_p)) times these, in one serial pass over the triangles after the
+// springs (a fixed order: the same bits for any thread count). Every edge of a triangle must be a
+// spring (the constructor checks it), so the blocks are in the pattern. Drag makes K and D
+// non-symmetric.
 // Option `compressed_dd_only` (off by default): for compressed springs (l < L) keep only
 // k d dᵀ in J_s, dropping k (1 - L/l)(I - d dᵀ), whose negative eigenvalue makes the stiffness
 // indefinite. The Jacobian is then inexact (an approximation for implicit solvers); the forces
 // are unchanged.
 //
 // Invariants returned by invariants(): the quantities this configuration conserves.
-//   energy   E = Σ ½ m|v|² + Σ ½ k (l - L)² - Σ m g·x, always returned; conserved without damping,
-//            dE/dt = -Σ γ|v_i|² - Σ c s² <= 0 with it;
-//   momentum_x/y/z   P_c = Σ m v_c when there are no pins, no point damping and g_c = 0;
+//   energy   E = Σ ½ m|v|² + Σ ½ k (l - L)² - Σ m g·x, always returned; conserved without damping
+//            and drag, dE/dt = -Σ γ|v_i|² - Σ c s² - Σ β_d A |v̄·n|³ <= 0 with them;
+//   momentum_x/y/z   P_c = Σ m v_c when there are no pins, no point damping, no drag and g_c = 0;
 //   angular_momentum (2D: Σ m (x v_y - y v_x)) when no pins, no point damping and g = 0;
-//   angular_momentum_x/y/z (3D: Σ m x × v) when no pins, no point damping and g ∥ e_c or g = 0
-//            (gravity's torque M x_cm × g has no component along g).
+//   angular_momentum_x/y/z (3D: Σ m x × v) when no pins, no point damping, no drag and g ∥ e_c
+//            or g = 0 (gravity's torque M x_cm × g has no component along g).
 // linear_momentum() and angular_momentum() compute them for any configuration.
 //
 // Stiffness: ω_max, the largest |eigenvalue|^½ of M⁻¹ ∂f_s/∂x over free dofs (springs only;
@@ -93,22 +110,26 @@
 //
 // Additive split (NetworkOptions::split, the models' `split` parameter; core/ode_system.hpp):
 //   none     no split (the default; the right-hand side is untouched, bitwise);
-//   springs  a_I = springs and dashpots, a_E = gravity and point damping. K_I = K and
-//            D_I = the dashpots' ∂/∂v (D without -(γ/m) I), on K's pattern;
+//   springs  a_I = springs and dashpots, a_E = gravity, point damping and air drag. K_I = the
+//            springs' K and D_I = the dashpots' ∂/∂v (D without -(γ/m) I and without drag), on
+//            K's pattern (D_I: the diagonal pattern when no spring has a dashpot);
 //   stretch  a_I = the structural springs and their dashpots (SpringKind::structural), a_E =
-//            every other spring (shear, bend) with its dashpot, gravity and point damping. K_I
-//            and D_I have only the structural pairs' blocks (a pattern of their own, sparser).
+//            every other spring (shear, bend) with its dashpot, gravity, point damping and air
+//            drag. K_I and D_I have only the structural pairs' blocks (a pattern of their own).
 // a_E + a_I = a up to rounding (each part sums its own springs; pinned points: 0 in both).
 // The parts' Jacobians are written in place like force_jacobians() (fill_blocks on the implicit
-// springs' structure). explicit_part_spectrum(): springs: radius max γ/m on the negative real
-// axis (0 without point damping); stretch: the Gershgorin bound of ω_max of the explicit springs
-// alone (StiffnessSpectrum on their adjacency) on the imaginary axis, point damping ignored.
+// springs' structure). explicit_part_spectrum(): springs: radius max_p (γ + Σ_t 2β|u_t|/3)/m_p
+// on the negative real axis (J_E's eigenvalues are 0 and those of D_E, point damping and drag,
+// which are real and <= 0; the radius bounds D_E's norm row by row; 0 without either); stretch:
+// the Gershgorin bound of ω_max of the explicit springs alone (StiffnessSpectrum on their
+// adjacency) on the imaginary axis, point damping and drag ignored.
 // (J_E = [[0, 0], [K_E, D_E]] itself is nilpotent in x: the rate that limits an explicit a_E is
 // the explicit springs' oscillation ±iω under x' = v, the eigenvalues of [[0, I], [K_E, 0]].)
 //
 // Spring view (core/springs.hpp): spring_network() lists the springs (i, j, L, k, c), masses,
 // pins, gravity and point damping for the graphics solvers (XPBD, projective dynamics), which
-// work on the springs directly. Built on first use (it copies the spring list). Constraints are
+// work on the springs directly; with air drag its other_forces says "air drag" and they refuse
+// the model. Built on first use (it copies the spring list). Constraints are
 // not in it: the driver still projects after every step.
 #pragma once
 
@@ -137,6 +158,7 @@ struct NetworkOptions {
   bool compressed_dd_only = false;          // see the header comment
   Index parallel_threshold = 2048;          // points; below this the right-hand side runs serially
   NetworkSplit split = NetworkSplit::none;  // additive split (see the header comment)
+  double air_drag = 0.0;  // β_d = ½ρC_d (>= 0) of the air drag on the triangles (3D only)
 };
 
 class MassSpringNetwork final : public MechanicalSystem {
@@ -146,7 +168,8 @@ class MassSpringNetwork final : public MechanicalSystem {
   // on first use).
   MassSpringNetwork(std::string name, int dim, std::vector<MassPoint> points,
                     std::vector<Spring> springs, NetworkOptions options,
-                    std::vector<DistanceConstraint> constraints = {});
+                    std::vector<DistanceConstraint> constraints = {},
+                    std::vector<Triangle> triangles = {});
 
   std::string name() const override { return name_; }
   Index dofs() const override { return dim_ * num_points(); }
@@ -162,8 +185,9 @@ class MassSpringNetwork final : public MechanicalSystem {
   void force_jacobians(double t, CVecRef x, CVecRef v, SparseMat& k, SparseMat& d) const override;
   // The pinned points' dofs.
   std::vector<Index> fixed_dofs() const override;
-  // ∂f/∂x of springs is a Hessian and point damping is -γI; dashpots make ∂f/∂x non-symmetric.
-  bool symmetric_force_jacobians() const override { return !has_dashpots_; }
+  // ∂f/∂x of springs is a Hessian and point damping is -γI; dashpots and drag make ∂f/∂x
+  // non-symmetric.
+  bool symmetric_force_jacobians() const override { return !has_dashpots_ && !drag(); }
 
   std::vector<Invariant> invariants() const override;
   std::optional<double> stiffness(double t, CVecRef y) const override;
@@ -199,6 +223,9 @@ class MassSpringNetwork final : public MechanicalSystem {
   Index num_points() const { return static_cast<Index>(points_.size()); }
   const std::vector<MassPoint>& points() const { return points_; }
   const std::vector<Spring>& springs() const { return springs_; }
+  const std::vector<Triangle>& triangles() const { return triangles_; }
+  // True when air drag acts (air_drag > 0 and the network has triangles).
+  bool drag() const { return opt_.air_drag > 0.0 && !triangles_.empty(); }
   const std::vector<DistanceConstraint>& constraints() const {
     return distance_constraints_.list();
   }
@@ -238,17 +265,27 @@ class MassSpringNetwork final : public MechanicalSystem {
     std::vector<Index> adj_pos;    // dim² per adjacency entry
     std::vector<Index> adj_pos_t;  // the same for the transposed block (rows of the neighbour)
     bool dashpots = false;         // some spring of this structure has a dashpot
+    // With drag (the whole network's structure only): per triangle, the position of entry (0, 0)
+    // of its 9 blocks (p, q), p and q over (a, b, c) row-major; entry (r, s) of block (p, q) is
+    // at that position + r + s × (length of column 3q).
+    std::vector<Index> face_pos;
   };
   template <int D, Part P>
   void acceleration_impl(const double* x, const double* v, double* a) const;
   template <int D>
   void blocks_impl(const Structure& st, double gamma, const double* x, const double* v,
                    double* k_values, double* d_values) const;
-  void fill_blocks(const Structure& st, double gamma, CVecRef x, CVecRef v, SparseMat* k,
-                   SparseMat* d) const;
+  // with_drag: add air drag's blocks (the whole network's K and D; not the implicit part's).
+  void fill_blocks(const Structure& st, double gamma, bool with_drag, CVecRef x, CVecRef v,
+                   SparseMat* k, SparseMat* d) const;
+  // Air drag: its accelerations added to a, and its blocks added to K and D (either may be null).
+  void add_drag(const double* x, const double* v, double* a) const;
+  void add_drag_blocks(const Structure& st, const double* x, const double* v, double* k_values,
+                       double* d_values) const;
   void pack_rhs_springs();        // rhs_springs_, part_start_, cross_start_ (constructor)
   void ensure_structure() const;  // builds the members marked "on first use" once
-  Structure build_structure(const std::vector<Spring>& springs) const;
+  Structure build_structure(const std::vector<Spring>& springs, bool with_faces) const;
+  void check_triangles() const;  // constructor: the triangles and the drag coefficient
   const Structure& implicit_structure() const {
     return opt_.split == NetworkSplit::stretch ? implicit_structure_ : structure_;
   }
@@ -262,6 +299,7 @@ class MassSpringNetwork final : public MechanicalSystem {
   int dim_;
   std::vector<MassPoint> points_;
   std::vector<Spring> springs_;
+  std::vector<Triangle> triangles_;
   NetworkOptions opt_;
   bool velocity_dependent_ = false;
   bool has_dashpots_ = false;

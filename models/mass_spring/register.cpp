@@ -156,6 +156,10 @@ void register_mass_spring_models(ModelRegistry& reg) {
              "point damping coefficient (force -damping v)", B::non_negative()},
             {"dashpot", P::real, str(cloth.dashpot), "dashpot coefficient of every spring",
              B::non_negative()},
+            {"drag", P::real, str(cloth.air_drag),
+             "air drag coefficient b = rho C_d / 2: each triangle (two per cell) feels "
+             "-b A (vn)|vn| n, vn its mean velocity along its normal n, A its area",
+             B::non_negative()},
             {"compressed_dd", P::boolean, str(cloth.compressed_dd_only),
              "Jacobian keeps only k d d^T for compressed springs (inexact, definite)"},
             {"parallel_threshold", P::integer, str(cloth.parallel_threshold), threshold_help,
@@ -164,8 +168,8 @@ void register_mass_spring_models(ModelRegistry& reg) {
              P::text,
              "none",
              "additive split f = f_E + f_I: none; springs (springs and dashpots implicit; "
-             "gravity and point damping explicit); stretch (structural springs implicit; shear, "
-             "bend, gravity and point damping explicit)",
+             "gravity, point damping and air drag explicit); stretch (structural springs "
+             "implicit; shear, bend, gravity, point damping and air drag explicit)",
              {"none", "springs", "stretch"}}},
            [](const Params& p) {
              ClothOptions o;
@@ -186,6 +190,7 @@ void register_mass_spring_models(ModelRegistry& reg) {
              o.prestretch = p.real("prestretch");
              o.point_damping = p.real("damping");
              o.dashpot = p.real("dashpot");
+             o.air_drag = p.real("drag");
              o.compressed_dd_only = p.boolean("compressed_dd");
              o.parallel_threshold = p.integer("parallel_threshold");
              o.split = split_param(p);

@@ -99,6 +99,9 @@ std::vector<std::unique_ptr<OdeSystem>> jacobian_cases(bool compressed_dd) {
                                 "perturbation=0", "prestretch=1.02", dd}));
   out.push_back(model(
       "soft_cube", {"n=2", "dashpot=0.2", "damping=0.01", "scenario=compress", "factor=0.9", dd}));
+  // Air drag on the triangles (without dashpots: D on K's pattern for the drag alone).
+  out.push_back(model(
+      "cloth", {"n=4", "m=3", "pin=corners", "drag=0.8", "perturbation=0", "prestretch=1.02", dd}));
   return out;
 }
 
@@ -410,8 +413,8 @@ TEST(MassSpringChain, ExactModalSolutionMatchesRk4) {
 // 64 × 64 = 4096 points take the OpenMP path (threshold 2048). Each point sums its own springs
 // in a fixed order, so 1 and 2 threads, and the serial path, agree bit for bit.
 TEST(MassSpringParallel, BitwiseIdenticalForAnyThreadCount) {
-  auto par = model("cloth", {"n=64", "dashpot=0.02", "damping=0.01", "pin=corners"});
-  auto ser = model("cloth", {"n=64", "dashpot=0.02", "damping=0.01", "pin=corners",
+  auto par = model("cloth", {"n=64", "dashpot=0.02", "damping=0.01", "pin=corners", "drag=0.5"});
+  auto ser = model("cloth", {"n=64", "dashpot=0.02", "damping=0.01", "pin=corners", "drag=0.5",
                              "parallel_threshold=100000"});
   const MassSpringNetwork& np = net(*par);
   ASSERT_TRUE(np.parallel());

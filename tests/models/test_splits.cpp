@@ -47,6 +47,9 @@ std::vector<SplitCase> split_cases() {
       {"cloth", {"n=5", "damping=0.02", "dashpot=0.01", "split=springs"}, "springs"},
       {"cloth", {"n=5", "damping=0.02", "dashpot=0.01", "split=stretch"}, "stretch"},
       {"cloth", {"n=5", "split=stretch"}, "stretch"},  // no dashpots: symmetric K_I, D_I = 0
+      // Air drag in f_E, kept out of J_I (drag's blocks would make J_I differ from f_I's).
+      {"cloth", {"n=5", "damping=0.02", "dashpot=0.01", "drag=0.6", "split=springs"}, "springs"},
+      {"cloth", {"n=5", "drag=0.6", "split=stretch"}, "stretch"},
   };
 }
 
@@ -387,8 +390,8 @@ TEST(MassSpringSplits, ExplicitPartSpectrum) {
 TEST(MassSpringSplits, PartsBitwiseIdenticalForAnyThreadCount) {
   for (const std::string split : {"springs", "stretch"}) {
     SCOPED_TRACE(split);
-    const std::vector<std::string> p{"n=64", "dashpot=0.02", "damping=0.01", "pin=corners",
-                                     "split=" + split};
+    const std::vector<std::string> p{"n=64",        "dashpot=0.02", "damping=0.01",
+                                     "pin=corners", "drag=0.5",     "split=" + split};
     auto par = model("cloth", p);
     auto sp = p;
     sp.push_back("parallel_threshold=100000");
