@@ -94,6 +94,20 @@ MassSpringNetwork::MassSpringNetwork(std::string name, int dim, std::vector<Mass
 
   distance_constraints_ = DistanceConstraints(dim_, points_, std::move(constraints));
   check_triangles();
+  if (drag()) {
+    const auto count = static_cast<std::size_t>(np);
+    point_face_start_.assign(count + 1, 0);
+    for (const Triangle& t : triangles_)
+      for (const Index p : {t.a, t.b, t.c}) ++point_face_start_[static_cast<std::size_t>(p) + 1];
+    for (std::size_t p = 0; p < count; ++p) point_face_start_[p + 1] += point_face_start_[p];
+    point_faces_.resize(3 * triangles_.size());
+    std::vector<Index> fill(point_face_start_.begin(), point_face_start_.end() - 1);
+    for (std::size_t t = 0; t < triangles_.size(); ++t)
+      for (const Index p : {triangles_[t].a, triangles_[t].b, triangles_[t].c})
+        point_faces_[static_cast<std::size_t>(fill[static_cast<std::size_t>(p)]++)] =
+            static_cast<Index>(t);
+    face_force_.resize(3 * triangles_.size());
+  }
 
   velocity_dependent_ = opt_.point_damping != 0.0 || drag();
   for (const Spring& s : springs_) has_dashpots_ = has_dashpots_ || s.damping != 0.0;
@@ -815,18 +829,25 @@ FaceDrag face_drag(const double* x, const double* v, const Triangle& t, double b
 
 }  // namespace
 
-// In triangle order, serially: each point's additions in a fixed order for any thread count.
+// The triangles' forces into face_force_, then each free point adds its triangles' shares in
+// ascending triangle order: the additions of one serial pass over the triangles, for any thread
+// count.
 void MassSpringNetwork::add_drag(const double* x, const double* v, double* a) const {
   const double beta = 0.5 * opt_.air_drag;
-  const double* inv_mass = inv_mass_.data();  // 0 for pinned points
-  for (const Triangle& t : triangles_) {
-    const FaceDrag fd = face_drag(x, v, t, beta);
-    for (const Index p : {t.a, t.b, t.c}) {
-      if (pinned_[static_cast<std::size_t>(p)]) continue;
-      const double s = inv_mass[p] / 3.0;
-      for (int c = 0; c < 3; ++c) a[3 * p + c] += s * fd.f[c];
-    }
-  }
+  double* force = face_force_.data();
+  const auto nt = static_cast<Index>(triangles_.size());
+  for_points(nt, parallel(), [&](Index t) {
+    const FaceDrag fd = face_drag(x, v, triangles_[static_cast<std::size_t>(t)], beta);
+    for (int c = 0; c < 3; ++c) force[3 * t + c] = fd.f[c];
+  });
+  const Index* start = point_face_start_.data();
+  const Index* faces = point_faces_.data();
+  for_points(num_points(), parallel(), [&](Index p) {
+    if (pinned_[static_cast<std::size_t>(p)]) return;
+    const double s = inv_mass_[static_cast<std::size_t>(p)] / 3.0;
+    for (Index e = start[p]; e < start[p + 1]; ++e)
+      for (int c = 0; c < 3; ++c) a[3 * p + c] += s * force[3 * faces[e] + c];
+  });
 }
 
 void MassSpringNetwork::add_drag_blocks(const Structure& st, const double* x, const double* v,

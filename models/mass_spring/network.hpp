@@ -47,13 +47,15 @@
 //   S_a = [e_2 - e_1]×, S_b = -[e_2]×, S_c = [e_1]× (e_1 = x_b - x_a, e_2 = x_c - x_a; [s]× y =
 //   s × y, from dN = (e_2 - e_1) × dx_a - e_2 × dx_b + e_1 × dx_c),
 // added to K and D as (1/(3 m_p)) times these, in one serial pass over the triangles after the
-// springs (a fixed order: the same bits for any thread count). Every edge of a triangle must be a
-// spring (the constructor checks it), so the blocks are in the pattern. Drag makes K and D
-// non-symmetric.
-// Option `compressed_dd_only` (off by default): for compressed springs (l < L) keep only
-// k d dᵀ in J_s, dropping k (1 - L/l)(I - d dᵀ), whose negative eigenvalue makes the stiffness
-// indefinite. The Jacobian is then inexact (an approximation for implicit solvers); the forces
-// are unchanged.
+// springs (a fixed order: the same bits for any thread count). In the right-hand side the
+// triangles' forces go into a scratch array first (in parallel on the OpenMP path), then each
+// free point adds F/(3 m_p) of its triangles in ascending triangle order (in parallel over
+// points): the same additions in the same order as one serial pass over the triangles. Every edge
+// of a triangle must be a spring (the constructor checks it), so the blocks are in the pattern.
+// Drag makes K and D non-symmetric. Option `compressed_dd_only` (off by default): for compressed
+// springs (l < L) keep only k d dᵀ in J_s, dropping k (1 - L/l)(I - d dᵀ), whose negative
+// eigenvalue makes the stiffness indefinite. The Jacobian is then inexact (an approximation for
+// implicit solvers); the forces are unchanged.
 //
 // Invariants returned by invariants(): the quantities this configuration conserves.
 //   energy   E = Σ ½ m|v|² + Σ ½ k (l - L)² - Σ m g·x, always returned; conserved without damping
@@ -300,6 +302,10 @@ class MassSpringNetwork final : public MechanicalSystem {
   std::vector<MassPoint> points_;
   std::vector<Spring> springs_;
   std::vector<Triangle> triangles_;
+  // With drag: each point's triangles in ascending order (CSR), and the triangles' forces of
+  // the current evaluation (scratch, sized once; like the SPH model's, one evaluation at a time).
+  std::vector<Index> point_face_start_, point_faces_;
+  mutable std::vector<double> face_force_;
   NetworkOptions opt_;
   bool velocity_dependent_ = false;
   bool has_dashpots_ = false;
