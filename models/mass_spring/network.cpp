@@ -9,6 +9,7 @@
 #include <limits>
 #include <type_traits>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 
 namespace stiffbench {
@@ -150,13 +151,13 @@ void MassSpringNetwork::check_triangles() const {
   if (triangles_.empty()) return;
   require_input(dim_ == 3, who + "triangles (air drag) need a 3D network");
   const Index np = num_points();
-  std::unordered_map<std::uint64_t, int> edges;
+  std::unordered_set<std::uint64_t> edges;
   const auto key = [](Index i, Index j) {
     return (static_cast<std::uint64_t>(std::min(i, j)) << 32) |
            static_cast<std::uint64_t>(std::max(i, j));
   };
   if (opt_.air_drag > 0.0)
-    for (const Spring& sp : springs_) edges.emplace(key(sp.i, sp.j), 0);
+    for (const Spring& sp : springs_) edges.insert(key(sp.i, sp.j));
   for (std::size_t t = 0; t < triangles_.size(); ++t) {
     const Triangle& tr = triangles_[t];
     const Index v[3] = {tr.a, tr.b, tr.c};
@@ -903,16 +904,15 @@ void MassSpringNetwork::add_drag_blocks(const Structure& st, const double* x, co
 // Additive split (see the header comment).
 
 std::optional<SplitInfo> MassSpringNetwork::imex_split() const {
-  const std::string damping = drag() ? "point damping and air drag" : "point damping";
+  const std::string forces =
+      drag() ? "gravity, point damping and air drag" : "gravity and point damping";
   switch (opt_.split) {
     case NetworkSplit::none:
       return std::nullopt;
     case NetworkSplit::springs:
-      return SplitInfo{"springs", "gravity and " + damping, "springs and dashpots (with x' = v)"};
+      return SplitInfo{"springs", forces, "springs and dashpots (with x' = v)"};
     case NetworkSplit::stretch:
-      return SplitInfo{"stretch",
-                       std::string("shear and bend springs (and their dashpots), gravity") +
-                           (drag() ? ", point damping and air drag" : " and point damping"),
+      return SplitInfo{"stretch", "shear and bend springs (and their dashpots), " + forces,
                        "structural springs and their dashpots (with x' = v)"};
   }
   return std::nullopt;
@@ -931,20 +931,21 @@ std::optional<SpectrumEstimate> MassSpringNetwork::explicit_part_spectrum(double
     // f_E = [0; g - γ v/m + drag/m]: ∂f_E/∂y has eigenvalues 0 and those of D_E, real and <= 0
     // (point damping: -γ/m_i); each row's sum of block norms bounds them: γ/m_p plus, per
     // triangle of p, 3 blocks of norm 2β|u|/3 (‖w N Nᵀ‖ = 1) times 1/(3 m_p).
-    std::vector<double> rate(points_.size(), opt_.point_damping);
-    if (drag()) {
-      const Index n = dofs();
-      const double* x = y.data();
-      const double* v = y.data() + n;
-      const double beta = 0.5 * opt_.air_drag;
-      for (const Triangle& t : triangles_) {
-        const double r = 2.0 * beta * std::abs(face_drag(x, v, t, beta).u) / 3.0;
-        for (const Index p : {t.a, t.b, t.c}) rate[static_cast<std::size_t>(p)] += r;
-      }
-    }
+    // Each point's triangles from the right-hand side's lists (no allocation).
+    const double* x = y.data();
+    const double* v = y.data() + dofs();
+    const double beta = 0.5 * opt_.air_drag;
     double radius = 0.0;
-    for (std::size_t p = 0; p < points_.size(); ++p)
-      radius = std::max(radius, rate[p] * inv_mass_[p]);
+    for (Index p = 0; p < num_points(); ++p) {
+      double rate = opt_.point_damping;
+      if (drag())
+        for (Index e = point_face_start_[static_cast<std::size_t>(p)];
+             e < point_face_start_[static_cast<std::size_t>(p) + 1]; ++e) {
+          const Triangle& t = triangles_[static_cast<std::size_t>(point_faces_[e])];
+          rate += 2.0 * beta * std::abs(face_drag(x, v, t, beta).u) / 3.0;
+        }
+      radius = std::max(radius, rate * inv_mass_[static_cast<std::size_t>(p)]);
+    }
     return SpectrumEstimate{radius, SpectrumEstimate::Ray::negative_real};
   }
   if (opt_.split == NetworkSplit::stretch) {

@@ -52,10 +52,11 @@
 // free point adds F/(3 m_p) of its triangles in ascending triangle order (in parallel over
 // points): the same additions in the same order as one serial pass over the triangles. Every edge
 // of a triangle must be a spring (the constructor checks it), so the blocks are in the pattern.
-// Drag makes K and D non-symmetric. Option `compressed_dd_only` (off by default): for compressed
-// springs (l < L) keep only k d dᵀ in J_s, dropping k (1 - L/l)(I - d dᵀ), whose negative
-// eigenvalue makes the stiffness indefinite. The Jacobian is then inexact (an approximation for
-// implicit solvers); the forces are unchanged.
+// Drag makes K and D non-symmetric.
+// Option `compressed_dd_only` (off by default): for compressed springs (l < L) keep only
+// k d dᵀ in J_s, dropping k (1 - L/l)(I - d dᵀ), whose negative eigenvalue makes the stiffness
+// indefinite. The Jacobian is then inexact (an approximation for implicit solvers); the forces
+// are unchanged.
 //
 // Invariants returned by invariants(): the quantities this configuration conserves.
 //   energy   E = Σ ½ m|v|² + Σ ½ k (l - L)² - Σ m g·x, always returned; conserved without damping
