@@ -101,28 +101,38 @@ std::string Table::to_markdown() const {
   return os.str();
 }
 
-void write_file_atomic(const std::filesystem::path& path, const std::string& content) {
+AtomicFileStream::AtomicFileStream(std::filesystem::path path) : path_(std::move(path)) {
   namespace fs = std::filesystem;
-  if (path.has_parent_path()) fs::create_directories(path.parent_path());
+  if (path_.has_parent_path()) fs::create_directories(path_.parent_path());
   // Hidden and per process: cannot collide with a user's file or another process's temporary.
-  const fs::path tmp = path.parent_path() / ("." + path.filename().string() + ".tmp." +
-                                             std::to_string(static_cast<long>(::getpid())));
-  try {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f)
-      throw std::runtime_error("cannot write " + path.string() + " (temporary " + tmp.string() +
-                               ": " + std::strerror(errno) + ")");
-    f << content;
-    f.close();
-    if (!f)
-      throw std::runtime_error("error writing " + path.string() + " (temporary " + tmp.string() +
-                               ")");
-    fs::rename(tmp, path);
-  } catch (...) {
-    std::error_code ignore;
-    fs::remove(tmp, ignore);
-    throw;
-  }
+  tmp_ = path_.parent_path() / ("." + path_.filename().string() + ".tmp." +
+                                std::to_string(static_cast<long>(::getpid())));
+  file_.open(tmp_, std::ios::binary | std::ios::trunc);
+  if (!file_)
+    throw std::runtime_error("cannot write " + path_.string() + " (temporary " + tmp_.string() +
+                             ": " + std::strerror(errno) + ")");
+}
+
+AtomicFileStream::~AtomicFileStream() {
+  if (committed_) return;
+  file_.close();
+  std::error_code ignore;
+  std::filesystem::remove(tmp_, ignore);
+}
+
+void AtomicFileStream::commit() {
+  file_.close();
+  if (!file_)
+    throw std::runtime_error("error writing " + path_.string() + " (temporary " + tmp_.string() +
+                             ")");
+  std::filesystem::rename(tmp_, path_);
+  committed_ = true;
+}
+
+void write_file_atomic(const std::filesystem::path& path, const std::string& content) {
+  AtomicFileStream f(path);
+  f.stream() << content;
+  f.commit();  // on an exception the destructor removes the temporary
 }
 
 namespace {

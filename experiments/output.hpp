@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <iosfwd>
 #include <optional>
 #include <string>
@@ -55,6 +56,26 @@ std::string format_fixed(double x, int digits = 3);
 // another process writing the same table), then renamed over PATH. When writing the temporary
 // fails or throws, the temporary is removed before the error propagates: no `*.tmp*` is left.
 void write_file_atomic(const std::filesystem::path& path, const std::string& content);
+
+// The same for a file written as a stream, so that a large file (a long trajectory) is never
+// held in memory: the text goes to the temporary as it is produced, commit() renames it over
+// PATH. Destroyed without commit() (an exception, a failed run that writes nothing), the
+// temporary is removed.
+class AtomicFileStream {
+ public:
+  explicit AtomicFileStream(std::filesystem::path path);
+  ~AtomicFileStream();
+  AtomicFileStream(const AtomicFileStream&) = delete;
+  AtomicFileStream& operator=(const AtomicFileStream&) = delete;
+  std::ostream& stream() { return file_; }
+  // Closes the temporary and renames it over PATH; std::runtime_error when writing failed.
+  void commit();
+
+ private:
+  std::filesystem::path path_, tmp_;
+  std::ofstream file_;
+  bool committed_ = false;
+};
 
 // Creates DIR and checks that a file can be written there, before an experiment runs; BadInput
 // naming `flag`, the directory and the reason otherwise (and nothing is left behind).

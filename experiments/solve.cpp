@@ -14,7 +14,7 @@
 #include <memory>
 #include <optional>
 #include <ostream>
-#include <sstream>
+#include <system_error>
 
 #include "core/driver.hpp"
 #include "experiments/catalog.hpp"
@@ -59,7 +59,7 @@ struct SolveRun {
   // particles (particle models write VTK frames instead); empty: none.
   std::unique_ptr<FrameWriter> frame_writer;
   std::string traj_path;
-  std::ostringstream traj;
+  std::unique_ptr<AtomicFileStream> traj;  // streamed to a temporary, renamed when the run ends
   std::vector<TimedRow> timed_rows;
   std::vector<long> nearest_step;  // fixed step with output times: the step of each
   long observer_calls = 0;
@@ -176,6 +176,33 @@ void plan_steps(SolveRun& run, std::ostream& err) {
         << " (" << suggested->rule << ")\n";
 }
 
+// The trajectory file's size, checked before the run: a note when it is large, BadInput when the
+// file system holding it has less room than its bound (trajectory_bytes_bound).
+void plan_trajectory(const SolveRun& run, std::ostream& err) {
+  if (run.traj_path.empty()) return;
+  long rows = static_cast<long>(run.times.size());
+  if (!run.timed) {
+    rows = std::max(1L, run.fo.outputs);
+    if (!run.step.adaptive) rows = std::min(rows, run.n_steps);
+    rows += 1;
+  }
+  const double bytes = trajectory_bytes_bound(rows, run.sys.dimension());
+  const std::string what =
+      "the trajectory file " + run.traj_path + " will hold " + std::to_string(rows) + " rows of " +
+      std::to_string(run.sys.dimension() + 1) + " numbers, up to " + format_bytes(bytes);
+  const std::string fewer = run.timed ? "fewer output times" : "a smaller --outputs";
+  std::error_code ec;
+  const auto parent = std::filesystem::absolute(run.traj_path, ec).parent_path();
+  const auto space = std::filesystem::space(parent, ec);
+  if (!ec)
+    require_input(bytes <= static_cast<double>(space.available),
+                  "--out: " + what + ", more than the " +
+                      format_bytes(static_cast<double>(space.available)) + " free in " +
+                      parent.string() + "; give " + fewer + " or another --out");
+  if (bytes >= kLargeTrajectoryBytes)
+    err << "solve: " << what << " (" << fewer << " writes less)\n";
+}
+
 // The output is checked before the run: an unwritable path is bad input now, not after it.
 // Output safety: a folder of frames holding solve.json of a different spec, or a trajectory
 // file that exists (no spec is recorded beside it), is refused unless --force.
@@ -198,8 +225,7 @@ void check_output(const SolveOptions& opt, bool frames, std::ostream& err) {
   }
 }
 
-// --frames: the frame writer, DIR/solve.json, and the trajectory path (DIR/trajectory.csv for
-// models without particles or grid).
+// --frames: the frame writer and DIR/solve.json.
 void open_frames(SolveRun& run) {
   const SolveOptions& opt = run.opt;
   require_input(opt.frame_format == "vtu" || opt.frame_format == "vtk",
@@ -210,9 +236,6 @@ void open_frames(SolveRun& run) {
   meta["t_end_used"] = run.t_end;
   meta["h_used"] = run.step.adaptive ? nlohmann::json() : nlohmann::json(run.fo.h);
   write_file_atomic(run.frame_writer->dir() / "solve.json", meta.dump(2) + "\n");
-  run.traj_path = run.sys.has_particles() || run.sys.has_grid()
-                      ? ""
-                      : (run.frame_writer->dir() / "trajectory.csv").string();
 }
 
 void write_traj_row(std::ostream& traj, double t, CVecRef y) {
@@ -250,7 +273,7 @@ Observer make_observer(SolveRun& run, std::ostream& err) {
   if (run.timed) return timed_observer(run);
   if (run.traj_path.empty() && !run.frame_writer) return {};
   return [&run, &err](double t, CVecRef y) {
-    if (!run.traj_path.empty()) write_traj_row(run.traj, t, y);
+    if (run.traj) write_traj_row(run.traj->stream(), t, y);
     if (run.frame_writer) {
       run.frame_writer->write(t, y);
       err << "solve: frame " << run.frame_writer->frames() - 1 << "/"
@@ -263,9 +286,11 @@ Observer make_observer(SolveRun& run, std::ostream& err) {
 // The run itself, recording output rows and frames on the way.
 RunResult execute(SolveRun& run, std::ostream& err) {
   if (!run.traj_path.empty()) {
-    run.traj << "t";
-    for (Index i = 0; i < run.sys.dimension(); ++i) run.traj << ",y" << i;
-    run.traj << "\n";
+    run.traj = std::make_unique<AtomicFileStream>(run.traj_path);
+    std::ostream& traj = run.traj->stream();
+    traj << "t";
+    for (Index i = 0; i < run.sys.dimension(); ++i) traj << ",y" << i;
+    traj << "\n";
   }
   const Observer obs = make_observer(run, err);
   run.y0 = run.sys.initial_state();
@@ -277,10 +302,10 @@ RunResult execute(SolveRun& run, std::ostream& err) {
 // The trajectory file, written whatever the status: the trajectory up to a blow-up is part of
 // the result.
 void write_trajectory(SolveRun& run) {
-  if (run.traj_path.empty()) return;
+  if (!run.traj) return;
   if (run.timed)
-    for (const auto& row : run.timed_rows) write_traj_row(run.traj, row.t, row.y);
-  write_file_atomic(run.traj_path, run.traj.str());
+    for (const auto& row : run.timed_rows) write_traj_row(run.traj->stream(), row.t, row.y);
+  run.traj->commit();
 }
 
 // Model, integrator, step, stiffness at t0 and status.
@@ -486,11 +511,26 @@ void cmd_solve(const SolveOptions& given, std::ostream& out, std::ostream& err) 
                 "--frames needs --out DIR (the output directory)");
   plan_steps(run, err);
   check_output(opt, run.frames, err);
-  run.traj_path = opt.out_csv;
+  // The trajectory: the --out file, or with --frames DIR/trajectory.csv for models without
+  // particles or grid (those write frames instead).
+  run.traj_path = !run.frames ? opt.out_csv
+                  : run.sys.has_particles() || run.sys.has_grid()
+                      ? ""
+                      : (std::filesystem::path(opt.out_csv) / "trajectory.csv").string();
+  plan_trajectory(run, err);
   if (run.frames) open_frames(run);
   const RunResult r = execute(run, err);
   write_trajectory(run);
   print_summary(run, r, out, err);
+}
+
+double trajectory_bytes_bound(long rows, Index dimension) {
+  // Header "t,y0,y1,...": 2 + the digits of each index and its ",y".
+  double header = 2;
+  for (Index i = 0; i < dimension; ++i) header += 2 + std::to_string(i).size();
+  // A number is at most 24 characters in the shortest round-trip form (sign, 17 digits, point,
+  // "e-308"), plus its separator (the comma, or the row's newline).
+  return header + static_cast<double>(rows) * 25.0 * static_cast<double>(dimension + 1);
 }
 
 std::vector<double> parse_times(const std::string& list) {

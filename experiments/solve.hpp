@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/params.hpp"
+#include "core/types.hpp"
 
 namespace stiffbench {
 
@@ -40,6 +41,14 @@ struct SolveOptions {
 // refused unless force_output().
 nlohmann::json solve_spec(const SolveOptions& opt);
 void cmd_solve(const SolveOptions& opt, std::ostream& out, std::ostream& err);
+
+// An upper bound of the size in bytes of a trajectory CSV of `rows` states of `dimension`
+// components (the header, then t and the state per row in the shortest round-trip form). solve
+// checks it against the free space of --out's file system before the run, and notes a file of
+// kLargeTrajectoryBytes or more on the error stream (40 steps of cloth 512² at the default
+// --outputs: 41 rows of 1,572,865 numbers, up to 1.5 GiB).
+double trajectory_bytes_bound(long rows, Index dimension);
+inline constexpr double kLargeTrajectoryBytes = 256.0 * 1024 * 1024;
 
 // "t1,t2,..." of --times as numbers (BadInput naming --times for an empty or non-numeric item).
 std::vector<double> parse_times(const std::string& list);

@@ -94,6 +94,12 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"sph_support_below_spacing",
                 "solve --model sph_drop_2d --param support=0.9 --integrator rk4 --t-end 0.01",
                 "support"},
+        // An adaptive run's trajectory has --outputs + 1 rows: 10^12 rows of 5 numbers (up to
+        // 114 TiB) exceed any disk, refused before the run.
+        BadCase{"trajectory_larger_than_the_disk",
+                "solve --model kepler --integrator dopri5 --t-end 1 --outputs 1000000000000 "
+                "--out /tmp/sbtest_huge_trajectory.csv",
+                "a smaller --outputs"},
         BadCase{"sph_verlet_on_viscous_dam_break",
                 "solve --model sph_dam_break_2d --integrator velocity_verlet --t-end 0.01",
                 "velocity_verlet"}),

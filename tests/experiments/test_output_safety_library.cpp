@@ -165,3 +165,74 @@ TEST(OutputSafetyLibrary, WriteFileAtomicLeavesNoTemporary) {
 }
 
 }  // namespace
+
+namespace {
+
+std::vector<std::string> names_in(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// AtomicFileStream (solve's trajectory, written as the run goes): PATH keeps its old content until
+// commit(); a stream destroyed without commit() leaves PATH as it was and removes its temporary.
+TEST(OutputSafetyLibrary, AtomicFileStreamPublishesOnlyOnCommit) {
+  const fs::path dir = fresh_dir("atomic_stream");
+  fs::create_directories(dir);
+  std::ofstream(dir / "traj.csv") << "old\n";
+  {
+    AtomicFileStream f(dir / "traj.csv");
+    f.stream() << "new\n";
+    f.stream().flush();
+    EXPECT_EQ(names_in(dir).size(), 2u);  // the temporary exists beside the file
+    EXPECT_EQ(slurp(dir / "traj.csv"), "old\n");
+  }
+  EXPECT_EQ(slurp(dir / "traj.csv"), "old\n");
+  EXPECT_EQ(names_in(dir), std::vector<std::string>{"traj.csv"});
+  {
+    AtomicFileStream f(dir / "traj.csv");
+    f.stream() << "t,y0\n0,1\n";
+    f.commit();
+  }
+  EXPECT_EQ(slurp(dir / "traj.csv"), "t,y0\n0,1\n");
+  EXPECT_EQ(names_in(dir), std::vector<std::string>{"traj.csv"});
+  fs::remove_all(dir);
+}
+
+// trajectory_bytes_bound against a real file: solve's trajectory of a small cloth is not larger
+// than the bound, and the bound is exactly the size of a table of the same shape in which every
+// number is the longest the shortest round-trip form writes (-2.2250738585072014e-308, 24
+// characters), built here independently of the formula: the bound is tight.
+TEST(OutputSafetyLibrary, TrajectoryBoundHoldsAndIsTheWorstCase) {
+  const fs::path dir = fresh_dir("trajectory_bound");
+  fs::create_directories(dir);
+  SolveOptions opt;
+  opt.model = "cloth";
+  opt.params = Params::from_assignments({"n=4"});
+  opt.integrator = "rk4";
+  opt.h = 1e-3;
+  opt.t_end = 0.01;
+  opt.outputs = 5;
+  opt.out_csv = (dir / "traj.csv").string();
+  std::ostringstream out, err;
+  cmd_solve(opt, out, err);
+  const std::string text = slurp(dir / "traj.csv");
+  const auto columns = std::count(text.begin(), text.begin() + text.find('\n'), ',') + 1;
+  const long rows = std::count(text.begin(), text.end(), '\n') - 1;
+  ASSERT_EQ(rows, 6);  // outputs at 5 equal intervals and t0
+  const Index dim = columns - 1;
+  std::string worst = "t";
+  for (Index i = 0; i < dim; ++i) worst += ",y" + std::to_string(i);
+  worst += "\n";
+  const std::string longest = "-2.2250738585072014e-308";
+  ASSERT_EQ(longest.size(), 24u);
+  for (long r = 0; r < rows; ++r)
+    for (Index c = 0; c < columns; ++c) worst += longest + (c + 1 < columns ? "," : "\n");
+  EXPECT_EQ(trajectory_bytes_bound(rows, dim), static_cast<double>(worst.size()));
+  EXPECT_LE(static_cast<double>(text.size()), trajectory_bytes_bound(rows, dim));
+  EXPECT_EQ(err.str().find("up to"), std::string::npos) << err.str();  // small: no note
+  fs::remove_all(dir);
+}
+
+}  // namespace
