@@ -37,9 +37,12 @@ class StiffnessSpectrum {
   std::pair<double, double> eigen_range(CVecRef x) const;
 
  private:
-  // out = H z with H = -∂f_s/∂x (springs only, exact J_s).
+  // Each adjacency entry's unit direction and its two coefficients at positions x (D + 2 numbers).
   template <int D>
-  void matvec(const double* x, const double* z, double* out) const;
+  std::vector<double> spring_terms(const double* x) const;
+  // out = H z with H = -∂f_s/∂x (springs only, exact J_s), from spring_terms.
+  template <int D>
+  void matvec(const double* terms, const double* z, double* out) const;
 
   int dim_;
   const std::vector<MassPoint>& points_;
