@@ -17,7 +17,8 @@
 // point it loses orthogonality as Ritz values converge; that adds copies of converged Ritz values
 // but leaves the extreme ones where they are (Paige 1976; Golub & Van Loan, 10.3). Full
 // reorthogonalisation costs O(n j²) over j steps and was the whole cost on large networks: 300
-// steps on the 786,432 free coordinates of a 512 × 512 cloth took 130 s and 3 GB.
+// steps on the 786,432 free coordinates of a 512 × 512 cloth took 130 s and 3 GB (with the
+// other costs of that estimate, cut to 15 s and 1.5 GB; models/mass_spring/stiffness_spectrum.hpp).
 #pragma once
 
 #include <cstdint>

@@ -15,6 +15,10 @@ namespace {
 // steps, from the start vector of seed 20240521 (the defaults of LanczosOptions).
 const LanczosOptions kLanczos{1e-10, 300, 20240521};
 
+// Networks with at least this many points split spring_terms and matvec between the threads
+// (the default parallel_threshold of the right-hand side, NetworkOptions).
+constexpr Index kParallelPoints = 2048;
+
 }  // namespace
 
 double StiffnessSpectrum::omega_max_bound(CVecRef x) const {
@@ -46,7 +50,7 @@ template <int D>
 std::vector<double> StiffnessSpectrum::spring_terms(const double* x) const {
   std::vector<double> terms((D + 2) * adj_.neighbours.size());
   const Index np = static_cast<Index>(points_.size());
-#pragma omp parallel for schedule(static) if (np >= 2048)
+#pragma omp parallel for schedule(static) if (np >= kParallelPoints)
   for (Index p = 0; p < np; ++p) {
     const double* xp = x + D * p;
     for (Index e = adj_.start[static_cast<std::size_t>(p)];
@@ -75,7 +79,7 @@ std::vector<double> StiffnessSpectrum::spring_terms(const double* x) const {
 template <int D>
 void StiffnessSpectrum::matvec(const double* terms, const double* z, double* out) const {
   const Index np = static_cast<Index>(points_.size());
-#pragma omp parallel for schedule(static) if (np >= 2048)
+#pragma omp parallel for schedule(static) if (np >= kParallelPoints)
   for (Index p = 0; p < np; ++p) {
     double acc[D] = {};
     const double* zp = z + D * p;

@@ -12,7 +12,8 @@
 //     coefficients are computed once per run, the products split between threads on large
 //     networks, and above 256 MiB of Krylov basis Lanczos runs without storing it: on the 512 ×
 //     512 cloth (786,432 coordinates, 300 steps) `solve`'s stiffness line took 15 s and 1.5 GB in
-//     all (the model's Jacobian pattern included) against 130 s and 3 GB before.
+//     all (the model's Jacobian pattern included) against 130 s and 3 GB before
+//     (two runs of the same command on a quiet machine, before and after, not alternated).
 // Both ignore dashpots and point damping (with them the first-order spectral radius differs:
 // for uniform γ/m and an underdamped mode it is still ω).
 //
