@@ -183,13 +183,12 @@ RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOp
   RunResult r;
   r.y = sys.initial_state();
   r.t = t0;
+  // The output stops: opt.times (then t_end), or `outputs` equal intervals computed one at a time,
+  // so a large --outputs costs no memory.
   std::vector<double> stops = opt.times;
+  long n_stops = 0;
   if (stops.empty()) {
-    const long outputs = std::max(1L, opt.outputs);
-    for (long j = 1; j <= outputs; ++j)
-      stops.push_back(j == outputs ? opt.t_end
-                                   : t0 + (opt.t_end - t0) * static_cast<double>(j) /
-                                              static_cast<double>(outputs));
+    n_stops = std::max(1L, opt.outputs);
   } else {
     double prev = t0;
     for (const double t : stops) {
@@ -199,13 +198,21 @@ RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOp
       prev = t;
     }
     if (stops.back() < opt.t_end) stops.push_back(opt.t_end);
+    n_stops = static_cast<long>(stops.size());
   }
+  const auto stop_at = [&](long j) {  // j = 1, ..., n_stops
+    if (!stops.empty()) return stops[static_cast<std::size_t>(j - 1)];
+    return j == n_stops
+               ? opt.t_end
+               : t0 + (opt.t_end - t0) * static_cast<double>(j) / static_cast<double>(n_stops);
+  };
   const EvalCounters before = sys.counters();
   const RowClock clock;
   const auto start = std::chrono::steady_clock::now();
   integ.reset(sys, t0, r.y);
   if (observer) observer(r.t, r.y);
-  for (const double t_out : stops) {
+  for (long j = 1; j <= n_stops; ++j) {
+    const double t_out = stop_at(j);
     Status s = Status::ok;
     try {
       poll_run_control();
