@@ -276,30 +276,46 @@ const SpringNetworkView* MassSpringNetwork::spring_network() const {
   return &view_;
 }
 
-// Adjacency lists (Jacobians, stiffness estimates) and the fixed pattern of K and D with the
-// value positions of every block, built once, on first use, by whichever thread gets there first.
-void MassSpringNetwork::ensure_structure() const {
-  std::call_once(structure_once_, [this] {
-    structure_ = build_structure(springs_, drag());
+// The springs' adjacency lists (stiffness estimates, and the Jacobians' structure below), built
+// once, on first use, by whichever thread gets there first.
+void MassSpringNetwork::ensure_adjacency() const {
+  std::call_once(adjacency_once_, [this] {
+    adjacency_ = SpringAdjacency::build(num_points(), springs_);
     if (opt_.split == NetworkSplit::stretch) {
-      std::vector<Spring> implicit, explicit_springs;
-      for (const Spring& sp : springs_)
-        (implicit_spring(sp) ? implicit : explicit_springs).push_back(sp);
-      implicit_structure_ = build_structure(implicit, false);
-      explicit_adjacency_ = SpringAdjacency::build(num_points(), explicit_springs);
+      implicit_adjacency_ = SpringAdjacency::build(num_points(), springs_of_part(true));
+      explicit_adjacency_ = SpringAdjacency::build(num_points(), springs_of_part(false));
     }
   });
 }
 
+std::vector<Spring> MassSpringNetwork::springs_of_part(bool implicit) const {
+  std::vector<Spring> part;
+  for (const Spring& sp : springs_)
+    if (implicit_spring(sp) == implicit) part.push_back(sp);
+  return part;
+}
+
+// The fixed pattern of K and D with the value positions of every block (Jacobians), built once,
+// on first use.
+void MassSpringNetwork::ensure_structure() const {
+  ensure_adjacency();
+  std::call_once(structure_once_, [this] {
+    structure_ = build_structure(springs_, adjacency_, drag());
+    if (opt_.split == NetworkSplit::stretch)
+      implicit_structure_ = build_structure(springs_of_part(true), implicit_adjacency_, false);
+  });
+}
+
 MassSpringNetwork::Structure MassSpringNetwork::build_structure(const std::vector<Spring>& springs,
+                                                                const SpringAdjacency& adjacency,
                                                                 bool with_faces) const {
   const Index np = num_points();
   const Index n = dofs();
   Structure st;
   for (const Spring& sp : springs) st.dashpots = st.dashpots || sp.damping != 0.0;
-  st.adjacency = SpringAdjacency::build(np, springs);
-  const std::vector<Index>& start = st.adjacency.start;
-  const std::vector<SpringNeighbour>& neighbours = st.adjacency.neighbours;
+  st.adjacency = &adjacency;
+  const std::vector<Index>& start = adjacency.start;
+  const std::vector<SpringNeighbour>& neighbours = adjacency.neighbours;
   SparseMat& pattern = st.pattern;
 
   // The fixed pattern of K and D: every point's diagonal block and one block per ordered pair
@@ -631,8 +647,8 @@ template <int D>
 void MassSpringNetwork::blocks_impl(const Structure& st, double gamma, const double* x,
                                     const double* v, double* k_values, double* d_values) const {
   const bool dd_only = opt_.compressed_dd_only;
-  const Index* start = st.adjacency.start.data();
-  const SpringNeighbour* nb = st.adjacency.neighbours.data();
+  const Index* start = st.adjacency->start.data();
+  const SpringNeighbour* nb = st.adjacency->neighbours.data();
   const MassPoint* pts = points_.data();
   const Index* dpos = st.diag_pos.data();
   const Index* apos = st.adj_pos.data();
@@ -951,7 +967,7 @@ std::optional<SpectrumEstimate> MassSpringNetwork::explicit_part_spectrum(double
   if (opt_.split == NetworkSplit::stretch) {
     // The explicit springs alone oscillate at up to ω_max (eigenvalues ±iω of [[0, I], [K_E, 0]]);
     // the Gershgorin bound of their ω_max.
-    ensure_structure();
+    ensure_adjacency();
     const double omega =
         StiffnessSpectrum(dim_, points_, explicit_adjacency_).omega_max_bound(y.head(dofs()));
     return SpectrumEstimate{omega, SpectrumEstimate::Ray::imaginary};
@@ -1073,18 +1089,18 @@ double MassSpringNetwork::constraint_residual(CVecRef y) const {
 // Stiffness (models/mass_spring/stiffness_spectrum.hpp).
 
 double MassSpringNetwork::omega_max_bound(CVecRef x) const {
-  ensure_structure();
-  return StiffnessSpectrum(dim_, points_, structure_.adjacency).omega_max_bound(x);
+  ensure_adjacency();
+  return StiffnessSpectrum(dim_, points_, adjacency_).omega_max_bound(x);
 }
 
 std::pair<double, double> MassSpringNetwork::stiffness_eigen_range(CVecRef x) const {
-  ensure_structure();
-  return StiffnessSpectrum(dim_, points_, structure_.adjacency).eigen_range(x);
+  ensure_adjacency();
+  return StiffnessSpectrum(dim_, points_, adjacency_).eigen_range(x);
 }
 
 double MassSpringNetwork::omega_max_estimate(CVecRef x) const {
-  ensure_structure();
-  return StiffnessSpectrum(dim_, points_, structure_.adjacency).omega_max_estimate(x);
+  ensure_adjacency();
+  return StiffnessSpectrum(dim_, points_, adjacency_).omega_max_estimate(x);
 }
 
 std::optional<double> MassSpringNetwork::stiffness(double, CVecRef y) const {

@@ -261,7 +261,7 @@ class MassSpringNetwork final : public MechanicalSystem {
   // (row-major within the block). One for the whole network, one for the implicit springs of
   // split=stretch.
   struct Structure {
-    SpringAdjacency adjacency;
+    const SpringAdjacency* adjacency = nullptr;  // adjacency_ or implicit_adjacency_
     SparseMat pattern;
     SparseMat diag_pattern;        // D's pattern without dashpots (D = -(γ/m) I)
     std::vector<Index> diag_pos;   // dim² per point
@@ -286,12 +286,16 @@ class MassSpringNetwork final : public MechanicalSystem {
   void add_drag_blocks(const Structure& st, const double* x, const double* v, double* k_values,
                        double* d_values) const;
   void pack_rhs_springs();        // rhs_springs_, part_start_, cross_start_ (constructor)
+  void ensure_adjacency() const;  // builds the adjacency lists once
   void ensure_structure() const;  // builds the members marked "on first use" once
-  Structure build_structure(const std::vector<Spring>& springs, bool with_faces) const;
+  Structure build_structure(const std::vector<Spring>& springs, const SpringAdjacency& adjacency,
+                            bool with_faces) const;
   void check_triangles() const;  // constructor: the triangles and the drag coefficient
   const Structure& implicit_structure() const {
     return opt_.split == NetworkSplit::stretch ? implicit_structure_ : structure_;
   }
+  // The springs of the split's implicit part (implicit = true) or explicit part, in order.
+  std::vector<Spring> springs_of_part(bool implicit) const;
   // Whether spring s is in the implicit part of the active split.
   bool implicit_spring(const Spring& s) const {
     return opt_.split == NetworkSplit::springs ||
@@ -336,13 +340,18 @@ class MassSpringNetwork final : public MechanicalSystem {
   std::vector<std::uint8_t> packed_implicit_;  // per packed spring: in a_I (split only)
   bool implicit_dashpots_ = false;             // some implicit spring has a dashpot
 
-  // Built on first use (ensure_structure; an explicit run never needs them): the whole
-  // network's structure (Jacobian blocks, stiffness spectrum), the implicit springs' (stretch)
-  // and the explicit springs' adjacency (stretch: explicit_part_spectrum).
+  // Built on first use (an explicit run never needs them). ensure_adjacency: the adjacency lists
+  // of the whole network (stiffness spectrum), of the implicit springs and of the explicit
+  // springs (stretch: explicit_part_spectrum). ensure_structure: the whole network's structure
+  // and the implicit springs' (stretch), for the Jacobian blocks. The stiffness estimates need
+  // the adjacency only, which is a fraction of the structure's memory on a large network.
+  mutable std::once_flag adjacency_once_;
+  mutable SpringAdjacency adjacency_;
+  mutable SpringAdjacency implicit_adjacency_;
+  mutable SpringAdjacency explicit_adjacency_;
   mutable std::once_flag structure_once_;
   mutable Structure structure_;
   mutable Structure implicit_structure_;
-  mutable SpringAdjacency explicit_adjacency_;
 
   std::function<void(double, VecRef)> exact_;
 
