@@ -9,6 +9,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/run_control.hpp"
@@ -46,8 +47,21 @@ struct SpectrumEstimate {
 
 // A conserved (or monitored) quantity of a model, e.g. energy or angular momentum.
 struct Invariant {
+  Invariant() = default;
+  Invariant(std::string name_, std::function<double(double t, CVecRef y)> value_,
+            std::string arbitrary_zero_ = {})
+      : name(std::move(name_)),
+        value(std::move(value_)),
+        arbitrary_zero(std::move(arbitrary_zero_)) {}
+
   std::string name;
   std::function<double(double t, CVecRef y)> value;
+  // Why the quantity's zero is arbitrary, or empty when it is not. An energy whose gravitational
+  // potential -m g·x is zero at x = 0 rather than at a rest state is an example: its change
+  // relative to |I0| then depends on where the model put the origin, so the studies report the
+  // absolute change |I(t) - I0| instead (energy, solve, budget), and `stability` does not judge
+  // growth by it (its `auto` criterion falls back to the norm).
+  std::string arbitrary_zero;
 };
 
 class MechanicalSystem;

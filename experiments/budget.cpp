@@ -321,7 +321,8 @@ void measure_errors(const BudgetContext& c, const std::vector<Vec>& f, BudgetRow
   for (const Invariant& inv : sys.invariants()) {
     if (inv.name == "energy") {
       const double e0 = inv.value(sys.initial_time(), f.front());
-      double scale = std::abs(e0);
+      // An arbitrary zero (Invariant::arbitrary_zero) makes |E_0| no scale of the motion.
+      double scale = inv.arbitrary_zero.empty() ? std::abs(e0) : 0.0;
       for (const Vec& y : f) scale = std::max(scale, kinetic_energy(mech, masses, y));
       row.energy_rel = (inv.value(t_end, f.back()) - e0) / scale;
     } else if (inv.name.rfind("angular_momentum", 0) == 0) {
@@ -709,7 +710,9 @@ void write_budget_outputs(const std::filesystem::path& dir, const BudgetSpec& sp
                     {"repeat_budget_s", kRepeatBudget},
                     {"bootstrap_resamples", kBootstrapResamples},
                     {"ms_per_frame", "frame loop wall time / frames (reset() excluded)"}};
-  meta["energy_rel"] = "(E_N - E_0) / max(|E_0|, max over frames of 1/2 v^T M v)";
+  meta["energy_rel"] =
+      "(E_N - E_0) / max(|E_0|, max over frames of 1/2 v^T M v); |E_0| left out when the "
+      "energy's zero is arbitrary (gravity's potential zero at x = 0)";
   write_file_atomic(dir / "budget.json", meta.dump(2) + "\n");
 }
 

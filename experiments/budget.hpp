@@ -28,7 +28,8 @@
 //   energy_rel     (E_N - E_0)/D for the model's `energy` invariant, D = max(|E_0|, the largest
 //                  kinetic energy ½ vᵀ M v over the frames): a scene that starts at rest near
 //                  E = 0 (the cloth) is measured against the energy its motion had, not against
-//                  the round-off of E_0;
+//                  the round-off of E_0; |E_0| is left out of D when the energy's zero is
+//                  arbitrary (Invariant::arbitrary_zero: gravity's potential is zero at x = 0);
 //   angular_momentum_drift   when the model lists angular momentum invariants (a mass-spring
 //                  network without pins, point damping or gravity across the axis): the largest
 //                  change |L_c(end) - L_c(0)| over the listed components, relative to |L_c(0)|

@@ -33,9 +33,9 @@ namespace {
 
 // |v - v0| / |v0|, or |v - v0| when v0 is (round-off) zero; NaN counts as +inf so a maximum
 // cannot skip it.
-double relative_error(double v, double v0) {
+double relative_error(double v, double v0, bool absolute) {
   const double d = std::abs(v - v0);
-  const double e = invariant_error_is_absolute(v0) ? d : d / std::abs(v0);
+  const double e = absolute ? d : d / std::abs(v0);
   return std::isnan(e) ? std::numeric_limits<double>::infinity() : e;
 }
 
@@ -96,13 +96,17 @@ EnergyRun measure_energy_drift(const OdeSystem& sys, Integrator& integ,
   const Invariant& main_inv = invs[main_index];
   const Vec y0 = sys.initial_state();
   const double v0 = main_inv.value(t0, y0);
+  const bool absolute = invariant_error_is_absolute(v0, main_inv.arbitrary_zero);
   std::vector<const Invariant*> others;
   std::vector<double> others_v0, others_max;
+  std::vector<char> others_absolute;
   for (std::size_t i = 0; i < invs.size(); ++i) {
     if (i == main_index) continue;
     others.push_back(&invs[i]);
     others_v0.push_back(invs[i].value(t0, y0));
     others_max.push_back(0.0);
+    others_absolute.push_back(
+        invariant_error_is_absolute(others_v0.back(), invs[i].arbitrary_zero));
   }
 
   EnergyRun run;
@@ -120,7 +124,7 @@ EnergyRun measure_energy_drift(const OdeSystem& sys, Integrator& integ,
   int tenths_reported = 0;
   const Observer observer = [&](double t, CVecRef y) {
     const double v = main_inv.value(t, y);
-    const double e = relative_error(v, v0);
+    const double e = relative_error(v, v0, absolute);
     since_last = std::max(since_last, e);
     max_all = std::max(max_all, e);
     if (t <= t_tenth) {
@@ -130,7 +134,8 @@ EnergyRun measure_energy_drift(const OdeSystem& sys, Integrator& integ,
     }
     slope.add(t, e);
     for (std::size_t i = 0; i < others.size(); ++i)
-      others_max[i] = std::max(others_max[i], relative_error(others[i]->value(t, y), others_v0[i]));
+      others_max[i] = std::max(others_max[i], relative_error(others[i]->value(t, y), others_v0[i],
+                                                             others_absolute[i] != 0));
     last = {t, v, e, since_last};
     if (k % stride == 0 || k == n) {
       run.samples.push_back(last);
@@ -178,9 +183,11 @@ EnergyResult run_energy(const EnergySpec& given, std::ostream* progress) {
     if (inv.name == given.invariant) {
       found = true;
       res.initial_value = inv.value(sys.initial_time(), sys.initial_state());
+      res.arbitrary_zero = inv.arbitrary_zero;
     } else {
       res.other_invariants.push_back(inv.name);
       res.other_initial_values.push_back(inv.value(sys.initial_time(), sys.initial_state()));
+      res.other_arbitrary_zero.push_back(inv.arbitrary_zero);
     }
   }
   require_input(found, "--invariant: model '" + given.model + "' has no invariant '" +
@@ -269,14 +276,17 @@ Table energy_summary_table(const EnergyResult& r) {
 }
 
 Table energy_markdown_table(const EnergyResult& r) {
-  Table t{{"integrator", "h", "steps", "max rel. error", "final rel. error", "drift rate (1/t)",
-           "growth", "status"},
+  const std::string kind =
+      invariant_error_is_absolute(r.initial_value, r.arbitrary_zero) ? "abs." : "rel.";
+  Table t{{"integrator", "h", "steps", "max " + kind + " error", "final " + kind + " error",
+           "drift rate (1/t)", "growth", "status"},
           {}};
   for (std::size_t i = 0; i < r.other_invariants.size(); ++i)
-    t.columns.push_back((invariant_error_is_absolute(r.other_initial_values.at(i))
-                             ? "max abs. error "
-                             : "max rel. error ") +
-                        r.other_invariants[i]);
+    t.columns.push_back(
+        (invariant_error_is_absolute(r.other_initial_values.at(i), r.other_arbitrary_zero.at(i))
+             ? "max abs. error "
+             : "max rel. error ") +
+        r.other_invariants[i]);
   // f evaluations, and of the solver counters those some run reports (implicit methods).
   t.columns.push_back("f_evals");
   std::vector<std::size_t> counters;
@@ -315,7 +325,10 @@ std::string markdown_report(const EnergySpec& spec, const EnergyResult& r) {
   os << "# Energy drift: " << r.model << "\n\n";
   os << "Invariant: " << r.invariant << ", initial value " << format_full(r.initial_value)
      << "; relative error |I(t) - I0|/|I0|"
-     << (invariant_error_is_absolute(r.initial_value)
+     << (!r.arbitrary_zero.empty()
+             ? " (here the absolute error |I(t) - I0|: its zero is arbitrary, " + r.arbitrary_zero +
+                   ")"
+         : invariant_error_is_absolute(r.initial_value)
              ? " (here the absolute error |I(t) - I0|, since |I0| <= " +
                    format_short(kZeroInvariant, 0) + ")"
              : "")
@@ -331,8 +344,11 @@ std::string markdown_report(const EnergySpec& spec, const EnergyResult& r) {
     for (std::size_t i = 0; i < r.other_invariants.size(); ++i)
       os << (i ? "," : "") << " " << r.other_invariants[i] << " (initial value "
          << format_short(r.other_initial_values[i], 3) << ", "
-         << (invariant_error_is_absolute(r.other_initial_values[i]) ? "absolute" : "relative")
-         << " error)";
+         << (invariant_error_is_absolute(r.other_initial_values[i], r.other_arbitrary_zero[i])
+                 ? "absolute"
+                 : "relative")
+         << " error" << (r.other_arbitrary_zero[i].empty() ? "" : ": " + r.other_arbitrary_zero[i])
+         << ")";
     os << ".";
   }
   os << "\n\n";
@@ -369,10 +385,12 @@ bool write_energy_outputs(const fs::path& dir, const EnergySpec& spec, const Ene
   meta["initial_value"] = r.initial_value;
   meta["other_invariants"] = r.other_invariants;
   meta["other_initial_values"] = r.other_initial_values;
+  meta["arbitrary_zero"] = r.arbitrary_zero;
+  meta["other_arbitrary_zero"] = r.other_arbitrary_zero;
   meta["relative_error"] =
       "|I(t) - I0| / |I0| after every step (absolute |I(t) - I0| when |I0| <= " +
       format_short(kZeroInvariant, 0) +
-      "); energy.csv rows "
+      " or when the invariant's zero is arbitrary: arbitrary_zero says why); energy.csv rows "
       "every ceil(N/samples) steps plus the first and last, each with the maximum since the "
       "previous row";
   meta["growth"] = "max over the run / max over t <= t0 + (t_end - t0)/10";

@@ -5,8 +5,11 @@
 // |I0| <= kZeroInvariant the absolute error |I(t) - I0| is used instead. That covers I0 = 0 and
 // the round-off of cancelling sums that are zero in exact arithmetic: the total momentum of the
 // symmetric SPH drop starts at ~1e-17, and dividing by it gave "relative errors" of 20 for a
-// momentum conserved to 1e-16. The threshold is absolute (invariants carry units); energy.md and
-// energy.json say which error each invariant got. A non-finite value counts as +inf.
+// momentum conserved to 1e-16. The threshold is absolute (invariants carry units). An invariant
+// whose zero is arbitrary (Invariant::arbitrary_zero: a cloth's energy under gravity, whose
+// potential is zero at the initial height) gets the absolute error too: divided by |I0| its error
+// would depend on where the model put the origin. energy.md and energy.json say which error each
+// invariant got, and why. A non-finite value counts as +inf.
 //
 // Sampling: a row every ceil(N/samples) steps, plus the initial state and the last step (so a run
 // of N steps gives about samples + 2 rows, whatever N is). Each row carries the invariant and its
@@ -48,7 +51,11 @@ namespace stiffbench {
 
 // Initial values of at most this magnitude are taken as zero (see above).
 inline constexpr double kZeroInvariant = 1e-10;
-inline bool invariant_error_is_absolute(double i0) { return !(std::abs(i0) > kZeroInvariant); }
+// Whether the error of an invariant with initial value i0 is absolute (see above); arbitrary_zero
+// is Invariant::arbitrary_zero.
+inline bool invariant_error_is_absolute(double i0, const std::string& arbitrary_zero = {}) {
+  return !arbitrary_zero.empty() || !(std::abs(i0) > kZeroInvariant);
+}
 
 struct EnergySpec {
   std::string model;
@@ -109,9 +116,11 @@ EnergyRun measure_energy_drift(const OdeSystem& sys, Integrator& integ,
 struct EnergyResult {
   std::string model;
   std::string invariant;
-  double initial_value = 0;  // I0
+  double initial_value = 0;    // I0
+  std::string arbitrary_zero;  // Invariant::arbitrary_zero of the invariant
   std::vector<std::string> other_invariants;
   std::vector<double> other_initial_values;
+  std::vector<std::string> other_arbitrary_zero;
   double h = 0;  // requested (spec.h or the suggested step)
   std::string h_source;
   double t_end = 0;

@@ -413,13 +413,22 @@ void print_conserved(const SolveRun& run, const RunResult& r, std::ostream& out)
   }
   const auto invariants = sys.invariants();
   if (!invariants.empty()) {
-    out << "\ninvariants          initial                  final                    rel. change\n";
+    // The change relative to |initial|, or absolute (marked) when the initial value is 0 or the
+    // invariant's zero is arbitrary (Invariant::arbitrary_zero, said below the table).
+    out << "\ninvariants          initial                  final                    change\n";
+    std::string notes;
     for (const auto& inv : invariants) {
       const double a = inv.value(sys.initial_time(), y0), b = inv.value(r.t, r.y);
+      const bool relative = a != 0 && inv.arbitrary_zero.empty();
       out << "  " << std::left << std::setw(18) << inv.name << std::setw(25) << format_full(a)
           << std::setw(25) << format_full(b) << std::right
-          << format_short(a != 0 ? (b - a) / std::abs(a) : b - a) << "\n";
+          << format_short(relative ? (b - a) / std::abs(a) : b - a)
+          << (relative ? " (relative)" : " (absolute)") << "\n";
+      if (!inv.arbitrary_zero.empty())
+        notes += "  " + inv.name + ": absolute change, its zero is arbitrary (" +
+                 inv.arbitrary_zero + ")\n";
     }
+    out << notes;
   }
   const auto observables = sys.observables();
   if (!observables.empty()) {

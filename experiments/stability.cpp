@@ -234,18 +234,35 @@ Probe probe(const OdeSystem& sys, Integrator& integ, double t0, const Vec& y0, d
   return p;
 }
 
-// Mechanical systems with an energy invariant are judged by their energy (unless --criterion
-// norm); BadInput for --criterion energy on a system without one.
-std::function<double(double, CVecRef)> energy_criterion(const OdeSystem& sys,
-                                                        const StabilitySpec& spec) {
+// The energy a run's growth is judged by, besides the norm (empty: the norm alone).
+struct EnergyCriterion {
   std::function<double(double, CVecRef)> energy;
+  std::string not_used;  // why `auto` left out a mechanical system's energy (arbitrary zero)
+};
+
+// Mechanical systems with an energy invariant are judged by their energy (unless --criterion
+// norm), when its zero is a rest state: growth relative to |E0| means nothing for an energy with
+// an arbitrary zero (Invariant::arbitrary_zero), so `auto` uses the norm alone there. BadInput
+// for --criterion energy on a system without a usable energy.
+EnergyCriterion energy_criterion(const OdeSystem& sys, const StabilitySpec& spec) {
+  EnergyCriterion c;
   if (sys.as_mechanical() != nullptr && spec.criterion != "norm")
-    for (const auto& inv : sys.invariants())
-      if (inv.name == "energy") energy = inv.value;
-  require_input(energy || spec.criterion != "energy",
+    for (const auto& inv : sys.invariants()) {
+      if (inv.name != "energy") continue;
+      require_input(inv.arbitrary_zero.empty() || spec.criterion != "energy",
+                    "--criterion energy: the energy of model " + spec.model +
+                        " has an arbitrary zero (" + inv.arbitrary_zero +
+                        "), so its growth relative to |E0| means nothing; use --criterion norm "
+                        "(auto does)");
+      if (inv.arbitrary_zero.empty())
+        c.energy = inv.value;
+      else
+        c.not_used = "the energy's zero is arbitrary: " + inv.arbitrary_zero;
+    }
+  require_input(c.energy || spec.criterion != "energy",
                 "--criterion energy: model " + spec.model +
                     " is not a mechanical system with an 'energy' invariant");
-  return energy;
+  return c;
 }
 
 // The linear-theory limit of the method on the system's spectrum, into `row`; for a method that
@@ -478,7 +495,8 @@ class LimitSearch {
 
 // The measured and predicted stability limit of one integrator on the system.
 StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& spec_sys,
-                     const Spectrum* spec_explicit, const Vec& y0, const StabilitySpec& spec) {
+                     const Spectrum* spec_explicit, const Vec& y0, const StabilitySpec& spec,
+                     const std::function<double(double, CVecRef)>& energy) {
   StabilityRow row;
   row.model = spec.model;
   row.integrator = integ.info().name;
@@ -490,7 +508,6 @@ StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& sp
   const double h0 = first_step(sys, row, sc.h_ref);
   const double h_floor = 1e-3 * std::min(h0, sc.h_ref);
 
-  const std::function<double(double, CVecRef)> energy = energy_criterion(sys, spec);
   try {
     LimitSearch(sys, integ, y0, spec, sc, energy, row).search(h0, h_floor);
   } catch (const RowEnded& e) {
@@ -623,6 +640,9 @@ StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress)
   Progress prog(progress, "stability", static_cast<long>(values.size() * spec.integrators.size()));
   for (std::size_t iv = 0; iv < values.size(); ++iv) {
     Setup& s = setups[iv];
+    const EnergyCriterion criterion = energy_criterion(*s.model, spec);
+    res.criterion = criterion.energy ? "energy" : "norm";
+    res.criterion_note = criterion.not_used;
     const Vec y0 = perturbed_state(*s.model, spec);
     const Spectrum sp = spectrum_of(*s.model, s.model->initial_time(), y0, spec);
     res.spectrum_source = sp.source;
@@ -642,7 +662,8 @@ StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress)
     }
     for (auto& integ : s.integrators) {
       const RowClock clock;  // --max-wall covers the row's whole bisection
-      StabilityRow row = measure(*s.model, *integ, sp, spe ? &*spe : nullptr, y0, spec);
+      StabilityRow row =
+          measure(*s.model, *integ, sp, spe ? &*spe : nullptr, y0, spec, criterion.energy);
       if (sweep) {
         row.param = spec.sweep_param;
         row.value = values[iv];
@@ -728,11 +749,10 @@ std::string markdown_report(const StabilitySpec& spec, const StabilityResult& r)
      << ", against linear theory. A run is stable when it stays finite and "
         "its max-norm never exceeds "
      << num(spec.norm_growth) << " x max(1, |y0|)"
-     << (spec.criterion == "norm"
-             ? std::string()
-             : " (and, for mechanical systems with an energy invariant, its energy never "
-               "exceeds E0 + " +
-                   num(spec.energy_growth - 1) + " x |E0|)")
+     << (r.criterion == "energy"
+             ? " and its energy never exceeds E0 + " + num(spec.energy_growth - 1) + " x |E0|"
+         : r.criterion_note.empty() ? std::string()
+                                    : " (the energy is not used: " + r.criterion_note + ")")
      << ", checked at every step over "
      << (spec.horizon ? "a horizon of " + num(*spec.horizon)
                       : num(spec.periods) + " periods of the fastest mode")
@@ -802,10 +822,12 @@ void write_stability_outputs(const std::filesystem::path& dir, const StabilitySp
   meta["spectrum"] = r.spectrum_source;
   if (!r.explicit_spectrum_source.empty())
     meta["explicit_part_spectrum"] = r.explicit_spectrum_source;
+  meta["criterion_used"] = r.criterion;
+  if (!r.criterion_note.empty()) meta["criterion_note"] = r.criterion_note;
   meta["criterion"] =
-      "stable: status ok, finite, max-norm <= norm_growth * max(1, |y0|) and (mechanical "
-      "systems with an energy invariant) E <= E0 + (growth - 1) |E0| at every step of the "
-      "horizon; "
+      "stable: status ok, finite, max-norm <= norm_growth * max(1, |y0|) and (criterion_used "
+      "energy: mechanical systems with an energy invariant whose zero is not arbitrary) "
+      "E <= E0 + (growth - 1) |E0| at every step of the horizon; "
       "unstable_for_all_h: unstable at 0.75 h_max over 8x the horizon; "
       "solver_limit: the smallest failing step ended in newton_failed or solver_error";
   for (const auto& row : r.rows) {
@@ -951,8 +973,8 @@ StudyKind stability_study_kind() {
       {"criterion",
        P::text,
        "auto",
-       "auto (energy for mechanical systems with an energy invariant, else the norm), energy, or "
-       "norm (for models whose energy has an arbitrary zero, e.g. gravity)",
+       "auto (energy for mechanical systems with an energy invariant whose zero is not "
+       "arbitrary, else the norm: a cloth under gravity gets the norm), energy, or norm",
        {"auto", "energy", "norm"}},
       {"norm_growth", P::real, "10",
        "a run is unstable when its max-norm exceeds this factor times max(1, |y0|)",

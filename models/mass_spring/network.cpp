@@ -1039,18 +1039,20 @@ Vec MassSpringNetwork::angular_momentum(CVecRef y) const {
 
 std::vector<Invariant> MassSpringNetwork::invariants() const {
   std::vector<Invariant> out;
-  out.push_back({"energy", [this](double, CVecRef y) { return energy(y); }});
+  const auto& g = opt_.gravity;
+  const bool no_gravity = g[0] == 0.0 && g[1] == 0.0 && g[2] == 0.0;
+  out.push_back(
+      {"energy", [this](double, CVecRef y) { return energy(y); },
+       no_gravity ? "" : "gravity's potential -m g.x is zero at x = 0, not at a rest state"});
   bool pinned = false;
   for (const MassPoint& pt : points_) pinned = pinned || pt.pinned;
   if (pinned || opt_.point_damping != 0.0 || drag()) return out;
   static const char* const axis[] = {"x", "y", "z"};
-  const auto& g = opt_.gravity;
   for (int c = 0; c < dim_; ++c) {
     if (g[static_cast<std::size_t>(c)] != 0.0) continue;
     out.push_back({std::string("momentum_") + axis[c],
                    [this, c](double, CVecRef y) { return linear_momentum(y)[c]; }});
   }
-  const bool no_gravity = g[0] == 0.0 && g[1] == 0.0 && g[2] == 0.0;
   if (dim_ == 2 && no_gravity) {
     out.push_back(
         {"angular_momentum", [this](double, CVecRef y) { return angular_momentum(y)[0]; }});
