@@ -12,10 +12,11 @@
 // energy threshold is relative to |E0|, so it needs an energy whose zero is the rest state
 // (chains, the SPH drop, Kepler). A model whose energy has an arbitrary zero says so
 // (Invariant::arbitrary_zero: a spring network under gravity, whose potential -m g·x is zero at
-// the cloth's initial height), and `criterion = auto` then judges by the norm alone: measured
-// against the 0.31 J of the 64×64 cloth's initial spring energy, the O(h) energy oscillation of
-// symplectic Euler exchanging about 100 J with gravity read as growth, and the row said
-// unstable_for_all_h. `criterion = energy` on such a model is BadInput. The initial state is
+// the cloth's initial height), and `criterion = auto` then judges by the norm alone. Before,
+// E0 of the 64×64 cloth was its initial spring energy, 0.31, while its energy moves between
+// gravity, springs and motion; symplectic Euler's bounded O(h) energy error crossed 2 E0 and the
+// row said unstable_for_all_h, with a growth of ×0.99999 per period. `criterion = energy` on
+// such a model is BadInput. The initial state is
 // perturbed first so that every mode is excited (an unexcited fastest mode only grows from
 // round-off and hides the instability):
 //   mechanical systems: x_i += ε·s·ξ_i with s the RMS deviation of x0 from its mean (1 if 0);
