@@ -86,16 +86,35 @@ std::string Table::to_csv() const {
   return out;
 }
 
+namespace {
+
+// A Markdown table cell: a '|' inside it (a message quoting |E0|) would end the cell, and a line
+// break the row, so they are escaped and replaced by a space.
+std::string markdown_cell(const std::string& v) {
+  if (v.empty()) return " ";
+  std::string out;
+  out.reserve(v.size());
+  for (const char ch : v) {
+    if (ch == '|')
+      out += "\\|";
+    else
+      out += ch == '\n' || ch == '\r' ? ' ' : ch;
+  }
+  return out;
+}
+
+}  // namespace
+
 std::string Table::to_markdown() const {
   std::ostringstream os;
   os << "|";
-  for (const auto& c : columns) os << " " << c << " |";
+  for (const auto& c : columns) os << " " << markdown_cell(c) << " |";
   os << "\n|";
   for (std::size_t i = 0; i < columns.size(); ++i) os << "---|";
   os << "\n";
   for (const auto& r : rows) {
     os << "|";
-    for (const auto& v : r) os << " " << (v.empty() ? " " : v) << " |";
+    for (const auto& v : r) os << " " << markdown_cell(v) << " |";
     os << "\n";
   }
   return os.str();

@@ -23,6 +23,8 @@ struct Table {
   std::vector<std::vector<std::string>> rows;
 
   std::string to_csv() const;
+  // GitHub-flavoured Markdown. In a cell a '|' is escaped (a backslash before it), so that a
+  // message quoting |E0| stays in its cell, and a line break becomes a space.
   std::string to_markdown() const;
 };
 

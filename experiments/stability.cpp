@@ -779,6 +779,8 @@ std::string markdown_report(const StabilitySpec& spec, const StabilityResult& r)
       note = row.growth_per_period ? "growth x" + num(*row.growth_per_period) +
                                          " per period at h = " + num(row.growth_h)
                                    : "unstable at every step down to h = " + num(row.growth_h);
+      // What ended that run: the energy criterion can end one whose norm does not grow.
+      if (!row.message.empty()) note += " (" + row.message + ")";
     } else if (row.status == "failed" || row.status == "solver_limit") {
       note = row.message;
     } else {

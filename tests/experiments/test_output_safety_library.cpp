@@ -148,6 +148,25 @@ TEST(OutputSafetyLibrary, ReportRefusesTheOtherSuite) {
 
 // write_file_atomic: the temporary is hidden and per process (a user's NAME.tmp is not touched)
 // and removed when the write fails (here: the rename onto a folder that is not empty).
+// A Markdown cell holding '|' (a stability note quoting |E0|) or a line break keeps the table's
+// shape: each row has as many unescaped '|' as the header (columns + 1).
+TEST(OutputSafetyLibrary, MarkdownCellsKeepTheTableShape) {
+  const Table t{{"a", "b|c"}, {{"energy exceeded 2 x |E0| at t = 1", "two\nlines"}, {"", "x"}}};
+  const std::string md = t.to_markdown();
+  std::istringstream lines(md);
+  std::string line;
+  std::vector<std::string> all;
+  while (std::getline(lines, line)) all.push_back(line);
+  ASSERT_EQ(all.size(), 4u);  // header, rule, two rows
+  for (const std::string& l : all) {
+    int bars = 0;
+    for (std::size_t i = 0; i < l.size(); ++i)
+      if (l[i] == '|' && (i == 0 || l[i - 1] != '\\')) ++bars;
+    EXPECT_EQ(bars, 3) << l;
+  }
+  EXPECT_EQ(all[2], "| energy exceeded 2 x \\|E0\\| at t = 1 | two lines |");
+}
+
 TEST(OutputSafetyLibrary, WriteFileAtomicLeavesNoTemporary) {
   const fs::path dir = fresh_dir("atomic");
   fs::create_directories(dir / "busy");
