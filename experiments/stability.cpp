@@ -637,10 +637,14 @@ StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress)
     require_input(integ->supports_fixed_step(),
                   "--integrators: '" + integ->info().name +
                       "' is adaptive only: the stability study runs fixed steps");
+  // The criterion of every value too: --criterion energy with a value whose energy has an
+  // arbitrary zero (--sweep gravity=0,1) is BadInput before the first value runs.
+  std::vector<EnergyCriterion> criteria;
+  for (const Setup& s : setups) criteria.push_back(energy_criterion(*s.model, spec));
   Progress prog(progress, "stability", static_cast<long>(values.size() * spec.integrators.size()));
   for (std::size_t iv = 0; iv < values.size(); ++iv) {
     Setup& s = setups[iv];
-    const EnergyCriterion criterion = energy_criterion(*s.model, spec);
+    const EnergyCriterion& criterion = criteria[iv];
     res.criterion = criterion.energy ? "energy" : "norm";
     res.criterion_note = criterion.not_used;
     const Vec y0 = perturbed_state(*s.model, spec);

@@ -225,6 +225,10 @@ TEST(Stability, ClothUnderGravityIsJudgedByTheNorm) {
   // --criterion energy on this model is refused before anything runs.
   spec.criterion = "energy";
   EXPECT_THROW(run_stability(spec, nullptr), BadInput);
+  // So is a sweep with one such value among others (gravity = 0 first).
+  spec.sweep_param = "gravity";
+  spec.sweep_values = {0.0, 1.0};
+  EXPECT_THROW(run_stability(spec, nullptr), BadInput);
 }
 
 TEST(Stability, BadSpecIsRefused) {
