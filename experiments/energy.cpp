@@ -227,8 +227,10 @@ EnergyResult run_energy(const EnergySpec& given, std::ostream* progress) {
     const EnergyRun& run = res.runs.back();
     // A run that stopped early still counts as done.
     for (; ticked < 10; ++ticked)
-      prog.tick(name + " " + to_string(run.stats.status) +
-                ", max rel. error = " + format_short(run.max_rel_error, 3));
+      prog.tick(
+          name + " " + to_string(run.stats.status) + ", max " +
+          (invariant_error_is_absolute(res.initial_value, res.arbitrary_zero) ? "abs." : "rel.") +
+          " error = " + format_short(run.max_rel_error, 3));
   }
   return res;
 }
