@@ -4,26 +4,14 @@
 
 #include "core/params.hpp"
 #include "experiments/catalog.hpp"
+#include "experiments/output.hpp"
 
 namespace stiffbench {
 
 namespace {
 
-// One Markdown cell: `|` escaped, line breaks as spaces, an empty cell as "-".
-std::string cell(const std::string& text) {
-  if (text.empty()) return "-";
-  std::string s;
-  s.reserve(text.size());
-  for (const char c : text) {
-    if (c == '|')
-      s += "\\|";
-    else if (c == '\n' || c == '\r')
-      s += ' ';
-    else
-      s += c;
-  }
-  return s;
-}
+// One Markdown cell: `|` escaped, line breaks as spaces (markdown_escape), an empty cell as "-".
+std::string cell(const std::string& text) { return text.empty() ? "-" : markdown_escape(text); }
 
 void write_row(const std::vector<std::string>& cells, std::ostream& out) {
   out << "|";

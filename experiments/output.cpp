@@ -86,15 +86,10 @@ std::string Table::to_csv() const {
   return out;
 }
 
-namespace {
-
-// A Markdown table cell: a '|' inside it (a message quoting |E0|) would end the cell, and a line
-// break the row, so they are escaped and replaced by a space.
-std::string markdown_cell(const std::string& v) {
-  if (v.empty()) return " ";
+std::string markdown_escape(const std::string& text) {
   std::string out;
-  out.reserve(v.size());
-  for (const char ch : v) {
+  out.reserve(text.size());
+  for (const char ch : text) {
     if (ch == '|')
       out += "\\|";
     else
@@ -102,6 +97,10 @@ std::string markdown_cell(const std::string& v) {
   }
   return out;
 }
+
+namespace {
+
+std::string markdown_cell(const std::string& v) { return v.empty() ? " " : markdown_escape(v); }
 
 }  // namespace
 

@@ -23,10 +23,13 @@ struct Table {
   std::vector<std::vector<std::string>> rows;
 
   std::string to_csv() const;
-  // GitHub-flavoured Markdown. In a cell a '|' is escaped (a backslash before it), so that a
-  // message quoting |E0| stays in its cell, and a line break becomes a space.
+  // GitHub-flavoured Markdown, each cell through markdown_escape (below).
   std::string to_markdown() const;
 };
+
+// Text for one Markdown table cell: a '|' escaped (a backslash before it), so that a message
+// quoting |E0| stays in its cell, and line breaks as spaces.
+std::string markdown_escape(const std::string& text);
 
 // One CSV field: line breaks become spaces (one record per line, so `run` can append and resume
 // line by line), quoted (with "" for ") when it holds ',' or '"'.
