@@ -329,6 +329,9 @@ std::pair<std::size_t, std::size_t> SphFluid::thread_range() const {
   return {at(t), at(t + 1)};
 }
 
+// The density pass evaluates its kernel terms this many at a time (see density_pass).
+constexpr std::size_t kDensityBlock = 64;
+
 // Both passes work in slot order (the Verlet list's cell order): slot k is particle
 // list_order_[k], and every per-particle array they use (positions, velocities, masses,
 // densities, pressures, neighbour slots) is indexed by slot, so the neighbours of consecutive
@@ -375,22 +378,33 @@ void SphFluid::density_pass(const double* x) const {
       std::size_t count = 0;
       // Candidates [from, to) at positions pos with weights wt (masses for fluid candidates,
       // boundary volumes for boundary ones): Σ wt_j W(r_ij) within h, and the kept neighbours.
-      // Branch-free: every candidate is written, and kept (count advanced) only within h; a
-      // rejected one adds +0.0, which leaves the sum unchanged bit for bit.
+      // First the squared distances, branch-free: every candidate is written, and kept (count
+      // advanced) only within h. Then the square root and the kernel of the kept ones only, in
+      // candidate order: the same sum, bit for bit, as adding +0.0 for each rejected one.
       const auto scan = [&](std::size_t from, std::size_t to, const double* pos, const double* wt) {
-        double sum = 0.0;
+        const std::size_t kept0 = count;
+        const double hh = h2;  // a local: the stores below could alias the captured one
         for (std::size_t q = from; q < to; ++q) {
           const std::size_t j = c[q];
           const double* xj = pos + D * j;
           double r2 = 0.0;
           for (int d = 0; d < D; ++d) r2 += (xi[d] - xj[d]) * (xi[d] - xj[d]);
-          const bool in = r2 < h2;
-          const double r = std::sqrt(r2);
-          const double w = wt[j] * wd.w_inside_as<KD>(r);
-          sum += in ? w : 0.0;
           idx[count] = static_cast<std::uint32_t>(j);
-          dist[count] = r;
-          count += in ? 1 : 0;
+          dist[count] = r2;
+          count += r2 < hh ? 1 : 0;
+        }
+        // The kernel terms per block (an `omp simd` loop), then their sum in order.
+        double sum = 0.0;
+        alignas(64) double w[kDensityBlock];
+        for (std::size_t q0 = kept0; q0 < count; q0 += kDensityBlock) {
+          const std::size_t nb = std::min(kDensityBlock, count - q0);
+#pragma omp simd
+          for (std::size_t b = 0; b < nb; ++b) {
+            const double r = std::sqrt(dist[q0 + b]);
+            dist[q0 + b] = r;
+            w[b] = wt[idx[q0 + b]] * wd.w_inside_as<KD>(r);
+          }
+          for (std::size_t b = 0; b < nb; ++b) sum += w[b];
         }
         return sum;
       };
