@@ -205,6 +205,11 @@ class Kernel {
   }
   bool has_laplacian() const { return type_ == KernelType::viscosity; }
 
+  // The constants of the closed forms above, for the SIMD pair loops (sph/pair_lanes.inc), which
+  // evaluate the Wendland C2 forms with the same operations in the same order.
+  double norm() const { return norm_; }
+  double inv_h() const { return inv_h_; }
+
  private:
   KernelType type_ = KernelType::wendland_c2;
   int dim_ = 2;

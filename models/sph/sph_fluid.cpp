@@ -1,17 +1,92 @@
 #include "models/sph/sph_fluid.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <sstream>
 #include <utility>
 
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#endif
 #include <omp.h>
 #include <Eigen/IterativeLinearSolvers>
 
 #include "models/detail/with_dim.hpp"
 
 namespace stiffbench {
+
+// GCC notes that the 32-byte vectors of pair_lanes.inc would be passed differently with and
+// without AVX; its helpers are always inlined, so no such call exists (reported at the end of the
+// file, hence for the whole file).
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
+// The pair loops' arguments (pair_lanes.inc): the slot-ordered fields and the neighbour rows.
+namespace sph_lanes {
+struct DensityArgs {
+  const double* spos;   // fluid positions by slot (D each)
+  const double* bx;     // boundary positions by boundary slot
+  const double* sm;     // fluid masses by slot
+  const double* sbvol;  // boundary volumes by boundary slot
+  const std::uint32_t* cand;
+  const std::uint32_t* cand_count;
+  const std::uint32_t* cand_bcount;
+  std::uint32_t* nb_index;
+  std::size_t* nb_count;
+  std::size_t* nb_bcount;
+  double* srho;  // out: densities by slot
+  std::size_t cap;
+  double h2, rho0;
+  const sph::Kernel* wd;
+};
+
+struct ForceArgs {
+  const double *sx, *sv, *sm, *srho, *sp, *spr2, *sinv_rho, *bx, *sbvol;
+  const std::uint32_t* nb_index;
+  const std::size_t *nb_count, *nb_bcount;
+  double* spair;  // out: the pair sums by slot (D each)
+  std::size_t cap;
+  bool variational, artificial, muller;
+  double rho0, mu, av, eps2, bfac;
+  const sph::Kernel *wg, *wv;
+};
+}  // namespace sph_lanes
+
+// The pair loops, portable (SSE2 on x86-64: two lanes per instruction) ...
+#ifdef __AVX2__
+#define STIFFBENCH_LANES_AVX2 1
+#else
+#define STIFFBENCH_LANES_AVX2 0
+#endif
+namespace sph_lanes_portable {
+using sph_lanes::DensityArgs;
+using sph_lanes::ForceArgs;
+#include "models/sph/pair_lanes.inc"
+}  // namespace sph_lanes_portable
+#undef STIFFBENCH_LANES_AVX2
+
+// ... and, in a build without -mavx2, the same source compiled for AVX2 (four lanes per
+// instruction, a branch-free left-pack in the density pass), chosen at run time when the
+// processor has it.
+// Both give the same bits (pair_lanes.inc).
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__AVX2__)
+#define STIFFBENCH_SPH_AVX2_DISPATCH 1
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#define STIFFBENCH_LANES_AVX2 1
+namespace sph_lanes_avx2 {
+using sph_lanes::DensityArgs;
+using sph_lanes::ForceArgs;
+#include "models/sph/pair_lanes.inc"
+}  // namespace sph_lanes_avx2
+#undef STIFFBENCH_LANES_AVX2
+#pragma GCC pop_options
+#endif
 
 namespace {
 
@@ -266,7 +341,6 @@ void SphFluid::build_list(const double* x) const {
     slot_of_[static_cast<std::size_t>(list_order_[k])] = static_cast<std::uint32_t>(k);
   cand_count_.resize(n);
   cand_bcount_.resize(n);
-  cand_prefix_.resize(n + 1);
   const auto& order = list_order_;
   const auto& bgrid = boundary_grid<D>();
   const bool with_boundary = !bvol_.empty();
@@ -304,46 +378,85 @@ void SphFluid::build_list(const double* x) const {
     if (most <= cap) break;
     cand_capacity_ = most + most / 4;
   }
-  cand_prefix_[0] = 0;
-  for (std::size_t k = 0; k < n; ++k)
-    cand_prefix_[k + 1] = cand_prefix_[k] + cand_count_[k] + cand_bcount_[k];
   nb_index_.resize(n * cand_capacity_);
-  nb_dist_.resize(n * cand_capacity_);
 }
 
-// The calling thread's slots [first, last): contiguous ranges holding equal numbers of
-// candidates (the cost of both passes), split by binary search in their running total.
-std::pair<std::size_t, std::size_t> SphFluid::thread_range() const {
-  const std::size_t n = static_cast<std::size_t>(n_);
-  const int nt = parallel_ ? omp_get_num_threads() : 1;
-  const int t = parallel_ ? omp_get_thread_num() : 0;
-  if (nt <= 1) return {0, n};
-  const std::size_t total = cand_prefix_[n];
-  const auto at = [&](int part) -> std::size_t {
-    if (part >= nt) return n;
-    const std::size_t goal = total / static_cast<std::size_t>(nt) * static_cast<std::size_t>(part);
-    return static_cast<std::size_t>(
-        std::lower_bound(cand_prefix_.begin(), cand_prefix_.end() - 1, goal) -
-        cand_prefix_.begin());
-  };
-  return {at(t), at(t + 1)};
+// The pair passes hand out slots in blocks of this many, one block at a time to whichever thread
+// is free (the two vCPUs of the development machine differ by 1.4x in speed, so equal static
+// shares wait for the slower one). A particle's sums do not depend on the thread that computes
+// them, so the results are the same for any thread count and any schedule.
+constexpr Index kSlotBlock = 256;
+
+Index SphFluid::slot_blocks() const { return (n_ + kSlotBlock - 1) / kSlotBlock; }
+
+std::pair<std::size_t, std::size_t> SphFluid::slot_block(Index block) const {
+  const Index first = block * kSlotBlock;
+  return {static_cast<std::size_t>(first),
+          static_cast<std::size_t>(std::min(n_, first + kSlotBlock))};
 }
 
-// The density pass evaluates its kernel terms this many at a time (see density_pass).
-constexpr std::size_t kDensityBlock = 64;
+namespace {
+
+#ifdef STIFFBENCH_SPH_AVX2_DISPATCH
+std::atomic<bool> g_avx2_allowed{true};
+bool avx2_usable() {
+  static const bool yes = __builtin_cpu_supports("avx2");
+  return yes && g_avx2_allowed.load(std::memory_order_relaxed);
+}
+#endif
+
+template <int D, sph::KernelType KD>
+void density_range(const sph_lanes::DensityArgs& a, std::size_t first, std::size_t last,
+                   double* scratch, bool avx2) {
+#ifdef STIFFBENCH_SPH_AVX2_DISPATCH
+  if (avx2) return sph_lanes_avx2::density_range<D, KD>(a, first, last, scratch);
+#else
+  (void)avx2;
+#endif
+  sph_lanes_portable::density_range<D, KD>(a, first, last, scratch);
+}
+
+template <int D, sph::KernelType KG, bool Explicit, bool Implicit>
+void force_range(const sph_lanes::ForceArgs& a, std::size_t first, std::size_t last, bool avx2) {
+#ifdef STIFFBENCH_SPH_AVX2_DISPATCH
+  if (avx2) return sph_lanes_avx2::force_range<D, KG, Explicit, Implicit>(a, first, last);
+#else
+  (void)avx2;
+#endif
+  sph_lanes_portable::force_range<D, KG, Explicit, Implicit>(a, first, last);
+}
+
+}  // namespace
+
+void SphFluid::allow_avx2(bool yes) {
+#ifdef STIFFBENCH_SPH_AVX2_DISPATCH
+  g_avx2_allowed.store(yes, std::memory_order_relaxed);
+#else
+  (void)yes;
+#endif
+}
+
+bool SphFluid::uses_avx2() const {
+#ifdef STIFFBENCH_SPH_AVX2_DISPATCH
+  return avx2_usable();
+#elif defined(__AVX2__)
+  return true;
+#else
+  return false;
+#endif
+}
 
 // Both passes work in slot order (the Verlet list's cell order): slot k is particle
 // list_order_[k], and every per-particle array they use (positions, velocities, masses,
 // densities, pressures, neighbour slots) is indexed by slot, so the neighbours of consecutive
 // particles sit in nearby memory. The state's order never changes: densities and pressures are
-// also written by particle index, accelerations by particle index.
+// also written by particle index, accelerations by particle index. The pair sums themselves are
+// pair_lanes.inc's loops (four lanes; their summation order is documented there).
 template <int D, sph::KernelType KD>
 void SphFluid::density_pass(const double* x) const {
   update_list<D>(x);
   const auto& order = list_order_;
-  const double* bx = boundary_grid<D>().positions();
-  const double h2 = opt_.support * opt_.support, rho0 = opt_.rho0;
-  const std::size_t n = static_cast<std::size_t>(n_), cap = cand_capacity_;
+  const std::size_t n = static_cast<std::size_t>(n_);
   rho_.resize(n);
   p_.resize(n);
   sm_.resize(n);
@@ -354,9 +467,25 @@ void SphFluid::density_pass(const double* x) const {
   nb_count_.resize(n);
   nb_bcount_.resize(n);
   spos_.resize(n * D);
-  // A local copy: the loop's stores through double pointers could alias the member kernel's
-  // constants, and the compiler would reload them for every pair.
-  const sph::Kernel wd = wd_;
+  const sph_lanes::DensityArgs args{spos_.data(),
+                                    boundary_grid<D>().positions(),
+                                    sm_.data(),
+                                    sbvol_.data(),
+                                    cand_.data(),
+                                    cand_count_.data(),
+                                    cand_bcount_.data(),
+                                    nb_index_.data(),
+                                    nb_count_.data(),
+                                    nb_bcount_.data(),
+                                    srho_.data(),
+                                    cand_capacity_,
+                                    opt_.support * opt_.support,
+                                    opt_.rho0,
+                                    &wd_};
+  const bool avx2 = uses_avx2();
+  // One row of squared distances per thread (+ 4: the left-pack's full-vector stores).
+  scratch_.resize(static_cast<std::size_t>(parallel_ ? omp_get_max_threads() : 1) *
+                  (cand_capacity_ + 4));
 #pragma omp parallel if (parallel_)
   {
 #pragma omp for schedule(static)
@@ -365,90 +494,63 @@ void SphFluid::density_pass(const double* x) const {
       for (int d = 0; d < D; ++d) spos_[D * k + static_cast<std::size_t>(d)] = x[D * i + d];
       sm_[k] = m_[i];
     }
-    const auto [first, last] = thread_range();
-    // Local pointers: the loop's stores could alias the vectors' own pointers otherwise.
-    const double* spos = spos_.data();
-    const double* sm = sm_.data();
-    const double* sbvol = sbvol_.data();
-    for (std::size_t k = first; k < last; ++k) {
-      const double* xi = spos + D * k;
-      const std::uint32_t* c = cand_.data() + k * cap;
-      std::uint32_t* idx = nb_index_.data() + k * cap;
-      double* dist = nb_dist_.data() + k * cap;
-      std::size_t count = 0;
-      // Candidates [from, to) at positions pos with weights wt (masses for fluid candidates,
-      // boundary volumes for boundary ones): Σ wt_j W(r_ij) within h, and the kept neighbours.
-      // First the squared distances, branch-free: every candidate is written, and kept (count
-      // advanced) only within h. Then the square root and the kernel of the kept ones only, in
-      // candidate order: the same sum, bit for bit, as adding +0.0 for each rejected one.
-      const auto scan = [&](std::size_t from, std::size_t to, const double* pos, const double* wt) {
-        const std::size_t kept0 = count;
-        const double hh = h2;  // a local: the stores below could alias the captured one
-        for (std::size_t q = from; q < to; ++q) {
-          const std::size_t j = c[q];
-          const double* xj = pos + D * j;
-          double r2 = 0.0;
-          for (int d = 0; d < D; ++d) r2 += (xi[d] - xj[d]) * (xi[d] - xj[d]);
-          idx[count] = static_cast<std::uint32_t>(j);
-          dist[count] = r2;
-          count += r2 < hh ? 1 : 0;
-        }
-        // The kernel terms per block (an `omp simd` loop), then their sum in order.
-        double sum = 0.0;
-        alignas(64) double w[kDensityBlock];
-        for (std::size_t q0 = kept0; q0 < count; q0 += kDensityBlock) {
-          const std::size_t nb = std::min(kDensityBlock, count - q0);
-#pragma omp simd
-          for (std::size_t b = 0; b < nb; ++b) {
-            const double r = std::sqrt(dist[q0 + b]);
-            dist[q0 + b] = r;
-            w[b] = wt[idx[q0 + b]] * wd.w_inside_as<KD>(r);
-          }
-          for (std::size_t b = 0; b < nb; ++b) sum += w[b];
-        }
-        return sum;
-      };
-      const std::size_t nf = cand_count_[k], nall = nf + cand_bcount_[k];
-      const double sum = scan(0, nf, spos, sm);
-      const std::size_t fluid_count = count;
-      const double bsum = scan(nf, nall, bx, sbvol);
-      const double rho = nall > nf ? sum + rho0 * bsum : sum;
-      nb_count_[k] = fluid_count;
-      nb_bcount_[k] = count - fluid_count;
-      const double p = pressure(rho);
-      srho_[k] = rho;
-      sp_[k] = p;
-      sinv_rho_[k] = 1.0 / rho;
-      spr2_[k] = p / (rho * rho);
-      const std::size_t iu = static_cast<std::size_t>(order[k]);
-      rho_[iu] = rho;
-      p_[iu] = p;
+    const std::size_t t = parallel_ ? static_cast<std::size_t>(omp_get_thread_num()) : 0;
+    double* scratch = scratch_.data() + t * (cand_capacity_ + 4);
+#pragma omp for schedule(dynamic, 1)
+    for (Index block = 0; block < slot_blocks(); ++block) {
+      const auto [first, last] = slot_block(block);
+      density_range<D, KD>(args, first, last, scratch, avx2);
+      for (std::size_t k = first; k < last; ++k) {
+        const double rho = srho_[k], p = pressure(rho);
+        sp_[k] = p;
+        sinv_rho_[k] = 1.0 / rho;
+        spr2_[k] = p / (rho * rho);
+        const std::size_t iu = static_cast<std::size_t>(order[k]);
+        rho_[iu] = rho;
+        p_[iu] = p;
+      }
     }
   }
 }
 
-// P selects the terms (Part::all: every term, in the order of the unsplit right-hand side, so
-// split=none is unchanged bit for bit): explicit_part = gravity, pressure, boundary pressure and
-// penalty walls; implicit_part = both viscosities with their boundary terms.
+// P selects the terms (Part::all: every term, so split=none is the sum of the two parts' terms
+// in one pass): explicit_part = gravity, pressure, boundary pressure and penalty walls;
+// implicit_part = both viscosities with their boundary terms. a_i = g + (pair sum) + walls.
 template <int D, sph::KernelType KG, SphFluid::Part P>
 void SphFluid::force_pass(const double* v, double* a) const {
   constexpr bool with_explicit = P != Part::implicit_part;
   constexpr bool with_implicit = P != Part::explicit_part;
   const auto& order = list_order_;
-  const double* sx = spos_.data();
-  const double* bx = boundary_grid<D>().positions();
-  const std::size_t n = static_cast<std::size_t>(n_), cap = cand_capacity_;
+  const std::size_t n = static_cast<std::size_t>(n_);
   const bool penalty = opt_.boundary == SphBoundary::penalty;
-  const bool variational = opt_.form == SphPressureForm::variational;
-  const bool muller = with_implicit && opt_.viscosity == SphViscosity::muller && opt_.mu > 0;
-  const bool artificial =
-      with_implicit && opt_.viscosity == SphViscosity::artificial && opt_.alpha > 0;
-  const double rho0 = opt_.rho0, mu = opt_.mu;
-  const double av = opt_.alpha * c_ * hs_, eps2 = 0.01 * hs_ * hs_;
   const double d0 = wall_range(), k_wall = wall_strength();
-  const double bfac = opt_.mirror_boundary_pressure ? 2.0 : 1.0;
-  const sph::Kernel wg = wg_, wv = wv_;  // local copies (see density_pass)
   sv_.resize(n * D);
+  spair_.resize(n * D);
+  const sph_lanes::ForceArgs args{spos_.data(),
+                                  sv_.data(),
+                                  sm_.data(),
+                                  srho_.data(),
+                                  sp_.data(),
+                                  spr2_.data(),
+                                  sinv_rho_.data(),
+                                  boundary_grid<D>().positions(),
+                                  sbvol_.data(),
+                                  nb_index_.data(),
+                                  nb_count_.data(),
+                                  nb_bcount_.data(),
+                                  spair_.data(),
+                                  cand_capacity_,
+                                  opt_.form == SphPressureForm::variational,
+                                  opt_.viscosity == SphViscosity::artificial && opt_.alpha > 0,
+                                  opt_.viscosity == SphViscosity::muller && opt_.mu > 0,
+                                  opt_.rho0,
+                                  opt_.mu,
+                                  opt_.alpha * c_ * hs_,
+                                  0.01 * hs_ * hs_,
+                                  opt_.mirror_boundary_pressure ? 2.0 : 1.0,
+                                  &wg_,
+                                  &wv_};
+  const bool avx2 = uses_avx2();
 #pragma omp parallel if (parallel_)
   {
 #pragma omp for schedule(static)
@@ -456,86 +558,30 @@ void SphFluid::force_pass(const double* v, double* a) const {
       for (int d = 0; d < D; ++d)
         sv_[D * static_cast<std::size_t>(s) + static_cast<std::size_t>(d)] =
             v[D * order[static_cast<std::size_t>(s)] + static_cast<Index>(d)];
-    const auto [first, last] = thread_range();
-    // Local pointers: the stores to a could alias the vectors' own pointers otherwise.
-    const double *sm = sm_.data(), *sv = sv_.data(), *srho = srho_.data(), *sp = sp_.data(),
-                 *spr2 = spr2_.data(), *sinv_rho = sinv_rho_.data(), *nb_dist = nb_dist_.data();
-    const std::uint32_t* nb_index = nb_index_.data();
-    const std::size_t *nb_count = nb_count_.data(), *nb_bcount = nb_bcount_.data();
-    const double* sbvol = sbvol_.data();
-    for (std::size_t k = first; k < last; ++k) {
-      const double* xi = sx + D * k;
-      const double* vi = sv + D * k;
-      const double rhoi = srho[k], pi = sp[k], pr2i = spr2[k], inv_rhoi = sinv_rho[k];
-      std::array<double, D> acc;
-      for (int d = 0; d < D; ++d)
-        acc[d] = with_explicit ? opt_.gravity[static_cast<std::size_t>(d)] : 0.0;
-      const std::uint32_t* idx = nb_index + k * cap;
-      const double* dist = nb_dist + k * cap;
-      for (std::size_t q = 0; q < nb_count[k]; ++q) {
-        const double r = dist[q];
-        if (r == 0.0) continue;  // self, or a coincident particle: no direction
-        const std::size_t j = static_cast<std::size_t>(idx[q]);
-        const double m = sm[j];
-        const double* xj = sx + D * j;
-        const double* vj = sv + D * j;
-        std::array<double, D> dx;
-        for (int d = 0; d < D; ++d) dx[d] = xi[d] - xj[d];
-        const double dwr = wg.dw_over_r_as<KG>(r);  // ∇W_ij = dwr · (x_i - x_j)
-        double coef = 0.0;
-        if constexpr (with_explicit)
-          coef =
-              variational ? m * (pr2i + spr2[j]) : 0.5 * m * (pi + sp[j]) * inv_rhoi * sinv_rho[j];
-        if (artificial) {
-          double vr = 0.0;
-          for (int d = 0; d < D; ++d) vr += (vi[d] - vj[d]) * dx[d];
-          // Branch-free (approaching pairs only): subtracting +0.0 leaves coef unchanged.
-          const double pi_ij = m * av * vr / (0.5 * (rhoi + srho[j]) * (r * r + eps2));
-          coef -= vr < 0.0 ? pi_ij : 0.0;
-        }
-        for (int d = 0; d < D; ++d) acc[d] -= coef * dwr * dx[d];
-        if (muller) {
-          const double cv = mu * inv_rhoi * m * sinv_rho[j] * wv.laplacian(r);
-          for (int d = 0; d < D; ++d) acc[d] += cv * (vj[d] - vi[d]);
-        }
-      }
-      const std::size_t end = nb_count[k] + nb_bcount[k];
-      for (std::size_t q = nb_count[k]; q < end; ++q) {
-        const double r = dist[q];
-        if (r == 0.0) continue;
-        const std::size_t b = static_cast<std::size_t>(idx[q]);
-        std::array<double, D> dx;
-        for (int d = 0; d < D; ++d) dx[d] = xi[d] - bx[D * b + static_cast<std::size_t>(d)];
-        const double vb = sbvol[b];
-        const double dwr = wg.dw_over_r_as<KG>(r);
-        double coef = 0.0;
-        if constexpr (with_explicit)
-          coef = bfac * rho0 * vb * pr2i;  // -f ρ0 V_b p_i/ρ_i² ∇W_ib, f = 2 or 1
-        if (artificial) {
-          double vr = 0.0;
-          for (int d = 0; d < D; ++d) vr += vi[d] * dx[d];
-          const double pi_ib = rho0 * vb * av * vr / (0.5 * (rhoi + rho0) * (r * r + eps2));
-          coef -= vr < 0.0 ? pi_ib : 0.0;
-        }
-        for (int d = 0; d < D; ++d) acc[d] -= coef * dwr * dx[d];
-        if (muller) {
-          const double cv = mu * inv_rhoi * vb * wv.laplacian(r);  // m_b/ρ_b = V_b, v_b = 0
-          for (int d = 0; d < D; ++d) acc[d] -= cv * vi[d];
-        }
-      }
-      if (with_explicit && penalty) {
-        for (const auto& wall : scene_.walls) {
-          double sd = -wall.offset;
-          for (int d = 0; d < D; ++d) sd += wall.normal[static_cast<std::size_t>(d)] * xi[d];
-          if (sd < d0) {
-            const double qw = 1.0 - sd / d0;
-            for (int d = 0; d < D; ++d)
-              acc[d] += k_wall * qw * qw * wall.normal[static_cast<std::size_t>(d)];
+#pragma omp for schedule(dynamic, 1)
+    for (Index block = 0; block < slot_blocks(); ++block) {
+      const auto [first, last] = slot_block(block);
+      force_range<D, KG, with_explicit, with_implicit>(args, first, last, avx2);
+      for (std::size_t k = first; k < last; ++k) {
+        const double* xi = spos_.data() + D * k;
+        std::array<double, D> acc;
+        for (int d = 0; d < D; ++d)
+          acc[d] = (with_explicit ? opt_.gravity[static_cast<std::size_t>(d)] : 0.0) +
+                   spair_[D * k + static_cast<std::size_t>(d)];
+        if (with_explicit && penalty) {
+          for (const auto& wall : scene_.walls) {
+            double sd = -wall.offset;
+            for (int d = 0; d < D; ++d) sd += wall.normal[static_cast<std::size_t>(d)] * xi[d];
+            if (sd < d0) {
+              const double qw = 1.0 - sd / d0;
+              for (int d = 0; d < D; ++d)
+                acc[d] += k_wall * qw * qw * wall.normal[static_cast<std::size_t>(d)];
+            }
           }
         }
+        const Index i = order[k];
+        for (int d = 0; d < D; ++d) a[D * i + d] = acc[d];
       }
-      const Index i = order[k];
-      for (int d = 0; d < D; ++d) a[D * i + d] = acc[d];
     }
   }
 }

@@ -113,9 +113,12 @@
 // changes): a particle's sums run over its neighbours within h in an order fixed by the
 // positions alone, whenever the list was built, so the right-hand side is a function of the
 // state, bit for bit. Both passes (density, then forces) gather per particle over the list
-// with OpenMP when there are at least `parallel_threshold` particles, the threads taking
-// contiguous ranges of slots with equal numbers of candidates (measured at the build), so
-// results are bitwise identical for any thread count. The state vector's order never changes.
+// with OpenMP when there are at least `parallel_threshold` particles, the threads taking blocks
+// of 256 slots as they become free. Each particle's sums run in four lanes (neighbour q of its
+// kept neighbours into lane q mod 4, then (L0 + L1) + (L2 + L3); sph/pair_lanes.inc), compiled
+// for SSE2 and, chosen at run time, AVX2, which give the same bits. So results are bitwise
+// identical for any thread count, schedule and processor. The state vector's order never
+// changes.
 // Nothing edits positions or velocities outside the right-hand side: boundaries are forces, and
 // there is no velocity clamping.
 //
@@ -243,6 +246,11 @@ class SphFluid final : public MechanicalSystem {
   // built since construction (also counted in counters().neighbour_builds).
   double neighbour_skin() const { return skin_; }
   long neighbour_list_builds() const { return list_builds_; }
+  // Whether the pair loops run their AVX2 build (x86-64 processors with AVX2, in a build without
+  // -mavx2, which compiles them for AVX2 throughout). allow_avx2(false) makes every SphFluid of
+  // the process use the portable build, which gives the same bits (tests compare the two).
+  bool uses_avx2() const;
+  static void allow_avx2(bool yes);
   // ω_max of the pressure waves on the uniform lattice at rest (see the header comment).
   double acoustic_rate() const { return acoustic_rate_; }
   double max_density_error(CVecRef y) const;  // max_i |ρ_i/ρ0 - 1| (free surfaces included)
@@ -276,8 +284,10 @@ class SphFluid final : public MechanicalSystem {
   void update_list(const double* x) const;  // rebuilds the Verlet list when it is stale
   template <int D>
   void build_list(const double* x) const;
-  // The threads' share [first, last) of the slots: equal numbers of candidates.
-  std::pair<std::size_t, std::size_t> thread_range() const;
+  // The pair passes' blocks of slots (sph_fluid.cpp, kSlotBlock): their number, and block b's
+  // slots [first, last).
+  Index slot_blocks() const;
+  std::pair<std::size_t, std::size_t> slot_block(Index block) const;
   template <int D>
   const sph::NeighbourGrid<D>& fluid_grid() const;
   template <int D>
@@ -302,14 +312,16 @@ class SphFluid final : public MechanicalSystem {
   mutable std::vector<double> rho_, p_;  // ρ and p by particle index (observables)
   // The same in cell order (slot k = particle order()[k]) with p/ρ², 1/ρ, masses, velocities.
   mutable std::vector<double> srho_, sp_, spr2_, sinv_rho_, sm_, sv_;
+  mutable std::vector<double> spair_;  // the force pass's pair sums by slot (D each)
   // Neighbours within h of each slot from the density pass, in its candidates' order: fluid
-  // slots (self included) in [k·cand_capacity_, k·cand_capacity_ + nb_count_k) of the index and
-  // distance arrays, then boundary slots in the next nb_bcount_k entries.
+  // slots (self included) in [k·cand_capacity_, k·cand_capacity_ + nb_count_k) of nb_index_,
+  // then boundary slots in the next nb_bcount_k entries (the force pass recomputes r from the
+  // positions: the same bits, and less memory traffic than storing it).
   mutable std::vector<std::size_t> nb_count_, nb_bcount_;  // fluid, then boundary neighbours
   // The Verlet list: positions at its build (by particle index), slot order (slot k holds
   // particle list_order_[k]), current positions in slot order, and per slot its candidates in
   // [k·cand_capacity_, ... + cand_count_k) (fluid slots, by particle index) followed by
-  // cand_bcount_k boundary slots (ascending); cand_prefix_ = running total of both (n + 1).
+  // cand_bcount_k boundary slots (ascending).
   double skin_ = 0.0;
   mutable long list_builds_ = 0;
   mutable std::vector<double> list_x_, spos_;
@@ -318,10 +330,9 @@ class SphFluid final : public MechanicalSystem {
   mutable std::size_t cand_capacity_ = 64;
   mutable std::vector<std::uint32_t> cand_;
   mutable std::vector<std::uint32_t> cand_count_, cand_bcount_;
-  mutable std::vector<std::size_t> cand_prefix_;
   std::vector<double> sbvol_;  // boundary volumes in boundary-grid slot order
   mutable std::vector<std::uint32_t> nb_index_;
-  mutable std::vector<double> nb_dist_;
+  mutable std::vector<double> scratch_;  // the density pass's rows of r², one per thread
   mutable sph::NeighbourGrid<2> grid2_, bgrid2_;
   mutable sph::NeighbourGrid<3> grid3_, bgrid3_;
 };

@@ -172,11 +172,12 @@ TEST(SphNeighbours, ListRhsMatchesBruteForceAlsoAfterMoves) {
   }
 }
 
-// The pair passes (sph_fluid.cpp) run over the reused neighbour list on cell-sorted copies of the
-// particle fields; a change that evaluates several pairs per SIMD lane must keep each particle's
-// additions in neighbour order. Their result is the one-pair-at-a-time loop written out here, bit
-// for bit: the neighbours in the list's order (fluid ones by ascending particle index, as
-// the list sorts them), each term with the model's operations in the model's order (the header's
+// The pair passes (sph/pair_lanes.inc) run over the reused neighbour list on cell-sorted copies of
+// the particle fields, four neighbours per SIMD vector. Their result is the one-pair-at-a-time
+// loop written out here, bit for bit: the neighbours within h in the list's order (fluid ones by
+// ascending particle index, as the list sorts them), the q-th of them adding to lane q mod 4 and
+// a particle's sum (L0 + L1) + (L2 + L3) (the order pair_lanes.inc documents), each term with the
+// model's operations in the model's order (the header's
 // equations for the Wendland C2 kernels, the linear EOS through pressure(), Monaghan's and
 // Müller's viscosities, penalty walls). Scenes without boundary particles, whose order is the
 // boundary grid's.
@@ -208,13 +209,15 @@ Vec one_pair_at_a_time(const SphFluid& f, CVecRef y, Vec& rho) {
   rho.resize(n);
   Vec p(n), pr2(n), inv_rho(n);
   for (Index i = 0; i < n; ++i) {
-    double sum = 0.0;
+    std::array<double, 4> lane{};  // kept neighbour q adds to lane q mod 4
+    std::size_t q = 0;
     for (Index j = 0; j < n; ++j) {
       const double r2 = r2_of(i, j);
       if (r2 < h2)
-        sum +=
+        lane[q++ % 4] +=
             m[static_cast<std::size_t>(j)] * wd.w_inside_as<KernelType::wendland_c2>(std::sqrt(r2));
     }
+    const double sum = (lane[0] + lane[1]) + (lane[2] + lane[3]);
     rho[i] = sum;
     p[i] = f.pressure(sum);
     pr2[i] = p[i] / (sum * sum);
@@ -222,12 +225,13 @@ Vec one_pair_at_a_time(const SphFluid& f, CVecRef y, Vec& rho) {
   }
   Vec a(f.dofs());
   for (Index i = 0; i < n; ++i) {
-    std::array<double, 3> acc{};
-    for (int d = 0; d < dim; ++d)
-      acc[static_cast<std::size_t>(d)] = o.gravity[static_cast<std::size_t>(d)];
+    std::array<std::array<double, 3>, 4> lane{};  // kept neighbour q: lane q mod 4
+    std::size_t q = 0;
     for (Index j = 0; j < n; ++j) {
       const double r2 = r2_of(i, j), r = std::sqrt(r2);
-      if (!(r2 < h2) || r == 0.0) continue;
+      if (!(r2 < h2)) continue;
+      std::array<double, 3>& acc = lane[q++ % 4];
+      if (r == 0.0) continue;  // itself: counted, adds nothing
       const double mj = m[static_cast<std::size_t>(j)];
       std::array<double, 3> dx{};
       for (int d = 0; d < dim; ++d)
@@ -250,6 +254,9 @@ Vec one_pair_at_a_time(const SphFluid& f, CVecRef y, Vec& rho) {
           acc[static_cast<std::size_t>(d)] += cv * (v[dim * j + d] - v[dim * i + d]);
       }
     }
+    std::array<double, 3> acc{};
+    for (std::size_t d = 0; d < static_cast<std::size_t>(dim); ++d)
+      acc[d] = o.gravity[d] + ((lane[0][d] + lane[1][d]) + (lane[2][d] + lane[3][d]));
     if (o.boundary == SphBoundary::penalty) {
       for (const auto& wall : f.scene().walls) {
         double sd = -wall.offset;
@@ -292,6 +299,54 @@ TEST(SphNeighbours, PairPassesAreTheOnePairAtATimeLoopBitForBit) {
       ASSERT_GT(ref.cwiseAbs().maxCoeff(), 0.0);
       EXPECT_TRUE(a == ref) << "max |diff| " << (a - ref).cwiseAbs().maxCoeff();
       EXPECT_TRUE(f.densities(y.head(f.dofs())) == rho);
+    }
+  }
+}
+
+// The pair loops' AVX2 build (chosen at run time on processors that have it) and their portable
+// build give the same bits: pair_lanes.inc is one source whose lanes do the same operations in
+// the same order in both. Scenes with boundary particles (their separate loop), Müller's
+// viscosity with the symmetric form, and kernels evaluated lane by lane (spiky gradient, cubic
+// spline density), each at a moved state and on both parts of the split.
+TEST(SphNeighbours, Avx2AndPortablePairLoopsGiveTheSameBits) {
+  struct Case {
+    const char* name;
+    std::vector<std::string> params;
+  };
+  const std::vector<Case> cases = {
+      {"sph_dam_break_3d", {"n=6", "alpha=0.5", "split=viscosity"}},
+      {"sph_dam_break_2d", {"n=10", "viscosity=muller", "mu=0.1", "form=symmetric"}},
+      {"sph_tank_2d",
+       {"n=8", "width=0.1", "gradient_kernel=spiky", "density_kernel=cubic_spline"}}};
+  auto sys0 = model(cases[0].name, cases[0].params);
+  if (!fluid(*sys0).uses_avx2()) GTEST_SKIP() << "no AVX2 build of the pair loops runs here";
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    auto sys = model(c.name, c.params);
+    const SphFluid& f = fluid(*sys);
+    const Vec y = moved(f, f.initial_state(), 0.2 * f.options().spacing, 7);
+    const auto parts = [&] {
+      std::vector<Vec> out{acceleration(f, y)};
+      if (f.has_imex_split()) {
+        Vec ye(y.size()), yi(y.size());
+        f.rhs_explicit_part(0.0, y, ye);
+        f.rhs_implicit_part(0.0, y, yi);
+        out.push_back(ye);
+        out.push_back(yi);
+      }
+      return out;
+    };
+    ASSERT_TRUE(f.uses_avx2());
+    const std::vector<Vec> avx2 = parts();
+    SphFluid::allow_avx2(false);
+    EXPECT_FALSE(f.uses_avx2());
+    const std::vector<Vec> portable = parts();
+    SphFluid::allow_avx2(true);
+    ASSERT_EQ(avx2.size(), portable.size());
+    for (std::size_t k = 0; k < avx2.size(); ++k) {
+      ASSERT_GT(avx2[k].cwiseAbs().maxCoeff(), 0.0);
+      EXPECT_TRUE(avx2[k] == portable[k])
+          << "part " << k << ": max |diff| " << (avx2[k] - portable[k]).cwiseAbs().maxCoeff();
     }
   }
 }
