@@ -383,9 +383,9 @@ void SphFluid::build_list(const double* x) const {
 }
 
 // The pair passes hand out slots in blocks of this many, one block at a time to whichever thread
-// is free (the two vCPUs of the development machine differ by 1.4x in speed, so equal static
-// shares wait for the slower one). A particle's sums do not depend on the thread that computes
-// them, so the results are the same for any thread count and any schedule.
+// is free (the two vCPUs of the development machine at times differed by 1.4x in speed: equal
+// static shares wait for the slower one). A particle's sums do not depend on the thread that
+// computes them, so the results are the same for any thread count and any schedule.
 constexpr Index kSlotBlock = 256;
 
 Index SphFluid::slot_blocks() const { return (n_ + kSlotBlock - 1) / kSlotBlock; }
