@@ -28,10 +28,13 @@ namespace stiffbench {
 
 // The pair loops' arguments (pair_lanes.inc): the slot-ordered fields and the neighbour rows.
 namespace sph_lanes {
+// The fields of a fluid slot's record (SphFluid::SlotRecord): position (D), mass, velocity (D),
+// density.
+constexpr int kRecLen = 8, kRecX = 0, kRecM = 3, kRecV = 4, kRecRho = 7;
+
 struct DensityArgs {
-  const double* spos;   // fluid positions by slot (D each)
+  const double* rec;    // fluid records by slot (position and mass read)
   const double* bx;     // boundary positions by boundary slot
-  const double* sm;     // fluid masses by slot
   const double* sbvol;  // boundary volumes by boundary slot
   const std::uint32_t* cand;
   const std::uint32_t* cand_count;
@@ -46,7 +49,8 @@ struct DensityArgs {
 };
 
 struct ForceArgs {
-  const double *sx, *sv, *sm, *srho, *sp, *spr2, *sinv_rho, *bx, *sbvol;
+  const double* rec;  // fluid records by slot
+  const double *sp, *spr2, *sinv_rho, *bx, *sbvol;
   const std::uint32_t* nb_index;
   const std::size_t *nb_count, *nb_bcount;
   double* spair;  // out: the pair sums by slot (D each)
@@ -64,8 +68,7 @@ struct ForceArgs {
 #define STIFFBENCH_LANES_AVX2 0
 #endif
 namespace sph_lanes_portable {
-using sph_lanes::DensityArgs;
-using sph_lanes::ForceArgs;
+using namespace sph_lanes;
 #include "models/sph/pair_lanes.inc"
 }  // namespace sph_lanes_portable
 #undef STIFFBENCH_LANES_AVX2
@@ -81,8 +84,7 @@ using sph_lanes::ForceArgs;
 #pragma GCC target("avx2")
 #define STIFFBENCH_LANES_AVX2 1
 namespace sph_lanes_avx2 {
-using sph_lanes::DensityArgs;
-using sph_lanes::ForceArgs;
+using namespace sph_lanes;
 #include "models/sph/pair_lanes.inc"
 }  // namespace sph_lanes_avx2
 #undef STIFFBENCH_LANES_AVX2
@@ -460,17 +462,16 @@ void SphFluid::density_pass(const double* x) const {
   const std::size_t n = static_cast<std::size_t>(n_);
   rho_.resize(n);
   p_.resize(n);
-  sm_.resize(n);
   srho_.resize(n);
   sp_.resize(n);
   spr2_.resize(n);
   sinv_rho_.resize(n);
   nb_count_.resize(n);
   nb_bcount_.resize(n);
-  spos_.resize(n * D);
-  const sph_lanes::DensityArgs args{spos_.data(),
+  rec_.resize(n);
+  double* rec = rec_.data()->f;
+  const sph_lanes::DensityArgs args{rec,
                                     boundary_grid<D>().positions(),
-                                    sm_.data(),
                                     sbvol_.data(),
                                     cand_.data(),
                                     cand_count_.data(),
@@ -492,8 +493,9 @@ void SphFluid::density_pass(const double* x) const {
 #pragma omp for schedule(static)
     for (Index s = 0; s < n_; ++s) {
       const std::size_t k = static_cast<std::size_t>(s), i = static_cast<std::size_t>(order[k]);
-      for (int d = 0; d < D; ++d) spos_[D * k + static_cast<std::size_t>(d)] = x[D * i + d];
-      sm_[k] = m_[i];
+      double* r = rec + sph_lanes::kRecLen * k;
+      for (int d = 0; d < D; ++d) r[sph_lanes::kRecX + d] = x[D * i + d];
+      r[sph_lanes::kRecM] = m_[i];
     }
     const std::size_t t = parallel_ ? static_cast<std::size_t>(omp_get_thread_num()) : 0;
     double* scratch = scratch_.data() + t * (cand_capacity_ + 4);
@@ -525,12 +527,9 @@ void SphFluid::force_pass(const double* v, double* a) const {
   const std::size_t n = static_cast<std::size_t>(n_);
   const bool penalty = opt_.boundary == SphBoundary::penalty;
   const double d0 = wall_range(), k_wall = wall_strength();
-  sv_.resize(n * D);
   spair_.resize(n * D);
-  const sph_lanes::ForceArgs args{spos_.data(),
-                                  sv_.data(),
-                                  sm_.data(),
-                                  srho_.data(),
+  double* rec = rec_.data()->f;  // (sized and half filled by density_pass)
+  const sph_lanes::ForceArgs args{rec,
                                   sp_.data(),
                                   spr2_.data(),
                                   sinv_rho_.data(),
@@ -555,16 +554,18 @@ void SphFluid::force_pass(const double* v, double* a) const {
 #pragma omp parallel if (parallel_)
   {
 #pragma omp for schedule(static)
-    for (Index s = 0; s < n_; ++s)
-      for (int d = 0; d < D; ++d)
-        sv_[D * static_cast<std::size_t>(s) + static_cast<std::size_t>(d)] =
-            v[D * order[static_cast<std::size_t>(s)] + static_cast<Index>(d)];
+    for (Index s = 0; s < n_; ++s) {
+      const std::size_t k = static_cast<std::size_t>(s);
+      double* r = rec + sph_lanes::kRecLen * k;
+      for (int d = 0; d < D; ++d) r[sph_lanes::kRecV + d] = v[D * order[k] + d];
+      r[sph_lanes::kRecRho] = srho_[k];
+    }
 #pragma omp for schedule(dynamic, 1)
     for (Index block = 0; block < slot_blocks(); ++block) {
       const auto [first, last] = slot_block(block);
       force_range<D, KG, with_explicit, with_implicit>(args, first, last, avx2);
       for (std::size_t k = first; k < last; ++k) {
-        const double* xi = spos_.data() + D * k;
+        const double* xi = rec + sph_lanes::kRecLen * k + sph_lanes::kRecX;
         std::array<double, D> acc;
         for (int d = 0; d < D; ++d)
           acc[d] = (with_explicit ? opt_.gravity[static_cast<std::size_t>(d)] : 0.0) +

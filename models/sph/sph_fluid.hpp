@@ -311,7 +311,13 @@ class SphFluid final : public MechanicalSystem {
   // Scratch of one evaluation (the right-hand side allocates nothing after the first call).
   mutable std::vector<double> rho_, p_;  // ρ and p by particle index (observables)
   // The same in cell order (slot k = particle order()[k]) with p/ρ², 1/ρ, masses, velocities.
-  mutable std::vector<double> srho_, sp_, spr2_, sinv_rho_, sm_, sv_;
+  mutable std::vector<double> srho_, sp_, spr2_, sinv_rho_;
+  // Per slot one cache line: position (dim), mass, velocity (dim), density (pair_lanes.inc's
+  // kRec* offsets); the density pass writes position and mass, the force pass velocity and ρ.
+  struct alignas(64) SlotRecord {
+    double f[8];
+  };
+  mutable std::vector<SlotRecord> rec_;
   mutable std::vector<double> spair_;  // the force pass's pair sums by slot (D each)
   // Neighbours within h of each slot from the density pass, in its candidates' order: fluid
   // slots (self included) in [k·cand_capacity_, k·cand_capacity_ + nb_count_k) of nb_index_,
@@ -324,7 +330,7 @@ class SphFluid final : public MechanicalSystem {
   // cand_bcount_k boundary slots (ascending).
   double skin_ = 0.0;
   mutable long list_builds_ = 0;
-  mutable std::vector<double> list_x_, spos_;
+  mutable std::vector<double> list_x_;
   mutable std::vector<Index> list_order_;
   mutable std::vector<std::uint32_t> slot_of_;  // particle index -> slot
   mutable std::size_t cand_capacity_ = 64;
