@@ -483,7 +483,7 @@ void spring_range_portable(const SpringArgs& s, Index e0, Index e1, const double
 #define STIFFBENCH_SPRING_AVX2_DISPATCH 1
 // The same kernel compiled for AVX2 (4 springs per vector; GCC loads the end points lane by
 // lane: its vgatherdpd version measured 25% slower on the project's AMD EPYC), chosen at run
-// time when the processor has it. Without -ffp-contract (ISO C++ mode: off) the compiler fuses no
+// time when the processor has it. With -ffp-contract=off (CMakeLists.txt) the compiler fuses no
 // multiply-add, and sqrt and division are correctly rounded, so both versions give the same bits.
 template <int D>
 __attribute__((target("avx2"))) void spring_range_avx2(const SpringArgs& s, Index e0, Index e1,

@@ -82,7 +82,7 @@
 // chosen at run time when the processor has it, the default build stays portable), then the
 // additions in spring order, f_i of consecutive springs with the same first end kept in
 // registers. Neither changes the order of any point's additions, and without contracted
-// multiply-adds (ISO C++ mode) both builds give the same bits. Networks with at least
+// multiply-adds (-ffp-contract=off) both builds give the same bits. Networks with at least
 // `parallel_threshold` points split their points into kRhsPartitions contiguous index ranges.
 // A parallel region clears the points of partitions q and q + 1 and adds the springs between them
 // for even q (one thread per pair: their points are disjoint), then for odd q, then any other cross
