@@ -310,7 +310,7 @@ class SphFluid final : public MechanicalSystem {
 
   // Scratch of one evaluation (the right-hand side allocates nothing after the first call).
   mutable std::vector<double> rho_, p_;  // ρ and p by particle index (observables)
-  // The same in cell order (slot k = particle order()[k]) with p/ρ², 1/ρ, masses, velocities.
+  // ρ, p, p/ρ² and 1/ρ in cell order (slot k = particle order()[k]).
   mutable std::vector<double> srho_, sp_, spr2_, sinv_rho_;
   // Per slot one cache line: position (dim), mass, velocity (dim), density (pair_lanes.inc's
   // kRec* offsets); the density pass writes position and mass, the force pass velocity and ρ.
