@@ -914,6 +914,45 @@ std::pair<double, double> slope_and_se(const FitLevels& lv, std::size_t a, std::
   return {slope, std::sqrt(ssr / (m - 2) / sxx)};
 }
 
+// The last three pairwise orders up to level `last` (consecutive levels above the floors, two
+// when only two exist), finest first.
+std::vector<double> last_pair_orders(const FitLevels& lv, std::size_t last) {
+  std::vector<double> q;
+  for (std::size_t b = last; b >= 1 && q.size() < 3 && lv.usable[b] && lv.usable[b - 1]; --b)
+    q.push_back(lv.pair_order(b));
+  return q;
+}
+
+// Where the last three pairwise orders q1, q2, q3 (coarse to fine; `q` holds them finest first)
+// are heading when their steps d1 = q2 - q1, d2 = q3 - q2 have one sign and shrink by a ratio
+// r = d2/d1 ≤ 0.75: Aitken's extrapolation q3 + d2 r/(1 - r). Nothing otherwise (nearer r = 1
+// the extrapolation is too sensitive to mean anything).
+std::optional<double> order_limit(const std::vector<double>& q) {
+  if (q.size() < 3) return std::nullopt;
+  const double d2 = q[0] - q[1], d1 = q[1] - q[2];
+  if (!(d1 * d2 > 0 && std::abs(d2) <= 0.75 * std::abs(d1))) return std::nullopt;
+  const double r = d2 / d1;
+  return q[0] + d2 * r / (1 - r);
+}
+
+// Whether the pairwise orders up to level `last` are still moving towards the expected slope:
+// the last three pairs (last_pair_orders) each step towards it, by more than kOrderTolerance in
+// all, and, when the steps shrink enough for order_limit, its extrapolated limit is within
+// kOrderReductionSpread of it. A pre-asymptotic approach (e.g. backward Euler on a stiff cloth:
+// 0.37 0.62 0.79 0.89, whose limit is 1.03) then is not read as a steady reduced order, while
+// orders converging to another value (a true reduction) or wandering (noise) are.
+bool orders_approach(const FitLevels& lv, std::size_t last, double expected) {
+  const std::vector<double> q = last_pair_orders(lv, last);
+  if (q.size() < 2) return false;
+  const double toward = expected - q[0];  // the direction still to go
+  const double d2 = q[0] - q[1];
+  const double d1 = q.size() == 3 ? q[1] - q[2] : d2;
+  if (!(d1 * toward > 0 && d2 * toward > 0)) return false;
+  if (std::abs(q.back() - q[0]) <= kOrderTolerance) return false;
+  const auto limit = order_limit(q);
+  return !limit || std::abs(*limit - expected) <= kOrderReductionSpread;
+}
+
 // Why a fit over the window [a, a + len) is more than kOrderTolerance from the expected slope,
 // read from the pairwise orders.
 std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, double slope,
@@ -935,16 +974,27 @@ std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, 
     w_lo = std::min(w_lo, lv.pair_order(b));
     w_hi = std::max(w_hi, lv.pair_order(b));
   }
+  const bool approaching = orders_approach(lv, a + len - 1, expected);
+  const auto limit = order_limit(last_pair_orders(lv, a + len - 1));
+  const std::string levelling =
+      limit ? " (levelling off near " + format_fixed(*limit, 2) + ")" : std::string();
   std::string reason;
+  // Pairwise orders still moving towards the classical order at the window's finest level
+  // (orders_approach): pre-asymptotic, whatever the window's slope; not an order reduction.
+  if (approaching)
+    reason = "pre-asymptotic: the pairwise orders are still moving towards " +
+             std::to_string(expected_slope) + " at the finest level above the floors (" + all +
+             "), so " + format_fixed(slope, 2) +
+             " is not the method's order on this problem: add --levels or use a smaller --h";
   // Below the classical order by more than kOrderReductionSpread over a window whose pairwise
   // orders agree (within kOrderAgreement, as every fit window): the method's reduced order on
   // this problem.
-  if (slope < expected - kOrderReductionSpread && !coarser_near)
+  else if (slope < expected - kOrderReductionSpread && !coarser_near)
     reason = "order reduction to " + format_fixed(slope, 2) + " (classical " +
              std::to_string(expected_slope) +
              "): a steady reduced order on this problem, as on stiff problems where the stage "
              "order or the lack of stiff accuracy sets it; pairwise orders " +
-             all;
+             all + levelling;
   else if (coarser_near)
     reason = "the error stops following h^" + std::to_string(expected_slope) +
              " below h = " + format_short(lv.rs[a]->h) +
@@ -1032,8 +1082,31 @@ OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& i
                    ") are above the floors but do not follow it (pairwise orders " + finer +
                    "): a solver tolerance, order reduction or the reference sets their error, "
                    "or they are still pre-asymptotic";
-    if (std::abs(slope - fit.expected_slope) > kOrderTolerance)
-      fit.reason = off_fit_reason(lv, best_a, best_len, slope, fit.expected_slope);
+    if (std::abs(slope - fit.expected_slope) > kOrderTolerance) {
+      // The finest pair above the floors within kOrderTolerance of the classical order, beyond
+      // a window that is not: the window is the pre-asymptotic range (e.g. symplectic Euler on
+      // the cloth: 2.16 2.04 2.01 2.00 1.99, then 1.00 where the first-order term takes over in
+      // the max-norm), and the asymptotic order is the classical one. Otherwise the window's
+      // reason, followed by the finer levels' note.
+      double q_finest = std::numeric_limits<double>::quiet_NaN();
+      std::size_t b_finest = 0;
+      for (std::size_t b = best_a + best_len; b < n; ++b)
+        if (lv.usable[b] && lv.usable[b - 1]) {
+          q_finest = lv.pair_order(b);
+          b_finest = b;
+        }
+      if (!finer.empty() && std::abs(q_finest - fit.expected_slope) <= kOrderTolerance)
+        fit.reason = "pre-asymptotic window: the finest pair above the floors (h = " +
+                     format_short(lv.rs[b_finest - 1]->h) + " to " +
+                     format_short(lv.rs[b_finest]->h) + ") gives " + format_fixed(q_finest, 2) +
+                     ", the classical order, after " + format_fixed(slope, 2) +
+                     " over the window (pairwise orders " + lv.pair_orders(1, n) +
+                     "): add levels below h = " + format_short(lv.rs[b_finest]->h) +
+                     " to fit the asymptotic range";
+      else
+        fit.reason = off_fit_reason(lv, best_a, best_len, slope, fit.expected_slope) +
+                     (finer.empty() ? "" : "; " + fit.reason);
+    }
     return fit;
   }
   const std::string k = std::to_string(n_usable);

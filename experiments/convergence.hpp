@@ -50,7 +50,10 @@
 // window, with its standard error; with fewer than three levels in the window there is no fit
 // and the reason says what to change. A fit more than kOrderTolerance from the expected slope, or
 // with finer levels above the floors that leave the window, gets a reason read from the pairwise
-// orders. For a local error the fitted slope is order + 1.
+// orders (docs/commands/convergence.md lists the cases): orders still moving towards the expected
+// slope at the window's finest level, or a finest pair at it beyond a window that is not, are
+// pre-asymptotic, never an order reduction or a higher order. For a local error the fitted slope
+// is order + 1.
 //
 // Ladders (--ladder): `common` runs every integrator on h_k = h/refine^k. `per-method` gives
 // each integrator its own coarsest step h0 (then h0/refine^k, same levels and refine), found by

@@ -3,6 +3,7 @@
 // per-method ladder's probe.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -108,6 +109,69 @@ TEST(OrderFit, AHigherOrderThanClassicalIsNamed) {
   EXPECT_EQ(f.reason.rfind("a higher order than the classical 1: " + format_fixed(*f.fitted, 2), 0),
             0u)
       << f.reason;
+}
+
+// A saturated error that becomes first order only as h falls below h0, e = h h0 / (h + h0), with
+// h0 = 0.002 (the shape of backward Euler on a stiff cloth, whose large steps damp the motion
+// away). Theory: the pairwise orders are 1 + log2((h/2 + h0)/(h + h0)), rising monotonically
+// from 0.03 at h = 0.1 to 0.88 at h = 3.9e-4, i.e. towards 1. The fit window (the longest run
+// agreeing within 0.2) is the nearly flat coarse end, far below 1; the reason must call this
+// pre-asymptotic, not a steady order reduction (it did until stop 45).
+TEST(OrderFit, AnApproachTowardsTheClassicalOrderIsNotAnOrderReduction) {
+  const double h0 = 0.002;
+  std::vector<double> e;
+  for (int k = 0; k < 9; ++k) {
+    const double h = 0.1 / std::pow(2.0, k);
+    e.push_back(h * h0 / (h + h0));
+  }
+  std::vector<ConvergenceRow> rows = synthetic(e, 1e-16);
+  for (auto& r : rows) r.order = 1;
+  const OrderFit f = fit_order(rows, "m", false);
+  ASSERT_TRUE(f.fitted.has_value()) << f.reason;
+  EXPECT_LT(*f.fitted, 1.0 - kOrderReductionSpread);  // the window alone would look reduced
+  EXPECT_EQ(f.reason.rfind("pre-asymptotic: the pairwise orders are still moving towards 1", 0), 0u)
+      << f.reason;
+  EXPECT_EQ(f.reason.find("order reduction to"), std::string::npos) << f.reason;
+}
+
+// The contrast: e = h^0.5 (1 + 2h), a true reduced order 1/2 for a first-order method. Theory:
+// pairwise orders 0.5 + log2((1 + 2h)/(1 + h)), 0.63 at h = 0.1 falling towards 0.5, away from
+// 1; the reason names the order reduction to the fitted value.
+TEST(OrderFit, OrdersSettlingBelowTheClassicalOneAreAnOrderReduction) {
+  std::vector<double> e;
+  for (int k = 0; k < 6; ++k) {
+    const double h = 0.1 / std::pow(2.0, k);
+    e.push_back(std::sqrt(h) * (1 + 2 * h));
+  }
+  std::vector<ConvergenceRow> rows = synthetic(e, 1e-16);
+  for (auto& r : rows) r.order = 1;
+  const OrderFit f = fit_order(rows, "m", false);
+  ASSERT_TRUE(f.fitted.has_value()) << f.reason;
+  EXPECT_NEAR(*f.fitted, 0.55, 0.06);
+  EXPECT_EQ(f.reason.rfind("order reduction to " + format_fixed(*f.fitted, 2), 0), 0u) << f.reason;
+}
+
+// The max-norm of an O(h²) component with a large constant and an O(h) one with a small
+// constant, e = max(800 h², 0.25 h), for a first-order method (symplectic Euler on the cloth
+// shows this). Theory: the pairwise orders are exactly 2 down to h = 3.9e-4, then log2(2.5) =
+// 1.32 across the crossover h = 3.125e-4, then exactly 1. The window is the order-2 run, but the
+// finest pair gives the classical order: the reason must say the window is pre-asymptotic, not
+// that the method is more accurate than its order (it did until stop 45).
+TEST(OrderFit, TheClassicalOrderAtTheFinestPairMakesTheWindowPreAsymptotic) {
+  std::vector<double> e;
+  for (int k = 0; k < 11; ++k) {
+    const double h = 0.1 / std::pow(2.0, k);
+    e.push_back(std::max(800 * h * h, 0.25 * h));
+  }
+  std::vector<ConvergenceRow> rows = synthetic(e, 1e-16);
+  for (auto& r : rows) r.order = 1;
+  const OrderFit f = fit_order(rows, "m", false);
+  ASSERT_TRUE(f.fitted.has_value()) << f.reason;
+  EXPECT_NEAR(*f.fitted, 2.0, 1e-9);
+  EXPECT_EQ(f.levels_used, 9);
+  EXPECT_EQ(f.reason.rfind("pre-asymptotic window: the finest pair above the floors", 0), 0u)
+      << f.reason;
+  EXPECT_NE(f.reason.find("gives 1.00, the classical order"), std::string::npos) << f.reason;
 }
 
 // Fewer than three levels above the floor: no fit, and the reason says what to change.
