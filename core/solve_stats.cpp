@@ -30,11 +30,13 @@ std::vector<std::string> SolveStats::counter_names() {
           "fi_evals"};
 }
 
+std::string SolveStats::count_text(long v) { return v < 0 ? std::string() : std::to_string(v); }
+
 std::vector<std::string> SolveStats::counter_values() const {
-  return {std::to_string(newton_iters),
+  return {count_text(newton_iters),
           std::to_string(newton_conv_failures),
           std::to_string(error_test_failures),
-          std::to_string(linear_setups),
+          count_text(linear_setups),
           std::to_string(linear_iters),
           std::to_string(fe_evals),
           std::to_string(fi_evals)};
@@ -66,9 +68,9 @@ std::vector<std::string> SolveStats::field_values() const {
           std::to_string(fe_evals),
           std::to_string(fi_evals),
           std::to_string(jac_evals),
-          std::to_string(linear_setups),
-          std::to_string(lin_solves),
-          std::to_string(newton_iters),
+          count_text(linear_setups),
+          count_text(lin_solves),
+          count_text(newton_iters),
           std::to_string(newton_conv_failures),
           std::to_string(linear_iters),
           wall.str()};
@@ -82,7 +84,8 @@ void print_stats_table(std::ostream& os, const SolveStats& s) {
   for (const auto& n : names) w = std::max(w, n.size() + 2);
   const auto width = static_cast<int>(w);
   for (std::size_t i = 0; i < names.size(); ++i)
-    os << "  " << std::left << std::setw(width) << names[i] << std::right << values[i] << "\n";
+    os << "  " << std::left << std::setw(width) << names[i] << std::right
+       << (values[i].empty() ? "not reported" : values[i]) << "\n";
   if (s.library_f_evals >= 0)
     os << "  " << std::left << std::setw(width) << "library_f_evals" << std::right
        << s.library_f_evals << "\n";

@@ -19,6 +19,9 @@ struct SolveStats {
   long error_test_failures = 0;  // rejected steps: the error test failed (adaptive runs)
   long f_evals = 0;              // counted at the system boundary (rhs and acceleration calls)
   long jac_evals = 0;  // analytic Jacobian evaluations (finite-difference ones count as f_evals)
+  // linear_setups, lin_solves and newton_iters are kNotReported (-1) for a library that does
+  // the work but keeps no count the testbed can read (GSL's implicit steppers): the CSVs leave
+  // such a value empty, the tables say "not reported", never 0.
   long linear_setups = 0;  // matrix assemblies / factorizations (Krylov: preconditioner set-ups)
   long lin_solves = 0;
   long newton_iters = 0;
@@ -29,6 +32,10 @@ struct SolveStats {
   // multirate methods on a split model); each is also one of f_evals. 0 for the other methods.
   long fe_evals = 0;
   long fi_evals = 0;
+  static constexpr long kNotReported = -1;
+  // A counter's text: its value, or "" when it is kNotReported (any negative value).
+  static std::string count_text(long v);
+
   // The library's own count of f evaluations (references only; -1 when not reported). It can
   // differ from f_evals, which the testbed counts at the system boundary: see the reference
   // integrators' headers for why.

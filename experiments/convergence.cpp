@@ -1162,7 +1162,7 @@ Table convergence_table(const ConvergenceResult& res) {
                                     optional_full(r.observed_order),
                                     std::to_string(r.stats.f_evals),
                                     std::to_string(r.stats.jac_evals),
-                                    std::to_string(r.stats.lin_solves),
+                                    SolveStats::count_text(r.stats.lin_solves),
                                     format_full(r.stats.wall_s),
                                     r.status_text()};
     add_trailing_values(row, r);
@@ -1186,7 +1186,7 @@ Table local_error_table(const ConvergenceResult& res) {
                                     r.status_text(),
                                     std::to_string(r.stats.f_evals),
                                     std::to_string(r.stats.jac_evals),
-                                    std::to_string(r.stats.lin_solves)};
+                                    SolveStats::count_text(r.stats.lin_solves)};
     add_trailing_values(row, r);
     t.rows.push_back(std::move(row));
   }

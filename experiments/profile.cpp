@@ -301,12 +301,17 @@ CostTable cost_table(const std::vector<std::string>& problems,
     t.note.emplace_back(methods.size(), "no rows");
     std::vector<double> best_error(methods.size(), kInf);
     std::vector<std::set<std::string>> statuses(methods.size());
+    std::vector<bool> unreported(methods.size(), false);
     for (const auto& r : tab.rows) {
       const auto m = static_cast<std::size_t>(std::find(methods.begin(), methods.end(), r[ci]) -
                                               methods.begin());
       if (m == methods.size()) continue;
       if (r[cs] != "ok") {
         statuses[m].insert(r[cs].empty() ? "error" : r[cs]);
+        continue;
+      }
+      if (r[cc].empty()) {  // a library that keeps no such count (SolveStats::kNotReported)
+        unreported[m] = true;
         continue;
       }
       const double e = std::stod(r[ce]);
@@ -316,6 +321,8 @@ CostTable cost_table(const std::vector<std::string>& problems,
     for (std::size_t m = 0; m < methods.size(); ++m) {
       if (std::isfinite(t.cost[p][m]))
         t.note[p][m].clear();
+      else if (unreported[m])  // unsolved in this measure: its cost is unknown, not zero
+        t.note[p][m] = column.at(cost) + " not reported by the library";
       else if (std::isfinite(best_error[m]))
         t.note[p][m] = "best error " + format_short(best_error[m], 2);
       else if (!statuses[m].empty())

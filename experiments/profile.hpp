@@ -22,8 +22,10 @@
 // Cost of method m on problem p at accuracy τ (no interpolation): the least cost among the
 // runs of m on p with status ok and error <= τ (error: the work-precision max-norm error at
 // t_end against the exact solution or the reference); +infinity (unsolved) when there is none
-// (never reaches τ, failed, unstable, timeout). Cost measures: f_evals (the f_evals column),
-// wall (wall_s_median, seconds), linear_solves (lin_solves).
+// (never reaches τ, failed, unstable, timeout), and also when the runs' cost column is empty:
+// a library that keeps no count of it (GSL's implicit steppers and lin_solves) is not ranked on
+// a cost it does not report. Cost measures: f_evals (the f_evals column), wall (wall_s_median,
+// seconds), linear_solves (lin_solves).
 //
 // Performance profile (Dolan & Moré 2002): r_{p,m} = cost_{p,m} / min_m' cost_{p,m'} (infinite
 // when m does not solve p or no method does), ρ_m(α) = |{p : r_{p,m} <= α}| / |P|.

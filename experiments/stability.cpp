@@ -843,10 +843,16 @@ void write_stability_outputs(const std::filesystem::path& dir, const StabilitySp
     j["status"] = row.status;
     j["predicted_on"] = row.predicted_on;
     j["probes"] = row.probes;
-    if (row.counters)
-      for (std::size_t c = 0; c < SolveStats::counter_names().size(); ++c)
-        j["counters"][SolveStats::counter_names()[c]] =
-            std::stol(row.counters->counter_values()[c]);
+    if (row.counters) {
+      for (std::size_t c = 0; c < SolveStats::counter_names().size(); ++c) {
+        const std::string v = row.counters->counter_values()[c];
+        auto& slot = j["counters"][SolveStats::counter_names()[c]];
+        if (v.empty())
+          slot = nullptr;  // not reported by the library (SolveStats::kNotReported)
+        else
+          slot = std::stol(v);
+      }
+    }
     j["horizon"] = row.horizon;
     if (row.growth_per_period) {
       j["growth_per_period"] = *row.growth_per_period;

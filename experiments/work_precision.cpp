@@ -382,7 +382,7 @@ Table work_precision_table(const WorkPrecisionResult& res) {
                                     ok ? format_full(r.error) : "",
                                     std::to_string(r.stats.f_evals),
                                     std::to_string(r.stats.jac_evals),
-                                    std::to_string(r.stats.lin_solves),
+                                    SolveStats::count_text(r.stats.lin_solves),
                                     std::to_string(r.stats.steps),
                                     format_full(r.wall.median),
                                     to_string(r.stats.status),
@@ -420,7 +420,8 @@ Table work_precision_markdown_table(const WorkPrecisionResult& res) {
     std::vector<std::string> out;
     for (const auto& c : shown) {
       const std::string& v = row[col(c)];
-      out.push_back(v.empty()      ? ""
+      const bool counter = c != "integrator" && c != "setting" && c != "error" && c != "mescd";
+      out.push_back(v.empty()      ? (counter ? "not reported" : "")
                     : c == "error" ? format_short(std::stod(v))
                     : c == "mescd" ? format_fixed(std::stod(v), 2)
                                    : v);
@@ -523,14 +524,16 @@ std::string WorkPrecisionJob::report_markdown(const std::string& note) const {
       else if (!best || r.error < best->error)
         best = &r;
     }
-    summary.rows.push_back({name, std::to_string(n), best ? format_short(best->error) : "-",
-                            best ? std::to_string(best->stats.f_evals) : "-",
-                            best ? std::to_string(best->stats.newton_iters) : "-",
-                            best ? format_short(best->wall.median, 2) + " [" +
-                                       format_short(best->wall.ci_low, 2) + ", " +
-                                       format_short(best->wall.ci_high, 2) + "]"
-                                 : "-",
-                            status});
+    summary.rows.push_back(
+        {name, std::to_string(n), best ? format_short(best->error) : "-",
+         best ? std::to_string(best->stats.f_evals) : "-",
+         !best                          ? "-"
+         : best->stats.newton_iters < 0 ? "not reported"
+                                        : std::to_string(best->stats.newton_iters),
+         best ? format_short(best->wall.median, 2) + " [" + format_short(best->wall.ci_low, 2) +
+                    ", " + format_short(best->wall.ci_high, 2) + "]"
+              : "-",
+         status});
   }
   md << summary.to_markdown() << "\n";
   return md.str();

@@ -17,7 +17,11 @@
 // error_test_failures = the evolve object's count (steps computed) minus the accepted ones,
 // newton_conv_failures = its failed_steps minus those rejections (attempts whose stepper
 // failed: the implicit steppers' solves that did not converge; GSL halves h and retries).
-// GSL reports no Newton iterations, factorisations or Krylov iterations: those stay 0.
+// GSL reports no Newton iterations, factorisations or linear solves: for the steppers that
+// take a Jacobian (rk2imp, rk4imp, bsimp, msbdf) linear_setups and lin_solves, and but for the
+// linearly implicit bsimp newton_iters, are SolveStats::kNotReported (empty in the CSVs, "not
+// reported" in the tables), not 0; the explicit steppers and msadams (functional iteration)
+// make none, and Krylov iterations are 0 for all.
 #pragma once
 
 #include "core/registry_types.hpp"

@@ -155,6 +155,24 @@ TEST(Profile, CostTableFromWorkPrecisionRows) {
   EXPECT_DOUBLE_EQ(loose.cost[0][1], 50);
 }
 
+// A method whose library keeps no count of the cost measure (an empty lin_solves field: GSL's
+// implicit steppers) is unsolved in that measure with the reason noted, not the cheapest at 0;
+// in f_evals, which it reports, it is ranked as usual.
+TEST(Profile, AnUnreportedCostIsNotAZeroCost) {
+  Table rows{{"integrator", "setting", "error", "f_evals", "lin_solves", "wall_s_median", "status"},
+             {{"a", "rtol=1e-6", "1e-7", "300", "30", "0.9", "ok"},
+              {"g", "rtol=1e-6", "1e-7", "200", "", "0.5", "ok"}}};
+  const CostTable ls = cost_table({"p"}, {"a", "g"}, {rows}, 1e-6, "linear_solves");
+  EXPECT_DOUBLE_EQ(ls.cost[0][0], 30);
+  EXPECT_FALSE(std::isfinite(ls.cost[0][1]));
+  EXPECT_EQ(ls.note[0][1], "lin_solves not reported by the library");
+  EXPECT_DOUBLE_EQ(performance_profile(ls, 0, 1.0), 1.0);
+  EXPECT_DOUBLE_EQ(performance_profile(ls, 1, 1e9), 0.0);
+  const CostTable fe = cost_table({"p"}, {"a", "g"}, {rows}, 1e-6, "f_evals");
+  EXPECT_DOUBLE_EQ(fe.cost[0][1], 200);
+  EXPECT_TRUE(fe.note[0][1].empty());
+}
+
 TEST(Profile, ShippedSuitesShareTheirSettings) {
   for (const std::string& name : builtin_profile_suites())
     for (const bool quick : {false, true}) {

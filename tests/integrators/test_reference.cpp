@@ -377,6 +377,37 @@ TEST(ReferenceErrors, NonFiniteRightHandSideIsReported) {
   }
 }
 
+// GSL keeps no count of its factorisations, linear solves or Newton iterations. The steppers
+// that take a Jacobian do that work (GSL's sources: rk2imp, rk4imp and msbdf iterate a modified
+// Newton method, bsimp solves linear systems without iterating), so their counters must read
+// "not reported", never a 0 that a table or a linear_solves profile would take as free; the
+// explicit steppers and msadams (functional iteration) make none and report a true 0. The check
+// is a run each, so the values are what a study's CSV gets.
+TEST(ReferenceCounters, GslWorkItDoesNotCountIsNotReportedNotZero) {
+  auto sys = model("prothero_robinson", {"lambda=-1e4"});
+  for (const std::string name :
+       {"gsl_rk2imp", "gsl_rk4imp", "gsl_msbdf", "gsl_bsimp", "gsl_rkf45", "gsl_msadams"}) {
+    auto integ = make(name);
+    const RunResult r = run_adaptive(*sys, *integ, {1.0, 0});
+    ASSERT_EQ(r.stats.status, Status::ok) << name;
+    EXPECT_GT(r.stats.f_evals, 0) << name;
+    const bool jacobian = name != "gsl_rkf45" && name != "gsl_msadams";
+    const bool newton = jacobian && name != "gsl_bsimp";
+    EXPECT_EQ(r.stats.lin_solves, jacobian ? SolveStats::kNotReported : 0) << name;
+    EXPECT_EQ(r.stats.linear_setups, jacobian ? SolveStats::kNotReported : 0) << name;
+    EXPECT_EQ(r.stats.newton_iters, newton ? SolveStats::kNotReported : 0) << name;
+    EXPECT_EQ(r.stats.linear_iters, 0) << name;
+    // In the CSVs an unreported count is an empty field.
+    const auto names = SolveStats::field_names();
+    const auto values = r.stats.field_values();
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      if (names[i] == "lin_solves") {
+        EXPECT_EQ(values[i].empty(), jacobian) << name;
+      }
+    }
+  }
+}
+
 // Work-precision on an exact problem: every method's error falls as its work rises.
 TEST(WorkPrecision, ErrorFallsAsWorkRisesOnProtheroRobinson) {
   WorkPrecisionSpec spec;
