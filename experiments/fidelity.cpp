@@ -783,7 +783,7 @@ StudyKind fidelity_study_kind() {
        "per-mode runs (--model): step sizes, comma-separated (default: nu = 0.1 at the lowest "
        "and nu = 2 at the highest selected mode)"},
       {"modes", ParamType::integer, "20", "lowest modes analysed (--model)", Bounds::in(1, 4000)},
-      {"amplitude", ParamType::real, "1e-4",
+      {"amplitude", ParamType::real, "1e-7",
        "mode excitation relative to the RMS spread of the rest positions (--model)",
        Bounds::positive()},
       {"mode_steps", ParamType::integer, "400", "steps of each per-mode run (--model)",
