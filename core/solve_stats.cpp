@@ -32,6 +32,10 @@ std::vector<std::string> SolveStats::counter_names() {
 
 std::string SolveStats::count_text(long v) { return v < 0 ? std::string() : std::to_string(v); }
 
+std::string SolveStats::count_shown(const std::string& text) {
+  return text.empty() ? "not reported" : text;
+}
+
 std::vector<std::string> SolveStats::counter_values() const {
   return {count_text(newton_iters),
           std::to_string(newton_conv_failures),
@@ -85,7 +89,7 @@ void print_stats_table(std::ostream& os, const SolveStats& s) {
   const auto width = static_cast<int>(w);
   for (std::size_t i = 0; i < names.size(); ++i)
     os << "  " << std::left << std::setw(width) << names[i] << std::right
-       << (values[i].empty() ? "not reported" : values[i]) << "\n";
+       << SolveStats::count_shown(values[i]) << "\n";
   if (s.library_f_evals >= 0)
     os << "  " << std::left << std::setw(width) << "library_f_evals" << std::right
        << s.library_f_evals << "\n";

@@ -33,8 +33,10 @@ struct SolveStats {
   long fe_evals = 0;
   long fi_evals = 0;
   static constexpr long kNotReported = -1;
-  // A counter's text: its value, or "" when it is kNotReported (any negative value).
+  // A counter's text: its value, or "" when it is kNotReported (any negative value): for CSVs.
   static std::string count_text(long v);
+  // The same for tables: "not reported" in place of "".
+  static std::string count_shown(const std::string& text);
 
   // The library's own count of f evaluations (references only; -1 when not reported). It can
   // differ from f_evals, which the testbed counts at the system boundary: see the reference

@@ -313,7 +313,7 @@ Table energy_markdown_table(const EnergyResult& r) {
     for (const auto& [name, value] : run.other_max_rel_error) row.push_back(format_short(value, 2));
     row.push_back(std::to_string(run.stats.f_evals));
     const auto values = run.stats.counter_values();
-    for (std::size_t c : counters) row.push_back(values[c].empty() ? "not reported" : values[c]);
+    for (std::size_t c : counters) row.push_back(SolveStats::count_shown(values[c]));
     row.push_back(format_short(run.stats.wall_s, 2));
     t.rows.push_back(std::move(row));
   }

@@ -421,7 +421,7 @@ Table work_precision_markdown_table(const WorkPrecisionResult& res) {
     for (const auto& c : shown) {
       const std::string& v = row[col(c)];
       const bool counter = c != "integrator" && c != "setting" && c != "error" && c != "mescd";
-      out.push_back(v.empty()      ? (counter ? "not reported" : "")
+      out.push_back(v.empty()      ? (counter ? SolveStats::count_shown(v) : "")
                     : c == "error" ? format_short(std::stod(v))
                     : c == "mescd" ? format_fixed(std::stod(v), 2)
                                    : v);
@@ -527,9 +527,7 @@ std::string WorkPrecisionJob::report_markdown(const std::string& note) const {
     summary.rows.push_back(
         {name, std::to_string(n), best ? format_short(best->error) : "-",
          best ? std::to_string(best->stats.f_evals) : "-",
-         !best                          ? "-"
-         : best->stats.newton_iters < 0 ? "not reported"
-                                        : std::to_string(best->stats.newton_iters),
+         best ? SolveStats::count_shown(SolveStats::count_text(best->stats.newton_iters)) : "-",
          best ? format_short(best->wall.median, 2) + " [" + format_short(best->wall.ci_low, 2) +
                     ", " + format_short(best->wall.ci_high, 2) + "]"
               : "-",
