@@ -839,7 +839,7 @@ std::vector<ParamSpec> method_param_specs(const MethodDefinition& m) {
     case MethodKind::splitting:
       return {};
     case MethodKind::imex_ark:
-      return m.adaptive() ? esdirk_param_specs() : implicit_param_specs(true);
+      return m.adaptive() ? esdirk_param_specs(false) : implicit_param_specs(true);
   }
   return {};
 }

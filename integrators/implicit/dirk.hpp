@@ -132,8 +132,9 @@ class DirkIntegrator final : public Integrator {
 double adaptive_newton_tolerance(CVecRef y, const ControllerOptions& control);
 
 // Parameters of the ESDIRK pairs: the implicit family's (with Newton), the controller's and
-// error_filter; and the reader of the last.
-std::vector<ParamSpec> esdirk_param_specs();
+// error_filter, on by default for the ESDIRK pairs and off for the IMEX pairs (filter_by_default
+// false: imex_ark.hpp says why); and the reader of the last.
+std::vector<ParamSpec> esdirk_param_specs(bool filter_by_default = true);
 bool read_error_filter(const Params& p);
 
 class Bdf2Integrator final : public Integrator {
