@@ -26,9 +26,10 @@ void add_study_command(CLI::App& app, const StudyKind& kind) {
     cmd->get_option("--integrators")->required();
   else
     cmd->get_option("--integrators")
-        ->description(
-            "comma-separated integrator names or method-file paths (default: every integrator the "
-            "study applies to)");
+        ->description(!kind.integrators_help.empty()
+                          ? kind.integrators_help
+                          : "comma-separated integrator names or method-file paths (default: "
+                            "every integrator the study applies to)");
   if (kind.positional_integrators)
     cmd->add_option("methods", st->positional,
                     "integrator names or method-file paths, comma- or space-separated (as "

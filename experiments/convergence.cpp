@@ -935,14 +935,13 @@ std::optional<double> order_limit(const std::vector<double>& q) {
   return q[0] + d2 * r / (1 - r);
 }
 
-// Whether the pairwise orders up to level `last` are still moving towards the expected slope:
-// the last three pairs (last_pair_orders) each step towards it, by more than kOrderTolerance in
-// all, and, when the steps shrink enough for order_limit, its extrapolated limit is within
-// kOrderReductionSpread of it. A pre-asymptotic approach (e.g. backward Euler on a stiff cloth:
-// 0.37 0.62 0.79 0.89, whose limit is 1.03) then is not read as a steady reduced order, while
-// orders converging to another value (a true reduction) or wandering (noise) are.
-bool orders_approach(const FitLevels& lv, std::size_t last, double expected) {
-  const std::vector<double> q = last_pair_orders(lv, last);
+// Whether the last pairwise orders q (last_pair_orders) are still moving towards the expected
+// slope: they each step towards it, by more than kOrderTolerance in all, and, when the steps
+// shrink enough for order_limit, its extrapolated limit is within kOrderReductionSpread of it. A
+// pre-asymptotic approach (e.g. backward Euler on a stiff cloth: 0.37 0.62 0.79 0.89, whose limit
+// is 1.03) then is not read as a steady reduced order, while orders converging to another value (a
+// true reduction) or wandering (noise) are.
+bool orders_approach(const std::vector<double>& q, double expected) {
   if (q.size() < 2) return false;
   const double toward = expected - q[0];  // the direction still to go
   const double d2 = q[0] - q[1];
@@ -951,6 +950,20 @@ bool orders_approach(const FitLevels& lv, std::size_t last, double expected) {
   if (std::abs(q.back() - q[0]) <= kOrderTolerance) return false;
   const auto limit = order_limit(q);
   return !limit || std::abs(*limit - expected) <= kOrderReductionSpread;
+}
+
+// How a reduced order behaves at the window's fine end, from its last pairwise orders q
+// (last_pair_orders, finest first): steady when they agree within kOrderTolerance, else still
+// falling or rising (from the coarsest of them to the finest); order_limit then tells where they
+// level off.
+std::string reduced_trend(const std::vector<double>& q) {
+  if (q.size() < 2 ||
+      *std::max_element(q.begin(), q.end()) - *std::min_element(q.begin(), q.end()) <=
+          kOrderTolerance)
+    return "a steady reduced order on this problem";
+  return std::string("a reduced order on this problem, still ") +
+         (q.front() < q.back() ? "falling" : "rising") + " at the window's fine end (" +
+         format_fixed(q.back(), 2) + " to " + format_fixed(q.front(), 2) + ")";
 }
 
 // Why a fit over the window [a, a + len) is more than kOrderTolerance from the expected slope,
@@ -974,8 +987,9 @@ std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, 
     w_lo = std::min(w_lo, lv.pair_order(b));
     w_hi = std::max(w_hi, lv.pair_order(b));
   }
-  const bool approaching = orders_approach(lv, a + len - 1, expected);
-  const auto limit = order_limit(last_pair_orders(lv, a + len - 1));
+  const std::vector<double> last_orders = last_pair_orders(lv, a + len - 1);
+  const bool approaching = orders_approach(last_orders, expected);
+  const auto limit = order_limit(last_orders);
   const std::string levelling =
       limit ? " (levelling off near " + format_fixed(*limit, 2) + ")" : std::string();
   std::string reason;
@@ -991,9 +1005,9 @@ std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, 
   // this problem.
   else if (slope < expected - kOrderReductionSpread && !coarser_near)
     reason = "order reduction to " + format_fixed(slope, 2) + " (classical " +
-             std::to_string(expected_slope) +
-             "): a steady reduced order on this problem, as on stiff problems where the stage "
-             "order or the lack of stiff accuracy sets it; pairwise orders " +
+             std::to_string(expected_slope) + "): " + reduced_trend(last_orders) +
+             ", as on stiff problems where the stage order or the lack of stiff accuracy sets "
+             "it; pairwise orders " +
              all + levelling;
   else if (coarser_near)
     reason = "the error stops following h^" + std::to_string(expected_slope) +

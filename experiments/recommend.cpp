@@ -411,6 +411,10 @@ StudyKind recommend_study_kind() {
       "within a time budget, Pareto fronts and the cheapest methods that meet rtol; writes "
       "recommend.{csv,md,json,png}";
   k.integrators_required = false;
+  k.integrators_help =
+      "comma-separated integrator names or method-file paths ADDED to the candidates (every "
+      "registered integrator the model suits is always considered; these run even when their "
+      "family would be dropped)";
   k.options = {
       {"rtol", P::real, "", "the requested tolerance R (error_rel <= R)", Bounds::positive()},
       {"t_end", P::real, "0",

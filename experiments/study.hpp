@@ -97,6 +97,9 @@ struct StudyKind {
   // The command also takes the integrators as positional arguments (`analyze rk4,dopri5 gauss6`),
   // joined with --integrators.
   bool positional_integrators = false;
+  // --integrators' help when it is optional and does not select (recommend: it adds to the
+  // candidates); empty: "default: every integrator the study applies to".
+  std::string integrators_help;
   std::vector<ParamSpec> options;         // the study's own options, declared once
   std::vector<std::string> required;      // options that must be given
   std::vector<std::string> extra_files;   // besides STEM.{csv,md,json}, e.g. energy_summary.csv

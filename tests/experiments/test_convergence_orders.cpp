@@ -149,6 +149,40 @@ TEST(OrderFit, OrdersSettlingBelowTheClassicalOneAreAnOrderReduction) {
   ASSERT_TRUE(f.fitted.has_value()) << f.reason;
   EXPECT_NEAR(*f.fitted, 0.55, 0.06);
   EXPECT_EQ(f.reason.rfind("order reduction to " + format_fixed(*f.fitted, 2), 0), 0u) << f.reason;
+  // The last three pairwise orders, 0.535 0.518 0.509, agree within 0.1: steady.
+  EXPECT_NE(f.reason.find("a steady reduced order"), std::string::npos) << f.reason;
+}
+
+// Pairwise orders built to be 1.00, 0.92, 0.84 for a second-order method: the window (all three
+// pairs, spread 0.16 <= 0.2) is far below 2 and no pair comes near it, so the verdict is an order
+// reduction; its last three pairs differ by 0.16 > 0.1 and fall, so it is not "steady" (rodas4
+// on Prothero–Robinson, lambda = -1e6, from h = 0.1/4 shows 1.50 1.31 1.18 of this shape).
+TEST(OrderFit, AFallingReducedOrderIsNotCalledSteady) {
+  std::vector<double> e = {1e-2};
+  for (double q : {1.00, 0.92, 0.84}) e.push_back(e.back() / std::pow(2.0, q));
+  std::vector<ConvergenceRow> rows = synthetic(e, 1e-16);
+  for (auto& r : rows) r.order = 2;
+  const OrderFit f = fit_order(rows, "m", false);
+  ASSERT_TRUE(f.fitted.has_value()) << f.reason;
+  EXPECT_NEAR(*f.fitted, 0.92, 0.01);
+  EXPECT_EQ(f.reason.rfind("order reduction to 0.92 (classical 2): a reduced order on this "
+                           "problem, still falling at the window's fine end (1.00 to 0.84)",
+                           0),
+            0u)
+      << f.reason;
+}
+
+// e = h^0.5 exactly: every pairwise order is 1/2 (log2 of 2^0.5), so the reduction is steady.
+TEST(OrderFit, EqualPairwiseOrdersBelowTheClassicalOneAreASteadyReduction) {
+  std::vector<double> e;
+  for (int k = 0; k < 6; ++k) e.push_back(std::sqrt(0.1 / std::pow(2.0, k)));
+  std::vector<ConvergenceRow> rows = synthetic(e, 1e-16);
+  for (auto& r : rows) r.order = 1;
+  const OrderFit f = fit_order(rows, "m", false);
+  ASSERT_TRUE(f.fitted.has_value()) << f.reason;
+  EXPECT_NEAR(*f.fitted, 0.5, 1e-9);
+  EXPECT_EQ(f.reason.rfind("order reduction to 0.50 (classical 1): a steady reduced order", 0), 0u)
+      << f.reason;
 }
 
 // The max-norm of an O(h²) component with a large constant and an O(h) one with a small
