@@ -167,7 +167,12 @@ ProfileSuite make_profile_suite(const std::string& name, std::vector<SpecFile> s
   }
   check_uniform(suite, files, shared);
   suite.shared = shared.front();
-  suite.methods = suite.problems.front().spec.integrators;
+  // The methods by the names their rows carry: a method file given by path is registered under
+  // the name inside it (relative paths from the spec's folder, as the run resolves them), and the
+  // cost tables look rows up by that name.
+  const SpecFile& first = suite.problems.front().spec;
+  suite.methods = resolve_integrator_tokens(
+      first.integrators, std::filesystem::path(first.file).parent_path().string());
   return suite;
 }
 

@@ -10,6 +10,7 @@
 #include "core/params.hpp"
 #include "core/types.hpp"
 #include "experiments/output.hpp"
+#include "integrators/method_file.hpp"
 
 namespace stiffbench {
 
@@ -294,6 +295,10 @@ SpecFile parse_spec_text(const std::string& source, const std::string& file,
     throw BadInput(file + ": key 'kind' missing or not a string; one of " + join(schema.kinds));
   spec.kind = kind->as_string()->get();
   const std::optional<SpecKindSchema> found = schema.find(spec.kind);
+  if (!found && is_method_kind(spec.kind))
+    throw BadInput(where_of(file, *kind) + ": a method file (kind '" + spec.kind +
+                   "'), not a spec file: keep method files out of a folder of specs and name "
+                   "them in 'integrators' by path (or load their folder with --methods DIR)");
   if (!found)
     throw BadInput(where_of(file, *kind) + ": key 'kind': unknown kind '" + spec.kind + "'" +
                    did_you_mean(spec.kind, schema.kinds) + "; known: " + join(schema.kinds));

@@ -750,6 +750,10 @@ MethodInfo info_of(const MethodDefinition& m, const Integrator& probe) {
 
 }  // namespace
 
+bool is_method_kind(const std::string& kind) {
+  return std::any_of(kKinds.begin(), kKinds.end(), [&](const auto& k) { return k.first == kind; });
+}
+
 MethodDefinition parse_method_file(const std::string& text, const std::string& origin) {
   toml::table root;
   try {

@@ -22,6 +22,7 @@
 #include "core/types.hpp"
 #include "experiments/cli_main.hpp"
 #include "experiments/profile.hpp"
+#include "integrators/embedded_methods.hpp"
 
 namespace stiffbench {
 namespace {
@@ -275,6 +276,54 @@ TEST(Profile, TinySuiteEndToEndAndReused) {
   fs::remove_all(out);
 }
 
+// A user's method given to the suite by the path of its method file: its rows carry the name
+// inside the file, and the profile must find them under that name. The file below is dopri5's
+// tableau under another name, so (independent check: the same coefficients give the same runs)
+// its cost equals dopri5's on every problem; the profile once looked rows up by the path, found
+// none and scored the method as solving nothing (rho = 0) with no error.
+TEST(Profile, AMethodFileGivenByPathIsProfiledUnderItsName) {
+  const fs::path suite = tiny_suite("method_file");
+  std::string dopri5;
+  for (const auto& [file, text] : embedded_method_files())
+    if (file == "dopri5.toml") dopri5 = std::string(text);
+  const std::string key = "name = \"dopri5\"";
+  ASSERT_NE(dopri5.find(key), std::string::npos);
+  dopri5.replace(dopri5.find(key), key.size(), "name = \"my_dopri5\"");
+  fs::create_directories(suite / "my");  // beside the specs, not among them
+  std::ofstream(suite / "my" / "my_dopri5.toml") << dopri5;
+  for (const char* f : {"01_oscillator.toml", "02_decay.toml"}) {
+    std::ifstream in(suite / f);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    std::string text = ss.str();
+    const std::string list = "integrators = [\"dopri5\", \"bs3\"]";
+    ASSERT_NE(text.find(list), std::string::npos);
+    text.replace(text.find(list), list.size(), "integrators = [\"dopri5\", \"my/my_dopri5.toml\"]");
+    std::ofstream(suite / f) << text;
+  }
+  const fs::path out = fs::temp_directory_path() / ("profile_mf_" + std::to_string(getpid()));
+  fs::remove_all(out);
+  std::string o, e;
+  ASSERT_EQ(run_cli({"profile", suite.string(), "--quick", "--tau", "1e-3", "--cost", "f_evals",
+                     "--out", out.string()},
+                    &o, &e),
+            0)
+      << o << e;
+  const ProfileSuite ps = load_profile_suite(suite.string(), true);
+  EXPECT_EQ(ps.methods, (std::vector<std::string>{"dopri5", "my_dopri5"}));
+  // Both solve both problems at the same cost: each is cheapest everywhere, rho(1) = 1.
+  std::ifstream csv(out / "profile.csv");
+  std::string line;
+  int ones = 0;
+  while (std::getline(csv, line))
+    if (line == "1e-03,f_evals,performance,dopri5,1,1" ||
+        line == "1e-03,f_evals,performance,my_dopri5,1,1")
+      ++ones;
+  EXPECT_EQ(ones, 2) << "profile.csv rows at alpha = 1 with rho = 1";
+  fs::remove_all(suite);
+  fs::remove_all(out);
+}
+
 TEST(Profile, BadInputExitsTwoBeforeAnythingRuns) {
   const fs::path suite = tiny_suite("bad");
   const fs::path tuned = tiny_suite("tuned", "seed = 3\n");
@@ -282,6 +331,9 @@ TEST(Profile, BadInputExitsTwoBeforeAnythingRuns) {
   {  // an integrator parameter in one file only is a study setting
     std::ofstream(tuned_param / "02_decay.toml", std::ios::app) << "max_steps = 50000\n";
   }
+  const fs::path with_method = tiny_suite("with_method");
+  for (const auto& [file, text] : embedded_method_files())
+    if (file == "rk4.toml") std::ofstream(with_method / "03_rk4.toml") << text;
   const fs::path empty = fs::temp_directory_path() / ("profile_empty_" + std::to_string(getpid()));
   fs::create_directories(empty);
   const fs::path out = fs::temp_directory_path() / ("profile_bad_" + std::to_string(getpid()));
@@ -294,7 +346,8 @@ TEST(Profile, BadInputExitsTwoBeforeAnythingRuns) {
       {{empty.string()}, "no spec file"},
       {{"no_such_suite"}, "no_such_suite"},
       {{tuned.string()}, "seed"},
-      {{tuned_param.string()}, "params.max_steps"}};
+      {{tuned_param.string()}, "params.max_steps"},
+      {{with_method.string()}, "a method file (kind 'explicit_rk'), not a spec file"}};
   for (const auto& [args, named] : cases) {
     std::vector<std::string> a = {"profile"};
     a.insert(a.end(), args.begin(), args.end());
@@ -306,7 +359,7 @@ TEST(Profile, BadInputExitsTwoBeforeAnythingRuns) {
     EXPECT_FALSE(fs::exists(out / "decay"));
   }
   EXPECT_THROW(make_profile_suite("none", {}, false), BadInput);
-  for (const auto& d : {suite, tuned, tuned_param, empty, out}) fs::remove_all(d);
+  for (const auto& d : {suite, tuned, tuned_param, with_method, empty, out}) fs::remove_all(d);
 }
 
 }  // namespace
