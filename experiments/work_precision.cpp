@@ -438,6 +438,54 @@ Table work_precision_markdown_table(const WorkPrecisionResult& res) {
 
 }  // namespace
 
+std::vector<std::string> tolerance_response_notes(const WorkPrecisionResult& res) {
+  std::vector<std::string> names;
+  for (const auto& r : res.rows)
+    if (std::find(names.begin(), names.end(), r.integrator) == names.end())
+      names.push_back(r.integrator);
+  std::vector<std::string> notes;
+  for (const auto& name : names) {
+    std::vector<std::pair<double, double>> pts;  // (rtol, error)
+    for (const auto& r : res.rows)
+      if (r.integrator == name && r.stats.status == Status::ok &&
+          r.setting.rfind("rtol=", 0) == 0 && std::isfinite(r.error) && r.error > 0)
+        pts.emplace_back(std::stod(r.setting.substr(5)), r.error);
+    if (pts.size() < 3) continue;
+    std::sort(pts.begin(), pts.end());  // tightest first
+    double mx = 0, my = 0;
+    for (const auto& [t, e] : pts) {
+      mx += std::log10(t);
+      my += std::log10(e);
+    }
+    mx /= static_cast<double>(pts.size());
+    my /= static_cast<double>(pts.size());
+    double sxy = 0, sxx = 0;
+    for (const auto& [t, e] : pts) {
+      sxy += (std::log10(t) - mx) * (std::log10(e) - my);
+      sxx += (std::log10(t) - mx) * (std::log10(t) - mx);
+    }
+    const double slope = sxy / sxx;
+    const auto& [tight, tight_error] = pts.front();
+    if (slope >= kToleranceResponseMin || tight_error <= 100 * tight) continue;
+    notes.push_back("**" + name + "**: the error does not follow the tolerance (slope " +
+                    format_fixed(slope, 2) + " of log error against log rtol over rtol " +
+                    format_short(pts.back().first) + " to " + format_short(tight) + "; error " +
+                    format_short(tight_error) + " at rtol " + format_short(tight) +
+                    "): its step control does not see its error on this problem (an embedded "
+                    "estimate that vanishes or is filtered away), so these points are not a "
+                    "work-precision curve although every run ended ok");
+  }
+  return notes;
+}
+
+namespace {
+std::string tolerance_response_markdown(const WorkPrecisionResult& res) {
+  std::string md;
+  for (const auto& n : tolerance_response_notes(res)) md += "- " + n + "\n";
+  return md.empty() ? md : "\nTolerance response:\n\n" + md;
+}
+}  // namespace
+
 void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpec& spec,
                                   const WorkPrecisionResult& res) {
   const std::filesystem::path d(dir);
@@ -455,7 +503,8 @@ void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpe
      << " resamples).\n\n";
   std::vector<RunNote> notes;
   for (const auto& r : res.rows) notes.push_back({r.integrator + ", " + r.setting, &r.stats});
-  md << work_precision_markdown_table(res).to_markdown() << failed_runs_markdown(notes)
+  md << work_precision_markdown_table(res).to_markdown() << tolerance_response_markdown(res)
+     << failed_runs_markdown(notes)
      << "\nFull precision: `work_precision.csv`; metadata: `work_precision.json`.\n";
   write_file_atomic(d / "work_precision.md", md.str());
   nlohmann::json meta = run_metadata("work-precision", spec.to_json());
@@ -533,7 +582,7 @@ std::string WorkPrecisionJob::report_markdown(const std::string& note) const {
               : "-",
          status});
   }
-  md << summary.to_markdown() << "\n";
+  md << summary.to_markdown() << tolerance_response_markdown(result_) << "\n";
   return md.str();
 }
 

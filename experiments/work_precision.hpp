@@ -124,6 +124,14 @@ WorkPrecisionRow run_work_precision_setting(const OdeSystem& sys, const std::str
                                             unsigned long seed, std::size_t stream,
                                             double wall_limit_s);
 Table work_precision_table(const WorkPrecisionResult& r);
+// Adaptive methods whose error does not follow the tolerance, one Markdown line each: among a
+// method's ok rows at rtol settings (3 or more, errors > 0), the least-squares slope of
+// log(error) against log(rtol) is below kToleranceResponseMin while the tightest setting's error
+// is more than 100 times its rtol. Its step control then does not see its error on this problem
+// (an embedded estimate that vanishes, e.g. ros3p on a linear autonomous system, or is filtered
+// away), so its points are not a work-precision curve, although every run ends ok.
+constexpr double kToleranceResponseMin = 0.3;
+std::vector<std::string> tolerance_response_notes(const WorkPrecisionResult& r);
 void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpec& spec,
                                   const WorkPrecisionResult& r);
 

@@ -280,5 +280,42 @@ TEST(WorkPrecisionTiming, SeedIsRecordedAndRepeatsValidated) {
   EXPECT_THROW(run_work_precision(spec, nullptr), BadInput);
 }
 
+// tolerance_response_notes on hand-made rows (the slopes by hand: log10 error against log10 rtol).
+// "flat": errors 5e-3, 6e-3, 2e-3 at rtol 1e-4, 1e-6, 1e-8 (ark324l2sa with the filtered estimate
+// on stiff Prothero-Robinson): log10 e = -2.301, -2.222, -2.699 against log10 rtol = -4, -6, -8
+// gives the slope (2 * 0.106 + 2 * 0.292) / 8 = 0.0995, and 2e-3 > 100 * 1e-8, so it is named.
+// "good": errors 10 rtol (slope 1): not named. "floor": 1e-9, 1e-12, 3e-13, slope
+// (2 * 2.174 + 2 * 1.349) / 8 = 0.881: not named. "short": two settings only: no fit. "fixed":
+// h settings: not adaptive.
+TEST(WorkPrecisionTolerance, AMethodWhoseErrorIgnoresTheToleranceIsNamed) {
+  WorkPrecisionResult res;
+  auto add = [&](const std::string& name, const std::string& setting, double error) {
+    WorkPrecisionRow r;
+    r.integrator = name;
+    r.setting = setting;
+    r.error = error;
+    r.stats.status = Status::ok;
+    res.rows.push_back(r);
+  };
+  const std::vector<std::string> rtols = {"rtol=1e-04", "rtol=1e-06", "rtol=1e-08"};
+  const std::vector<double> flat = {5e-3, 6e-3, 2e-3}, good = {1e-3, 1e-5, 1e-7},
+                            floor = {1e-9, 1e-12, 3e-13}, fixed = {1e-2, 1e-2, 1e-2};
+  for (std::size_t k = 0; k < 3; ++k) {
+    add("flat", rtols[k], flat[k]);
+    add("good", rtols[k], good[k]);
+    add("floor", rtols[k], floor[k]);
+    add("fixed", "h=" + std::to_string(k + 1), fixed[k]);
+  }
+  add("short", "rtol=1e-04", 1e-2);
+  add("short", "rtol=1e-06", 1e-2);
+  const std::vector<std::string> notes = tolerance_response_notes(res);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_EQ(notes[0].rfind("**flat**: the error does not follow the tolerance (slope 0.10", 0), 0u)
+      << notes[0];
+  // A failed run is no evidence either way: with the 2e-3 row failed, two settings remain.
+  res.rows[8].stats.status = Status::newton_failed;  // flat at rtol=1e-08
+  EXPECT_TRUE(tolerance_response_notes(res).empty());
+}
+
 }  // namespace
 }  // namespace stiffbench
