@@ -10,7 +10,7 @@
 #include "core/params.hpp"
 #include "core/types.hpp"
 #include "experiments/output.hpp"
-#include "integrators/method_file.hpp"
+#include "integrators/method_kinds.hpp"
 
 namespace stiffbench {
 

@@ -29,22 +29,12 @@
 
 namespace stiffbench {
 
+static_assert(static_cast<std::size_t>(MethodKind::imex_ark) + 1 == kMethodKindNames.size(),
+              "kMethodKindNames lists every MethodKind in its order");
+
 std::string to_string(MethodKind k) {
-  switch (k) {
-    case MethodKind::explicit_rk:
-      return "explicit_rk";
-    case MethodKind::dirk:
-      return "dirk";
-    case MethodKind::irk:
-      return "irk";
-    case MethodKind::rosenbrock:
-      return "rosenbrock";
-    case MethodKind::splitting:
-      return "splitting";
-    case MethodKind::imex_ark:
-      return "imex_ark";
-  }
-  return "?";
+  const auto i = static_cast<std::size_t>(k);  // kMethodKindNames is in MethodKind's order
+  return i < kMethodKindNames.size() ? std::string(kMethodKindNames[i]) : "?";
 }
 
 bool MethodDefinition::adaptive() const {
@@ -67,13 +57,12 @@ bool MethodDefinition::adaptive() const {
 
 namespace {
 
-const std::vector<std::pair<std::string, MethodKind>> kKinds = {
-    {"explicit_rk", MethodKind::explicit_rk},
-    {"dirk", MethodKind::dirk},
-    {"irk", MethodKind::irk},
-    {"rosenbrock", MethodKind::rosenbrock},
-    {"splitting", MethodKind::splitting},
-    {"imex_ark", MethodKind::imex_ark}};
+const std::vector<std::pair<std::string, MethodKind>> kKinds = [] {
+  std::vector<std::pair<std::string, MethodKind>> kinds;
+  for (std::size_t i = 0; i < kMethodKindNames.size(); ++i)
+    kinds.emplace_back(kMethodKindNames[i], static_cast<MethodKind>(i));
+  return kinds;
+}();
 
 const std::vector<std::string> kCommonKeys = {"name",      "kind",  "order",    "description",
                                               "reference", "class", "constants"};
@@ -749,10 +738,6 @@ MethodInfo info_of(const MethodDefinition& m, const Integrator& probe) {
 }
 
 }  // namespace
-
-bool is_method_kind(const std::string& kind) {
-  return std::any_of(kKinds.begin(), kKinds.end(), [&](const auto& k) { return k.first == kind; });
-}
 
 MethodDefinition parse_method_file(const std::string& text, const std::string& origin) {
   toml::table root;

@@ -63,15 +63,13 @@
 #include "core/registry_types.hpp"
 #include "core/tableau.hpp"
 #include "integrators/implicit/linearly_implicit.hpp"
+#include "integrators/method_kinds.hpp"
 #include "integrators/symplectic/kick_drift.hpp"
 
 namespace stiffbench {
 
 enum class MethodKind { explicit_rk, dirk, irk, rosenbrock, splitting, imex_ark };
 std::string to_string(MethodKind k);
-// Whether `kind` names a method-file kind (explicit_rk, dirk, ...): lets a reader of other TOML
-// files (spec files) say that it was given a method file.
-bool is_method_kind(const std::string& kind);
 
 struct MethodDefinition {
   std::string name;
