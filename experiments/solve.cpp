@@ -323,14 +323,13 @@ void print_run_header(const SolveRun& run, const RunResult& r, std::ostream& out
         << ")\n";
     // The run stops exactly at every output time (run_adaptive), which caps its steps: say so,
     // so that an error read here is not taken for the method's own at its tolerance.
-    const double span = run.t_end - sys.initial_time();
     if (!run.times.empty())
       out << "             stopping exactly at each of the " << run.times.size()
           << " output times, which can shorten steps\n";
     else if (run.fo.outputs > 1)
       out << "             stopping exactly at " << run.fo.outputs
           << " equally spaced output times (--outputs): no step longer than "
-          << format_short(span / static_cast<double>(run.fo.outputs))
+          << format_short((run.t_end - sys.initial_time()) / static_cast<double>(run.fo.outputs))
           << "; --outputs 1 lets the method choose every step\n";
   } else {
     out << "h            " << format_full(r.h) << " (" << r.n_steps

@@ -452,19 +452,14 @@ std::vector<std::string> tolerance_response_notes(const WorkPrecisionResult& res
         pts.emplace_back(std::stod(r.setting.substr(5)), r.error);
     if (pts.size() < 3) continue;
     std::sort(pts.begin(), pts.end());  // tightest first
-    double mx = 0, my = 0;
+    std::vector<double> log_tol, log_err;
     for (const auto& [t, e] : pts) {
-      mx += std::log10(t);
-      my += std::log10(e);
+      log_tol.push_back(std::log10(t));
+      log_err.push_back(std::log10(e));
     }
-    mx /= static_cast<double>(pts.size());
-    my /= static_cast<double>(pts.size());
-    double sxy = 0, sxx = 0;
-    for (const auto& [t, e] : pts) {
-      sxy += (std::log10(t) - mx) * (std::log10(e) - my);
-      sxx += (std::log10(t) - mx) * (std::log10(t) - mx);
-    }
-    const double slope = sxy / sxx;
+    const std::optional<double> fit = least_squares_slope(log_tol, log_err);
+    if (!fit) continue;  // every setting at one rtol
+    const double slope = *fit;
     const auto& [tight, tight_error] = pts.front();
     if (slope >= kToleranceResponseMin || tight_error <= 100 * tight) continue;
     notes.push_back("**" + name + "**: the error does not follow the tolerance (slope " +
