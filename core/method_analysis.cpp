@@ -1,5 +1,7 @@
 #include "core/method_analysis.hpp"
 
+#include "core/additive_conditions.hpp"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -562,6 +564,45 @@ MethodAnalysis analyze_kick_drift(const KickDriftCoefficients& c) {
   const AxisLimit osc = oscillator_limit(kick_drift_stability(c));
   m.oscillator_limit = osc.limit;
   if (osc.unbounded) m.notes.push_back("stable on the undamped oscillator for every step");
+  return m;
+}
+
+MethodAnalysis analyze_additive(const AdditiveTableau& t) {
+  const ButcherTableau& e = t.explicit_table;
+  const ButcherTableau& i = t.implicit_table;
+  const Index s = t.stages();
+  require_input(s >= 1 && e.a.rows() == s && e.a.cols() == s && i.a.rows() == s &&
+                    i.a.cols() == s && e.b.size() == s && i.b.size() == s,
+                "analyze: additive tableau '" + t.name +
+                    "' needs two s x s tables and two b with s >= 1 entries");
+  MethodAnalysis m;
+  m.name = t.name;
+  m.kind = "imex_ark";
+  m.stages = static_cast<int>(s);
+  m.claimed_order = t.order;
+  for (const AdditiveCondition& c :
+       additive_order_conditions(e, i, e.b, i.b, kMaxAdditiveOrder, "b"))
+    m.conditions.push_back(
+        {c.order, -1, c.name, c.residual, std::numeric_limits<double>::quiet_NaN()});
+  m.order = additive_satisfied_order(e, i, e.b, i.b, kMaxAdditiveOrder, kConditionTol);
+  if (t.has_embedded() && e.b_embedded.size() == s && i.b_embedded.size() == s)
+    m.embedded_order = additive_satisfied_order(e, i, e.b_embedded, i.b_embedded, kMaxAdditiveOrder,
+                                                kConditionTol);
+  m.residual_by_order.assign(kMaxAdditiveOrder, 0.0);
+  for (const OrderCondition& c : m.conditions)
+    m.residual_by_order[static_cast<std::size_t>(c.order - 1)] =
+        std::max(m.residual_by_order[static_cast<std::size_t>(c.order - 1)], std::abs(c.residual));
+  m.stiffly_accurate = i.coefficients_fsal();
+  m.max_coefficient = std::max({max_abs(e.a), max_abs(e.b), max_abs(i.a), max_abs(i.b)});
+  if (e.c.size() == s) m.max_coefficient = std::max(m.max_coefficient, max_abs(e.c));
+  if (i.c.size() == s) m.max_coefficient = std::max(m.max_coefficient, max_abs(i.c));
+  m.notes.push_back(
+      "additive order conditions (bi-coloured trees; Hairer, Nørsett & Wanner I, "
+      "II.15; Kennedy & Carpenter 2003) to order " +
+      std::to_string(kMaxAdditiveOrder) +
+      ", the coupling ones included; no error coefficients; the pair has no "
+      "stability function of its own (each table alone: " +
+      t.name + ":explicit, " + t.name + ":implicit)");
   return m;
 }
 

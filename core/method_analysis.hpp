@@ -101,6 +101,17 @@ MethodAnalysis analyze_runge_kutta(const ButcherTableau& t, const std::string& k
 MethodAnalysis analyze_rosenbrock(const RosenbrockTableau& t);
 MethodAnalysis analyze_kick_drift(const KickDriftCoefficients& c);
 
+// Additive (IMEX) Runge–Kutta pairs, kind "imex_ark": the pair's order and embedded order from
+// the additive order conditions of core/additive_conditions.hpp (both tables' own conditions and
+// the coupling ones, to order kMaxAdditiveOrder), the largest residual per order, stiffly accurate
+// (the implicit table's last row equals its b), the largest coefficient of either table. The
+// conditions keep their names (tree = -1) and have no error coefficient (NaN): the coloured trees'
+// symmetries are not formed, so no error norms either. The pair has no stability function of its
+// own: each table alone is an analyze_runge_kutta of its own (what `stiffbench analyze` shows as
+// NAME:explicit and NAME:implicit).
+inline constexpr int kMaxAdditiveOrder = 6;
+MethodAnalysis analyze_additive(const AdditiveTableau& t);
+
 // |R(iν)| and arg R(iν) − ν (unwrapped) on ν = 10^(−2 + 3k/(n−1)), k = 0..n−1.
 struct DispersionPoint {
   double nu, amplification, phase_error;

@@ -69,6 +69,7 @@ std::optional<MethodAnalysis> coefficient_analysis(const Integrator& integ) {
   if (const ButcherTableau* t = integ.butcher_tableau())
     return analyze_runge_kutta(*t, tableau_kind(*t));
   if (const RosenbrockTableau* t = integ.rosenbrock_tableau()) return analyze_rosenbrock(*t);
+  if (const AdditiveTableau* t = integ.additive_tableau()) return analyze_additive(*t);
   if (const KickDriftCoefficients* c = integ.kick_drift_coefficients())
     return analyze_kick_drift(*c);
   return std::nullopt;
@@ -99,29 +100,59 @@ nlohmann::json AnalyzeSpec::to_json() const {
 
 namespace {
 
-// The analysis of an integrator object registered as `info`.
-AnalyzedMethod analyze_object(const MethodInfo& info, const Integrator& integ, int points) {
-  AnalyzedMethod m;
+// A row's stability function's dissipation and dispersion.
+void add_dispersion(AnalyzedMethod& m, int points) {
+  if (!m.analysis.p.empty())
+    m.dispersion = dissipation_dispersion({m.analysis.p, m.analysis.q}, points);
+}
+
+// The analysis of an integrator object registered as `info`: one row, and for an additive pair
+// two more, each table alone (NAME:explicit, NAME:implicit).
+std::vector<AnalyzedMethod> analyze_object(const MethodInfo& info, const Integrator& integ,
+                                           int points) {
+  std::vector<AnalyzedMethod> rows(1);
+  AnalyzedMethod& m = rows[0];
   m.integrator = info.name;
   m.family = to_string(info.family);
   if (auto a = coefficient_analysis(integ)) {
     m.coefficient_defined = true;
     m.analysis = std::move(*a);
     if (m.analysis.claimed_order == 0) m.analysis.claimed_order = info.order;
-    if (!m.analysis.p.empty())
-      m.dispersion = dissipation_dispersion({m.analysis.p, m.analysis.q}, points);
+    add_dispersion(m, points);
   } else {
     stability_figures(m, integ, info, points);
   }
   m.analysis.name = info.name;
-  return m;
+  if (const AdditiveTableau* t = integ.additive_tableau()) {
+    const int order = m.analysis.claimed_order;
+    for (const auto& [table, part] :
+         {std::pair{&t->explicit_table, "explicit"}, std::pair{&t->implicit_table, "implicit"}}) {
+      AnalyzedMethod r;
+      r.integrator = additive_part_name(info.name, part);
+      r.family = rows[0].family;
+      r.coefficient_defined = true;
+      r.analysis = analyze_runge_kutta(*table, tableau_kind(*table));
+      r.analysis.name = r.integrator;
+      // The tables carry the pair's order: each alone should have at least that order.
+      r.analysis.claimed_order = order;
+      r.analysis.notes.push_back(std::string("the ") + part + " table of " + info.name +
+                                 " alone (its weights b, its own order conditions)");
+      add_dispersion(r, points);
+      rows.push_back(std::move(r));
+    }
+  }
+  return rows;
 }
 
 }  // namespace
 
+std::string additive_part_name(const std::string& integrator, const std::string& part) {
+  return integrator + ":" + part;
+}
+
 AnalyzedMethod analyze_integrator(const std::string& name, int points) {
   const auto& entry = integrator_registry().at(name);
-  return analyze_object(entry.info, *integrator_registry().create(name, Params{}), points);
+  return analyze_object(entry.info, *integrator_registry().create(name, Params{}), points).front();
 }
 
 AnalyzeResult run_analyze(const AnalyzeSpec& spec) {
@@ -134,20 +165,22 @@ AnalyzeResult run_analyze(const AnalyzeSpec& spec) {
     infos.push_back(integrator_registry().at(name).info);
     integs.push_back(integrator_registry().create(name, Params{}));
   }
-  AnalyzeResult res;
-  res.methods.resize(names.size());
+  std::vector<std::vector<AnalyzedMethod>> rows(names.size());
   std::vector<std::exception_ptr> failed(names.size());
   // Methods are independent; each reads only its own coefficients.
 #pragma omp parallel for schedule(dynamic)
   for (std::size_t k = 0; k < names.size(); ++k) {
     try {
-      res.methods[k] = analyze_object(infos[k], *integs[k], spec.points);
+      rows[k] = analyze_object(infos[k], *integs[k], spec.points);
     } catch (...) {
       failed[k] = std::current_exception();
     }
   }
   for (const auto& e : failed)
     if (e) std::rethrow_exception(e);
+  AnalyzeResult res;
+  for (auto& r : rows)
+    for (auto& m : r) res.methods.push_back(std::move(m));
   return res;
 }
 
@@ -179,8 +212,17 @@ bool has_stability_function(const AnalyzedMethod& m) {
   return m.coefficient_defined && !m.analysis.p.empty();
 }
 
+// Additive pairs have no error coefficients (analyze_additive).
+bool has_error_norms(const MethodAnalysis& a) { return a.kind != "imex_ark"; }
+
+// The highest order whose conditions were analysed: the achieved order reads ">= p" there.
+int analysed_to(const MethodAnalysis& a) {
+  return a.kind == "imex_ark" ? kMaxAdditiveOrder : kMaxOrder;
+}
+
 // The error norms of order p+1 and p+2 exist for p + 1 <= 8 and p + 2 <= 8.
 std::vector<std::string> error_norms(const MethodAnalysis& a) {
+  if (!has_error_norms(a)) return {"", "", "", ""};
   const bool next = a.order + 1 <= kMaxOrder, after = a.order + 2 <= kMaxOrder;
   return {next ? format_full(a.error_norm_2) : "", next ? format_full(a.error_norm_max) : "",
           after ? format_full(a.error_norm_2_next) : "",
@@ -268,7 +310,7 @@ Table analyze_conditions_table(const AnalyzeResult& r) {
   for (const auto& m : r.methods)
     for (const auto& c : m.analysis.conditions)
       t.rows.push_back({m.integrator, std::to_string(c.order), c.name, format_full(c.residual),
-                        format_full(c.error_coefficient)});
+                        std::isnan(c.error_coefficient) ? "" : format_full(c.error_coefficient)});
   return t;
 }
 
@@ -307,12 +349,12 @@ Table analyze_summary_table(const AnalyzeResult& r) {
     }
     const bool rf = has_stability_function(m);
     std::string order = std::to_string(a.order);
-    if (a.order >= kMaxOrder) order = ">= " + order;
+    if (a.order >= analysed_to(a)) order = ">= " + order;
     if (a.claimed_order && a.claimed_order != a.order)
       order += " (claimed " + std::to_string(a.claimed_order) + ")";
     t.rows.push_back(
         {m.integrator, a.kind, order, a.stage_order >= 0 ? std::to_string(a.stage_order) : "-",
-         a.order < kMaxOrder ? format_full(a.error_norm_2) : "-",
+         a.order < kMaxOrder && has_error_norms(a) ? format_full(a.error_norm_2) : "-",
          rf ? format_full(a.r_infinity) : "-", rf ? stability_class(a.a_stable, a.l_stable) : "-",
          rf ? limit_text(a.real_axis_limit, a.real_axis_unbounded) : "-",
          rf ? limit_text(a.imag_axis_limit, a.imag_axis_unbounded)
@@ -335,15 +377,16 @@ Table order_markdown_table(const AnalyzeResult& r) {
   for (const auto& m : r.methods) {
     if (!m.coefficient_defined) continue;
     const MethodAnalysis& a = m.analysis;
-    std::vector<std::string> row = {m.integrator,
-                                    a.kind,
-                                    std::to_string(a.stages),
-                                    a.claimed_order ? std::to_string(a.claimed_order) : "-",
-                                    (a.order >= kMaxOrder ? ">= " : "") + std::to_string(a.order),
-                                    a.stage_order >= 0 ? std::to_string(a.stage_order) : "-",
-                                    a.embedded_order ? std::to_string(a.embedded_order) : "-",
-                                    yes_no(a.fsal),
-                                    yes_no(a.stiffly_accurate)};
+    std::vector<std::string> row = {
+        m.integrator,
+        a.kind,
+        std::to_string(a.stages),
+        a.claimed_order ? std::to_string(a.claimed_order) : "-",
+        (a.order >= analysed_to(a) ? ">= " : "") + std::to_string(a.order),
+        a.stage_order >= 0 ? std::to_string(a.stage_order) : "-",
+        a.embedded_order ? std::to_string(a.embedded_order) : "-",
+        yes_no(a.fsal),
+        yes_no(a.stiffly_accurate)};
     for (auto& e : error_norms(a)) row.push_back(e.empty() ? "-" : e);
     row.push_back(format_full(a.max_coefficient));
     t.rows.push_back(std::move(row));
@@ -435,10 +478,15 @@ std::string markdown_report(const AnalyzeResult& r) {
      << stability_markdown_table(r).to_markdown();
   const Table other = other_markdown_table(r);
   if (!other.rows.empty())
-    os << "\n## Splittings and methods without coefficients\n\n"
+    os << "\n## Splittings, IMEX pairs and methods without coefficients\n\n"
        << "Kick/drift splittings have no scalar R(z): their oscillator limit is the largest hω "
-          "stable on x'' = −ω²x. Methods that are not coefficient-defined show what their "
-          "linear stability data give.\n\n"
+          "stable on x'' = −ω²x. An IMEX pair (kind imex_ark) has no R(z) of its own: its order "
+          "is that of the additive order conditions, the coupling ones included, and its two "
+          "tables are analysed alone in the rows NAME:explicit and NAME:implicit above (the "
+          "explicit table's axis limits bound hλ for the eigenvalues of f_E, the implicit "
+          "table's |R(∞)| and A-/L-stability tell what the pair does with those of f_I). "
+          "Methods that are not coefficient-defined show what their linear stability data "
+          "give.\n\n"
        << other.to_markdown();
   std::string notes;
   for (const auto& m : r.methods)

@@ -3,10 +3,14 @@
 //
 // Each integrator is created from the registry with its defaults and its coefficients taken
 // from the integrator itself: a Butcher tableau (kind explicit_rk when A is strictly lower
-// triangular, dirk when lower triangular, irk otherwise), a Rosenbrock tableau or kick/drift
-// coefficients. An integrator with none of them (BDF2, the graphics solvers, a library
-// reference) is not coefficient-defined: its row says so and carries what its linear stability
-// data give (axis and oscillator limits, A-stability), never a failure.
+// triangular, dirk when lower triangular, irk otherwise), a Rosenbrock tableau, kick/drift
+// coefficients or an additive (IMEX) pair of tables (kind imex_ark: the pair's order and embedded
+// order from the additive order conditions, coupling ones included; then two more rows,
+// NAME:explicit and NAME:implicit, each table analysed alone as a Runge–Kutta method: the
+// explicit table's axis limits bound h·λ on f_E's spectrum, the implicit one's |R(∞)| and
+// A-/L-stability tell what the pair does to f_I's). An integrator with none of them (BDF2, the
+// graphics solvers, a library reference) is not coefficient-defined: its row says so and carries
+// what its linear stability data give (axis and oscillator limits, A-stability), never a failure.
 //
 // Files (DIR/):
 //   analyze.csv             one row per integrator (analyze_table below);
@@ -73,8 +77,12 @@ struct AnalyzeResult {
   std::vector<AnalyzedMethod> methods;  // in the order of the spec
 };
 
-// The analysis of one registered integrator (created with its defaults).
+// The analysis of one registered integrator (created with its defaults): its own row (for an
+// additive pair the pair's order from the additive conditions, without the two tables' rows).
 AnalyzedMethod analyze_integrator(const std::string& name, int points = 121);
+// The name of an additive pair's table analysed alone ("ark324l2sa:explicit"; part "explicit"
+// or "implicit"): run_analyze puts these two rows right after the pair's.
+std::string additive_part_name(const std::string& integrator, const std::string& part);
 AnalyzeResult run_analyze(const AnalyzeSpec& spec);
 // The one call: check DIR, analyse, write DIR/analyze.{csv,md,json}, analyze_conditions.csv and
 // analyze_dispersion.csv, plot, print the summary (ctx.out); `integrators` are a user's own

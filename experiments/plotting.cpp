@@ -45,7 +45,10 @@ std::vector<PlotPanel> family_panels(const std::vector<std::string>& integrators
   for (const auto& [family, title] : order) {
     PlotPanel p{title, {}};
     for (const auto& name : integrators) {
+      // An additive pair's table analysed alone ("ark324l2sa:explicit") goes with the pair.
       const auto* e = integrator_registry().find(name);
+      if (!e && name.find(':') != std::string::npos)
+        e = integrator_registry().find(name.substr(0, name.find(':')));
       const std::string f = e ? to_string(e->info.family) : "other";
       if (f == family) p.methods.push_back(name);
     }

@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Dense>
+
 #include "experiments/analyze.hpp"
 #include "experiments/cli_main.hpp"
 #include "experiments/commands.hpp"
@@ -262,6 +264,108 @@ TEST(AnalyzeStudy, RosenbrockAndSplittingRows) {
   EXPECT_EQ(vv.at("p_coefficients"), "");  // no scalar R(z)
 }
 
+// IMEX pairs (kind imex_ark): the pair's order from the additive order conditions, then each
+// table alone. Figures:
+//   - ark436l2sa, ARK4(3)6L[2]SA of Kennedy & Carpenter (2003): order 4, embedded order 3,
+//     stiffly accurate (published). Its implicit table is esdirk43's, so that row must repeat
+//     esdirk43's own analysis. The explicit table's imaginary-axis limit 4.000729197218431 was
+//     found outside stiffbench (Python, the published rationals, R(iy) stage by stage and a
+//     bisection on |R(iy)| <= 1); here R(iy) = 1 + z bᵀ(I − zA)⁻¹1 is also solved directly on
+//     both sides of the reported limit (not through R's polynomial, which the analysis uses).
+//   - imex_ssp2_222 (Pareschi & Russo 2005): its explicit table is Heun's, R = 1 + z + z²/2:
+//     stable on [−2, 0], |R(iy)|² = 1 + y⁴/4 > 1 for y ≠ 0 (imaginary limit 0), SSP
+//     coefficient 1. Its implicit table [[γ, 0], [1 − 2γ, γ]], b = (1/2, 1/2), γ = 1 − 1/√2 has
+//     R(∞) = 1 − bᵀA⁻¹1 = 1 − (4γ − 1)/(2γ²) = 0, as 2γ² − 4γ + 1 = 0.
+TEST(AnalyzeStudy, ImexPairsGetTheirOrderAndEachTableAlone) {
+  AnalyzeSpec spec;
+  spec.integrators = {"ark436l2sa", "imex_ssp2_222", "esdirk43"};
+  const AnalyzeResult r = run_analyze(spec);
+  const Table t = analyze_table(r);
+  ASSERT_EQ(t.rows.size(), 7u);
+  std::map<std::string, std::map<std::string, std::string>> row;
+  for (const auto& v : t.rows)
+    for (std::size_t i = 0; i < t.columns.size(); ++i) row[v[0]][t.columns[i]] = v[i];
+  EXPECT_EQ(t.rows[1][0], "ark436l2sa:explicit");  // the tables right after their pair
+  EXPECT_EQ(t.rows[2][0], "ark436l2sa:implicit");
+
+  const auto& ark = row.at("ark436l2sa");
+  EXPECT_EQ(ark.at("kind"), "imex_ark");
+  EXPECT_EQ(ark.at("order"), "4");
+  EXPECT_EQ(ark.at("embedded_order"), "3");
+  EXPECT_EQ(ark.at("stiffly_accurate"), "yes");
+  EXPECT_EQ(ark.at("error_norm_2"), "");      // no error coefficients for the coloured trees
+  EXPECT_EQ(ark.at("p_coefficients"), "");    // no stability function of its own
+  EXPECT_EQ(ark.at("residual_order_7"), "");  // conditions to order 6
+  const auto& ex = row.at("ark436l2sa:explicit");
+  EXPECT_EQ(ex.at("kind"), "explicit_rk");
+  EXPECT_EQ(ex.at("order"), "4");
+  const double limit = num(ex, "imaginary_axis_limit");
+  EXPECT_NEAR(limit, 4.000729197218431, 1e-12);
+  const auto integ = integrator_registry().create("ark436l2sa", Params{});
+  const ButcherTableau& e = integ->additive_tableau()->explicit_table;
+  auto abs_r = [&](double y) {
+    const Eigen::Index s = e.a.rows();
+    const std::complex<double> z(0.0, y);
+    const Eigen::MatrixXcd m =
+        Eigen::MatrixXcd::Identity(s, s) - z * e.a.cast<std::complex<double>>();
+    const Eigen::VectorXcd k = m.partialPivLu().solve(Eigen::VectorXcd::Ones(s));
+    return std::abs(1.0 + z * e.b.cast<std::complex<double>>().dot(k));
+  };
+  EXPECT_LE(abs_r(limit * (1 - 1e-6)), 1.0);
+  EXPECT_GT(abs_r(limit * (1 + 1e-6)), 1.0);
+  const auto& im = row.at("ark436l2sa:implicit");
+  const auto& esdirk = row.at("esdirk43");
+  for (const char* c :
+       {"kind", "order", "stage_order", "error_norm_2", "q_coefficients", "r_infinity", "l_stable"})
+    EXPECT_EQ(im.at(c), esdirk.at(c)) << c;
+
+  const auto& heun = row.at("imex_ssp2_222:explicit");
+  EXPECT_NEAR(num(heun, "real_axis_limit"), 2.0, 1e-12);
+  EXPECT_EQ(num(heun, "imaginary_axis_limit"), 0.0);
+  EXPECT_NEAR(num(heun, "ssp_coefficient"), 1.0, 1e-10);
+  const auto& sdirk = row.at("imex_ssp2_222:implicit");
+  EXPECT_NEAR(num(sdirk, "r_infinity"), 0.0, 1e-12);
+  EXPECT_EQ(sdirk.at("l_stable"), "yes");
+  EXPECT_EQ(row.at("imex_ssp2_222").at("order"), "2");
+
+  // The conditions file names the coupling conditions and gives them no error coefficient.
+  bool coupling = false;
+  for (const auto& c : analyze_conditions_table(r).rows)
+    if (c[0] == "ark436l2sa") {
+      EXPECT_EQ(c[4], "") << c[2];
+      coupling = coupling ||
+                 (c[2].find("AI") != std::string::npos && c[2].find("bE") != std::string::npos);
+    }
+  EXPECT_TRUE(coupling);
+  // Convergence tables show the analysed order beside the claimed one for IMEX pairs too.
+  ASSERT_TRUE(coefficient_analysis(*integ).has_value());
+  EXPECT_EQ(coefficient_analysis(*integ)->order, 4);
+}
+
+// A pair whose tables are each of order 2 but do not couple: explicit Heun (c = 0, 1) and the
+// implicit table [[0, 0], [0, 1/2]], b = (0, 1) (c = 0, 1/2; order 2 alone: Σb = 1, bᵀc = 1/2).
+// The coupling conditions of order 2 (by hand): bE·AI·1 = 1/2 has residual
+// (1/2)(0) + (1/2)(1/2) − 1/2 = −1/4, and bI·AE·1 = 1/2 has residual 0·0 + 1·1 − 1/2 = 1/2; so
+// the pair has order 1 and its largest residual of order 2 is 1/2.
+TEST(AnalyzeStudy, AnImexPairThatDoesNotCoupleHasTheLowerOrder) {
+  AdditiveTableau t;
+  t.name = "uncoupled";
+  t.order = 2;
+  t.explicit_table.a = Mat{{0.0, 0.0}, {1.0, 0.0}};
+  t.explicit_table.b = Vec{{0.5, 0.5}};
+  t.explicit_table.c = Vec{{0.0, 1.0}};
+  t.implicit_table.a = Mat{{0.0, 0.0}, {0.0, 0.5}};
+  t.implicit_table.b = Vec{{0.0, 1.0}};
+  t.implicit_table.c = Vec{{0.0, 0.5}};
+  EXPECT_EQ(analyze_runge_kutta(t.explicit_table, "explicit_rk").order, 2);
+  EXPECT_EQ(analyze_runge_kutta(t.implicit_table, "dirk").order, 2);
+  const MethodAnalysis m = analyze_additive(t);
+  EXPECT_EQ(m.kind, "imex_ark");
+  EXPECT_EQ(m.order, 1);
+  ASSERT_GE(m.residual_by_order.size(), 2u);
+  EXPECT_NEAR(m.residual_by_order[1], 0.5, 1e-15);
+}
+
 // The default set: every integrator with coefficients or stability data, without the library
 // references.
 TEST(AnalyzeStudy, DefaultSetHasTheCoefficientMethods) {
@@ -272,6 +376,7 @@ TEST(AnalyzeStudy, DefaultSetHasTheCoefficientMethods) {
   EXPECT_TRUE(has("rk4"));
   EXPECT_TRUE(has("radau5"));
   EXPECT_TRUE(has("bdf2"));
+  EXPECT_TRUE(has("ark324l2sa"));  // IMEX pairs: their tables (kind imex_ark)
   EXPECT_FALSE(has("cvode_bdf"));
 }
 
