@@ -94,6 +94,14 @@ class Integrator {
   // history. The same system must be passed to the following step() calls.
   virtual void reset(const OdeSystem& sys, double t0, CVecRef y0) = 0;
 
+  // Starts again at (t, y) on the system of the last reset(): clears what depends on the state
+  // (history, cached stages, an evaluated Jacobian and its factorisation) and keeps what depends
+  // only on the system's structure (work vectors, sparsity patterns, symbolic analyses). Operator
+  // splitting restarts its sub-integrators at every substep: a full reset() there would redo the
+  // structure's analysis (and, on a mechanical system, evaluate a force Jacobian for the pattern
+  // that no counter sees) at every step. The default is reset(); on another system, too.
+  virtual void restart(const OdeSystem& sys, double t, CVecRef y) { reset(sys, t, y); }
+
   // Advances y from t to t + h. Returns Status::ok or the reason the step failed (e.g.
   // newton_failed); it never returns a silently wrong step. Integrator-side counters (Newton
   // iterations, linear solves) are added to `stats`; the driver counts steps and evaluations.

@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "core/additive_conditions.hpp"
 #include "core/driver.hpp"
 #include "experiments/catalog.hpp"
 #include "integrators/implicit/dirk.hpp"
@@ -176,10 +177,23 @@ namespace {
 
 // ---- The audit's own systems ---------------------------------------------------------------
 
-// y' = λy, λ = -1, y(0) = 1: the scalar linear system of the count checks.
+// The split of the audit's own systems for methods that need one (IMEX pairs, operator
+// splitting): f_E = f_I = f/2, both parts carrying half of every term. The methods' own split
+// behaviour is tested on the split models; here the split only lets them run, so that what they
+// report can be compared with what they do.
+SplitInfo halves_split() { return SplitInfo{"halves", "half of f", "half of f"}; }
+
+// y' = λy, λ = -1, y(0) = 1: the scalar linear system of the count checks (split: each part
+// -y/2).
 class ScalarLinear final : public OdeSystem {
  public:
-  std::string name() const override { return "scalar_linear"; }
+  explicit ScalarLinear(bool split = false) : split_(split) {}
+  std::string name() const override { return split_ ? "scalar_linear(split)" : "scalar_linear"; }
+  bool has_imex_split() const override { return split_; }
+  std::optional<SplitInfo> imex_split() const override {
+    return split_ ? std::optional<SplitInfo>(halves_split()) : std::nullopt;
+  }
+  bool has_implicit_part_jacobian() const override { return split_; }
   Index dimension() const override { return 1; }
   Vec initial_state() const override { return Vec::Ones(1); }
   bool has_jacobian() const override { return true; }
@@ -189,19 +203,36 @@ class ScalarLinear final : public OdeSystem {
 
  protected:
   void eval_rhs(double, CVecRef y, VecRef dydt) const override { dydt[0] = -y[0]; }
-  void eval_jacobian(double, CVecRef, SparseMat& jac) const override {
+  void eval_jacobian(double, CVecRef, SparseMat& jac) const override { scalar(jac, -1.0); }
+  void eval_rhs_explicit_part(double, CVecRef y, VecRef fe) const override { fe[0] = -0.5 * y[0]; }
+  void eval_rhs_implicit_part(double, CVecRef y, VecRef fi) const override { fi[0] = -0.5 * y[0]; }
+  void eval_implicit_part_jacobian(double, CVecRef, SparseMat& jac) const override {
+    scalar(jac, -0.5);
+  }
+
+ private:
+  static void scalar(SparseMat& jac, double v) {
     jac.resize(1, 1);
     jac.setZero();
-    jac.insert(0, 0) = -1.0;
+    jac.insert(0, 0) = v;
     jac.makeCompressed();
   }
+  bool split_;
 };
 
 // y' = t^q (q = 0: y' = 1), y(0) = 0, exact y = t^(q+1)/(q+1); Jacobian 0 (one stored zero).
+// Split: each part t^q/2, so that a pair whose two tables have order p integrates it exactly.
 class Monomial final : public OdeSystem {
  public:
-  explicit Monomial(int q) : q_(q) {}
-  std::string name() const override { return q_ == 0 ? "y'=1" : "y'=t^" + std::to_string(q_); }
+  explicit Monomial(int q, bool split = false) : q_(q), split_(split) {}
+  bool has_imex_split() const override { return split_; }
+  std::optional<SplitInfo> imex_split() const override {
+    return split_ ? std::optional<SplitInfo>(halves_split()) : std::nullopt;
+  }
+  bool has_implicit_part_jacobian() const override { return split_; }
+  std::string name() const override {
+    return (q_ == 0 ? "y'=1" : "y'=t^" + std::to_string(q_)) + (split_ ? " (split)" : "");
+  }
   Index dimension() const override { return 1; }
   Vec initial_state() const override { return Vec::Zero(1); }
   bool has_jacobian() const override { return true; }
@@ -210,18 +241,26 @@ class Monomial final : public OdeSystem {
   void exact(double t, VecRef y) const override { y[0] = std::pow(t, q_ + 1) / (q_ + 1); }
 
  protected:
-  void eval_rhs(double t, CVecRef, VecRef dydt) const override {
-    dydt[0] = q_ == 0 ? 1.0 : std::pow(t, q_);
+  void eval_rhs(double t, CVecRef, VecRef dydt) const override { dydt[0] = power(t); }
+  void eval_jacobian(double, CVecRef, SparseMat& jac) const override { zero(jac); }
+  void eval_rhs_explicit_part(double t, CVecRef, VecRef fe) const override {
+    fe[0] = 0.5 * power(t);
   }
-  void eval_jacobian(double, CVecRef, SparseMat& jac) const override {
+  void eval_rhs_implicit_part(double t, CVecRef, VecRef fi) const override {
+    fi[0] = 0.5 * power(t);
+  }
+  void eval_implicit_part_jacobian(double, CVecRef, SparseMat& jac) const override { zero(jac); }
+
+ private:
+  double power(double t) const { return q_ == 0 ? 1.0 : std::pow(t, q_); }
+  static void zero(SparseMat& jac) {
     jac.resize(1, 1);
     jac.setZero();
     jac.insert(0, 0) = 0.0;
     jac.makeCompressed();
   }
-
- private:
   int q_;
+  bool split_;
 };
 
 // The three systems of the count checks, with the span of a run on each.
@@ -231,19 +270,87 @@ struct CountSystem {
   double span;  // fixed-step and adaptive runs cover [t0, t0 + span]
 };
 
-std::vector<CountSystem> count_systems() {
+// Methods that need an additive split (`split`: IMEX pairs, operator splitting, multirate) get
+// split systems instead: the scalar one in halves, Kaps' problem (ε = 1e-3, its 1/ε terms
+// implicit; kepler has no split) and the cloth with split=springs.
+std::vector<CountSystem> count_systems(bool split = false) {
   std::vector<CountSystem> out;
-  out.push_back({"scalar_linear", std::make_unique<ScalarLinear>(), 1.0});
-  Params kepler;
-  kepler.set("e", "0.5");
-  out.push_back({"kepler(e=0.5)", model_registry().create("kepler", kepler), 0.5});
+  out.push_back({split ? "scalar_linear(split)" : "scalar_linear",
+                 std::make_unique<ScalarLinear>(split), 1.0});
+  if (split) {
+    Params kaps;
+    kaps.set("eps", "1e-3");
+    out.push_back({"kaps(eps=1e-3)", model_registry().create("kaps", kaps), 0.5});
+  } else {
+    Params kepler;
+    kepler.set("e", "0.5");
+    out.push_back({"kepler(e=0.5)", model_registry().create("kepler", kepler), 0.5});
+  }
   Params cloth;
   cloth.set("n", "8");
+  if (split) cloth.set("split", "springs");
   // 8×8 points; structural ω = √(k/m) ≈ 35, so h = 2.5e-4 is far inside every explicit
   // method's stability limit.
-  out.push_back({"cloth(n=8)", model_registry().create("cloth", cloth), 0.004});
+  out.push_back({split ? "cloth(n=8,split=springs)" : "cloth(n=8)",
+                 model_registry().create("cloth", cloth), 0.004});
   return out;
 }
+
+// y' = E y + I y with E = [[0, 1], [-1, 0]] (a rotation: the explicit part) and I = diag(-1, -2)
+// (decay: the implicit part), y(0) = (1, 1/2). E and I do not commute (EI - IE =
+// [[0, -1], [-1, 0]]), so a splitting's error is its own, not cancelled as on Kaps' problem,
+// whose exact solution keeps f_I = 0 (y1 = y2²) and makes Lie and Strang look exact.
+// Exact: y(t) = e^(Mt) y0, M = E + I = [[-1, 1], [-1, -2]], whose eigenvalues are s ± iω with
+// s = tr/2 = -3/2 and ω = √(det − s²) = √(3 − 9/4); e^(Mt) = e^(st) (cos ωt · 1 + sin ωt/ω ·
+// (M − s·1)) (Cayley–Hamilton).
+class RotationDecay final : public OdeSystem {
+ public:
+  std::string name() const override { return "rotation_decay"; }
+  Index dimension() const override { return 2; }
+  Vec initial_state() const override { return Vec{{1.0, 0.5}}; }
+  bool has_jacobian() const override { return true; }
+  bool autonomous() const override { return true; }
+  bool has_exact() const override { return true; }
+  bool has_imex_split() const override { return true; }
+  std::optional<SplitInfo> imex_split() const override {
+    return SplitInfo{"rotation_decay", "the rotation [[0, 1], [-1, 0]] y",
+                     "the decay diag(-1, -2) y"};
+  }
+  bool has_implicit_part_jacobian() const override { return true; }
+  void exact(double t, VecRef y) const override {
+    const double s = -1.5, w = std::sqrt(0.75);
+    const double c = std::cos(w * t), sn = std::sin(w * t) / w, e = std::exp(s * t);
+    const double y1 = 1.0, y2 = 0.5;  // y0
+    // (M − s·1) = [[0.5, 1], [-1, -0.5]]
+    y[0] = e * (c * y1 + sn * (0.5 * y1 + y2));
+    y[1] = e * (c * y2 + sn * (-y1 - 0.5 * y2));
+  }
+
+ protected:
+  void eval_rhs(double, CVecRef y, VecRef f) const override {
+    f[0] = y[1] - y[0];
+    f[1] = -y[0] - 2.0 * y[1];
+  }
+  void eval_jacobian(double, CVecRef, SparseMat& jac) const override {
+    const std::vector<Eigen::Triplet<double>> t{
+        {0, 0, -1.0}, {0, 1, 1.0}, {1, 0, -1.0}, {1, 1, -2.0}};
+    jac.resize(2, 2);
+    jac.setFromTriplets(t.begin(), t.end());
+  }
+  void eval_rhs_explicit_part(double, CVecRef y, VecRef fe) const override {
+    fe[0] = y[1];
+    fe[1] = -y[0];
+  }
+  void eval_rhs_implicit_part(double, CVecRef y, VecRef fi) const override {
+    fi[0] = -y[0];
+    fi[1] = -2.0 * y[1];
+  }
+  void eval_implicit_part_jacobian(double, CVecRef, SparseMat& jac) const override {
+    const std::vector<Eigen::Triplet<double>> t{{0, 0, -1.0}, {1, 1, -2.0}};
+    jac.resize(2, 2);
+    jac.setFromTriplets(t.begin(), t.end());
+  }
+};
 
 // ---- Helpers ------------------------------------------------------------------------------
 
@@ -358,7 +465,7 @@ void count_checks(std::vector<AuditRow>& rows, const std::string& name) {
   const MethodInfo& info = probe->info();
   const bool per_step =
       (info.family == Family::explicit_rk || info.family == Family::symplectic) && info.stages > 0;
-  std::vector<CountSystem> systems = count_systems();
+  std::vector<CountSystem> systems = count_systems(info.requires_.split);
   if (info.requires_.constraints) {
     // Methods that enforce holonomic constraints (rattle) run on none of the three: their counts
     // are checked on a constrained pendulum chain of 3 bobs instead.
@@ -412,12 +519,15 @@ constexpr int kSlopePoints = 3, kLadderLevels = 28;
 
 void slope_check(std::vector<AuditRow>& rows, const std::string& name) {
   const std::string check = "local_error_slope";
-  Params kp;
-  kp.set("e", "0.5");
-  const auto sys = model_registry().create("kepler", kp);
-  const std::string label = "kepler(e=0.5)";
   auto probe = create(name);
   const MethodInfo& info = probe->info();
+  // Kepler (e = 0.5); methods that need a split: RotationDecay, whose parts do not commute.
+  const bool split = info.requires_.split;
+  Params kp;
+  kp.set("e", "0.5");
+  const std::unique_ptr<OdeSystem> sys =
+      split ? std::make_unique<RotationDecay>() : model_registry().create("kepler", kp);
+  const std::string label = split ? "rotation_decay" : "kepler(e=0.5)";
   if (const std::string why = incompatibility(*probe, *sys); !why.empty())
     return rows.push_back(skip(name, check, label, why));
   if (info.order <= 0)
@@ -496,14 +606,7 @@ void adaptive_checks(std::vector<AuditRow>& rows, const std::string& name) {
   auto probe = create(name);
   const MethodInfo& info = probe->info();
   if (!probe->supports_adaptive()) return;
-  if (info.requires_.split) {
-    // The exactness systems have no additive split; the IMEX pairs' adaptive runs are tested on
-    // split models (tests/integrators/test_imex_ark.cpp).
-    const std::string why = "needs an additive split f = f_E + f_I, which these systems lack";
-    rows.push_back(skip(name, "adaptive_constant", "y'=1", why));
-    rows.push_back(skip(name, "adaptive_polynomial", "y'=t^(p-1)", why));
-    return;
-  }
+  const bool split = info.requires_.split;  // then both parts carry half of t^q
   if (info.order <= 0) {
     const std::string why =
         "variable order: a polynomial is exact only at the order the method has reached";
@@ -518,7 +621,7 @@ void adaptive_checks(std::vector<AuditRow>& rows, const std::string& name) {
     return run_adaptive(sys, *integ, o);
   };
   {
-    const Monomial sys(0);
+    const Monomial sys(0, split);
     const RunResult r = run(sys);
     const double err = std::abs(r.y[0] - 1.0);
     const bool ok = r.stats.status == Status::ok && err <= kExactTol && r.stats.steps <= kFewSteps;
@@ -531,7 +634,7 @@ void adaptive_checks(std::vector<AuditRow>& rows, const std::string& name) {
                                   : run_note(r)));
   }
   {
-    const Monomial sys(info.order - 1);
+    const Monomial sys(info.order - 1, split);
     const RunResult r = run(sys);
     const double exact = 1.0 / info.order;
     const double err = std::abs(r.y[0] - exact);
@@ -568,8 +671,50 @@ AuditRow order_row(const std::string& name, const std::string& check, const Butc
   return row(name, check, label, std::to_string(claimed), std::to_string(measured), ok, reason);
 }
 
+// The same for an additive pair: the conditions of both tables and the coupling ones
+// (core/additive_conditions.hpp) with the weights wE, wI, checked to order 6.
+AuditRow additive_order_row(const std::string& name, const std::string& check,
+                            const AdditiveTableau& t, const Vec& wE, const Vec& wI, int claimed) {
+  constexpr int kMax = 6;
+  const int measured =
+      additive_satisfied_order(t.explicit_table, t.implicit_table, wE, wI, kMax, 1e-12);
+  const std::string label = t.name + " (additive)";
+  if (claimed >= kMax)
+    return row(name, check, label, std::to_string(claimed),
+               measured >= kMax ? ">= 6" : std::to_string(measured), measured >= kMax,
+               "additive conditions up to order 6 checked");
+  std::string reason;
+  if (measured < claimed) {
+    const auto conditions =
+        additive_order_conditions(t.explicit_table, t.implicit_table, wE, wI, measured + 1, "b");
+    if (const auto c = first_violated_additive_condition(conditions, measured + 1, false, 1e-12))
+      reason = std::string(c->coupling ? "the coupling condition " : "the condition ") + c->name +
+               " fails by " + num(c->residual, 3);
+  } else if (measured > claimed) {
+    reason = "every additive condition of order " + std::to_string(claimed + 1) +
+             " holds as well: the claim is not the order";
+  }
+  return row(name, check, label, std::to_string(claimed), std::to_string(measured),
+             measured == claimed, reason);
+}
+
+// An additive pair's claims: its order and embedded order from the additive conditions (the
+// tables' sizes and shared nodes are checked when the pair is built).
+void additive_checks(std::vector<AuditRow>& rows, const std::string& name, const Integrator& integ,
+                     const AdditiveTableau& t) {
+  rows.push_back(additive_order_row(name, "tableau_order", t, t.explicit_table.b,
+                                    t.implicit_table.b, integ.info().order));
+  if (t.has_embedded())
+    rows.push_back(additive_order_row(name, "embedded_order", t, t.explicit_table.b_embedded,
+                                      t.implicit_table.b_embedded, t.embedded_order));
+  rows.push_back(
+      skip(name, "stage_order", t.name + " (additive)", "an additive pair claims no stage order"));
+}
+
 void tableau_checks(std::vector<AuditRow>& rows, const std::string& name) {
   auto integ = create(name);
+  if (const AdditiveTableau* a = integ->additive_tableau())
+    return additive_checks(rows, name, *integ, *a);
   const ButcherTableau* t = tableau_of(*integ);
   if (!t) {
     rows.push_back(skip(name, "tableau", "-", "not defined by a Butcher tableau"));

@@ -151,6 +151,16 @@ DirkIntegrator::DirkIntegrator(ButcherTableau tableau, std::string description, 
 void DirkIntegrator::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   check_compatible(info(), sys);
   core_.reset(sys, t0, y0);
+  restart_state(sys, t0);
+}
+
+void DirkIntegrator::restart(const OdeSystem& sys, double t, CVecRef y) {
+  if (core_.system() != &sys) return reset(sys, t, y);
+  core_.restart();
+  restart_state(sys, t);
+}
+
+void DirkIntegrator::restart_state(const OdeSystem& sys, double t0) {
   core_.set_newton_tol(newton_tol_);
   const Index n = sys.dimension();
   stepper_.reset(n);
@@ -243,6 +253,12 @@ Bdf2Integrator::Bdf2Integrator(ImplicitOptions opt)
     : Integrator(method_info("bdf2", Family::implicit, 2, 1, {}, kBdf2Text)),
       core_(std::move(opt)),
       startup_(implicit_tableau("sdirk2")) {}
+
+void Bdf2Integrator::restart(const OdeSystem& sys, double t, CVecRef y) {
+  if (core_.system() != &sys) return reset(sys, t, y);
+  core_.restart();
+  started_ = false;  // the next step starts with sdirk2 again
+}
 
 void Bdf2Integrator::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   check_compatible(info(), sys);

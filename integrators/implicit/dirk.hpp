@@ -100,6 +100,7 @@ class DirkIntegrator final : public Integrator {
                  ControllerOptions control = {}, bool error_filter = true);
   bool supports_adaptive() const override { return adaptive_; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
+  void restart(const OdeSystem& sys, double t, CVecRef y) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) override;
   std::optional<LinearStability> linear_stability() const override {
@@ -109,6 +110,7 @@ class DirkIntegrator final : public Integrator {
   const ImplicitCore& core() const { return core_; }
 
  private:
+  void restart_state(const OdeSystem& sys, double t0);  // what reset() and restart() clear
   DirkStepper stepper_;
   ImplicitCore core_;
   bool adaptive_ = false, fsal_ = false, filter_ = true;
@@ -141,6 +143,7 @@ class Bdf2Integrator final : public Integrator {
  public:
   explicit Bdf2Integrator(ImplicitOptions opt);
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
+  void restart(const OdeSystem& sys, double t, CVecRef y) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   std::optional<LinearStability> linear_stability() const override {
     return multistep_stability({1.0 / 3.0, -4.0 / 3.0, 1.0}, {0.0, 0.0, 2.0 / 3.0});

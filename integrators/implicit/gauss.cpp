@@ -243,6 +243,16 @@ void ImplicitRungeKutta::reset(const OdeSystem& sys, double t0, CVecRef y0) {
       (opt_.linear == LinearSolverKind::automatic && automatic_is_dense(automatic, n_));
   for (auto& r : real_) r.reset(n_, dense);
   for (auto& c : complex_) c.reset(n_, dense);
+  restart_state();
+}
+
+void ImplicitRungeKutta::restart(const OdeSystem& sys, double t, CVecRef y) {
+  if (core_.system() != &sys) return reset(sys, t, y);
+  core_.restart();
+  restart_state();
+}
+
+void ImplicitRungeKutta::restart_state() {
   for (Mat* m : {&z_, &w_, &f_, &z_prev_}) m->setZero(n_, s_);
   for (Vec* v : {&f0_, &scale_, &tmp_, &r1_, &x1_}) v->setZero(n_);
   r2_.setZero(n_);

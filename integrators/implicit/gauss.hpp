@@ -105,6 +105,7 @@ class ImplicitRungeKutta final : public Integrator {
   ImplicitRungeKutta(ButcherTableau tableau, std::string description, GaussOptions opt);
 
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
+  void restart(const OdeSystem& sys, double t, CVecRef y) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   std::optional<LinearStability> linear_stability() const override {
     return tableau_stability(tableau_);
@@ -113,6 +114,7 @@ class ImplicitRungeKutta final : public Integrator {
   const IrkConstants& constants() const { return k_; }
 
  private:
+  void restart_state();  // what reset() and restart() clear
   NewtonAttempt solve_stages(const OdeSystem& sys, double t, CVecRef y, double h,
                              SolveStats& stats);
   void starting_values(double h);

@@ -132,6 +132,14 @@ class ImplicitCore {
   // runs the symbolic analysis. BadInput for impossible combinations (e.g. matrix_free with a
   // direct solver).
   void reset(const OdeSystem& sys, double t0, CVecRef y0);
+  // Integrator::restart: the next step evaluates J again and factorises W anew; the Jacobian
+  // source, linear solver, patterns and symbolic analysis of reset() stay.
+  void restart() {
+    have_jac_ = jac_fresh_in_step_ = w_current_ = false;
+    error_.clear();
+  }
+  // The system of the last reset() (nullptr before the first).
+  const OdeSystem* system() const { return sys_; }
 
   // Marks the start of a step (modified Newton evaluates J again at its first iterate).
   void new_step() { jac_fresh_in_step_ = false; }

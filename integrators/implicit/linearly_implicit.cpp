@@ -27,6 +27,11 @@ void SemiImplicitEuler::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   for (Vec* v : {&f_, &dy_, &ft_, &rhs_}) v->resize(sys.dimension());
 }
 
+void SemiImplicitEuler::restart(const OdeSystem& sys, double t, CVecRef y) {
+  if (core_.system() != &sys) return reset(sys, t, y);
+  core_.restart();  // its only state: every step evaluates J and factorises anew
+}
+
 Status SemiImplicitEuler::step(const OdeSystem& sys, double t, VecRef y, double h,
                                SolveStats& stats) {
   sys.rhs(t, y, f_);
@@ -205,6 +210,16 @@ void Rosenbrock::reset(const OdeSystem& sys, double t0, CVecRef y0) {
   fs_.resize(n, tab_.stages());
   for (Vec* v : {&ft_, &arg_, &rhs_, &ynew_, &err_}) v->resize(n);
   need_ft_ = !sys.autonomous();
+  restart_state(t0);
+}
+
+void Rosenbrock::restart(const OdeSystem& sys, double t, CVecRef y) {
+  if (core_.system() != &sys) return reset(sys, t, y);
+  core_.restart();
+  restart_state(t);
+}
+
+void Rosenbrock::restart_state(double t0) {
   t_ = t0;
   h_ = 0.0;
   lin_valid_ = false;

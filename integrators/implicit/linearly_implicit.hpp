@@ -70,6 +70,7 @@ class SemiImplicitEuler final : public Integrator {
  public:
   explicit SemiImplicitEuler(ImplicitOptions opt);
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
+  void restart(const OdeSystem& sys, double t, CVecRef y) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   std::optional<LinearStability> linear_stability() const override {
     return rosenbrock_stability(Mat::Zero(1, 1), Mat::Ones(1, 1), Vec::Ones(1));
@@ -108,6 +109,7 @@ class Rosenbrock final : public Integrator {
   const RosenbrockTableau* rosenbrock_tableau() const override { return &tab_; }
   bool supports_adaptive() const override { return tab_.b_embedded.size() > 0; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
+  void restart(const OdeSystem& sys, double t, CVecRef y) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) override;
   std::optional<LinearStability> linear_stability() const override {
@@ -115,6 +117,7 @@ class Rosenbrock final : public Integrator {
   }
 
  private:
+  void restart_state(double t0);  // what reset() and restart() clear
   // f(t, y) into fs_.col(0), J and (non-autonomous) f_t at (t, y).
   void linearise(const OdeSystem& sys, double t, CVecRef y, SolveStats& stats);
   // The stages of a step of size h from the linearisation at (t, y), with I - hγJ factored:

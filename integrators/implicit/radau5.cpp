@@ -316,6 +316,16 @@ void Radau5::reset(const OdeSystem& sys, double t0, CVecRef y0) {
       (opt_.linear == LinearSolverKind::automatic && automatic_is_dense(automatic, n_));
   real_.reset(n_, dense);
   complex_.reset(n_, dense);
+  restart_state(t0);
+}
+
+void Radau5::restart(const OdeSystem& sys, double t, CVecRef y) {
+  if (core_.system() != &sys) return reset(sys, t, y);
+  core_.restart();
+  restart_state(t);
+}
+
+void Radau5::restart_state(double t0) {
   for (Mat* m : {&z_, &w_, &f_, &z_prev_}) m->setZero(n_, 3);
   for (Vec* v : {&f0_, &ynew_, &scale_, &tmp_, &tmp2_, &err_, &r1_, &x1_}) v->setZero(n_);
   r2_.setZero(n_);

@@ -141,6 +141,7 @@ class Radau5 final : public Integrator {
 
   bool supports_adaptive() const override { return true; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
+  void restart(const OdeSystem& sys, double t, CVecRef y) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) override;
   std::optional<LinearStability> linear_stability() const override {
@@ -149,6 +150,7 @@ class Radau5 final : public Integrator {
   const ButcherTableau* butcher_tableau() const override { return &tableau_; }
 
  private:
+  void restart_state(double t0);  // what reset() and restart() clear
   // Newton for the stages of a step of size h from (t, y), from the starting values (or, warm,
   // from the stages in z_).
   NewtonAttempt solve_stages(const OdeSystem& sys, double t, CVecRef y, double h, bool adaptive,

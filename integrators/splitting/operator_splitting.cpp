@@ -127,14 +127,16 @@ void OperatorSplitting::reset(const OdeSystem& sys, double t0, CVecRef y0) {
 }
 
 // Each substep restarts its sub-integrator at the substep's (t, y): the other part changed y
-// since the sub-integrator's last step, so its caches and history do not apply (header).
+// since the sub-integrator's last step, so its caches and history do not apply (header). A
+// restart, not a reset: the structure analysed by reset() (patterns, symbolic factorisation,
+// work vectors) is the same at every substep.
 Status OperatorSplitting::explicit_substep(double t, VecRef y, double h, SolveStats& stats) {
-  explicit_->reset(*explicit_view_, t, y);
+  explicit_->restart(*explicit_view_, t, y);
   return explicit_->step(*explicit_view_, t, y, h, stats);
 }
 
 Status OperatorSplitting::implicit_substep(double t, VecRef y, double h, SolveStats& stats) {
-  implicit_->reset(*implicit_view_, t, y);
+  implicit_->restart(*implicit_view_, t, y);
   return implicit_->step(*implicit_view_, t, y, h, stats);
 }
 
