@@ -157,6 +157,7 @@ EnergyRun measure_energy_drift(const OdeSystem& sys, Integrator& integ,
   run.t_reached = last.t;
   run.max_rel_error = max_all;
   run.final_rel_error = last.rel_error;
+  run.final_change = absolute ? last.value - v0 : (last.value - v0) / std::abs(v0);
   run.drift_rate = slope.slope();
   if (reached_tenth || r.stats.status == Status::ok) {
     if (max_tenth > 0)
@@ -277,11 +278,22 @@ Table energy_summary_table(const EnergyResult& r) {
   return t;
 }
 
+namespace {
+
+// "+1.2e-03 (gain)", "-3.4e-05 (loss)", "0", or "-" when not finite.
+std::string signed_change(double c) {
+  if (!std::isfinite(c)) return "-";
+  if (c == 0.0) return "0";
+  return (c > 0 ? "+" : "") + format_short(c, 2) + (c > 0 ? " (gain)" : " (loss)");
+}
+
+}  // namespace
+
 Table energy_markdown_table(const EnergyResult& r) {
   const std::string kind =
       invariant_error_is_absolute(r.initial_value, r.arbitrary_zero) ? "abs." : "rel.";
   Table t{{"integrator", "h", "steps", "max " + kind + " error", "final " + kind + " error",
-           "drift rate (1/t)", "growth", "status"},
+           "final change", "drift rate (1/t)", "growth", "status"},
           {}};
   for (std::size_t i = 0; i < r.other_invariants.size(); ++i)
     t.columns.push_back(
@@ -307,6 +319,7 @@ Table energy_markdown_table(const EnergyResult& r) {
                                     std::to_string(run.steps),
                                     format_short(run.max_rel_error, 2),
                                     format_short(run.final_rel_error, 2),
+                                    signed_change(run.final_change),
                                     format_short(run.drift_rate, 2),
                                     run.growth_ratio ? format_short(*run.growth_ratio, 2) : "-",
                                     to_string(run.stats.status)};
@@ -357,7 +370,8 @@ std::string markdown_report(const EnergySpec& spec, const EnergyResult& r) {
   os << "growth = max error over the run / max over its first tenth: about 1 means the error "
         "oscillates within a bounded band (symplectic methods), about 10 means it grows "
         "linearly in time (secular drift, e.g. rk4); drift rate is the least-squares slope of "
-        "the error against t.\n\n";
+        "the error against t; final change is the invariant's change at the end with its sign "
+        "(same scale as the error): a gain or a loss.\n\n";
   os << energy_markdown_table(r).to_markdown() << "\n";
   for (const auto& run : r.runs)
     if (run.stats.status != Status::ok)
@@ -398,14 +412,17 @@ bool write_energy_outputs(const fs::path& dir, const EnergySpec& spec, const Ene
   meta["growth"] = "max over the run / max over t <= t0 + (t_end - t0)/10";
   nlohmann::json runs = nlohmann::json::array();
   for (const auto& run : r.runs) {
-    nlohmann::json j = {{"integrator", run.integrator},
-                        {"h", run.h},
-                        {"steps", run.steps},
-                        {"t_reached", run.t_reached},
-                        {"status", to_string(run.stats.status)},
-                        {"message", run.stats.message},
-                        {"f_evals", run.stats.f_evals},
-                        {"wall_s", run.stats.wall_s}};
+    nlohmann::json j = {
+        {"integrator", run.integrator},
+        {"h", run.h},
+        {"steps", run.steps},
+        {"t_reached", run.t_reached},
+        {"status", to_string(run.stats.status)},
+        {"final_change", std::isfinite(run.final_change) ? nlohmann::json(run.final_change)
+                                                         : nlohmann::json(nullptr)},
+        {"message", run.stats.message},
+        {"f_evals", run.stats.f_evals},
+        {"wall_s", run.stats.wall_s}};
     for (const auto& [name, value] : run.other_max_rel_error) j["max_error_" + name] = value;
     runs.push_back(std::move(j));
   }

@@ -88,7 +88,11 @@ struct EnergyRun {
   double t_reached = 0;
   double max_rel_error = 0;
   double final_rel_error = 0;
-  double drift_rate = 0;               // per unit time
+  // The same at the last step with its sign: (I(t) - I0)/|I0| (or I(t) - I0 where the error is
+  // absolute): > 0 the method gained energy, < 0 it lost it (explicit Euler gains on an
+  // oscillator, backward Euler loses). NaN when the invariant ended non-finite.
+  double final_change = 0;
+  double drift_rate = 0;               // per unit time (of the unsigned error)
   std::optional<double> growth_ratio;  // column `growth`: see the header comment
   // Other invariants: name and maximum error over the run (relative, or absolute when
   // invariant_error_is_absolute(I0)).

@@ -116,6 +116,31 @@ TEST(EnergyOscillator, ExplicitEulerMatchesClosedForm) {
   EXPECT_EQ(r.other_invariants.size(), 0u);
 }
 
+// The final change keeps its sign: on x'' = -x explicit Euler multiplies x² + v² by 1 + h² per
+// step and backward Euler by 1/(1 + h²) (|R(ih)|² of R = 1 + z and R = 1/(1 - z)), so after N
+// steps the energy changed by (1 + h²)^N - 1 > 0 (a gain) and (1 + h²)^(-N) - 1 < 0 (a loss);
+// the unsigned final error is the absolute value of each. energy.md writes the sign in words.
+TEST(EnergyOscillator, FinalChangeTellsAGainFromALoss) {
+  const double h = 0.05;
+  const long n = 400;
+  EnergySpec spec =
+      spec_for("harmonic_oscillator", {"x0=1", "v0=0"}, {"euler", "backward_euler"}, h, h * n, 50);
+  const EnergyResult r = run_energy(spec, nullptr);
+  const double gain = std::pow(1 + h * h, static_cast<double>(n)) - 1;
+  const double loss = std::pow(1 + h * h, -static_cast<double>(n)) - 1;
+  ASSERT_EQ(r.runs.size(), 2u);
+  EXPECT_NEAR(r.runs[0].final_change, gain, 1e-11 * gain * n);
+  EXPECT_NEAR(r.runs[1].final_change, loss, 1e-11 * std::abs(loss) * n);
+  EXPECT_DOUBLE_EQ(r.runs[0].final_rel_error, std::abs(r.runs[0].final_change));
+  EXPECT_DOUBLE_EQ(r.runs[1].final_rel_error, std::abs(r.runs[1].final_change));
+  const Table t = energy_markdown_table(r);
+  const auto col = static_cast<std::size_t>(
+      std::find(t.columns.begin(), t.columns.end(), "final change") - t.columns.begin());
+  ASSERT_LT(col, t.columns.size());
+  EXPECT_NE(t.rows[0][col].find("(gain)"), std::string::npos) << t.rows[0][col];
+  EXPECT_NE(t.rows[1][col].find("(loss)"), std::string::npos) << t.rows[1][col];
+}
+
 // Symplectic Euler (velocity first) on x'' = -x conserves the quadratic form
 // Q = x² + v² + h x v exactly (det of the step map is 1 and Q is its invariant), an ellipse
 // whose axes have Q-eigenvalues 1 ± h/2. From (1, 0), Q = 1, so E = ½(x² + v²) sweeps
