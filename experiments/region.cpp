@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "experiments/analyze.hpp"
 #include "experiments/catalog.hpp"
 
 namespace stiffbench {
@@ -30,6 +31,18 @@ std::optional<LinearStability> stability_of(const std::string& name) {
   return integrator_registry().create(name, Params{})->linear_stability();
 }
 
+// The curves of a registered integrator: its own region, or for an additive (IMEX) pair, which
+// has none, the regions of its two tables alone (NAME:explicit, NAME:implicit; what `analyze`
+// shows of them). Empty when it has neither.
+std::vector<std::pair<std::string, LinearStability>> region_curves(const std::string& name) {
+  const auto integ = integrator_registry().create(name, Params{});
+  if (auto s = integ->linear_stability()) return {{name, std::move(*s)}};
+  if (const AdditiveTableau* t = integ->additive_tableau())
+    return {{additive_part_name(name, "explicit"), tableau_stability(t->explicit_table)},
+            {additive_part_name(name, "implicit"), tableau_stability(t->implicit_table)}};
+  return {};
+}
+
 std::string no_region_reason(const std::string& name) {
   const auto& info = integrator_registry().at(name).info;
   std::string why = info.family == Family::reference
@@ -37,7 +50,8 @@ std::string no_region_reason(const std::string& name) {
                         : "no stability data";
   if (info.order == 0) why += ", variable order";
   return "--integrators: '" + name + "' has no fixed stability region (" + why +
-         "); integrators with one: " + join_names(region_integrators());
+         "); integrators with one: " + join_names(region_integrators()) +
+         ", and the IMEX pairs (the regions of their two tables)";
 }
 
 std::vector<std::string> chosen_integrators(const RegionSpec& spec) {
@@ -58,7 +72,7 @@ void RegionSpec::validate() const {
   for (const auto& name : integrators) {
     integrator_registry().at(name);  // BadInput naming an unknown integrator
     require_input(seen.insert(name).second, "--integrators: '" + name + "' is listed twice");
-    require_input(stability_of(name).has_value(), no_region_reason(name));
+    require_input(!region_curves(name).empty(), no_region_reason(name));
   }
   if (box) {
     const RegionBox& b = *box;
@@ -134,9 +148,14 @@ RegionBox fitted_region_box(const std::vector<LinearStability>& methods) {
 
 RegionResult run_region(const RegionSpec& spec) {
   spec.validate();
-  const std::vector<std::string> names = chosen_integrators(spec);
+  std::vector<std::string> names, family;
   std::vector<LinearStability> stab;
-  for (const auto& name : names) stab.push_back(*stability_of(name));
+  for (const auto& name : chosen_integrators(spec))
+    for (auto& [row, s] : region_curves(name)) {
+      names.push_back(row);
+      family.push_back(to_string(integrator_registry().at(name).info.family));
+      stab.push_back(std::move(s));
+    }
 
   RegionResult res;
   res.resolution = spec.resolution;
@@ -150,7 +169,7 @@ RegionResult run_region(const RegionSpec& spec) {
     const LinearStability& s = stab[k];
     RegionMethod& m = res.methods[k];
     m.integrator = names[k];
-    m.family = to_string(integrator_registry().at(names[k]).info.family);
+    m.family = family[k];
     m.kind = s.kind;
     m.has_region = static_cast<bool>(s.amplification);
     if (m.has_region) {

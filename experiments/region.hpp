@@ -7,7 +7,10 @@
 //     of the box, each crossing refined by bisection (so every point has |R| = 1 to ~1e-12);
 //   BDF2 (linear multistep): the boundary locus z(θ) = ρ(e^{iθ})/σ(e^{iθ}) clipped to the box;
 //   kick/drift splittings, Verlet, leapfrog: no region in the z-plane (they need a mechanical
-//     system); only the stable interval of hω on the undamped oscillator x'' = −ω²x.
+//     system); only the stable interval of hω on the undamped oscillator x'' = −ω²x;
+//   IMEX pairs (named; not in the default set): no region of their own, so the regions of their
+//     two tables alone, as rows NAME:explicit and NAME:implicit (the explicit table's on f_E's
+//     eigenvalues, the implicit table's on f_I's; `analyze` gives their exact figures).
 //
 // Limits per integrator: the real-axis limit (the first z = −r where the method becomes
 // unstable, as that negative number; −inf when stable on the whole negative axis), the

@@ -247,6 +247,28 @@ TEST(RegionExperiment, MechanicalOnlyMethodsHaveOnlyTheOscillatorLimit) {
   EXPECT_NEAR(std::stod(l.rows[0][5]), 2.0, 1e-6);
 }
 
+// An IMEX pair has no region of its own: named, it is drawn as its two tables alone. Figures:
+// imex_ssp2_222's explicit table is Heun's (R = 1 + z + z²/2: stable on [-2, 0], unstable near 0
+// on the imaginary axis), its implicit one L-stable (R(∞) = 0, tests/experiments/test_analyze);
+// ark436l2sa's explicit imaginary-axis limit 4.000729197218431 was found outside stiffbench
+// (Python on the published rationals, test_analyze.cpp says how); its implicit table (esdirk43's)
+// is A-stable.
+TEST(RegionExperiment, ImexPairsAreDrawnAsTheirTwoTables) {
+  RegionSpec spec;
+  spec.integrators = {"imex_ssp2_222", "ark436l2sa"};
+  spec.resolution = 40;
+  const RegionResult r = run_region(spec);
+  ASSERT_EQ(r.methods.size(), 4u);
+  const auto& heun = method(r, "imex_ssp2_222:explicit");
+  EXPECT_NEAR(heun.real_axis->limit, 2.0, 1e-12);
+  EXPECT_EQ(heun.imaginary_axis->limit, 0.0);
+  EXPECT_EQ(heun.family, "imex");
+  EXPECT_TRUE(*method(r, "imex_ssp2_222:implicit").a_stable);
+  EXPECT_NEAR(method(r, "ark436l2sa:explicit").imaginary_axis->limit, 4.000729197218431, 1e-12);
+  EXPECT_TRUE(*method(r, "ark436l2sa:implicit").a_stable);
+  EXPECT_FALSE(method(r, "ark436l2sa:explicit").boundary.empty());
+}
+
 // Methods with the same |R(z)| are reported as such (all two-stage second-order explicit RK
 // methods have R = 1 + z + z²/2).
 TEST(RegionExperiment, IdenticalStabilityFunctionsAreNamed) {
