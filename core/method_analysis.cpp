@@ -289,6 +289,40 @@ std::optional<OrderCondition> first_violated_condition(const std::vector<OrderCo
   return first;
 }
 
+// Whether P/Q and P̂/Q̂ are one rational function: P·Q̂ = P̂·Q coefficient by coefficient, to
+// 1e-12 of the largest product coefficient.
+bool same_rational(const RationalForm& r, const RationalForm& e) {
+  auto product = [](const Polynomial& a, const Polynomial& b) {
+    std::vector<ld> c(a.size() + b.size() - 1, 0.0L);
+    for (std::size_t i = 0; i < a.size(); ++i)
+      for (std::size_t j = 0; j < b.size(); ++j) c[i + j] += static_cast<ld>(a[i]) * b[j];
+    return c;
+  };
+  if (r.p.empty() || r.q.empty() || e.p.empty() || e.q.empty()) return false;
+  std::vector<ld> x = product(r.p, e.q), y = product(e.p, r.q);
+  x.resize(std::max(x.size(), y.size()), 0.0L);
+  y.resize(x.size(), 0.0L);
+  ld scale = 0, diff = 0;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    scale = std::max({scale, std::abs(x[k]), std::abs(y[k])});
+    diff = std::max(diff, std::abs(x[k] - y[k]));
+  }
+  return diff <= 1e-12L * scale;
+}
+
+// The note of an embedded pair whose embedded weights have the method's own R(z) (ros3p): on
+// y' = Jy with constant J both solutions are R(hJ)y, so the estimate is round-off.
+void note_embedded_stability(MethodAnalysis& m, const LinearStability& main,
+                             const LinearStability& embedded) {
+  if (!main.rational || !embedded.rational || !same_rational(*main.rational, *embedded.rational))
+    return;
+  m.embedded_same_stability = true;
+  m.notes.push_back(
+      "the embedded weights have the same stability function R(z): on linear problems with a "
+      "constant Jacobian the error estimate is round-off, so an adaptive run's step there is "
+      "limited only by h_max and the output times (work-precision names such runs)");
+}
+
 MethodAnalysis analyze_runge_kutta(const ButcherTableau& t, const std::string& kind) {
   ButcherTableau tab = t;
   const Index s = tab.stages();
@@ -310,7 +344,13 @@ MethodAnalysis analyze_runge_kutta(const ButcherTableau& t, const std::string& k
   m.stiffly_accurate = tab.coefficients_fsal();
   m.fsal = m.stiffly_accurate && tab.a.row(0).cwiseAbs().maxCoeff() == 0.0;
   m.max_coefficient = std::max({max_abs(tab.a), max_abs(tab.b), max_abs(tab.c)});
-  fill_stability(m, tableau_stability(tab), tab.a, tab.b);
+  const LinearStability stab = tableau_stability(tab);
+  fill_stability(m, stab, tab.a, tab.b);
+  if (tab.b_embedded.size() == s) {
+    ButcherTableau embedded = tab;
+    embedded.b = tab.b_embedded;
+    note_embedded_stability(m, stab, tableau_stability(embedded));
+  }
   if (tab.is_explicit()) {
     m.ssp_coefficient = ssp_coefficient(tab);
     m.notes.push_back(
@@ -345,7 +385,10 @@ MethodAnalysis analyze_rosenbrock(const RosenbrockTableau& t) {
   m.notes.push_back(
       "Rosenbrock: order conditions of Hairer & Wanner II, IV.7 (exact Jacobian); "
       "stability from A = alpha + Gamma");
-  fill_stability(m, rosenbrock_stability(t.alpha, gamma, t.b), beta, t.b);
+  const LinearStability stab = rosenbrock_stability(t.alpha, gamma, t.b);
+  fill_stability(m, stab, beta, t.b);
+  if (t.b_embedded.size() == s)
+    note_embedded_stability(m, stab, rosenbrock_stability(t.alpha, gamma, t.b_embedded));
   return m;
 }
 

@@ -92,8 +92,11 @@ struct MethodAnalysis {
   double ssp_coefficient = -1;                      // explicit RK only; -1 otherwise
   int dissipation_order = 0, dispersion_order = 0;  // 0: none (exact to the series' length)
   double oscillator_limit = 0;                      // splittings: stable for hω below it
-  std::vector<OrderCondition> conditions;           // every condition up to order 8
-  std::vector<std::string> notes;                   // what was not analysed, and why
+  // The embedded weights give the same R(z) as b (P·Q̂ = P̂·Q to 1e-12): the error estimate
+  // vanishes on linear constant-coefficient problems (ros3p). A note says so.
+  bool embedded_same_stability = false;
+  std::vector<OrderCondition> conditions;  // every condition up to order 8
+  std::vector<std::string> notes;          // what was not analysed, and why
 };
 
 // Runge–Kutta (kind "explicit_rk", "dirk" or "irk"), Rosenbrock and kick/drift methods.

@@ -5,7 +5,9 @@
 
 #include <Eigen/LU>
 #include <cmath>
+#include <complex>
 #include <numbers>
+#include <optional>
 #include <string>
 
 #include "core/method_analysis.hpp"
@@ -357,6 +359,53 @@ TEST(MethodAnalysis, RosenbrockRos3p) {
   EXPECT_FALSE(m.l_stable);
   EXPECT_NEAR(m.r_infinity, std::sqrt(3.0) - 1, 1e-12);
   EXPECT_EQ(m.ssp_coefficient, -1.0);
+}
+
+// ROS3P's embedded weights give the same stability function as its own (Lang & Verwer 2001
+// chose them so): checked here without the polynomial forms, by one step of the scalar
+// Rosenbrock recursion on y' = λy, (1 − γz) k_i = z (1 + Σ_j α_ij k_j) + z Σ_j γ_ij k_j with
+// z = hλ, y1 = 1 + bᵀk against ŷ1 = 1 + b̂ᵀk, at points across the plane. Every other built-in
+// pair with embedded weights has a different R̂ and no such note (ros3p is the one whose estimate
+// vanishes on heat_2d, docs/commands/work-precision.md).
+TEST(MethodAnalysis, EmbeddedWeightsWithTheSameStabilityFunctionAreNamed) {
+  const auto ros3p = testing_support::make("ros3p");
+  const RosenbrockTableau& r = *ros3p->rosenbrock_tableau();
+  const Index s = r.stages();
+  for (const std::complex<double> z : {std::complex<double>(-0.7, 0.0), {0.3, 1.3}, {-5.0, 2.0}}) {
+    std::vector<std::complex<double>> k(static_cast<std::size_t>(s));
+    std::complex<double> y1 = 1.0, y1_hat = 1.0;
+    for (Index i = 0; i < s; ++i) {
+      std::complex<double> arg = 1.0, lower = 0.0;
+      for (Index j = 0; j < i; ++j) {
+        arg += r.alpha(i, j) * k[static_cast<std::size_t>(j)];
+        lower += r.gamma_lower(i, j) * k[static_cast<std::size_t>(j)];
+      }
+      k[static_cast<std::size_t>(i)] = (z * arg + z * lower) / (1.0 - r.gamma * z);
+      y1 += r.b[i] * k[static_cast<std::size_t>(i)];
+      y1_hat += r.b_embedded[i] * k[static_cast<std::size_t>(i)];
+    }
+    EXPECT_LT(std::abs(y1 - y1_hat), 1e-14 * std::abs(y1)) << z;
+  }
+  const MethodAnalysis m = analyze_rosenbrock(r);
+  EXPECT_TRUE(m.embedded_same_stability);
+  bool noted = false;
+  for (const auto& n : m.notes) noted = noted || n.find("same stability function") != n.npos;
+  EXPECT_TRUE(noted);
+
+  int pairs = 0;
+  for (const auto& e : integrator_registry().entries()) {
+    if (e.info.name == "ros3p") continue;
+    const auto integ = testing_support::make(e.info.name);
+    std::optional<MethodAnalysis> a;
+    if (const ButcherTableau* t = integ->butcher_tableau(); t && t->b_embedded.size() > 0)
+      a = analyze_runge_kutta(*t, t->is_explicit() ? "explicit_rk" : "irk");
+    else if (const RosenbrockTableau* q = integ->rosenbrock_tableau(); q && q->b_embedded.size())
+      a = analyze_rosenbrock(*q);
+    if (!a) continue;
+    ++pairs;
+    EXPECT_FALSE(a->embedded_same_stability) << e.info.name;
+  }
+  EXPECT_GE(pairs, 7);  // bs3, cash_karp, dopri5, rkf45, esdirk43, trbdf2, rodas4
 }
 
 // ---- Kick/drift splittings ----------------------------------------------------------------------
