@@ -146,11 +146,15 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
   row("cloth 512² springs/s in a symplectic_euler step", springs / se_step(2), "%.3g", ">= 4e8",
       springs / se_step(2) >= 4e8, "(" + one_thread(springs / se_step(1), "%.3g").substr(2) + ")");
   const auto rk_ratio = [&](int t) { return rk_step(t) / (4.0 * se_step(t)); };
-  row("cloth 512² rk4 step / (4 x symplectic_euler step), driver", rk_ratio(2), "%.3g", "<= 1.06",
-      rk_ratio(2) <= 1.06,
-      "(direct step(): " +
-          fmt("%.3g", L.sec("step/rk4/cloth:512/omp:2") /
-                          (4.0 * L.sec("step/symplectic_euler/cloth:512/omp:2"))) +
+  // The driver's per-run costs (the result's copy of y0, ‖y0‖∞) are the same for both methods,
+  // so they lower the driver ratio of a method with 4 times the step cost: the row takes the
+  // worse of the driver ratio and the direct step() ratio.
+  const double rk_direct =
+      L.sec("step/rk4/cloth:512/omp:2") / (4.0 * L.sec("step/symplectic_euler/cloth:512/omp:2"));
+  const double rk_worse = std::isnan(rk_direct) ? rk_ratio(2) : std::max(rk_ratio(2), rk_direct);
+  row("cloth 512² rk4 step / (4 x symplectic_euler step), the worse of driver and step()", rk_worse,
+      "%.3g", "<= 1.06", rk_worse <= 1.06,
+      "(driver: " + fmt("%.3g", rk_ratio(2)) + "; direct step(): " + fmt("%.3g", rk_direct) +
           "; Odeint rk4 / (4 x symplectic_euler step()): " +
           fmt("%.3g", L.sec("peer/odeint_rk4/cloth:512/omp:2") /
                           (4.0 * L.sec("step/symplectic_euler/cloth:512/omp:2"))) +

@@ -822,13 +822,15 @@ bool a_stable_on_samples(const LinearStability& s, double r, int n) {
   return true;
 }
 
-namespace {
 Polynomial poly_multiply(const Polynomial& a, const Polynomial& b) {
+  if (a.empty() || b.empty()) return {};
   Polynomial c(a.size() + b.size() - 1, 0.0);
   for (std::size_t i = 0; i < a.size(); ++i)
     for (std::size_t j = 0; j < b.size(); ++j) c[i + j] += a[i] * b[j];
   return c;
 }
+
+namespace {
 // P(z/k)^k (coefficients in ascending powers of z).
 Polynomial scaled_power(Polynomial p, int k) {
   double f = 1.0;

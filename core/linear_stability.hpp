@@ -47,6 +47,8 @@ inline constexpr double stability_tolerance = 1e-9;
 
 // A real polynomial by its coefficients in ascending powers.
 using Polynomial = std::vector<double>;
+// The product a·b (empty when either is).
+Polynomial poly_multiply(const Polynomial& a, const Polynomial& b);
 // R(z) = P(z)/Q(z), P(0) = Q(0) = 1.
 struct RationalForm {
   Polynomial p, q;

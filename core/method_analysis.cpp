@@ -292,22 +292,16 @@ std::optional<OrderCondition> first_violated_condition(const std::vector<OrderCo
 // Whether P/Q and P̂/Q̂ are one rational function: P·Q̂ = P̂·Q coefficient by coefficient, to
 // 1e-12 of the largest product coefficient.
 bool same_rational(const RationalForm& r, const RationalForm& e) {
-  auto product = [](const Polynomial& a, const Polynomial& b) {
-    std::vector<ld> c(a.size() + b.size() - 1, 0.0L);
-    for (std::size_t i = 0; i < a.size(); ++i)
-      for (std::size_t j = 0; j < b.size(); ++j) c[i + j] += static_cast<ld>(a[i]) * b[j];
-    return c;
-  };
   if (r.p.empty() || r.q.empty() || e.p.empty() || e.q.empty()) return false;
-  std::vector<ld> x = product(r.p, e.q), y = product(e.p, r.q);
-  x.resize(std::max(x.size(), y.size()), 0.0L);
-  y.resize(x.size(), 0.0L);
-  ld scale = 0, diff = 0;
+  Polynomial x = poly_multiply(r.p, e.q), y = poly_multiply(e.p, r.q);
+  x.resize(std::max(x.size(), y.size()), 0.0);
+  y.resize(x.size(), 0.0);
+  double scale = 0, diff = 0;
   for (std::size_t k = 0; k < x.size(); ++k) {
     scale = std::max({scale, std::abs(x[k]), std::abs(y[k])});
     diff = std::max(diff, std::abs(x[k] - y[k]));
   }
-  return diff <= 1e-12L * scale;
+  return diff <= 1e-12 * scale;
 }
 
 // The note of an embedded pair whose embedded weights have the method's own R(z) (ros3p): on

@@ -183,6 +183,14 @@ namespace {
 // report can be compared with what they do.
 SplitInfo halves_split() { return SplitInfo{"halves", "half of f", "half of f"}; }
 
+// The 1×1 Jacobian [v] of the audit's scalar systems (v = 0 is stored too: the pattern is fixed).
+void scalar_jacobian(SparseMat& jac, double v) {
+  jac.resize(1, 1);
+  jac.setZero();
+  jac.insert(0, 0) = v;
+  jac.makeCompressed();
+}
+
 // y' = λy, λ = -1, y(0) = 1: the scalar linear system of the count checks (split: each part
 // -y/2).
 class ScalarLinear final : public OdeSystem {
@@ -203,20 +211,14 @@ class ScalarLinear final : public OdeSystem {
 
  protected:
   void eval_rhs(double, CVecRef y, VecRef dydt) const override { dydt[0] = -y[0]; }
-  void eval_jacobian(double, CVecRef, SparseMat& jac) const override { scalar(jac, -1.0); }
+  void eval_jacobian(double, CVecRef, SparseMat& jac) const override { scalar_jacobian(jac, -1.0); }
   void eval_rhs_explicit_part(double, CVecRef y, VecRef fe) const override { fe[0] = -0.5 * y[0]; }
   void eval_rhs_implicit_part(double, CVecRef y, VecRef fi) const override { fi[0] = -0.5 * y[0]; }
   void eval_implicit_part_jacobian(double, CVecRef, SparseMat& jac) const override {
-    scalar(jac, -0.5);
+    scalar_jacobian(jac, -0.5);
   }
 
  private:
-  static void scalar(SparseMat& jac, double v) {
-    jac.resize(1, 1);
-    jac.setZero();
-    jac.insert(0, 0) = v;
-    jac.makeCompressed();
-  }
   bool split_;
 };
 
@@ -242,23 +244,19 @@ class Monomial final : public OdeSystem {
 
  protected:
   void eval_rhs(double t, CVecRef, VecRef dydt) const override { dydt[0] = power(t); }
-  void eval_jacobian(double, CVecRef, SparseMat& jac) const override { zero(jac); }
+  void eval_jacobian(double, CVecRef, SparseMat& jac) const override { scalar_jacobian(jac, 0.0); }
   void eval_rhs_explicit_part(double t, CVecRef, VecRef fe) const override {
     fe[0] = 0.5 * power(t);
   }
   void eval_rhs_implicit_part(double t, CVecRef, VecRef fi) const override {
     fi[0] = 0.5 * power(t);
   }
-  void eval_implicit_part_jacobian(double, CVecRef, SparseMat& jac) const override { zero(jac); }
+  void eval_implicit_part_jacobian(double, CVecRef, SparseMat& jac) const override {
+    scalar_jacobian(jac, 0.0);
+  }
 
  private:
   double power(double t) const { return q_ == 0 ? 1.0 : std::pow(t, q_); }
-  static void zero(SparseMat& jac) {
-    jac.resize(1, 1);
-    jac.setZero();
-    jac.insert(0, 0) = 0.0;
-    jac.makeCompressed();
-  }
   int q_;
   bool split_;
 };
