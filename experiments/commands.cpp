@@ -34,8 +34,9 @@ std::string step_modes(const IntegratorRegistry::Entry& e) {
 }
 
 void list_integrators(std::ostream& out) {
-  Table t{{"integrator", "family", "kind", "order", "stages", "step", "requires", "description"},
-          {}};
+  Table t{
+      {"integrator", "family", "kind", "order", "f evals/step", "step", "requires", "description"},
+      {}};
   for (const auto& e : integrator_registry().entries()) {
     const MethodInfo& m = e.info;
     t.rows.push_back({m.name, to_string(m.family), m.kind.empty() ? "-" : m.kind,

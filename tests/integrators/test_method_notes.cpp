@@ -85,8 +85,14 @@ TEST(MethodNotes, ListShowsKindAndStepColumns) {
   std::ostringstream out;
   cmd_list("integrators", out);
   const std::string s = out.str();
-  EXPECT_NE(s.find("| integrator | family | kind | order | stages | step |"), std::string::npos)
+  // The count column is MethodInfo::stages, f evaluations per step after start-up (describe
+  // calls it "evaluations per step"): ros3p has 3 stages but 2 evaluations, velocity_verlet 1
+  // (first-same-as-last), and the column says so.
+  EXPECT_NE(s.find("| integrator | family | kind | order | f evals/step | step |"),
+            std::string::npos)
       << s.substr(0, 300);
+  EXPECT_NE(s.find("| ros3p | implicit | Rosenbrock (embedded pair) | 3 | 2 |"), std::string::npos);
+  EXPECT_NE(s.find("| velocity_verlet | symplectic | splitting | 2 | 1 |"), std::string::npos);
   EXPECT_NE(s.find("| radau5 | implicit | Radau IIA collocation |"), std::string::npos);
 }
 
