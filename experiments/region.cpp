@@ -33,13 +33,18 @@ std::optional<LinearStability> stability_of(const std::string& name) {
 
 // The curves of a registered integrator: its own region, or for an additive (IMEX) pair, which
 // has none, the regions of its two tables alone (NAME:explicit, NAME:implicit; what `analyze`
-// shows of them). Empty when it has neither.
+// shows of them), or for an operator splitting (lie, strang), whose R is not a function of one
+// hλ either, its explicit sub-integrator's region over one step (NAME:explicit: R(z) for lie,
+// R(z/2)² for strang; the default sub-integrators, what `stability` predicts from). Empty when
+// it has none of these.
 std::vector<std::pair<std::string, LinearStability>> region_curves(const std::string& name) {
   const auto integ = integrator_registry().create(name, Params{});
   if (auto s = integ->linear_stability()) return {{name, std::move(*s)}};
   if (const AdditiveTableau* t = integ->additive_tableau())
     return {{additive_part_name(name, "explicit"), tableau_stability(t->explicit_table)},
             {additive_part_name(name, "implicit"), tableau_stability(t->implicit_table)}};
+  if (auto e = integ->explicit_part_stability())
+    return {{additive_part_name(name, "explicit"), std::move(*e)}};
   return {};
 }
 
@@ -51,7 +56,8 @@ std::string no_region_reason(const std::string& name) {
   if (info.order == 0) why += ", variable order";
   return "--integrators: '" + name + "' has no fixed stability region (" + why +
          "); integrators with one: " + join_names(region_integrators()) +
-         ", and the IMEX pairs (the regions of their two tables)";
+         ", the IMEX pairs (the regions of their two tables) and lie and strang (their explicit "
+         "sub-integrator's region over one step)";
 }
 
 std::vector<std::string> chosen_integrators(const RegionSpec& spec) {
@@ -296,6 +302,15 @@ std::string markdown_report(const RegionResult& r) {
     os << "\nSame stability function |R(z)|, hence the same region and coinciding curves in the "
           "plot: "
        << same << ".\n";
+  const bool parts = std::any_of(r.methods.begin(), r.methods.end(), [](const RegionMethod& m) {
+    return m.integrator.find(':') != std::string::npos;
+  });
+  if (parts)
+    os << "\nNAME:explicit and NAME:implicit are parts, not the method: an IMEX pair's two tables "
+          "alone, and for lie and strang their explicit sub-integrator over one step h (one "
+          "step for lie, two of h/2 for strang; the default sub-integrators). The combined "
+          "method's amplification is not a function of one h*lambda when the parts do not "
+          "commute; `stability` measures its limit on a split model.\n";
   os << "\nFull-precision limits: `region_limits.csv`; metadata: `region.json`.\n";
   return os.str();
 }

@@ -269,6 +269,39 @@ TEST(RegionExperiment, ImexPairsAreDrawnAsTheirTwoTables) {
   EXPECT_FALSE(method(r, "ark436l2sa:explicit").boundary.empty());
 }
 
+// lie and strang have no R of one hλ (their parts need not commute); region draws their
+// explicit sub-integrator (rk4 by default) over one step h: lie takes one rk4 step, so rk4's real
+// and imaginary-axis limits (2.785293563405282 and 2.828427124746190 = 2√2, from R(z) = Σ z^k/k!,
+// k ≤ 4); strang takes two half steps, R(z/2)², so exactly twice those limits.
+TEST(RegionExperiment, SplittingsAreDrawnAsTheirExplicitSubIntegrator) {
+  RegionSpec spec;
+  spec.integrators = {"lie", "strang", "rk4"};
+  spec.resolution = 40;
+  const RegionResult r = run_region(spec);
+  ASSERT_EQ(r.methods.size(), 3u);
+  const auto& rk4 = method(r, "rk4");
+  const auto& lie = method(r, "lie:explicit");
+  const auto& strang = method(r, "strang:explicit");
+  EXPECT_NEAR(rk4.imaginary_axis->limit, 2.0 * std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(lie.real_axis->limit, rk4.real_axis->limit, 1e-12);
+  EXPECT_NEAR(lie.imaginary_axis->limit, 2.0 * std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(strang.real_axis->limit, 2.0 * rk4.real_axis->limit, 1e-11);
+  EXPECT_NEAR(strang.imaginary_axis->limit, 4.0 * std::sqrt(2.0), 1e-11);
+  EXPECT_EQ(lie.family, "splitting");  // drawn in the splitting schemes panel
+  EXPECT_FALSE(strang.boundary.empty());
+  // The report says what the NAME:explicit rows are.
+  const auto dir = std::filesystem::temp_directory_path() /
+                   (std::string("sb_region_split") + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  write_region_outputs(dir, spec, r);
+  std::ifstream in(dir / "region.md");
+  std::stringstream md;
+  md << in.rdbuf();
+  std::filesystem::remove_all(dir);
+  EXPECT_NE(md.str().find("for lie and strang their explicit sub-integrator"), std::string::npos)
+      << md.str();
+}
+
 // Methods with the same |R(z)| are reported as such (all two-stage second-order explicit RK
 // methods have R = 1 + z + z²/2).
 TEST(RegionExperiment, IdenticalStabilityFunctionsAreNamed) {
