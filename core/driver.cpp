@@ -121,9 +121,10 @@ RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0
   RunResult r;
   r.n_steps = n;
   r.h = (opt.t_end - t0) / static_cast<double>(n);
-  // The copy and ‖y0‖∞ over OpenMP threads for large states (a cloth 512² state is 12.6 MB: with
-  // both serial, a 20-step symplectic_euler run's steps took 0.25-0.8 ms more each than direct
-  // step() calls, 0.15-0.22 ms with both threaded; docs/performance.md, stop 48).
+  // The copy and ‖y0‖∞ over OpenMP threads for large states (a cloth 512² state is 12.6 MB).
+  // With this and the benchmark's untimed first run, a 20-step symplectic_euler run's steps take
+  // 0.15-0.22 ms more each than direct step() calls, 0.25-0.8 ms before both (2 threads;
+  // docs/performance.md, stop 48).
   copy_state(y0, r.y);
   r.t = t0;
   const double bound = opt.blowup_factor * std::max(1.0, max_norm(y0));
