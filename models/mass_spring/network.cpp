@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <tuple>
 #include <type_traits>
 #include <unordered_map>
 #include <unordered_set>
@@ -173,7 +174,8 @@ void MassSpringNetwork::check_triangles() const {
 }
 
 // Springs of the right-hand side in structure-of-arrays order, grouped by partition of the
-// points (see the header comment and RhsSprings).
+// points (see the header comment and RhsSprings); within each group, the runs first, then the
+// loose springs in the network's order.
 void MassSpringNetwork::pack_rhs_springs() {
   const Index np = num_points();
   // The partition count depends on the size only (not on the threads or on the parallel
@@ -191,6 +193,7 @@ void MassSpringNetwork::pack_rhs_springs() {
     part[static_cast<std::size_t>(p)] = static_cast<std::int32_t>(owner(p));
   // Group of a spring: its partition q (both ends in q); parts + lo/2 for a spring between lo
   // and lo + 1 with lo even, parts + ne + lo/2 with lo odd; parts + ne + no for all others.
+  rhs_parts_ = parts;
   even_groups_ = parts / 2;
   odd_groups_ = (parts - 1) / 2;
   const Index groups = parts + even_groups_ + odd_groups_ + 1;
@@ -202,23 +205,12 @@ void MassSpringNetwork::pack_rhs_springs() {
     if (hi != lo + 1) return groups - 1;
     return parts + (lo % 2 == 0 ? lo / 2 : even_groups_ + lo / 2);
   };
-  std::vector<Index> start(static_cast<std::size_t>(groups) + 1, 0);
-  for (const Spring& sp : springs_) ++start[static_cast<std::size_t>(group_of(sp)) + 1];
-  for (Index g = 0; g < groups; ++g)
-    start[static_cast<std::size_t>(g) + 1] += start[static_cast<std::size_t>(g)];
-  part_start_.assign(start.begin(), start.begin() + parts + 1);
-  cross_start_.assign(start.begin() + parts, start.end());
 
   // The distinct (k, L) pairs (by bits): a short linear search while there are few, then a hash.
   RhsSprings& rs = rhs_springs_;
   const std::size_t ns = springs_.size();
   require_input(dofs() <= std::numeric_limits<std::int32_t>::max(),
                 name_ + ": more than 2^31 - 1 coordinates (the springs store 32-bit offsets)");
-  rs.i.resize(ns);
-  rs.j.resize(ns);
-  rs.kind.resize(ns);
-  rs.damping.assign(has_dashpots_ ? ns : 0, 0.0);
-  if (opt_.split != NetworkSplit::none) packed_implicit_.assign(ns, 0);
   struct KeyHash {
     std::size_t operator()(const std::pair<std::uint64_t, std::uint64_t>& key) const {
       return std::hash<std::uint64_t>()(key.first * 0x9E3779B97F4A7C15ULL ^ key.second);
@@ -247,14 +239,75 @@ void MassSpringNetwork::pack_rhs_springs() {
     if (!kinds.empty()) kinds.emplace(key, t);
     return t;
   };
-  std::vector<Index> next(start.begin(), start.end() - 1);
-  for (const Spring& sp : springs_) {
-    const auto slot = static_cast<std::size_t>(next[static_cast<std::size_t>(group_of(sp))]++);
+  // Each spring's (k, L) pair and part, and the springs of each group in the network's order.
+  std::vector<std::int32_t> kind(ns);
+  std::vector<std::uint8_t> implicit(ns, 0);
+  std::vector<std::vector<std::int32_t>> members(static_cast<std::size_t>(groups));
+  for (std::size_t e = 0; e < ns; ++e) {
+    const Spring& sp = springs_[e];
+    kind[e] = kind_of(sp.k, sp.rest);
+    implicit[e] = opt_.split != NetworkSplit::none && implicit_spring(sp) ? 1 : 0;
+    members[static_cast<std::size_t>(group_of(sp))].push_back(static_cast<std::int32_t>(e));
+  }
+
+  rs.i.resize(ns);
+  rs.j.resize(ns);
+  rs.kind.resize(ns);
+  rs.damping.assign(has_dashpots_ ? ns : 0, 0.0);
+  if (opt_.split != NetworkSplit::none) packed_implicit_.assign(ns, 0);
+  group_start_.assign(1, 0);
+  group_loose_.clear();
+  group_runs_.assign(1, 0);
+  runs_.clear();
+  std::vector<std::uint8_t> taken(ns, 0);
+  std::size_t slot = 0;
+  const auto place = [&](std::int32_t e) {
+    const Spring& sp = springs_[static_cast<std::size_t>(e)];
     rs.i[slot] = static_cast<std::int32_t>(dim_ * sp.i);
     rs.j[slot] = static_cast<std::int32_t>(dim_ * sp.j);
-    rs.kind[slot] = kind_of(sp.k, sp.rest);
+    rs.kind[slot] = kind[static_cast<std::size_t>(e)];
     if (has_dashpots_) rs.damping[slot] = sp.damping;
-    if (opt_.split != NetworkSplit::none) packed_implicit_[slot] = implicit_spring(sp) ? 1 : 0;
+    if (opt_.split != NetworkSplit::none)
+      packed_implicit_[slot] = implicit[static_cast<std::size_t>(e)];
+    ++slot;
+  };
+  for (const std::vector<std::int32_t>& m : members) {
+    // Runs: springs of one (j - i, (k, L) pair, part) whose first ends are consecutive points.
+    // Sorting by that key and i lists them together; runs shorter than kMinRun stay loose.
+    std::vector<std::int32_t> sorted = m;
+    const auto key = [&](std::int32_t e) {
+      const Spring& sp = springs_[static_cast<std::size_t>(e)];
+      return std::tuple{sp.j - sp.i, kind[static_cast<std::size_t>(e)],
+                        implicit[static_cast<std::size_t>(e)], sp.i};
+    };
+    std::stable_sort(sorted.begin(), sorted.end(),
+                     [&](std::int32_t a, std::int32_t b) { return key(a) < key(b); });
+    for (std::size_t a = 0; a < sorted.size();) {
+      std::size_t b = a + 1;
+      const auto [off, kd, imp, i0] = key(sorted[a]);
+      while (b < sorted.size()) {
+        const auto [off_b, kd_b, imp_b, i_b] = key(sorted[b]);
+        if (off_b != off || kd_b != kd || imp_b != imp || i_b != i0 + static_cast<Index>(b - a))
+          break;
+        ++b;
+      }
+      if (b - a >= static_cast<std::size_t>(kMinRun)) {
+        const Spring& first = springs_[static_cast<std::size_t>(sorted[a])];
+        runs_.push_back({static_cast<Index>(slot), static_cast<Index>(b - a),
+                         static_cast<std::int32_t>(dim_ * first.i),
+                         static_cast<std::int32_t>(dim_ * first.j), kd, imp});
+        for (std::size_t t = a; t < b; ++t) {
+          place(sorted[t]);
+          taken[static_cast<std::size_t>(sorted[t])] = 1;
+        }
+      }
+      a = b;
+    }
+    group_runs_.push_back(static_cast<Index>(runs_.size()));
+    group_loose_.push_back(static_cast<Index>(slot));
+    for (const std::int32_t e : m)
+      if (!taken[static_cast<std::size_t>(e)]) place(e);
+    group_start_.push_back(static_cast<Index>(slot));
   }
 }
 
@@ -413,6 +466,7 @@ struct SpringArgs {
   const double* damping;         // nullptr without dashpots
   const std::uint8_t* implicit;  // per spring; nullptr: add every spring
   std::uint8_t want;             // with `implicit`: add the springs with implicit[e] == want
+  const detail::SpringRun* runs;
 };
 
 constexpr int kBlock = 128;
@@ -469,30 +523,84 @@ template <int D, bool Dashpots>
   }
 }
 
+// A run (detail::SpringRun): the same c r as spring_range_impl, from contiguous coordinates
+// (the compiler vectorises the stride-D loads and stores with permutes), then f_i += c r for
+// the block's springs and f_j -= c r, each a loop over distinct points. Every point's additions
+// run in an order fixed by the packing, whatever the vector width.
+template <int D, bool Dashpots>
+[[gnu::always_inline]] inline void spring_run_impl(const SpringArgs& s,
+                                                   const detail::SpringRun& run, const double* x,
+                                                   const double* v, double* f) {
+  if (s.implicit && run.implicit != s.want) return;
+  const double k = s.k[run.kind], rest = s.rest[run.kind];
+  alignas(64) double cr[D][kBlock];
+  for (Index b0 = 0; b0 < run.n; b0 += kBlock) {
+    const int nb = static_cast<int>(std::min<Index>(kBlock, run.n - b0));
+    const Index oi = run.i + D * b0, oj = run.j + D * b0;
+    const double* xi = x + oi;
+    const double* xj = x + oj;
+#pragma omp simd
+    for (int b = 0; b < nb; ++b) {
+      double r[D], l2 = 0.0;
+      for (int c = 0; c < D; ++c) {
+        r[c] = xj[D * b + c] - xi[D * b + c];
+        l2 += r[c] * r[c];
+      }
+      const double l = std::sqrt(l2);
+      double coef = k * (l - rest) / l;
+      if constexpr (Dashpots) {
+        double ur = 0.0;
+        for (int c = 0; c < D; ++c) ur += (v[oj + D * b + c] - v[oi + D * b + c]) * r[c];
+        const double cd = s.damping[run.first + b0 + b];
+        coef += cd != 0.0 ? cd * ur / l2 : 0.0;
+      }
+      for (int c = 0; c < D; ++c) cr[c][b] = coef * r[c];
+    }
+    double* fi = f + oi;
+#pragma omp simd
+    for (int b = 0; b < nb; ++b)
+      for (int c = 0; c < D; ++c) fi[D * b + c] += cr[c][b];
+    double* fj = f + oj;
+#pragma omp simd
+    for (int b = 0; b < nb; ++b)
+      for (int c = 0; c < D; ++c) fj[D * b + c] -= cr[c][b];
+  }
+}
+
+// Group G of the packing: its runs, then its loose springs.
+template <int D, bool Dashpots>
+[[gnu::always_inline]] inline void spring_group_impl(const SpringArgs& s, Index r0, Index r1,
+                                                     Index e0, Index e1, const double* x,
+                                                     const double* v, double* f) {
+  for (Index r = r0; r < r1; ++r) spring_run_impl<D, Dashpots>(s, s.runs[r], x, v, f);
+  spring_range_impl<D, Dashpots>(s, e0, e1, x, v, f);
+}
+
 template <int D>
-void spring_range_portable(const SpringArgs& s, Index e0, Index e1, const double* x,
-                           const double* v, double* f) {
+void spring_group_portable(const SpringArgs& s, Index r0, Index r1, Index e0, Index e1,
+                           const double* x, const double* v, double* f) {
   if (s.damping)
-    spring_range_impl<D, true>(s, e0, e1, x, v, f);
+    spring_group_impl<D, true>(s, r0, r1, e0, e1, x, v, f);
   else
-    spring_range_impl<D, false>(s, e0, e1, x, v, f);
+    spring_group_impl<D, false>(s, r0, r1, e0, e1, x, v, f);
 }
 
 // A build for AVX2 or better (-march, e.g. STIFFBENCH_NATIVE) uses the portable kernel as is.
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__AVX2__)
 #define STIFFBENCH_SPRING_AVX2_DISPATCH 1
-// The same kernel compiled for AVX2 (4 springs per vector; GCC loads the end points lane by
-// lane: its vgatherdpd version measured 25% slower on the project's AMD EPYC), chosen at run
-// time when the processor has it. With -ffp-contract=off (CMakeLists.txt) the compiler fuses no
-// multiply-add, and sqrt and division are correctly rounded, so both versions give the same bits.
+// The same kernel compiled for AVX2 (4 springs per vector; GCC loads a loose spring's end points
+// lane by lane: its vgatherdpd version measured 25% slower on the project's AMD EPYC), chosen at
+// run time when the processor has it. With -ffp-contract=off (CMakeLists.txt) the compiler fuses
+// no multiply-add, and sqrt and division are correctly rounded, so both versions give the same
+// bits.
 template <int D>
-__attribute__((target("avx2"))) void spring_range_avx2(const SpringArgs& s, Index e0, Index e1,
-                                                       const double* x, const double* v,
-                                                       double* f) {
+__attribute__((target("avx2"))) void spring_group_avx2(const SpringArgs& s, Index r0, Index r1,
+                                                       Index e0, Index e1, const double* x,
+                                                       const double* v, double* f) {
   if (s.damping)
-    spring_range_impl<D, true>(s, e0, e1, x, v, f);
+    spring_group_impl<D, true>(s, r0, r1, e0, e1, x, v, f);
   else
-    spring_range_impl<D, false>(s, e0, e1, x, v, f);
+    spring_group_impl<D, false>(s, r0, r1, e0, e1, x, v, f);
 }
 
 bool has_avx2() {
@@ -502,15 +610,15 @@ bool has_avx2() {
 #endif
 
 template <int D>
-void spring_range(const SpringArgs& s, Index e0, Index e1, const double* x, const double* v,
-                  double* f) {
+void spring_group(const SpringArgs& s, Index r0, Index r1, Index e0, Index e1, const double* x,
+                  const double* v, double* f) {
 #ifdef STIFFBENCH_SPRING_AVX2_DISPATCH
   if (has_avx2()) {
-    spring_range_avx2<D>(s, e0, e1, x, v, f);
+    spring_group_avx2<D>(s, r0, r1, e0, e1, x, v, f);
     return;
   }
 #endif
-  spring_range_portable<D>(s, e0, e1, x, v, f);
+  spring_group_portable<D>(s, r0, r1, e0, e1, x, v, f);
 }
 
 // Points [p0, p1): force sums into accelerations, a = g + (f - γ v)/m (Springs: f/m only), 0 for
@@ -539,7 +647,7 @@ template <int D, MassSpringNetwork::Part P>
 void MassSpringNetwork::acceleration_impl(const double* x, const double* v, double* a) const {
   const double gamma = opt_.point_damping;
   const Index np = num_points();
-  const Index parts = static_cast<Index>(part_start_.size()) - 1;
+  const Index parts = rhs_parts_;
   const RhsSprings& rs = rhs_springs_;
   // A part of the split adds its own springs only (springs: all in a_I, none in a_E).
   const SpringArgs args{rs.i.data(),
@@ -549,14 +657,18 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
                         rs.rest.data(),
                         has_dashpots_ ? rs.damping.data() : nullptr,
                         P == Part::all ? nullptr : packed_implicit_.data(),
-                        static_cast<std::uint8_t>(P == Part::implicit_part ? 1 : 0)};
+                        static_cast<std::uint8_t>(P == Part::implicit_part ? 1 : 0),
+                        runs_.data()};
+  // Group G of the packing (its runs, then its loose springs).
+  const auto springs_of = [&](Index G) {
+    const auto u = static_cast<std::size_t>(G);
+    spring_group<D>(args, group_runs_[u], group_runs_[u + 1], group_loose_[u], group_start_[u + 1],
+                    x, v, a);
+  };
   // a first holds the force sums.
   // 1. The springs between partitions, group by group in a fixed order (the groups of one
   //    parity touch disjoint points); the even groups first clear their points (below).
-  const auto group = [&](Index g) {
-    spring_range<D>(args, cross_start_[static_cast<std::size_t>(g)],
-                    cross_start_[static_cast<std::size_t>(g) + 1], x, v, a);
-  };
+  const auto group = [&](Index g) { springs_of(parts + g); };
   // 2. Each partition of points (contiguous index ranges, a count fixed by the network's size,
   //    not by the threads) adds its interior springs, then turns its points' force sums into
   //    accelerations while they are in cache: a = g + (f - γ v)/m; pinned points do not move.
@@ -565,8 +677,7 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
   double g[D];
   for (int c = 0; c < D; ++c) g[c] = opt_.gravity[static_cast<std::size_t>(c)];
   const auto partition = [&](Index q) {
-    spring_range<D>(args, part_start_[static_cast<std::size_t>(q)],
-                    part_start_[static_cast<std::size_t>(q) + 1], x, v, a);
+    springs_of(q);
     finish_points<D, P == Part::implicit_part>(a, v, mass, pinned, g, gamma, np * q / parts,
                                                np * (q + 1) / parts);
   };
@@ -587,8 +698,8 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
     }
   };
   const Index first = ne + (parts - 2 * ne);
-  const bool rest = cross_start_[static_cast<std::size_t>(ne + no)] <
-                    cross_start_[static_cast<std::size_t>(ne + no) + 1];
+  const bool rest = group_start_[static_cast<std::size_t>(parts + ne + no)] <
+                    group_start_[static_cast<std::size_t>(parts + ne + no) + 1];
   if (parallel()) {
     // One parallel region, its stages separated by the work-sharing loops' barriers.
 #pragma omp parallel

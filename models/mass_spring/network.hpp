@@ -81,7 +81,11 @@
 // -fopt-info-vec: 4 springs per AVX2 vector, 2 per SSE2 vector; an AVX2 build of the kernel is
 // chosen at run time when the processor has it, the default build stays portable), then the
 // additions in spring order, f_i of consecutive springs with the same first end kept in
-// registers. Neither changes the order of any point's additions, and without contracted
+// registers. Springs of one (j - i, (k, L) pair, split part) whose first ends are consecutive
+// points (a lattice's springs of one direction along a row) are packed as runs (kMinRun) and
+// evaluated from contiguous coordinates, then f_i += c r and f_j -= c r as two contiguous loops
+// over the block; each group evaluates its runs, then its other springs. Neither the vector
+// width nor the threads change the order of any point's additions, and without contracted
 // multiply-adds (-ffp-contract=off) both builds give the same bits. Networks with at least
 // `parallel_threshold` points split their points into kRhsPartitions contiguous index ranges.
 // A parallel region clears the points of partitions q and q + 1 and adds the springs between them
@@ -163,6 +167,18 @@ struct NetworkOptions {
   NetworkSplit split = NetworkSplit::none;  // additive split (see the header comment)
   double air_drag = 0.0;  // β_d = ½ρC_d (>= 0) of the air drag on the triangles (3D only)
 };
+
+namespace detail {
+// A run of the right-hand side's springs (MassSpringNetwork, kMinRun): n springs of one (k, L)
+// pair and part with ends (i + D s, j + D s), s = 0 .. n-1, in slots first .. first + n - 1.
+struct SpringRun {
+  Index first;            // its first spring's slot in the packed springs
+  Index n;                // springs
+  std::int32_t i, j;      // first spring's ends' first coordinates (dim × point index)
+  std::int32_t kind;      // index into the distinct (k, L) pairs
+  std::uint8_t implicit;  // in a_I (split only)
+};
+}  // namespace detail
 
 class MassSpringNetwork final : public MechanicalSystem {
  public:
@@ -285,7 +301,7 @@ class MassSpringNetwork final : public MechanicalSystem {
   void add_drag(const double* x, const double* v, double* a) const;
   void add_drag_blocks(const Structure& st, const double* x, const double* v, double* k_values,
                        double* d_values) const;
-  void pack_rhs_springs();        // rhs_springs_, part_start_, cross_start_ (constructor)
+  void pack_rhs_springs();        // rhs_springs_, runs_ and the groups (constructor)
   void ensure_adjacency() const;  // builds the adjacency lists once
   void ensure_structure() const;  // builds the members marked "on first use" once
   Structure build_structure(const std::vector<Spring>& springs, const SpringAdjacency& adjacency,
@@ -318,12 +334,17 @@ class MassSpringNetwork final : public MechanicalSystem {
   std::vector<double> inv_mass_;  // per point, 0 for pinned points
   DistanceConstraints distance_constraints_;
 
-  // Right-hand side springs (see the header comment), in structure-of-arrays order: partition
-  // q's interior springs are [part_start_[q], part_start_[q+1]); the springs between partitions
-  // follow in groups cross_start_[g] .. cross_start_[g+1]: first the groups of springs joining
-  // partitions (q, q+1) for even q (disjoint points: run in parallel), then those for odd q, then
-  // one group of all other cross springs (serial).
+  // Right-hand side springs (see the header comment), in structure-of-arrays order, by group:
+  // group q < parts holds partition q's interior springs; the springs between partitions follow
+  // in groups parts + g: first the groups of springs joining partitions (q, q+1) for even q
+  // (disjoint points: run in parallel), then those for odd q, then one group of all other cross
+  // springs (serial). Group G's springs are [group_start_[G], group_start_[G+1]): first its runs
+  // (runs_[group_runs_[G] .. group_runs_[G+1]), then its loose springs from group_loose_[G].
   static constexpr Index kRhsPartitions = 32;
+  // A run: at least kMinRun springs of one (k, L) pair and part whose ends are consecutive
+  // points, (i0 + s, j0 + s) for s = 0 .. n-1 (a lattice's springs of one direction along a row),
+  // evaluated with contiguous loads and stores instead of gathers and scatters.
+  static constexpr Index kMinRun = 8;
   struct RhsSprings {
     std::vector<std::int32_t> i, j;  // end points' first coordinates (dim × point index)
     std::vector<std::int32_t> kind;  // index into k and rest: the distinct (k, L) pairs
@@ -332,8 +353,9 @@ class MassSpringNetwork final : public MechanicalSystem {
     std::size_t size() const { return i.size(); }
   };
   RhsSprings rhs_springs_;
-  std::vector<Index> part_start_;
-  std::vector<Index> cross_start_;
+  std::vector<detail::SpringRun> runs_;
+  Index rhs_parts_ = 1;
+  std::vector<Index> group_start_, group_loose_, group_runs_;
   Index even_groups_ = 0, odd_groups_ = 0;
   std::vector<double> point_mass_;             // per point
   std::vector<std::uint8_t> pinned_;           // per point

@@ -209,5 +209,52 @@ TEST(SpringKernel, RandomNetworkMatchesOneSpringAtATimeAndThreadCounts) {
   EXPECT_TRUE(acceleration(ser, y, 2) == a1);
 }
 
+// Runs and loose springs in one network (2D, 4,096 points): a chain (i, i+1) across every
+// partition (runs inside, single springs between partitions), a reversed run (i + 5, i) with its
+// own dashpot per spring, a run of 5 (shorter than a run: loose), a repeated run (each spring
+// twice), a pinned point inside a run, and random springs. The kernel's packing puts these in
+// runs and loose lists; the sums must stay within the rounding bound of the one-spring-at-a-time
+// reference and give the same bits at 1 and 2 threads and on the serial path.
+TEST(SpringKernel, RunsAndLooseSpringsMatchOneSpringAtATime) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Index np = 4096;
+  std::vector<MassPoint> points(static_cast<std::size_t>(np));
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    points[p].mass = 0.5 + u(rng);
+    points[p].x = {0.01 * static_cast<double>(p) + 0.003 * u(rng), 0.01 * u(rng), 0.0};
+    points[p].v = {u(rng) - 0.5, u(rng) - 0.5, 0.0};
+    points[p].pinned = p == 777;
+  }
+  std::vector<Spring> springs;
+  const auto add = [&](Index i, Index j, double k, double rest, double damping) {
+    springs.push_back({i, j, k, rest, damping, SpringKind::structural});
+  };
+  for (Index i = 0; i + 1 < np; ++i) add(i, i + 1, 100.0, 0.01, 0.0);
+  for (Index i = 300; i < 340; ++i) add(i + 5, i, 40.0, 0.05, 0.2 * u(rng));
+  for (Index i = 1000; i < 1005; ++i) add(i, i + 3, 60.0, 0.03, 0.1);
+  for (int twice = 0; twice < 2; ++twice)
+    for (Index i = 2000; i < 2100; ++i) add(i, i + 2, 80.0, 0.02, 0.0);
+  std::uniform_int_distribution<Index> any(0, np - 1);
+  for (int e = 0; e < 3000; ++e) {
+    const Index i = any(rng), j = any(rng);
+    if (i != j) add(i, j, 50.0 + static_cast<double>(e % 7), 0.1 * u(rng), 0.05 * u(rng));
+  }
+  NetworkOptions opt;
+  opt.gravity = {0.0, -9.81, 0.0};
+  opt.point_damping = 0.05;
+  const MassSpringNetwork n("runs_network", 2, points, springs, opt);
+  ASSERT_TRUE(n.parallel());
+  const Vec y = perturbed(n, 0.002, 0.5, 9);
+  const Reference ref = reference(n, y, Which::all);
+  const Vec a1 = acceleration(n, y, 1), a2 = acceleration(n, y, 2);
+  EXPECT_LE(error_in_bounds(a1, ref), 1.0);
+  EXPECT_GT(ref.a.cwiseAbs().maxCoeff(), 1.0);
+  EXPECT_TRUE(a1 == a2);
+  opt.parallel_threshold = 100000;
+  const MassSpringNetwork ser("runs_network", 2, points, springs, opt);
+  EXPECT_TRUE(acceleration(ser, y, 2) == a1);
+}
+
 }  // namespace
 }  // namespace stiffbench
