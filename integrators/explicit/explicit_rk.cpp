@@ -15,16 +15,20 @@ template <int M, bool Norm>
 void combine_range(Index begin, Index end, const double* base, int m, const double* const* k,
                    const double* c, double* out, double& mx, bool& nan) {
   const int terms = M > 0 ? M : m;
+  // Local accumulators (not the references): the compiler vectorises the norm with them.
+  double local_mx = mx, local_nan = 0.0;
   for (Index e = begin; e < end; ++e) {
     double acc = base[e];
     for (int j = 0; j < terms; ++j) acc += c[j] * k[j][e];
     out[e] = acc;
     if constexpr (Norm) {
       const double a = std::abs(acc);
-      nan = nan || std::isnan(a);
-      mx = a > mx ? a : mx;
+      local_nan = a != a ? 1.0 : local_nan;
+      local_mx = a > local_mx ? a : local_mx;
     }
   }
+  mx = local_mx;
+  nan = nan || local_nan != 0.0;
 }
 
 // The combination over all entries; returns ‖out‖∞ with Norm (NaN when an entry is NaN; max is
@@ -62,6 +66,63 @@ double combine(Index n, const double* base, int m, const double* const* k, const
   }
 }
 
+template <bool Norm>
+using RangeFn = void (*)(Index, Index, const double*, int, const double* const*, const double*,
+                         double*, double&, bool&);
+
+template <bool Norm>
+RangeFn<Norm> range_fn(int m) {
+  switch (m) {
+    case 1:
+      return &combine_range<1, Norm>;
+    case 2:
+      return &combine_range<2, Norm>;
+    case 3:
+      return &combine_range<3, Norm>;
+    case 4:
+      return &combine_range<4, Norm>;
+    default:
+      return &combine_range<0, Norm>;
+  }
+}
+
+// One combination of the mechanical path (ExplicitRungeKutta::step): base, its m terms'
+// columns and coefficients, and where it goes.
+struct Combination {
+  const double* base;
+  int m;
+  const double* const* cols;
+  const double* coefs;
+  double* out;  // nullptr: not wanted
+};
+
+// Two combinations over the same entries in one pass: sub-blocks of kSub entries, the first
+// combination's then the second's, so the columns both read come from cache the second time.
+// The first is computed before the second for every entry (the second may overwrite what the
+// first reads). Returns max(‖out1‖∞, ‖out2‖∞) with Norm (NaN when an entry is NaN).
+template <bool Norm>
+double combine_pair(Index n, const Combination& one, const Combination& two) {
+  constexpr Index kSub = 512;
+  const RangeFn<Norm> f1 = range_fn<Norm>(one.m), f2 = range_fn<Norm>(two.m);
+  const auto range = [&](Index lo, Index hi, double& mx, bool& nan) {
+    for (Index b = lo; b < hi; b += kSub) {
+      const Index e = std::min(hi, b + kSub);
+      if (one.out) f1(b, e, one.base, one.m, one.cols, one.coefs, one.out, mx, nan);
+      if (two.out) f2(b, e, two.base, two.m, two.cols, two.coefs, two.out, mx, nan);
+    }
+  };
+  double mx = 0.0;
+  bool nan = false;
+  if (n >= ExplicitRungeKutta::kParallelEntries) {
+    const Index chunks = 64;
+#pragma omp parallel for schedule(static) reduction(max : mx) reduction(|| : nan)
+    for (Index q = 0; q < chunks; ++q) range(n * q / chunks, n * (q + 1) / chunks, mx, nan);
+  } else {
+    range(0, n, mx, nan);
+  }
+  return nan ? std::numeric_limits<double>::quiet_NaN() : mx;
+}
+
 }  // namespace
 
 ExplicitRungeKutta::ExplicitRungeKutta(ButcherTableau tableau, std::string description)
@@ -83,8 +144,28 @@ ExplicitRungeKutta::ExplicitRungeKutta(ButcherTableau tableau, std::string descr
         terms_[static_cast<std::size_t>(i)].push_back(j);
         coefs_[static_cast<std::size_t>(i)].push_back(c);
       }
+  // The mechanical path's position combinations (header): row i < s has Σ_j a_ij on v and
+  // (A²)_ik = Σ_j a_ij a_jk on A_k; row s has Σ_j b_j and (bA)_k = Σ_j b_j a_jk.
+  const auto weight = [&](int i, int j) { return i < s ? tableau_.a(i, j) : tableau_.b[j]; };
+  x_v_coef_.assign(static_cast<std::size_t>(s) + 1, 0.0);
+  x_terms_.resize(static_cast<std::size_t>(s) + 1);
+  x_coefs_.resize(static_cast<std::size_t>(s) + 1);
+  for (int i = 0; i <= s; ++i) {
+    const int row_end = i < s ? i : s;
+    for (int j = 0; j < row_end; ++j) x_v_coef_[static_cast<std::size_t>(i)] += weight(i, j);
+    for (int k = 0; k < row_end; ++k) {
+      double c = 0.0;
+      for (int j = k + 1; j < row_end; ++j) c += weight(i, j) * tableau_.a(j, k);
+      if (c != 0.0) {
+        x_terms_[static_cast<std::size_t>(i)].push_back(k);
+        x_coefs_[static_cast<std::size_t>(i)].push_back(c);
+      }
+    }
+  }
   cols_.resize(static_cast<std::size_t>(s));
   scaled_.resize(static_cast<std::size_t>(s));
+  x_cols_.resize(static_cast<std::size_t>(s) + 1);
+  x_scaled_.resize(static_cast<std::size_t>(s) + 1);
 }
 
 void ExplicitRungeKutta::reset(const OdeSystem& sys, double, CVecRef) {
@@ -96,66 +177,84 @@ void ExplicitRungeKutta::reset(const OdeSystem& sys, double, CVecRef) {
 
 Status ExplicitRungeKutta::step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats&) {
   const int s = tableau_.stages();
+  norm_valid_ = false;
+  if (const MechanicalSystem* mech = sys.as_mechanical()) return step_mechanical(*mech, t, y, h);
   const Index n = y.size();
-  // base + Σ (h c_j) k_j over row i's non-zero terms, entries [lo, lo + len) of base, out and
-  // the columns of k_. With y_v (the mechanical path below, x-part only), a stage whose row of A
-  // is zero contributes y's v-part in place of its column.
-  const auto combine_rows = [&](int i, Index lo, Index len, const double* base, double* out,
-                                const double* y_v) {
+  // y + Σ (h c_j) k_j over row i's non-zero terms into out.
+  const auto combine_row = [&](int i, double* out) {
     const auto& terms = terms_[static_cast<std::size_t>(i)];
     const auto& coefs = coefs_[static_cast<std::size_t>(i)];
     const int m = static_cast<int>(terms.size());
     for (int j = 0; j < m; ++j) {
-      const int col = terms[static_cast<std::size_t>(j)];
-      const bool at_y = y_v != nullptr && terms_[static_cast<std::size_t>(col)].empty();
-      cols_[static_cast<std::size_t>(j)] = at_y ? y_v : k_.col(col).data() + lo;
+      cols_[static_cast<std::size_t>(j)] = k_.col(terms[static_cast<std::size_t>(j)]).data();
       scaled_[static_cast<std::size_t>(j)] = h * coefs[static_cast<std::size_t>(j)];
     }
-    if (i == s) return combine<true>(len, base + lo, m, cols_.data(), scaled_.data(), out);
-    return combine<false>(len, base + lo, m, cols_.data(), scaled_.data(), out);
+    if (i == s) return combine<true>(n, y.data(), m, cols_.data(), scaled_.data(), out);
+    return combine<false>(n, y.data(), m, cols_.data(), scaled_.data(), out);
   };
-  norm_valid_ = false;
-  const MechanicalSystem* mech = sys.as_mechanical();
-  if (mech == nullptr) {
-    for (int i = 0; i < s; ++i) {
-      const double ti = t + tableau_.c[i] * h;
-      if (terms_[static_cast<std::size_t>(i)].empty()) {
-        sys.rhs(ti, y, k_.col(i));  // the stage argument is y itself
-      } else {
-        combine_rows(i, 0, n, y.data(), ytmp_.data(), nullptr);
-        sys.rhs(ti, ytmp_, k_.col(i));
-      }
+  for (int i = 0; i < s; ++i) {
+    const double ti = t + tableau_.c[i] * h;
+    if (terms_[static_cast<std::size_t>(i)].empty()) {
+      sys.rhs(ti, y, k_.col(i));  // the stage argument is y itself
+    } else {
+      combine_row(i, ytmp_.data());
+      sys.rhs(ti, ytmp_, k_.col(i));
     }
-    if (!terms_[static_cast<std::size_t>(s)].empty()) {
-      last_norm_ = combine_rows(s, 0, n, y.data(), y.data(), nullptr);
-      norm_valid_ = true;
-    }
-    return Status::ok;
   }
-  // y = [x; v], f = [v; a] (MechanicalSystem::eval_rhs is final): the x-part of k_i is stage
-  // i's velocity V_i itself. Stage i writes X_i into ytmp_'s head and V_i straight into k_i's
-  // x-part, so no stage copies v into k; a stage with a zero row of A (the first) has V = y's
-  // v-part, read from y. Every entry gets the same operations as on the general path above, so
-  // the results are bitwise the same (the test compares); only the copies are gone.
-  const Index d = mech->dofs();
-  const double* y_v = y.data() + d;
+  if (!terms_[static_cast<std::size_t>(s)].empty()) {
+    last_norm_ = combine_row(s, y.data());
+    norm_valid_ = true;
+  }
+  return Status::ok;
+}
+
+// y = [x; v], f = [v; a]: the method written in its accelerations alone (header). k_'s columns
+// hold A_i in their v-part; X_i goes to ytmp_'s head and V_i, when a depends on v, to its tail.
+Status ExplicitRungeKutta::step_mechanical(const MechanicalSystem& mech, double t, VecRef y,
+                                           double h) {
+  const int s = tableau_.stages();
+  const Index d = mech.dofs();
+  double* x = y.data();
+  double* v = y.data() + d;
+  const bool need_v = mech.velocity_dependent();
+  // Row i's two combinations: positions x + (h r_i) v + Σ (h² c_k) A_k into x_out, velocities
+  // v + Σ (h a_ij) A_j into v_out (nullptr: not formed).
+  const auto rows = [&](int i, double* x_out, double* v_out) {
+    const auto u = static_cast<std::size_t>(i);
+    int mx = 0;
+    if (x_v_coef_[u] != 0.0) {
+      x_cols_[0] = v;
+      x_scaled_[0] = h * x_v_coef_[u];
+      mx = 1;
+    }
+    for (std::size_t t2 = 0; t2 < x_terms_[u].size(); ++t2, ++mx) {
+      x_cols_[static_cast<std::size_t>(mx)] = k_.col(x_terms_[u][t2]).data() + d;
+      x_scaled_[static_cast<std::size_t>(mx)] = h * h * x_coefs_[u][t2];
+    }
+    const int mv = static_cast<int>(terms_[u].size());
+    for (int j = 0; j < mv; ++j) {
+      cols_[static_cast<std::size_t>(j)] =
+          k_.col(terms_[u][static_cast<std::size_t>(j)]).data() + d;
+      scaled_[static_cast<std::size_t>(j)] = h * coefs_[u][static_cast<std::size_t>(j)];
+    }
+    const Combination cx{x, mx, x_cols_.data(), x_scaled_.data(), x_out};
+    const Combination cv{v, mv, cols_.data(), scaled_.data(), v_out};
+    return i == s ? combine_pair<true>(d, cx, cv) : combine_pair<false>(d, cx, cv);
+  };
   for (int i = 0; i < s; ++i) {
     const double ti = t + tableau_.c[i] * h;
     auto a_i = k_.col(i).tail(d);
     if (terms_[static_cast<std::size_t>(i)].empty()) {
-      mech->acceleration(ti, y.head(d), y.tail(d), a_i);
+      mech.acceleration(ti, y.head(d), y.tail(d), a_i);
       continue;
     }
-    combine_rows(i, 0, d, y.data(), ytmp_.data(), y_v);          // X_i
-    combine_rows(i, d, d, y.data(), k_.col(i).data(), nullptr);  // V_i
-    mech->acceleration(ti, ytmp_.head(d), k_.col(i).head(d), a_i);
+    rows(i, ytmp_.data(), need_v ? ytmp_.data() + d : nullptr);
+    const double* stage_v = need_v ? ytmp_.data() + d : v;
+    mech.acceleration(ti, ytmp_.head(d), Eigen::Map<const Vec>(stage_v, d), a_i);
   }
   if (!terms_[static_cast<std::size_t>(s)].empty()) {
-    // The x-part first: it reads y's v-part (V of a zero-row stage) before the v-part is updated.
-    const double mx = combine_rows(s, 0, d, y.data(), y.data(), y_v);
-    const double mv = combine_rows(s, d, d, y.data(), y.data() + d, nullptr);
-    last_norm_ = std::isnan(mx) || std::isnan(mv) ? std::numeric_limits<double>::quiet_NaN()
-                                                  : std::max(mx, mv);
+    // Positions first in each block: they read v before the velocities overwrite it.
+    last_norm_ = rows(s, x, v);
     norm_valid_ = true;
   }
   return Status::ok;

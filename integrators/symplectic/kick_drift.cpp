@@ -33,22 +33,28 @@ struct UpdateNorms {
   double x = 0.0, v = 0.0;
 };
 
-// max |p_i| over [0, n) with NaN propagated, order-independent (the same for any thread count).
-inline void track(double value, double& m, bool& nan) {
+// max |p_i| over [0, n) with NaN propagated, order-independent (the same for any thread count):
+// nan becomes 1 at a NaN entry. Doubles on both, local to the loop, so the compiler vectorises it.
+inline void track(double value, double& m, double& nan) {
   const double a = std::abs(value);
-  nan = nan || std::isnan(a);
+  nan = a != a ? 1.0 : nan;
   m = a > m ? a : m;
 }
 
 template <bool Kick, bool Drift, bool NormX, bool NormV>
 void update_entries(Index begin, Index end, double* x, double* v, const double* a, double hk,
                     double hd, double& mx, double& mv, bool& nan_x, bool& nan_v) {
+  double local_mx = mx, local_mv = mv, local_nan_x = 0.0, local_nan_v = 0.0;
   for (Index i = begin; i < end; ++i) {
     if constexpr (Kick) v[i] += hk * a[i];
     if constexpr (Drift) x[i] += hd * v[i];
-    if constexpr (NormX) track(x[i], mx, nan_x);
-    if constexpr (NormV) track(v[i], mv, nan_v);
+    if constexpr (NormX) track(x[i], local_mx, local_nan_x);
+    if constexpr (NormV) track(v[i], local_mv, local_nan_v);
   }
+  mx = local_mx;
+  mv = local_mv;
+  nan_x = nan_x || local_nan_x != 0.0;
+  nan_v = nan_v || local_nan_v != 0.0;
 }
 
 template <bool Kick, bool Drift, bool NormX, bool NormV>

@@ -4,9 +4,14 @@
 // enough for the OpenMP path of both (130²: 50,700 coordinates, 101,400 entries) and on a small
 // one (serial path), and NaN when the state has a NaN entry.
 //
-// The explicit Runge-Kutta methods take a mechanical system's stage velocities as the x-part of
-// their stage derivatives instead of copying them (integrators/explicit/explicit_rk.cpp); the
-// states must be bitwise those of the same methods run on the system's first-order face only.
+// On a mechanical system the explicit Runge-Kutta methods run in their accelerations alone
+// (integrators/explicit/explicit_rk.hpp: X_i = x + h (Σ_j a_ij) v + h² Σ_k (A²)_ik A_k, ...):
+// the same stage values as the first-order form in exact arithmetic. The states must agree with
+// those of the same methods run on the system's first-order face to within rounding: each
+// combination sums at most s + 2 terms, so the two forms' values differ by at most
+// 2 (s + 2) ε Σ|terms| (Higham 2002, §4.2) with Σ|terms| ≈ ‖y‖∞ (h |k| ≪ |y| here), and a change
+// δx in a stage position changes the next ones by about (hω)² δx ≪ δx. 64 ε ‖y‖∞ a step covers
+// s ≤ 4 with room; a wrong coefficient would show as h² |a| ≈ 1e-6 or more.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -60,7 +65,7 @@ class FirstOrderFace final : public OdeSystem {
   const OdeSystem& inner_;
 };
 
-TEST(StepNorm, MechanicalPathIsBitwiseTheFirstOrderPath) {
+TEST(StepNorm, MechanicalPathMatchesTheFirstOrderPathToRounding) {
   // 8²: serial passes; 130²: 50,700 coordinates, the threaded passes of both paths.
   for (const std::string n : {"8", "130"}) {
     const auto sys = testing_support::model("cloth", {"n=" + n, "perturbation=0.01"});
@@ -81,9 +86,12 @@ TEST(StepNorm, MechanicalPathIsBitwiseTheFirstOrderPath) {
       // One f evaluation a stage on both paths.
       EXPECT_EQ(fa, plain.counters().f_evals - fb0) << method;
       EXPECT_EQ(fa, 4L * a->info().stages) << method;
-      EXPECT_EQ((ya - yb).cwiseAbs().maxCoeff(), 0.0) << method << " n=" << n;
-      EXPECT_GT((ya - sys->initial_state()).cwiseAbs().maxCoeff(), 0.0) << method;
-      EXPECT_EQ(*a->last_step_max_norm(), *b->last_step_max_norm()) << method;
+      const double bound =
+          4 * 64 * std::numeric_limits<double>::epsilon() * yb.cwiseAbs().maxCoeff();
+      EXPECT_LE((ya - yb).cwiseAbs().maxCoeff(), bound) << method << " n=" << n;
+      // The steps moved the state well beyond that bound (the comparison is not vacuous).
+      EXPECT_GT((ya - sys->initial_state()).cwiseAbs().maxCoeff(), 1e6 * bound) << method;
+      EXPECT_NEAR(*a->last_step_max_norm(), *b->last_step_max_norm(), bound) << method;
     }
   }
 }

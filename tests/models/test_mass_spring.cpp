@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <memory>
 #include <random>
@@ -453,9 +454,10 @@ TEST(MassSpringParallel, BitwiseIdenticalForAnyThreadCount) {
 
 // The explicit and symplectic steppers update their vectors in fused passes, over OpenMP threads
 // above 50,000 entries (cloth 130² has 50,700 dofs, 101,400 entries). Independent computation:
-// the textbook RK4 and velocity Verlet written with Eigen vector operations, whose per-entry
-// arithmetic (terms added left to right) is the fused passes' own, so the results agree bit for
-// bit; and 1 and 2 threads agree bit for bit for every method.
+// the textbook RK4 and velocity Verlet written with Eigen vector operations. Velocity Verlet's
+// per-entry arithmetic (terms added left to right) is the fused passes' own, so it agrees bit for
+// bit; rk4 runs in its accelerations alone and agrees to within rounding. 1 and 2 threads agree
+// bit for bit for every method.
 TEST(MassSpringParallel, ExplicitAndSymplecticStepsBitwiseForAnyThreadCount) {
   auto sys = model("cloth", {"n=130", "pin=corners"});
   const MassSpringNetwork& nw = net(*sys);
@@ -501,7 +503,12 @@ TEST(MassSpringParallel, ExplicitAndSymplecticStepsBitwiseForAnyThreadCount) {
     y.noalias() += (h * (1.0 / 3.0)) * k3;
     y.noalias() += (h * (1.0 / 6.0)) * k4;
   }
-  EXPECT_TRUE(y == two["rk4"]) << max_abs_diff(y, two["rk4"]);
+  // rk4 runs a mechanical system in its accelerations alone (explicit_rk.hpp): the same values
+  // as the first-order form to within rounding, 64 ε ‖y‖∞ a step (tests/integrators/
+  // test_step_norm.cpp derives the bound).
+  EXPECT_LE(max_abs_diff(y, two["rk4"]),
+            3 * 64 * std::numeric_limits<double>::epsilon() * y.cwiseAbs().maxCoeff());
+  EXPECT_GT(max_abs_diff(y, y0), 1e-6);
 
   // Velocity Verlet: v += h/2 a(x); x += h v; v += h/2 a(x), a evaluated once per step.
   Vec x = y0.head(nd), v = y0.tail(nd), a(nd);
