@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <tuple>
 #include <type_traits>
 #include <unordered_map>
@@ -273,15 +274,30 @@ void MassSpringNetwork::pack_rhs_springs() {
   };
   for (const std::vector<std::int32_t>& m : members) {
     // Runs: springs of one (j - i, (k, L) pair, part) whose first ends are consecutive points.
-    // Sorting by that key and i lists them together; runs shorter than kMinRun stay loose.
-    std::vector<std::int32_t> sorted = m;
+    // Listing the springs by that key and then by i puts them together (a stable sort by
+    // (key, i)): one bucket per key, in key order, each in the network's order and sorted by i
+    // only when it is not already (a lattice lists its springs by first end). Runs shorter than
+    // kMinRun stay loose.
     const auto key = [&](std::int32_t e) {
       const Spring& sp = springs_[static_cast<std::size_t>(e)];
       return std::tuple{sp.j - sp.i, kind[static_cast<std::size_t>(e)],
                         implicit[static_cast<std::size_t>(e)], sp.i};
     };
-    std::stable_sort(sorted.begin(), sorted.end(),
-                     [&](std::int32_t a, std::int32_t b) { return key(a) < key(b); });
+    std::map<std::tuple<Index, std::int32_t, std::uint8_t>, std::vector<std::int32_t>> buckets;
+    for (const std::int32_t e : m) {
+      const auto [off, kd, imp, i0] = key(e);
+      buckets[{off, kd, imp}].push_back(e);
+    }
+    std::vector<std::int32_t> sorted;
+    sorted.reserve(m.size());
+    for (auto& [bucket_key, members_of_key] : buckets) {
+      const auto first_end = [&](std::int32_t a, std::int32_t b) {
+        return springs_[static_cast<std::size_t>(a)].i < springs_[static_cast<std::size_t>(b)].i;
+      };
+      if (!std::is_sorted(members_of_key.begin(), members_of_key.end(), first_end))
+        std::stable_sort(members_of_key.begin(), members_of_key.end(), first_end);
+      sorted.insert(sorted.end(), members_of_key.begin(), members_of_key.end());
+    }
     for (std::size_t a = 0; a < sorted.size();) {
       std::size_t b = a + 1;
       const auto [off, kd, imp, i0] = key(sorted[a]);
