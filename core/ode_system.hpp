@@ -288,7 +288,9 @@ class MechanicalSystem : public OdeSystem {
     eval_acceleration(t, x, v, a);
   }
 
-  // Whether a depends on v (damping). Leapfrog and the Verlet family require it not to.
+  // Whether a depends on v (damping). Leapfrog and the Verlet family require it not to, and the
+  // explicit Runge-Kutta methods form no stage velocities when it is false (they pass the step's
+  // v instead; integrators/explicit/explicit_rk.hpp), so it must not be false when a reads v.
   virtual bool velocity_dependent() const = 0;
 
   // Diagonal of the mass matrix, one entry per dof.
