@@ -86,8 +86,8 @@ RangeFn<Norm> range_fn(int m) {
   }
 }
 
-// One combination of the mechanical path (ExplicitRungeKutta::step): base, its m terms'
-// columns and coefficients, and where it goes.
+// One combination of the mechanical path (ExplicitRungeKutta::step_mechanical): base, its m
+// terms' columns and coefficients, and where it goes.
 struct Combination {
   const double* base;
   int m;
