@@ -66,12 +66,11 @@ double combine(Index n, const double* base, int m, const double* const* k, const
   }
 }
 
-template <bool Norm>
 using RangeFn = void (*)(Index, Index, const double*, int, const double* const*, const double*,
                          double*, double&, bool&);
 
 template <bool Norm>
-RangeFn<Norm> range_fn(int m) {
+RangeFn range_fn(int m) {
   switch (m) {
     case 1:
       return &combine_range<1, Norm>;
@@ -103,7 +102,7 @@ struct Combination {
 template <bool Norm>
 double combine_pair(Index n, const Combination& one, const Combination& two) {
   constexpr Index kSub = 512;
-  const RangeFn<Norm> f1 = range_fn<Norm>(one.m), f2 = range_fn<Norm>(two.m);
+  const RangeFn f1 = range_fn<Norm>(one.m), f2 = range_fn<Norm>(two.m);
   const auto range = [&](Index lo, Index hi, double& mx, bool& nan) {
     for (Index b = lo; b < hi; b += kSub) {
       const Index e = std::min(hi, b + kSub);
