@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "bench/cpu_speed.hpp"
 #include "core/ode_system.hpp"
 #include "core/params.hpp"
 
@@ -27,6 +28,8 @@ struct Config {
   double cvode_timeout_s = 300.0;
   // Allocations the counter saw for one Eigen vector and one std::vector (expected: 2).
   long alloc_self_check = -1;
+  // The CPUs' arithmetic rates just before and just after the benchmarks (cpu_speed.hpp).
+  CpuSpeeds cpu_before, cpu_after;
 };
 
 // One measured benchmark as the summary sees it. With --benchmark_repetitions=N every

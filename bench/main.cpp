@@ -10,7 +10,9 @@
 // version 1.7.1 takes --benchmark_min_time=SECONDS without a unit). Without
 // --benchmark_repetitions a full run repeats every benchmark 5 times and --quick once; the
 // summary uses the median repetition and lists each benchmark's median, minimum and bootstrap 95%
-// interval of the median. The binary also has a child mode, --cvode-child (bench_implicit.cpp).
+// interval of the median. Before and after the benchmarks it probes each CPU's arithmetic rate,
+// alone and with all busy (cpu_speed.hpp): the summary prints it beside the 2-thread speed-ups.
+// The binary also has a child mode, --cvode-child (bench_implicit.cpp).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -115,9 +117,11 @@ int main(int argc, char** argv) {
   register_implicit_benchmarks(cfg);
 
   const double start = now_seconds();
+  cfg.cpu_before = measure_cpu_speeds();
   CollectingReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
   reporter.finish();
+  cfg.cpu_after = measure_cpu_speeds();
   print_summary(reporter.results(), cfg, now_seconds() - start);
   benchmark::Shutdown();
   return 0;

@@ -69,6 +69,14 @@ void row(const std::string& figure, double value, const char* format, const std:
               target.c_str(), status.c_str(), note.empty() ? "" : (" " + note).c_str());
 }
 
+// "; these CPUs reach at most 1.69 (before) and 1.98 (after)": the speed-up that work divided
+// perfectly between the CPUs would reach (cpu_speed.hpp), or "" when the probe did not run.
+std::string attainable_note(const Config& cfg) {
+  if (!cfg.cpu_before.valid() || !cfg.cpu_after.valid()) return "";
+  return "; these CPUs reach at most " + fmt("%.2f", cfg.cpu_before.attainable()) +
+         " (before the benchmarks) and " + fmt("%.2f", cfg.cpu_after.attainable()) + " (after)";
+}
+
 }  // namespace
 
 void print_summary(const Results& results, const Config& cfg, double wall_seconds) {
@@ -80,7 +88,19 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
       wall_seconds);
   std::printf(
       "Each ratio divides two measurements of this run. Times are real (wall) time per "
-      "iteration, the median over the repetitions (spread: see the end).\n\n");
+      "iteration, the median over the repetitions (spread: see the end).\n");
+  if (cfg.cpu_before.valid() && cfg.cpu_after.valid())
+    std::printf(
+        "CPU speeds (a fixed multiply-add loop, one pinned thread per CPU, relative to the fastest "
+        "CPU alone): before the benchmarks %s; after %s. Work divided perfectly among these "
+        "CPUs runs at most %s (before) and %s (after) times as fast as on the fastest CPU alone: "
+        "a 2-thread speed-up cannot exceed that, and a 1-thread time taken on a slower CPU "
+        "inflates it. The loop touches no memory: contention for memory from other guests "
+        "does not show in it.\n",
+        cfg.cpu_before.describe().c_str(), cfg.cpu_after.describe().c_str(),
+        fmt("%.2f", cfg.cpu_before.attainable()).c_str(),
+        fmt("%.2f", cfg.cpu_after.attainable()).c_str());
+  std::printf("\n");
 
   // ---- Target table (issue #10, "Targets"; 2 threads).
   const std::string plain2 = "implicit/plain_bw/cloth:64/omp:2";
@@ -188,9 +208,16 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
   for (const char* sph_rhs : {"rhs/sph_dam_break_2d/n:224", "rhs/sph_dam_break_3d/n:46"}) {
     const std::string b = sph_rhs;
     const double sp = L.sec(b + "/omp:1") / L.sec(b + "/omp:2");
+    // cpu_attainable: the CPUs' probe just before the 2-thread loop (sph_rhs in bench_rhs.cpp;
+    // the 1-thread loop ran pinned to the CPU its own probe found fastest).
+    const double reach = L.counter(b + "/omp:2", "cpu_attainable");
+    const std::string pinned =
+        L.counter(b + "/omp:1", "cpu_pinned") >= 0 ? " (pinned to the fastest CPU)" : "";
     row(b.substr(4) + " 2-thread speed-up", sp, "%.2f", ">= 1.8", sp >= 1.8,
-        "(" + fmt("%.3g", L.sec(b + "/omp:1") * 1e3) + " ms on 1 thread, " +
-            fmt("%.3g", L.sec(b + "/omp:2") * 1e3) + " ms on 2)");
+        "(" + fmt("%.3g", L.sec(b + "/omp:1") * 1e3) + " ms on 1 thread" + pinned + ", " +
+            fmt("%.3g", L.sec(b + "/omp:2") * 1e3) + " ms on 2; the CPUs' probe before the " +
+            "2-thread run: at most " + fmt("%.2f", reach) + ", so " +
+            fmt("%.0f%%", sp / reach * 100.0) + " of what these CPUs allowed)");
   }
   const std::string nb3 = "neighbour_search/sph_dam_break_3d/n:46/omp:2";
   const double share = L.sec(nb3) / L.sec(sph3);
@@ -234,7 +261,8 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
       worst_name = family + "/n:" + std::to_string(ns.first);
     }
   row("2-thread speed-up of each RHS, largest size of each (worst)", worst_speedup, "%.2f",
-      ">= 1.8", worst_speedup >= 1.8, worst_name.empty() ? "" : "(" + worst_name + ")");
+      ">= 1.8", worst_speedup >= 1.8,
+      worst_name.empty() ? "" : "(" + worst_name + attainable_note(cfg) + ")");
 
   // Building the 512² cloth through the registry plus its first acceleration() (1 thread).
   const std::string build = "build/cloth/n:512/omp:1";
@@ -326,7 +354,8 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
     }
   }
 
-  std::printf("\n2-thread speed-ups (time at 1 thread / time at 2):\n%s",
+  std::printf("\n2-thread speed-ups (time at 1 thread / time at 2)%s:\n%s",
+              attainable_note(cfg).empty() ? "" : (" -- " + attainable_note(cfg).substr(2)).c_str(),
               speedups.empty() ? "    (none measured at both thread counts)\n" : speedups.c_str());
   // Spread over repetitions: median, fastest, and the bootstrap 95% interval of the median.
   int most = 0;

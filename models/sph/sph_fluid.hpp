@@ -138,6 +138,7 @@
 #include <vector>
 
 #include "core/ode_system.hpp"
+#include "models/sph/block_queue.hpp"
 #include "models/sph/kernels.hpp"
 #include "models/sph/neighbour_grid.hpp"
 
@@ -339,6 +340,7 @@ class SphFluid final : public MechanicalSystem {
   std::vector<double> sbvol_;  // boundary volumes in boundary-grid slot order
   mutable std::vector<std::uint32_t> nb_index_;
   mutable std::vector<double> scratch_;  // the density pass's rows of r², one per thread
+  mutable sph::BlockQueue blocks_;       // the pair passes' blocks of slots (block_queue.hpp)
   mutable sph::NeighbourGrid<2> grid2_, bgrid2_;
   mutable sph::NeighbourGrid<3> grid3_, bgrid3_;
 };

@@ -13,8 +13,10 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "models/sph/block_queue.hpp"
 #include "models/sph/sph_fluid.hpp"
 #include "tests/test_support.hpp"
 
@@ -404,6 +406,52 @@ TEST(SphNeighbours, ListIsRebuiltExactlyWhenAParticleMovedHalfTheSkin) {
   y.tail(f.dofs()).setConstant(5.0);
   eval(y);
   EXPECT_EQ(f.neighbour_list_builds(), b0 + 3);
+}
+
+// The pair passes' block queue (block_queue.hpp). One thread: 10 blocks in 3 segments are
+// [0, 3), [3, 6), [6, 10) (floor(10 s / 3)); thread 0 takes its own front to back, then the
+// others' back to front -- the order follows from the definition.
+TEST(SphBlockQueue, OneThreadTakesItsSegmentThenTheOthersFromTheBack) {
+  sph::BlockQueue q;
+  q.reset(10, 3);
+  std::vector<std::int64_t> got;
+  for (std::int64_t b; (b = q.next(0)) >= 0;) got.push_back(b);
+  EXPECT_EQ(got, (std::vector<std::int64_t>{0, 1, 2, 5, 4, 3, 9, 8, 7, 6}));
+  q.reset(0, 2);
+  EXPECT_EQ(q.next(1), -1);
+  // A thread beyond the segments only steals, first from segment (5 + 1) mod 2 = 0 = [0, 2):
+  // its back, block 1. A copy starts empty until reset.
+  q.reset(4, 2);
+  EXPECT_EQ(q.next(5), 1);
+  sph::BlockQueue copy(q);
+  EXPECT_EQ(copy.next(0), -1);
+}
+
+// Four threads on two segments (two of them only steal): every block is handed out exactly once.
+TEST(SphBlockQueue, ThreadsShareEveryBlockExactlyOnce) {
+  constexpr std::int64_t kBlocks = 20000;
+  sph::BlockQueue q;
+  q.reset(kBlocks, 2);
+  std::vector<std::vector<std::int64_t>> got(4);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([&, t] {
+      for (std::int64_t b; (b = q.next(t)) >= 0;) got[static_cast<std::size_t>(t)].push_back(b);
+    });
+  for (auto& th : threads) th.join();
+  std::vector<int> times(kBlocks, 0);
+  for (const auto& g : got)
+    for (std::int64_t b : g) ++times[static_cast<std::size_t>(b)];
+  EXPECT_EQ(std::count(times.begin(), times.end(), 1), kBlocks);
+  // Each owner takes its own segment front to back: its blocks below the midpoint rise.
+  for (int t = 0; t < 2; ++t) {
+    std::int64_t last = -1;
+    for (std::int64_t b : got[static_cast<std::size_t>(t)])
+      if ((b < kBlocks / 2) == (t == 0)) {
+        EXPECT_GT(b, last);
+        last = b;
+      }
+  }
 }
 
 }  // namespace
