@@ -2,7 +2,9 @@
 // them busy at once. On a virtual machine the vCPUs need not be equal: on the project's 2-vCPU
 // machine the second one at times runs the same loop at 0.7x the first one's rate (another guest
 // shares its physical core), and then no code reaches a 2-thread speed-up above 1.7. The summary
-// prints the probe taken before and after the benchmarks beside every speed-up it reports.
+// prints the probe taken before and after the benchmarks; the right-hand-side benchmarks probe
+// just before their timing loop (bench_rhs.cpp, OnFastestCpu) and the summary sets each
+// 2-thread speed-up beside what that probe allowed.
 #pragma once
 
 #include <sched.h>

@@ -245,7 +245,12 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
     const std::string base = name.substr(0, name.size() - suffix.size());
     const double s = L.sec(name) / L.sec(base + "/omp:2");
     if (!std::isfinite(s)) continue;
-    speedups += "    " + base + ": " + fmt("%.2f", s) + "\n";
+    const double reach = L.counter(base + "/omp:2", "cpu_attainable");
+    speedups += "    " + base + ": " + fmt("%.2f", s) +
+                (std::isfinite(reach) ? " (the CPUs' probe allowed " + fmt("%.2f", reach) + ": " +
+                                            fmt("%.0f%%", s / reach * 100.0) + ")"
+                                      : "") +
+                "\n";
     const std::size_t at = base.rfind("/n:");
     if (at == std::string::npos) continue;
     const std::string family = base.substr(0, at);
