@@ -37,25 +37,28 @@ void set_time_per(benchmark::State& st, const std::string& name, double items) {
                                          benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
-// The CPUs' speeds just before a timing loop (cpu_speed.hpp; on the project's VM their ratio
-// drifts by the minute), with a 1-thread loop pinned to the CPU found fastest: a 2-thread
-// speed-up is then taken against the best 1-thread time, and a slow CPU never inflates it.
-// record() adds the counters the summary reads, cpu_attainable and cpu_pinned. Construct it
-// right before the loop (after any set-up that may start OpenMP threads).
-class OnFastestCpu {
- public:
-  explicit OnFastestCpu(int threads)
-      : cpu_(measure_cpu_speeds(0.03)), pin_(threads == 1 ? cpu_.fastest() : -1) {}
-  void record(benchmark::State& st) const {
-    if (!cpu_.valid()) return;
-    st.counters["cpu_attainable"] = cpu_.attainable();
-    st.counters["cpu_pinned"] = pin_.pinned() ? cpu_.fastest() : -1;
+// The timing loop of a right-hand-side benchmark: `evaluate` once per iteration, after a probe
+// of the CPUs' speeds (cpu_speed.hpp; on the project's VM their ratio drifts by the minute).
+// A 1-thread loop runs pinned to the CPU found fastest, so a 2-thread speed-up is taken against
+// the best 1-thread time and a slow CPU never inflates it. Adds the counters the summary reads,
+// cpu_attainable and cpu_pinned. Call it after any set-up that may start OpenMP threads (they
+// would inherit the one-CPU mask).
+template <class Evaluate>
+void time_on_fastest_cpu(benchmark::State& st, int threads, Evaluate&& evaluate) {
+  const CpuSpeeds cpu = measure_cpu_speeds(0.03);
+  bool pinned = false;
+  {
+    const PinCurrentThread pin(threads == 1 ? cpu.fastest() : -1);
+    pinned = pin.pinned();
+    for (auto _ : st) {
+      evaluate();
+      benchmark::ClobberMemory();
+    }
   }
-
- private:
-  CpuSpeeds cpu_;
-  PinCurrentThread pin_;
-};
+  if (!cpu.valid()) return;
+  st.counters["cpu_attainable"] = cpu.attainable();
+  st.counters["cpu_pinned"] = pinned ? cpu.fastest() : -1;
+}
 
 void network_rhs(benchmark::State& st, const std::string& model, const Kv& params, int threads) {
   OmpThreads omp(threads);
@@ -65,15 +68,10 @@ void network_rhs(benchmark::State& st, const std::string& model, const Kv& param
   Vec a(n);
   const auto x = cm.warm.head(n), v = cm.warm.tail(n);
   net->acceleration(0.0, x, v, a);  // a first call outside the pinned loop
-  {
-    const OnFastestCpu cpu(threads);
-    for (auto _ : st) {
-      net->acceleration(0.0, x, v, a);
-      benchmark::DoNotOptimize(a.data());
-      benchmark::ClobberMemory();
-    }
-    cpu.record(st);
-  }
+  time_on_fastest_cpu(st, threads, [&] {
+    net->acceleration(0.0, x, v, a);
+    benchmark::DoNotOptimize(a.data());
+  });
   set_rate(st, "springs/s", static_cast<double>(net->springs().size()));
   st.counters["points"] = static_cast<double>(net->num_points());
   st.counters["springs"] = static_cast<double>(net->springs().size());
@@ -104,15 +102,10 @@ void plain_cloth_rhs(benchmark::State& st, long side, int threads) {
     }
   }
   plain->acceleration(cm.warm.data(), a.data());  // a first call outside the pinned loop
-  {
-    const OnFastestCpu cpu(threads);
-    for (auto _ : st) {
-      plain->acceleration(cm.warm.data(), a.data());
-      benchmark::DoNotOptimize(a.data());
-      benchmark::ClobberMemory();
-    }
-    cpu.record(st);
-  }
+  time_on_fastest_cpu(st, threads, [&] {
+    plain->acceleration(cm.warm.data(), a.data());
+    benchmark::DoNotOptimize(a.data());
+  });
   set_rate(st, "springs/s", static_cast<double>(plain->springs()));
   st.counters["points"] = static_cast<double>(plain->points());
   st.counters["threads"] = threads;
@@ -167,15 +160,10 @@ void sph_rhs(benchmark::State& st, const std::string& model, long n_param, int w
   fluid->acceleration(0.0, x, v, a);
   st.counters["list_builds_before"] = static_cast<double>(fluid->neighbour_list_builds());
   st.counters["warm_steps"] = warm;
-  {
-    const OnFastestCpu cpu(threads);
-    for (auto _ : st) {
-      fluid->acceleration(0.0, x, v, a);
-      benchmark::DoNotOptimize(a.data());
-      benchmark::ClobberMemory();
-    }
-    cpu.record(st);
-  }
+  time_on_fastest_cpu(st, threads, [&] {
+    fluid->acceleration(0.0, x, v, a);
+    benchmark::DoNotOptimize(a.data());
+  });
   const double particles = static_cast<double>(fluid->fluid_particles());
   const double support = fluid->options().support;
   const long pairs = fluid->dim() == 2
@@ -264,22 +252,18 @@ void sph_neighbours(benchmark::State& st, const std::string& model, long n_param
   const double radius = fluid->options().support;
   sph::NeighbourGrid<D> grid;
   grid.build(cm.warm.data(), np, radius);  // a first build outside the pinned loop
-  const OnFastestCpu cpu(threads);
-  for (auto _ : st) {
+  time_on_fastest_cpu(st, threads, [&] {
     grid.build(cm.warm.data(), np, radius);
-    if (!build_only) {
-      // Sum r² over the pairs so that the visits cannot be optimised away.
-      double total = 0.0;
-      const double* pos = grid.positions();
+    if (build_only) return;
+    // Sum r² over the pairs so that the visits cannot be optimised away.
+    double total = 0.0;
+    const double* pos = grid.positions();
 #pragma omp parallel for schedule(static) reduction(+ : total)
-      for (Index s = 0; s < np; ++s)
-        grid.for_each_neighbour_slot(pos + D * s, radius,
-                                     [&](std::size_t, double r2, const auto&) { total += r2; });
-      benchmark::DoNotOptimize(total);
-    }
-    benchmark::ClobberMemory();
-  }
-  cpu.record(st);
+    for (Index s = 0; s < np; ++s)
+      grid.for_each_neighbour_slot(pos + D * s, radius,
+                                   [&](std::size_t, double r2, const auto&) { total += r2; });
+    benchmark::DoNotOptimize(total);
+  });
   const long pairs = count_pairs<D>(cm.warm.data(), np, radius);
   st.counters["particles"] = static_cast<double>(np);
   if (!build_only) set_rate(st, "pairs/s", static_cast<double>(pairs));

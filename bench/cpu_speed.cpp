@@ -17,11 +17,10 @@ namespace {
 // Eight independent multiply-add chains (x <- x a + b, a fixed point that never overflows): the
 // rate of the floating-point units, free of memory traffic. Returns chunks (100000 x 8
 // multiply-adds) done per second.
-double arithmetic_rate(double seconds, std::atomic<int>* start, int starters) {
-  if (start) {  // wait until every thread of a together-run is pinned and ready
-    start->fetch_add(1);
-    while (start->load() < starters) std::this_thread::yield();
-  }
+// Starts once `starters` threads have incremented `start` (every thread pinned and ready).
+double arithmetic_rate(double seconds, std::atomic<int>& start, int starters) {
+  start.fetch_add(1);
+  while (start.load() < starters) std::this_thread::yield();
   std::array<double, 8> x{};
   for (std::size_t k = 0; k < x.size(); ++k) x[k] = 1.0 + 1e-3 * static_cast<double>(k);
   const double a = 0.999999, b = 1e-6;
@@ -41,11 +40,11 @@ double arithmetic_rate(double seconds, std::atomic<int>* start, int starters) {
   return static_cast<double>(chunks) / elapsed;
 }
 
-bool pin(std::thread& t, int cpu) {
+bool pin(pthread_t thread, int cpu) {
   cpu_set_t set;
   CPU_ZERO(&set);
   CPU_SET(cpu, &set);
-  return pthread_setaffinity_np(t.native_handle(), sizeof set, &set) == 0;
+  return pthread_setaffinity_np(thread, sizeof set, &set) == 0;
 }
 
 }  // namespace
@@ -65,10 +64,7 @@ int CpuSpeeds::fastest() const {
 PinCurrentThread::PinCurrentThread(int cpu) {
   CPU_ZERO(&old_);
   if (cpu < 0 || pthread_getaffinity_np(pthread_self(), sizeof old_, &old_) != 0) return;
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  CPU_SET(cpu, &set);
-  pinned_ = pthread_setaffinity_np(pthread_self(), sizeof set, &set) == 0;
+  pinned_ = pin(pthread_self(), cpu);
 }
 
 PinCurrentThread::~PinCurrentThread() {
@@ -107,9 +103,9 @@ CpuSpeeds measure_cpu_speeds(double seconds) {
     bool ok = true;
     for (std::size_t i : which) {
       threads.emplace_back([&, i] {
-        rates[i] = arithmetic_rate(seconds, &start, 1 + static_cast<int>(which.size()));
+        rates[i] = arithmetic_rate(seconds, start, 1 + static_cast<int>(which.size()));
       });
-      ok = pin(threads.back(), s.cpus[i]) && ok;
+      ok = pin(threads.back().native_handle(), s.cpus[i]) && ok;
     }
     start.fetch_add(1);  // the last starter: every thread has been pinned
     for (auto& t : threads) t.join();

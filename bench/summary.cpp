@@ -208,8 +208,8 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
   for (const char* sph_rhs : {"rhs/sph_dam_break_2d/n:224", "rhs/sph_dam_break_3d/n:46"}) {
     const std::string b = sph_rhs;
     const double sp = L.sec(b + "/omp:1") / L.sec(b + "/omp:2");
-    // cpu_attainable: the CPUs' probe just before the 2-thread loop (sph_rhs in bench_rhs.cpp;
-    // the 1-thread loop ran pinned to the CPU its own probe found fastest).
+    // cpu_attainable: the CPUs' probe just before the 2-thread loop (time_on_fastest_cpu in
+    // bench_rhs.cpp; the 1-thread loop ran pinned to the CPU its own probe found fastest).
     const double reach = L.counter(b + "/omp:2", "cpu_attainable");
     const std::string pinned =
         L.counter(b + "/omp:1", "cpu_pinned") >= 0 ? " (pinned to the fastest CPU)" : "";

@@ -44,14 +44,15 @@ class BlockQueue {
   }
 
   // The next block for thread t (its own segment's front first, then the other segments' backs
-  // in turn), or -1 when every block has been handed out. Threads t >= segments only steal.
+  // in turn), or -1 when every block has been handed out. t >= 0; threads t >= segments only
+  // steal.
   std::int64_t next(int t) {
-    if (t >= 0 && t < segments_) {
+    if (t < segments_) {
       const std::int64_t b = take(seg_[static_cast<std::size_t>(t)], true);
       if (b >= 0) return b;
     }
     for (int k = 1; k <= segments_; ++k) {
-      const int s = ((t < 0 ? 0 : t) + k) % segments_;
+      const int s = (t + k) % segments_;
       if (s == t) continue;
       const std::int64_t b = take(seg_[static_cast<std::size_t>(s)], false);
       if (b >= 0) return b;
