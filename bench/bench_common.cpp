@@ -2,6 +2,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <chrono>
 #include <deque>
 
@@ -100,6 +101,31 @@ double best_seconds_per_call(const std::function<void()>& f, int reps) {
     best = std::min(best, (t - t0) / static_cast<double>(calls));
   }
   return best;
+}
+
+std::map<std::string, std::vector<double>>& paired_ratios() {
+  static std::map<std::string, std::vector<double>> r;
+  return r;
+}
+
+void paired_rounds(benchmark::State& st, const std::string& name, const std::function<double()>& a,
+                   const std::function<double()>& b) {
+  std::vector<double> rounds;
+  for (auto _ : st) {
+    const double ta = a();
+    const double tb = b();
+    if (!(ta > 0.0 && tb > 0.0)) {
+      st.SkipWithError("a paired block took no measurable time");
+      return;
+    }
+    rounds.push_back(ta / tb);
+  }
+  if (rounds.empty()) return;
+  auto& all = paired_ratios()[name];
+  all.insert(all.end(), rounds.begin(), rounds.end());
+  std::nth_element(rounds.begin(), rounds.begin() + static_cast<std::ptrdiff_t>(rounds.size() / 2),
+                   rounds.end());
+  st.counters["ratio"] = rounds[rounds.size() / 2];
 }
 
 std::map<std::string, double>& time_spent() {

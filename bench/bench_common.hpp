@@ -85,6 +85,19 @@ double now_seconds();
 // (the summary lists the largest, to keep --quick under its budget).
 std::map<std::string, double>& time_spent();
 
+// Paired, interleaved timing: rounds of "time a, then time b" inside one benchmark, each side
+// a block of work it times itself (after an untimed warm-up call of its own, so that neither
+// side pays for the other's cache contents), and the per-round ratio time(a) / time(b). A
+// drift of the machine's speed on the scale of seconds (the project's vCPUs: up to 0.6x for
+// minutes, docs/performance.md "Stop 50") changes both sides of a round alike, where the ratio of
+// two rows measured seconds apart takes it whole. Every round's ratio, over all repetitions,
+// is kept under the benchmark's name for the summary (median and bootstrap interval).
+std::map<std::string, std::vector<double>>& paired_ratios();
+// One round per iteration of st; a() and b() return the seconds of their timed blocks. The
+// counter "ratio" is the median over this repetition's rounds.
+void paired_rounds(benchmark::State& st, const std::string& name, const std::function<double()>& a,
+                   const std::function<double()>& b);
+
 // Registration helpers (benchmark::RegisterBenchmark with real time and a unit chosen from the
 // expected magnitude).
 benchmark::internal::Benchmark* add(const std::string& name,

@@ -361,6 +361,62 @@ void peer_rk4(benchmark::State& st, long side, double h, int threads) {
   st.counters["threads"] = threads;
 }
 
+// Issue 29's rk4 ratio measured in interleaved rounds (paired_rounds): each round times k rk4
+// steps, then 4k symplectic_euler steps, each side after one untimed step of its own, each
+// method on its own copy of the warm 512² cloth. The round's ratio is (rk4 time / k) /
+// (4 × symplectic_euler time / 4k), the rows' ratio step/rk4 / (4 × step/symplectic_euler) taken
+// side by side. With `driver`, each block is one run_fixed_step_from run of k steps (rk4) or 4k
+// steps (symplectic_euler) after an untimed one-step run.
+void paired_rk4_se(benchmark::State& st, const std::string& name, bool driver, int threads,
+                   double h, int k) {
+  OmpThreads omp(threads);
+  const CachedModel& cm = cached_model("cloth", {{"n", "512"}});
+  const OdeSystem& sys = *cm.sys;
+  struct Side {
+    std::unique_ptr<Integrator> integ;
+    Vec y;
+    double t = 0.0;
+  };
+  Side rk{integrator_registry().create("rk4", Params{}), cm.warm};
+  Side se{integrator_registry().create("symplectic_euler", Params{}), cm.warm};
+  bool failed = false;
+  SolveStats stats;
+  // Untimed warm-up, then `steps` timed steps; seconds per 4 / per rk4 step come from the caller.
+  const auto block = [&](Side& s, long steps) {
+    if (failed) return 0.0;
+    const auto advance = [&](long count) {
+      if (driver) {
+        FixedStepOptions opt;
+        opt.h = h;
+        opt.t_end = s.t + static_cast<double>(count) * h;
+        RunResult r = run_fixed_step_from(sys, *s.integ, s.t, s.y, opt);
+        if (r.stats.status != Status::ok) return false;
+        std::swap(s.y, r.y);
+        s.t = r.t;
+        return true;
+      }
+      for (long i = 0; i < count; ++i, s.t += h)
+        if (s.integ->step(sys, s.t, s.y, h, stats) != Status::ok) return false;
+      return true;
+    };
+    if (!advance(1)) return failed = true, 0.0;
+    const double t0 = now_seconds();
+    if (!advance(steps)) return failed = true, 0.0;
+    return now_seconds() - t0;
+  };
+  try {
+    rk.integ->reset(sys, rk.t, rk.y);
+    se.integ->reset(sys, se.t, se.y);
+    paired_rounds(
+        st, name, [&] { return block(rk, k); }, [&] { return block(se, 4L * k); });
+  } catch (const std::exception& e) {
+    st.SkipWithError(e.what());
+    return;
+  }
+  if (failed) st.SkipWithError("a step failed");
+  st.counters["threads"] = threads;
+}
+
 }  // namespace
 
 void register_step_benchmarks(const Config& cfg) {
@@ -391,6 +447,15 @@ void register_step_benchmarks(const Config& cfg) {
             [name, t, h](benchmark::State& st) { integrator_step(st, 512, name, Params{}, h, t); });
       add("solve/" + name + "/cloth:512" + omp_suffix(t),
           [name, t, h](benchmark::State& st) { driver_steps(st, 512, name, h, t, 20); });
+    }
+    // The rk4 ratio side by side: 10 rounds a repetition (about 1 s direct, 2 s driver).
+    for (const bool driver : {false, true}) {
+      if (t != 2) break;
+      const std::string pname = std::string("paired/rk4_vs_4_symplectic_euler/") +
+                                (driver ? "driver" : "step") + "/cloth:512" + omp_suffix(t);
+      add(pname, [pname, driver, t, h](benchmark::State& st) {
+        paired_rk4_se(st, pname, driver, t, h, driver ? 5 : 2);
+      })->Iterations(10);
     }
     if (!all) continue;
     // 4 steps each (one step of GSL's is 12 evaluations: Google Benchmark would stop at one).

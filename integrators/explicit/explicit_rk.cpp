@@ -14,17 +14,43 @@ namespace {
 template <int M, bool Norm>
 void combine_range(Index begin, Index end, const double* base, int m, const double* const* k,
                    const double* c, double* out, double& mx, bool& nan) {
-  const int terms = M > 0 ? M : m;
   // Local accumulators (not the references): the compiler vectorises the norm with them.
   double local_mx = mx, local_nan = 0.0;
-  for (Index e = begin; e < end; ++e) {
-    double acc = base[e];
-    for (int j = 0; j < terms; ++j) acc += c[j] * k[j][e];
-    out[e] = acc;
-    if constexpr (Norm) {
-      const double a = std::abs(acc);
-      local_nan = a != a ? 1.0 : local_nan;
-      local_mx = a > local_mx ? a : local_mx;
+  if constexpr (M > 0) {
+    // The columns and coefficients in locals, and `omp simd`: without them GCC 12 could not rule
+    // out that out overlaps a column or a coefficient, and for M = 4 with the norm (rk4's final
+    // update) or with out == base (an update in place) ran the loop one entry at a time. Each
+    // entry reads base_e and the k_je and then writes out_e only, so entries are independent
+    // even when out is base; the per-entry arithmetic is the same in every lane (no contraction:
+    // -ffp-contract=off), so the bits do not change.
+    const double* cols[M];
+    double cc[M];
+    for (int j = 0; j < M; ++j) {
+      cols[j] = k[j];
+      cc[j] = c[j];
+    }
+#pragma omp simd reduction(max : local_mx, local_nan)
+    for (Index e = begin; e < end; ++e) {
+      double acc = base[e];
+#pragma GCC unroll 4
+      for (int j = 0; j < M; ++j) acc += cc[j] * cols[j][e];
+      out[e] = acc;
+      if constexpr (Norm) {
+        const double a = std::abs(acc);
+        local_nan = a != a ? 1.0 : local_nan;
+        local_mx = a > local_mx ? a : local_mx;
+      }
+    }
+  } else {
+    for (Index e = begin; e < end; ++e) {
+      double acc = base[e];
+      for (int j = 0; j < m; ++j) acc += c[j] * k[j][e];
+      out[e] = acc;
+      if constexpr (Norm) {
+        const double a = std::abs(acc);
+        local_nan = a != a ? 1.0 : local_nan;
+        local_mx = a > local_mx ? a : local_mx;
+      }
     }
   }
   mx = local_mx;
@@ -161,6 +187,46 @@ ExplicitRungeKutta::ExplicitRungeKutta(ButcherTableau tableau, std::string descr
       }
     }
   }
+  // A stage position may instead be formed from the previous one still in the stage buffer,
+  // X_i = X_j + h (r_i - r_j) v + h² Σ_k ((A²)_ik - (A²)_jk) A_k (j the last row before i that
+  // formed one), in place: that pass writes the buffer it reads (no read for ownership of a
+  // cold line) and, where r_i = r_j, reads no v (rk4's X_3 = X_2 + (h²/4) A_1: 3 vector streams
+  // instead of 4, and no read for ownership). It is taken where it reads no more vectors than the direct form.
+  x_from_prev_.assign(static_cast<std::size_t>(s) + 1, false);
+  // The differences are taken between the direct forms (a row converted below keeps its
+  // differences in the same members, so the next row must not read those).
+  const std::vector<double> direct_v = x_v_coef_;
+  const std::vector<std::vector<int>> direct_terms = x_terms_;
+  const std::vector<std::vector<double>> direct_coefs = x_coefs_;
+  for (int i = 1, j = -1; i < s; ++i) {
+    if (terms_[static_cast<std::size_t>(i)].empty()) continue;
+    if (j >= 0) {
+      const auto ui = static_cast<std::size_t>(i), uj = static_cast<std::size_t>(j);
+      const double dv = direct_v[ui] - direct_v[uj];
+      std::vector<double> delta(static_cast<std::size_t>(i), 0.0);
+      for (std::size_t t2 = 0; t2 < direct_terms[ui].size(); ++t2)
+        delta[static_cast<std::size_t>(direct_terms[ui][t2])] += direct_coefs[ui][t2];
+      for (std::size_t t2 = 0; t2 < direct_terms[uj].size(); ++t2)
+        delta[static_cast<std::size_t>(direct_terms[uj][t2])] -= direct_coefs[uj][t2];
+      std::vector<int> d_terms;
+      std::vector<double> d_coefs;
+      for (int k = 0; k < i; ++k)
+        if (delta[static_cast<std::size_t>(k)] != 0.0) {
+          d_terms.push_back(k);
+          d_coefs.push_back(delta[static_cast<std::size_t>(k)]);
+        }
+      // Vectors read: the base (x or X_j), v when its coefficient is non-zero, and the A_k.
+      const std::size_t direct = 1 + (direct_v[ui] != 0.0 ? 1 : 0) + direct_terms[ui].size();
+      const std::size_t from_prev = 1 + (dv != 0.0 ? 1 : 0) + d_terms.size();
+      if (from_prev <= direct) {
+        x_from_prev_[ui] = true;
+        x_v_coef_[ui] = dv;
+        x_terms_[ui] = std::move(d_terms);
+        x_coefs_[ui] = std::move(d_coefs);
+      }
+    }
+    j = i;
+  }
   cols_.resize(static_cast<std::size_t>(s));
   scaled_.resize(static_cast<std::size_t>(s));
   x_cols_.resize(static_cast<std::size_t>(s) + 1);
@@ -216,8 +282,9 @@ Status ExplicitRungeKutta::step_mechanical(const MechanicalSystem& mech, double 
   double* x = y.data();
   double* v = y.data() + d;
   const bool need_v = mech.velocity_dependent();
-  // Row i's two combinations: positions x + (h r_i) v + Σ (h² c_k) A_k into x_out, velocities
-  // v + Σ (h a_ij) A_j into v_out (nullptr: not formed).
+  // Row i's two combinations: positions x + (h r_i) v + Σ (h² c_k) A_k into x_out (or, for a
+  // row formed from the previous stage position, x_out + (h Δr) v + Σ (h² Δc_k) A_k in place),
+  // velocities v + Σ (h a_ij) A_j into v_out (nullptr: not formed).
   const auto rows = [&](int i, double* x_out, double* v_out) {
     const auto u = static_cast<std::size_t>(i);
     int mx = 0;
@@ -236,7 +303,7 @@ Status ExplicitRungeKutta::step_mechanical(const MechanicalSystem& mech, double 
           k_.col(terms_[u][static_cast<std::size_t>(j)]).data() + d;
       scaled_[static_cast<std::size_t>(j)] = h * coefs_[u][static_cast<std::size_t>(j)];
     }
-    const Combination cx{x, mx, x_cols_.data(), x_scaled_.data(), x_out};
+    const Combination cx{x_from_prev_[u] ? x_out : x, mx, x_cols_.data(), x_scaled_.data(), x_out};
     const Combination cv{v, mv, cols_.data(), scaled_.data(), v_out};
     return i == s ? combine_pair<true>(d, cx, cv) : combine_pair<false>(d, cx, cv);
   };

@@ -16,9 +16,11 @@
 //   x⁺ = x + h (Σ_i b_i) v + h² Σ_k (bA)_k A_k,      v⁺ = v + h Σ_i b_i A_i,
 // the same stage values as the first-order form in exact arithmetic (the rounding differs: the
 // test compares within a bound). Each stage forms X_i and V_i in one pass over the entries, and
-// V_i only when a depends on v (velocity_dependent()); the final update is one pass too. For
-// rk4 without damping that is 19 vector streams a step instead of the first-order form's 30
-// (docs/performance.md, "Stop 49").
+// V_i only when a depends on v (velocity_dependent()); the final update is one pass too. A
+// stage position may be formed in place from the previous one (X_i = X_j + h (r_i - r_j) v +
+// h² Σ_k ((A²)_ik - (A²)_jk) A_k) where that reads no more vectors: rk4's X_3 = X_2 + (h²/4) A_1.
+// For rk4 without damping that is 18 vector streams a step instead of the first-order form's 30,
+// and one write fewer to a buffer it has not read (docs/performance.md, "Stop 49", "Stop 51").
 #pragma once
 
 #include <vector>
@@ -64,6 +66,9 @@ class ExplicitRungeKutta final : public Integrator {
   std::vector<std::vector<double>> x_coefs_;
   std::vector<const double*> x_cols_;
   std::vector<double> x_scaled_;
+  // Rows whose position is formed from the previous stage position in place (constructor): for
+  // them x_v_coef_, x_terms_ and x_coefs_ hold the differences to that row.
+  std::vector<bool> x_from_prev_;
   double last_norm_ = 0.0;  // ‖y‖∞ after the last step (NaN when an entry is NaN)
   bool norm_valid_ = false;
 };
