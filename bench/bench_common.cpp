@@ -128,6 +128,13 @@ void paired_rounds(benchmark::State& st, const std::string& name, const std::fun
   st.counters["ratio"] = rounds[rounds.size() / 2];
 }
 
+double timed_calls(const std::function<void()>& f, int count) {
+  f();
+  const double t0 = now_seconds();
+  for (int i = 0; i < count; ++i) f();
+  return now_seconds() - t0;
+}
+
 std::map<std::string, double>& time_spent() {
   static std::map<std::string, double> t;
   return t;

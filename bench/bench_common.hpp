@@ -98,6 +98,9 @@ std::map<std::string, std::vector<double>>& paired_ratios();
 void paired_rounds(benchmark::State& st, const std::string& name, const std::function<double()>& a,
                    const std::function<double()>& b);
 
+// Seconds that `count` calls of f take, after one untimed call (a side of a paired round).
+double timed_calls(const std::function<void()>& f, int count);
+
 // Registration helpers (benchmark::RegisterBenchmark with real time and a unit chosen from the
 // expected magnitude).
 benchmark::internal::Benchmark* add(const std::string& name,

@@ -14,6 +14,7 @@
 #include "bench/bench_common.hpp"
 #include "bench/plain_cloth.hpp"
 #include "bench/plain_sph.hpp"
+#include "core/driver.hpp"
 #include "experiments/catalog.hpp"
 #include "models/sph/neighbour_grid.hpp"
 #include "models/sph/sph_fluid.hpp"
@@ -78,29 +79,36 @@ void network_rhs(benchmark::State& st, const std::string& model, const Kv& param
   st.counters["threads"] = threads;
 }
 
-// The plain gather, checked once against the testbed's acceleration at the same state (the two
-// sum the same spring forces in different orders: agreement to round-off).
-void plain_cloth_rhs(benchmark::State& st, long side, int threads) {
-  OmpThreads omp(threads);
-  const CachedModel& cm = cached_model("cloth", {{"n", std::to_string(side)}});
-  const auto* net = dynamic_cast<const MassSpringNetwork*>(cm.sys.get());
-  // Built once per cloth size (it copies what it needs from the network).
+// The plain gather on the cached cloth of this size, built once per size (it copies what it
+// needs from the network) and checked then against the testbed's acceleration at the same state
+// (the two sum the same spring forces in different orders: agreement to round-off); nullptr
+// when the check fails.
+const PlainClothRhs* checked_plain_cloth(const CachedModel& cm, long side) {
   static std::unique_ptr<PlainClothRhs> plain;
   static long owner = 0;
-  const Index n = net->dofs();
-  Vec a(n), ref(n);
   if (owner != side) {
+    const auto* net = dynamic_cast<const MassSpringNetwork*>(cm.sys.get());
+    const Index n = net->dofs();
+    Vec a(n), ref(n);
     plain = std::make_unique<PlainClothRhs>(*net);
     owner = side;
     plain->acceleration(cm.warm.data(), a.data());
     net->acceleration(0.0, cm.warm.head(n), cm.warm.tail(n), ref);
     const double diff = (a - ref).cwiseAbs().maxCoeff();
-    if (!(diff <= 1e-12 * std::max(1.0, ref.cwiseAbs().maxCoeff()))) {
-      owner = 0;
-      st.SkipWithError("plain cloth RHS differs from the testbed's acceleration");
-      return;
-    }
+    if (!(diff <= 1e-12 * std::max(1.0, ref.cwiseAbs().maxCoeff()))) owner = 0;
   }
+  return owner == side ? plain.get() : nullptr;
+}
+
+void plain_cloth_rhs(benchmark::State& st, long side, int threads) {
+  OmpThreads omp(threads);
+  const CachedModel& cm = cached_model("cloth", {{"n", std::to_string(side)}});
+  const PlainClothRhs* plain = checked_plain_cloth(cm, side);
+  if (!plain) {
+    st.SkipWithError("plain cloth RHS differs from the testbed's acceleration");
+    return;
+  }
+  Vec a(cm.sys->as_mechanical()->dofs());
   plain->acceleration(cm.warm.data(), a.data());  // a first call outside the pinned loop
   time_on_fastest_cpu(st, threads, [&] {
     plain->acceleration(cm.warm.data(), a.data());
@@ -108,6 +116,58 @@ void plain_cloth_rhs(benchmark::State& st, long side, int threads) {
   });
   set_rate(st, "springs/s", static_cast<double>(plain->springs()));
   st.counters["points"] = static_cast<double>(plain->points());
+  st.counters["threads"] = threads;
+}
+
+// Issue 29's first cloth ratio in interleaved rounds (paired_rounds): a fixed-step driver run of
+// 20 symplectic_euler steps (after an untimed one-step run), then 4 calls of the plain gather
+// (after an untimed one), on the 512² cloth; the round's ratio is (driver time / 20) / (plain
+// time / 4), the rows' solve/symplectic_euler / rhs/plain_cloth taken side by side.
+void paired_se_plain(benchmark::State& st, const std::string& name, int threads) {
+  OmpThreads omp(threads);
+  const CachedModel& cm = cached_model("cloth", {{"n", "512"}});
+  const PlainClothRhs* plain = checked_plain_cloth(cm, 512);
+  if (!plain) {
+    st.SkipWithError("plain cloth RHS differs from the testbed's acceleration");
+    return;
+  }
+  const OdeSystem& sys = *cm.sys;
+  auto se = integrator_registry().create("symplectic_euler", Params{});
+  Vec y = cm.warm, a(sys.as_mechanical()->dofs());
+  double t = 0.0;
+  bool failed = false;
+  const double h = 1e-3;
+  const auto run = [&](long steps) {
+    FixedStepOptions opt;
+    opt.h = h;
+    opt.t_end = t + static_cast<double>(steps) * h;
+    RunResult r = run_fixed_step_from(sys, *se, t, y, opt);
+    failed = failed || r.stats.status != Status::ok;
+    std::swap(y, r.y);
+    t = r.t;
+  };
+  const auto driver_side = [&] {
+    run(1);
+    const double t0 = now_seconds();
+    run(20);
+    return (now_seconds() - t0) / 20.0;
+  };
+  const auto plain_side = [&] {
+    return timed_calls(
+               [&] {
+                 plain->acceleration(cm.warm.data(), a.data());
+                 benchmark::DoNotOptimize(a.data());
+               },
+               4) /
+           4.0;
+  };
+  try {
+    paired_rounds(st, name, driver_side, plain_side);
+  } catch (const std::exception& e) {
+    st.SkipWithError(e.what());
+    return;
+  }
+  if (failed) st.SkipWithError("a symplectic_euler run failed");
   st.counters["threads"] = threads;
 }
 
@@ -204,6 +264,46 @@ void plain_sph_rhs(benchmark::State& st, const std::string& model, long n_param,
   set_rate(st, "pairs/s", static_cast<double>(pairs));
   set_time_per(st, "s/particle", static_cast<double>(fluid->fluid_particles()));
   st.counters["max_diff_vs_testbed"] = diff / scale;
+  st.counters["threads"] = threads;
+}
+
+// Issue 29's SPH ratio in interleaved rounds (paired_rounds): 2 calls of the plain 3D gather,
+// then 2 of the testbed's right-hand side (each after an untimed call), on the same warm state;
+// the round's ratio is plain time / testbed time, which is the testbed's pairs/s over the
+// peer's (the same pairs). The peer is checked against the testbed as in plain_sph_rhs.
+void paired_sph_peer(benchmark::State& st, const std::string& name, const std::string& model,
+                     long n_param, int warm, int threads) {
+  OmpThreads omp(threads);
+  const CachedModel& cm = cached_model(model, {{"n", std::to_string(n_param)}}, warm);
+  const auto* fluid = dynamic_cast<const SphFluid*>(cm.sys.get());
+  const Index n = fluid->dofs();
+  const PlainSph3d plain(*fluid);
+  Vec a(n), ref(n);
+  fluid->acceleration(0.0, cm.warm.head(n), cm.warm.tail(n), ref);
+  plain.acceleration(cm.warm.data(), cm.warm.data() + n, a.data());
+  if (!((a - ref).cwiseAbs().maxCoeff() <= 1e-8 * ref.cwiseAbs().maxCoeff())) {
+    st.SkipWithError("plain SPH RHS differs from the testbed's acceleration");
+    return;
+  }
+  const auto x = cm.warm.head(n), v = cm.warm.tail(n);
+  paired_rounds(
+      st, name,
+      [&] {
+        return timed_calls(
+            [&] {
+              plain.acceleration(cm.warm.data(), cm.warm.data() + n, a.data());
+              benchmark::DoNotOptimize(a.data());
+            },
+            2);
+      },
+      [&] {
+        return timed_calls(
+            [&] {
+              fluid->acceleration(0.0, x, v, a);
+              benchmark::DoNotOptimize(a.data());
+            },
+            2);
+      });
   st.counters["threads"] = threads;
 }
 
@@ -310,6 +410,10 @@ void register_rhs_benchmarks(const Config& cfg) {
             [n = n, t](benchmark::State& st) { plain_cloth_rhs(st, n, t); },
             n < 256 ? kMicrosecond : kMillisecond);
   }
+  // Issue 29's cloth ratio side by side: 10 rounds a repetition (about 1.3 s).
+  add("paired/symplectic_euler_vs_plain_gather/cloth:512/omp:2", [](benchmark::State& st) {
+    paired_se_plain(st, "paired/symplectic_euler_vs_plain_gather/cloth:512/omp:2", 2);
+  })->Iterations(10);
   // Construction of the largest cloth (issue #10: "512² cloth in well under 0.3 s").
   add(
       "build/cloth/n:512/omp:1", [](benchmark::State& st) { cloth_build(st, 512); }, kMillisecond);
@@ -355,7 +459,11 @@ void register_rhs_benchmarks(const Config& cfg) {
           });
       }
   }
-  // The 3D dam break's plain peer (issue #29) and its RHS with a Verlet-list build at every call.
+  // The 3D dam break's plain peer (issue #29) and its RHS with a Verlet-list build at every call;
+  // the peer and the testbed side by side, 6 rounds a repetition (about 2.5 s).
+  add("paired/plain_sph_3d_vs_testbed/n:46/omp:2", [](benchmark::State& st) {
+    paired_sph_peer(st, "paired/plain_sph_3d_vs_testbed/n:46/omp:2", "sph_dam_break_3d", 46, 5, 2);
+  })->Iterations(6);
   for (const int t : {1, 2}) {
     add(
         "peer/plain_sph_3d/n:46" + omp_suffix(t),
