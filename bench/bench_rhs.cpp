@@ -4,7 +4,9 @@
 // same cloth; and the SPH neighbour search on its own (models/sph/neighbour_grid.hpp: grid
 // build, and build plus one visit of every neighbour pair within the support radius in cell
 // order — the search a density or force pass does). Each at 1 and 2 OpenMP threads where the
-// thread scaling is asked for.
+// thread scaling is asked for. Two paired benchmarks (paired_rounds, bench_common.hpp) time
+// issue 29's ratios side by side: a symplectic_euler driver step against the plain cloth
+// gather, and the plain 3D SPH gather against the testbed's right-hand side.
 #include <omp.h>
 
 #include <cmath>

@@ -7,6 +7,9 @@
 //   solve/<integrator>/cloth:512/omp:<t>  the same method through the fixed-step driver
 //       (run_fixed_step_from, 20 steps per iteration: what `stiffbench solve` runs, including
 //       the driver's blow-up check after each step and its reset per run);
+//   paired/rk4_vs_4_symplectic_euler/{step,driver}/cloth:512/omp:2  the two methods in
+//       alternating rounds, each round's ratio rk4 step / (4 × symplectic_euler step) kept for
+//       the summary (paired_rounds, bench_common.hpp);
 //   peer/<library>_rk4/cloth:512/omp:<t>  classic RK4 of Boost.Odeint (runge_kutta4 over
 //       std::vector<double>), GSL (gsl_odeiv2_step_rk4 through gsl_odeiv2_driver_apply_fixed_step;
 //       GSL's rk4 estimates its error by step doubling and returns two steps of h/2, so one of its
