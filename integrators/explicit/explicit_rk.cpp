@@ -8,6 +8,18 @@ namespace stiffbench {
 
 namespace {
 
+// out_e = acc, and with Norm max |acc| into mx (nan_flag set to 1 when acc is NaN). Called
+// from the loop bodies below with their reduction variables, so it updates the loop's copies.
+template <bool Norm>
+inline void store_entry(double* out, Index e, double acc, double& mx, double& nan_flag) {
+  out[e] = acc;
+  if constexpr (Norm) {
+    const double a = std::abs(acc);
+    nan_flag = a != a ? 1.0 : nan_flag;
+    mx = a > mx ? a : mx;
+  }
+}
+
 // out_e = base_e + c_0 k_0e + c_1 k_1e + … (left to right) for e in [begin, end). out may be
 // base. M > 0 is the term count known at compile time, M = 0 a runtime count m. With Norm, also
 // max |out_e| into mx (nan set when an entry is NaN).
@@ -34,23 +46,13 @@ void combine_range(Index begin, Index end, const double* base, int m, const doub
       double acc = base[e];
 #pragma GCC unroll 4
       for (int j = 0; j < M; ++j) acc += cc[j] * cols[j][e];
-      out[e] = acc;
-      if constexpr (Norm) {
-        const double a = std::abs(acc);
-        local_nan = a != a ? 1.0 : local_nan;
-        local_mx = a > local_mx ? a : local_mx;
-      }
+      store_entry<Norm>(out, e, acc, local_mx, local_nan);
     }
   } else {
     for (Index e = begin; e < end; ++e) {
       double acc = base[e];
       for (int j = 0; j < m; ++j) acc += c[j] * k[j][e];
-      out[e] = acc;
-      if constexpr (Norm) {
-        const double a = std::abs(acc);
-        local_nan = a != a ? 1.0 : local_nan;
-        local_mx = a > local_mx ? a : local_mx;
-      }
+      store_entry<Norm>(out, e, acc, local_mx, local_nan);
     }
   }
   mx = local_mx;
@@ -191,7 +193,8 @@ ExplicitRungeKutta::ExplicitRungeKutta(ButcherTableau tableau, std::string descr
   // X_i = X_j + h (r_i - r_j) v + h² Σ_k ((A²)_ik - (A²)_jk) A_k (j the last row before i that
   // formed one), in place: that pass writes the buffer it reads (no read for ownership of a
   // cold line) and, where r_i = r_j, reads no v (rk4's X_3 = X_2 + (h²/4) A_1: 3 vector streams
-  // instead of 4, and no read for ownership). It is taken where it reads no more vectors than the direct form.
+  // instead of 4, and no read for ownership). It is taken where it reads no more vectors than the
+  // direct form.
   x_from_prev_.assign(static_cast<std::size_t>(s) + 1, false);
   // The differences are taken between the direct forms (a row converted below keeps its
   // differences in the same members, so the next row must not read those).
