@@ -115,7 +115,9 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
       wall_seconds);
   std::printf(
       "Each ratio divides two measurements of this run. Times are real (wall) time per "
-      "iteration, the median over the repetitions (spread: see the end).\n");
+      "iteration, the median over the repetitions (spread: see the end). A row marked 'paired "
+      "rounds' takes the median of per-round ratios of its two sides timed in alternation "
+      "(paired/... benchmarks), with a bootstrap 95%% interval of that median.\n");
   if (cfg.cpu_before.valid() && cfg.cpu_after.valid())
     std::printf(
         "CPU speeds (a fixed multiply-add loop, one pinned thread per CPU, relative to the fastest "
