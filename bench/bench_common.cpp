@@ -6,6 +6,7 @@
 #include <chrono>
 #include <deque>
 
+#include "core/driver.hpp"
 #include "experiments/catalog.hpp"
 #include "experiments/work_precision.hpp"
 
@@ -126,6 +127,18 @@ void paired_rounds(benchmark::State& st, const std::string& name, const std::fun
   std::nth_element(rounds.begin(), rounds.begin() + static_cast<std::ptrdiff_t>(rounds.size() / 2),
                    rounds.end());
   st.counters["ratio"] = rounds[rounds.size() / 2];
+}
+
+std::string driver_run(const OdeSystem& sys, Integrator& integ, double& t, Vec& y, double h,
+                       long steps) {
+  FixedStepOptions opt;
+  opt.h = h;
+  opt.t_end = t + static_cast<double>(steps) * h;
+  RunResult r = run_fixed_step_from(sys, integ, t, y, opt);
+  if (r.stats.status != Status::ok) return r.stats.message.empty() ? "run failed" : r.stats.message;
+  std::swap(y, r.y);
+  t = r.t;
+  return "";
 }
 
 double timed_calls(const std::function<void()>& f, int count) {

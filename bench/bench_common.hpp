@@ -20,6 +20,10 @@
 #include "core/ode_system.hpp"
 #include "core/params.hpp"
 
+namespace stiffbench {
+class Integrator;
+}
+
 namespace stiffbench::bench {
 
 struct Config {
@@ -97,6 +101,11 @@ std::map<std::string, std::vector<double>>& paired_ratios();
 // counter "ratio" is the median over this repetition's rounds.
 void paired_rounds(benchmark::State& st, const std::string& name, const std::function<double()>& a,
                    const std::function<double()>& b);
+
+// One fixed-step driver run (run_fixed_step_from) of `steps` steps of h from (t, y), continuing
+// there: t and y advance. Returns "" on success, else the run's message (t and y unchanged).
+std::string driver_run(const OdeSystem& sys, Integrator& integ, double& t, Vec& y, double h,
+                       long steps);
 
 // Seconds that `count` calls of f take, after one untimed call (a side of a paired round).
 double timed_calls(const std::function<void()>& f, int count);

@@ -16,7 +16,6 @@
 #include "bench/bench_common.hpp"
 #include "bench/plain_cloth.hpp"
 #include "bench/plain_sph.hpp"
-#include "core/driver.hpp"
 #include "experiments/catalog.hpp"
 #include "models/sph/neighbour_grid.hpp"
 #include "models/sph/sph_fluid.hpp"
@@ -140,13 +139,7 @@ void paired_se_plain(benchmark::State& st, const std::string& name, int threads)
   bool failed = false;
   const double h = 1e-3;
   const auto run = [&](long steps) {
-    FixedStepOptions opt;
-    opt.h = h;
-    opt.t_end = t + static_cast<double>(steps) * h;
-    RunResult r = run_fixed_step_from(sys, *se, t, y, opt);
-    failed = failed || r.stats.status != Status::ok;
-    std::swap(y, r.y);
-    t = r.t;
+    failed = !driver_run(sys, *se, t, y, h, steps).empty() || failed;
   };
   const auto driver_side = [&] {
     run(1);

@@ -130,19 +130,11 @@ void driver_steps(benchmark::State& st, long side, const std::string& name, doub
   auto integ = integrator_registry().create(name, Params{});
   Vec y = cm.warm;
   double t = 0.0;
-  FixedStepOptions opt;
-  opt.h = h;
   // One run of k steps from (t, y), continuing there; false (the benchmark skipped) on failure.
   const auto run = [&] {
-    opt.t_end = t + static_cast<double>(k) * h;
-    RunResult r = run_fixed_step_from(sys, *integ, t, y, opt);
-    if (r.stats.status != Status::ok) {
-      st.SkipWithError(r.stats.message.c_str());
-      return false;
-    }
-    std::swap(y, r.y);
-    t = r.t;
-    return true;
+    const std::string error = driver_run(sys, *integ, t, y, h, k);
+    if (!error.empty()) st.SkipWithError(error.c_str());
+    return error.empty();
   };
   try {
     // One untimed run first, as the direct step rows take an untimed first step: it allocates
@@ -388,16 +380,7 @@ void paired_rk4_se(benchmark::State& st, const std::string& name, bool driver, i
   const auto block = [&](Side& s, long steps) {
     if (failed) return 0.0;
     const auto advance = [&](long count) {
-      if (driver) {
-        FixedStepOptions opt;
-        opt.h = h;
-        opt.t_end = s.t + static_cast<double>(count) * h;
-        RunResult r = run_fixed_step_from(sys, *s.integ, s.t, s.y, opt);
-        if (r.stats.status != Status::ok) return false;
-        std::swap(s.y, r.y);
-        s.t = r.t;
-        return true;
-      }
+      if (driver) return driver_run(sys, *s.integ, s.t, s.y, h, count).empty();
       for (long i = 0; i < count; ++i, s.t += h)
         if (s.integ->step(sys, s.t, s.y, h, stats) != Status::ok) return false;
       return true;
