@@ -16,6 +16,7 @@
 
 #include "bench/bench_common.hpp"
 #include "experiments/work_precision.hpp"
+#include "models/mass_spring/network.hpp"
 
 namespace stiffbench::bench {
 
@@ -129,6 +130,8 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
         cfg.cpu_before.describe().c_str(), cfg.cpu_after.describe().c_str(),
         fmt("%.2f", cfg.cpu_before.attainable()).c_str(),
         fmt("%.2f", cfg.cpu_after.attainable()).c_str());
+  std::printf("Mass-spring kernel build in use: %s (MassSpringNetwork::kernel_isa).\n",
+              to_string(MassSpringNetwork::kernel_isa()));
   std::printf("\n");
 
   // ---- Target table (issue #10, "Targets"; 2 threads).

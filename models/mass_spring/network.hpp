@@ -79,7 +79,8 @@
 // when there are dashpots) and evaluated in blocks of 128: first c r for the whole block in a loop
 // without dependences between springs, which the compiler vectorises (`omp simd`, checked with
 // -fopt-info-vec: 4 springs per AVX2 vector, 2 per SSE2 vector; an AVX2 build of the kernel is
-// chosen at run time when the processor has it, the default build stays portable), then the
+// chosen at run time when the processor has it, and in 3D an AVX-512 build of the runs (below),
+// written with intrinsics; the default build stays portable: kernel_isa()), then the
 // additions in spring order, f_i of consecutive springs with the same first end kept in
 // registers. Springs of one (j - i, (k, L) pair, split part) whose first ends are consecutive
 // points (a lattice's springs of one direction along a row) are packed as runs (kMinRun) and
@@ -167,6 +168,12 @@ struct NetworkOptions {
   NetworkSplit split = NetworkSplit::none;  // additive split (see the header comment)
   double air_drag = 0.0;  // β_d = ½ρC_d (>= 0) of the air drag on the triangles (3D only)
 };
+
+// Builds of the right-hand side's spring kernel (see the header comment), narrowest first: the
+// portable one (the build's own target), the AVX2 one, and, in 3D, AVX-512 runs. All give the same
+// bits.
+enum class SpringKernelIsa { portable = 0, avx2 = 1, avx512 = 2 };
+const char* to_string(SpringKernelIsa isa);
 
 namespace detail {
 // A run of the right-hand side's springs (MassSpringNetwork, kMinRun): n springs of one (k, L)
@@ -263,6 +270,11 @@ class MassSpringNetwork final : public MechanicalSystem {
 
   // True when the right-hand side takes the OpenMP path.
   bool parallel() const { return num_points() >= opt_.parallel_threshold; }
+  // The build of the spring kernel the right-hand sides of this process run: the widest the
+  // processor has, at most the limit set by limit_kernel_isa (default: no limit). Tests and
+  // benchmarks lower the limit to compare the builds; the bits do not change.
+  static SpringKernelIsa kernel_isa();
+  static void limit_kernel_isa(SpringKernelIsa widest);
 
  protected:
   void eval_acceleration(double t, CVecRef x, CVecRef v, VecRef a) const override;
