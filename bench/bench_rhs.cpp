@@ -4,9 +4,10 @@
 // same cloth; and the SPH neighbour search on its own (models/sph/neighbour_grid.hpp: grid
 // build, and build plus one visit of every neighbour pair within the support radius in cell
 // order — the search a density or force pass does). Each at 1 and 2 OpenMP threads where the
-// thread scaling is asked for. Two paired benchmarks (paired_rounds, bench_common.hpp) time
+// thread scaling is asked for. Paired benchmarks (paired_rounds, bench_common.hpp) time
 // issue 29's ratios side by side: a symplectic_euler driver step against the plain cloth
-// gather, and the plain 3D SPH gather against the testbed's right-hand side.
+// gather, the plain 3D SPH gather against the testbed's right-hand side, and the SPH
+// right-hand sides at 1 thread against 2 (paired/sph_threads/..., their speed-ups).
 #include <omp.h>
 
 #include <cmath>
@@ -309,6 +310,41 @@ void paired_sph_peer(benchmark::State& st, const std::string& name, const std::s
   st.counters["threads"] = threads;
 }
 
+// Issue 29's SPH 2-thread speed-ups in interleaved rounds (paired_rounds): 2 calls of the
+// testbed's right-hand side at 1 thread, pinned to the CPU the benchmark's probe found fastest
+// (as the rhs/ rows' 1-thread loop), then 2 at 2 threads, each after an untimed call; the
+// round's ratio t_1 / t_2 is the speed-up. The rhs/ rows at 1 and 2 threads are timed tens of
+// seconds apart, and the machine's speed drifts on that scale.
+void paired_sph_threads(benchmark::State& st, const std::string& name, const std::string& model,
+                        long n_param, int warm) {
+  const CachedModel& cm = cached_model(model, {{"n", std::to_string(n_param)}}, warm);
+  const auto* fluid = dynamic_cast<const SphFluid*>(cm.sys.get());
+  const Index n = fluid->dofs();
+  Vec a(n);
+  const auto x = cm.warm.head(n), v = cm.warm.tail(n);
+  const auto call = [&] {
+    fluid->acceleration(0.0, x, v, a);
+    benchmark::DoNotOptimize(a.data());
+  };
+  {
+    const OmpThreads two(2);
+    call();  // the OpenMP threads start here, before the pinned side (they keep their mask)
+  }
+  const CpuSpeeds cpu = measure_cpu_speeds(0.03);
+  paired_rounds(
+      st, name,
+      [&] {
+        const OmpThreads one(1);
+        const PinCurrentThread pin(cpu.fastest());
+        return timed_calls(call, 2);
+      },
+      [&] {
+        const OmpThreads two(2);
+        return timed_calls(call, 2);
+      });
+  if (cpu.valid()) st.counters["cpu_attainable"] = cpu.attainable();
+}
+
 // The testbed's SPH right-hand side when every call rebuilds the Verlet list: calls alternate
 // between the warm state and a copy with one particle moved by 0.6 skins (more than the half
 // skin that triggers a build). rhs/ measures the calls that reuse the list; this, the calls
@@ -465,6 +501,15 @@ void register_rhs_benchmarks(const Config& cfg) {
   // the peer and the testbed side by side, 6 rounds a repetition (about 2.5 s).
   add("paired/plain_sph_3d_vs_testbed/n:46/omp:2", [](benchmark::State& st) {
     paired_sph_peer(st, "paired/plain_sph_3d_vs_testbed/n:46/omp:2", "sph_dam_break_3d", 46, 5, 2);
+  })->Iterations(6);
+  // The 2D and 3D 2-thread speed-ups, 1 and 2 threads side by side (about 3 s each).
+  const std::string threads_2d = "paired/sph_threads/sph_dam_break_2d/n:224/omp:1_vs_2";
+  const std::string threads_3d = "paired/sph_threads/sph_dam_break_3d/n:46/omp:1_vs_2";
+  add(threads_2d, [threads_2d](benchmark::State& st) {
+    paired_sph_threads(st, threads_2d, "sph_dam_break_2d", 224, 10);
+  })->Iterations(10);
+  add(threads_3d, [threads_3d](benchmark::State& st) {
+    paired_sph_threads(st, threads_3d, "sph_dam_break_3d", 46, 5);
   })->Iterations(6);
   for (const int t : {1, 2}) {
     add(
