@@ -642,14 +642,14 @@ __attribute__((target("avx2"))) void spring_group_avx2(const SpringArgs& s, Inde
 // one-source permute (all lanes kept) stand for the plain ones, whose GCC 12 versions trip
 // -Wmaybe-uninitialized inside avx512fintrin.h (GCC bug 105593).
 alignas(64) constexpr std::int64_t kPermIdx[8][8] = {
-    {0, 3, 6, 9, 12, 15, 0, 0},   // x components from the first two vectors
-    {0, 1, 2, 3, 4, 5, 10, 13},   // ... and the third
-    {1, 4, 7, 10, 13, 0, 0, 0},   // y
+    {0, 3, 6, 9, 12, 15, 0, 0},  // x components from the first two vectors
+    {0, 1, 2, 3, 4, 5, 10, 13},  // ... and the third
+    {1, 4, 7, 10, 13, 0, 0, 0},  // y
     {0, 1, 2, 3, 4, 8, 11, 14},
-    {2, 5, 8, 11, 14, 0, 0, 0},   // z
+    {2, 5, 8, 11, 14, 0, 0, 0},  // z
     {0, 1, 2, 3, 4, 9, 12, 15},
-    {0, 0, 0, 1, 1, 1, 2, 2},     // coefficients 0..7 spread over interleaved elements 0..7
-    {2, 3, 3, 3, 4, 4, 4, 5},     // ... 8..15
+    {0, 0, 0, 1, 1, 1, 2, 2},  // coefficients 0..7 spread over interleaved elements 0..7
+    {2, 3, 3, 3, 4, 4, 4, 5},  // ... 8..15
 };
 alignas(64) constexpr std::int64_t kSpreadLast[8] = {5, 5, 6, 6, 6, 7, 7, 7};  // ... 16..23
 
@@ -725,8 +725,8 @@ __attribute__((target("avx512f"))) void spring_run_avx512(const SpringArgs& s,
       const __m512d r1 = _mm512_sub_pd(_mm512_loadu_pd(pj + 8), _mm512_loadu_pd(pi + 8));
       const __m512d r2 = _mm512_sub_pd(_mm512_loadu_pd(pj + 16), _mm512_loadu_pd(pi + 16));
       // l² from +0.0 adds nothing to spring_run_impl's sum: r_x² is never -0.0.
-      const __m512d l2 = sum_triples(_mm512_mul_pd(r0, r0), _mm512_mul_pd(r1, r1),
-                                     _mm512_mul_pd(r2, r2), zero);
+      const __m512d l2 =
+          sum_triples(_mm512_mul_pd(r0, r0), _mm512_mul_pd(r1, r1), _mm512_mul_pd(r2, r2), zero);
       const __m512d l = _mm512_maskz_sqrt_pd(0xFF, l2);
       __m512d coef = _mm512_div_pd(_mm512_mul_pd(vk, _mm512_sub_pd(l, vrest)), l);
       if constexpr (Dashpots) {
@@ -735,16 +735,18 @@ __attribute__((target("avx512f"))) void spring_run_avx512(const SpringArgs& s,
         const __m512d u0 = _mm512_sub_pd(_mm512_loadu_pd(uj), _mm512_loadu_pd(ui));
         const __m512d u1 = _mm512_sub_pd(_mm512_loadu_pd(uj + 8), _mm512_loadu_pd(ui + 8));
         const __m512d u2 = _mm512_sub_pd(_mm512_loadu_pd(uj + 16), _mm512_loadu_pd(ui + 16));
-        const __m512d ur = sum_triples(_mm512_mul_pd(u0, r0), _mm512_mul_pd(u1, r1),
-                                       _mm512_mul_pd(u2, r2), zero);
+        const __m512d ur =
+            sum_triples(_mm512_mul_pd(u0, r0), _mm512_mul_pd(u1, r1), _mm512_mul_pd(u2, r2), zero);
         const __m512d c = _mm512_loadu_pd(cd + b);
         const __mmask8 has = _mm512_cmp_pd_mask(c, zero, _CMP_NEQ_UQ);
-        coef = _mm512_add_pd(coef, _mm512_maskz_mov_pd(has, _mm512_div_pd(_mm512_mul_pd(c, ur), l2)));
+        coef =
+            _mm512_add_pd(coef, _mm512_maskz_mov_pd(has, _mm512_div_pd(_mm512_mul_pd(c, ur), l2)));
       }
       double* out = cr + 3 * b;
       _mm512_store_pd(out, _mm512_mul_pd(_mm512_maskz_permutexvar_pd(0xFF, spread0, coef), r0));
       _mm512_store_pd(out + 8, _mm512_mul_pd(_mm512_maskz_permutexvar_pd(0xFF, spread1, coef), r1));
-      _mm512_store_pd(out + 16, _mm512_mul_pd(_mm512_maskz_permutexvar_pd(0xFF, spread2, coef), r2));
+      _mm512_store_pd(out + 16,
+                      _mm512_mul_pd(_mm512_maskz_permutexvar_pd(0xFF, spread2, coef), r2));
     }
     for (; b < nb; ++b)
       run_spring_scalar<Dashpots>(xi + 3 * b, xj + 3 * b, v + oi + 3 * b, v + oj + 3 * b, k, rest,
@@ -756,9 +758,9 @@ __attribute__((target("avx512f"))) void spring_run_avx512(const SpringArgs& s,
 }
 
 // The runs [r0, r1) of a group in 3D on an AVX-512 processor (its loose springs: spring_group).
-__attribute__((target("avx512f"))) void spring_runs_avx512(const SpringArgs& s, Index r0,
-                                                           Index r1, const double* x,
-                                                           const double* v, double* f) {
+__attribute__((target("avx512f"))) void spring_runs_avx512(const SpringArgs& s, Index r0, Index r1,
+                                                           const double* x, const double* v,
+                                                           double* f) {
   for (Index r = r0; r < r1; ++r) {
     if (s.damping)
       spring_run_avx512<true>(s, s.runs[r], x, v, f);
@@ -917,9 +919,12 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
 
 const char* to_string(SpringKernelIsa isa) {
   switch (isa) {
-    case SpringKernelIsa::portable: return "portable";
-    case SpringKernelIsa::avx2: return "avx2";
-    case SpringKernelIsa::avx512: return "avx512";
+    case SpringKernelIsa::portable:
+      return "portable";
+    case SpringKernelIsa::avx2:
+      return "avx2";
+    case SpringKernelIsa::avx512:
+      return "avx512";
   }
   return "?";
 }

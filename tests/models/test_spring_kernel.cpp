@@ -285,7 +285,8 @@ TEST(SpringKernel, EveryBuildGivesThePortableBits) {
   for (Index i = 0; i + 1 < np; ++i) add(i, i + 1, 100.0, 0.01, 0.0);
   Index start = 200;
   for (Index len = 8; len < 24; ++len, start += len + 4)  // remainders 0..7 of eight springs
-    for (Index i = start; i < start + len; ++i) add(i, i + 3, 60.0 + static_cast<double>(len), 0.03, 0.0);
+    for (Index i = start; i < start + len; ++i)
+      add(i, i + 3, 60.0 + static_cast<double>(len), 0.03, 0.0);
   for (Index i = 1000; i < 1300; ++i)  // 300 springs: two full blocks and one of 44
     add(i + 5, i, 40.0, 0.05, i % 3 == 0 ? 0.0 : 0.2 * u(rng));
   NetworkOptions opt;
