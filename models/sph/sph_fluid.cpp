@@ -67,6 +67,7 @@ struct ForceArgs {
 #else
 #define STIFFBENCH_LANES_AVX2 0
 #endif
+#define STIFFBENCH_LANES_AVX512 0
 namespace sph_lanes_portable {
 using namespace sph_lanes;
 #include "models/sph/pair_lanes.inc"
@@ -74,9 +75,10 @@ using namespace sph_lanes;
 #undef STIFFBENCH_LANES_AVX2
 
 // ... and, in a build without -mavx2, the same source compiled for AVX2 (four lanes per
-// instruction, a branch-free left-pack in the density pass), chosen at run time when the
-// processor has it.
-// Both give the same bits (pair_lanes.inc).
+// instruction, a branch-free left-pack in the density pass) and for AVX-512 (full groups of eight
+// neighbours in eight lanes, compressed stores in the density pass, 32 vector registers), chosen
+// at run time when the processor has them.
+// All give the same bits (pair_lanes.inc).
 // (GCC only: clang has no `#pragma GCC target`; a clang build uses the portable loops.)
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__AVX2__)
 #define STIFFBENCH_SPH_AVX2_DISPATCH 1
@@ -89,7 +91,19 @@ using namespace sph_lanes;
 }  // namespace sph_lanes_avx2
 #undef STIFFBENCH_LANES_AVX2
 #pragma GCC pop_options
+#pragma GCC push_options
+#pragma GCC target("avx2,avx512f,avx512vl,avx512dq")
+#undef STIFFBENCH_LANES_AVX512
+#define STIFFBENCH_LANES_AVX512 1
+#define STIFFBENCH_LANES_AVX2 1
+namespace sph_lanes_avx512 {
+using namespace sph_lanes;
+#include "models/sph/pair_lanes.inc"
+}  // namespace sph_lanes_avx512
+#undef STIFFBENCH_LANES_AVX2
+#pragma GCC pop_options
 #endif
+#undef STIFFBENCH_LANES_AVX512
 
 namespace {
 
@@ -408,25 +422,51 @@ bool avx2_usable() {
   static const bool yes = __builtin_cpu_supports("avx2");
   return yes && g_avx2_allowed.load(std::memory_order_relaxed);
 }
+std::atomic<bool> g_avx512_allowed{true};
+bool avx512_usable() {
+  static const bool yes = __builtin_cpu_supports("avx512f") &&
+                          __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq");
+  return yes && avx2_usable() && g_avx512_allowed.load(std::memory_order_relaxed);
+}
 #endif
+
+// The pair loops' build a pass runs (read once per pass, so that all its blocks use one build).
+enum class LanesBuild { portable, avx2, avx512 };
+LanesBuild lanes_build() {
+#ifdef STIFFBENCH_SPH_AVX2_DISPATCH
+  return avx512_usable() ? LanesBuild::avx512
+                         : (avx2_usable() ? LanesBuild::avx2 : LanesBuild::portable);
+#elif defined(__AVX2__)
+  return LanesBuild::avx2;
+#else
+  return LanesBuild::portable;
+#endif
+}
 
 template <int D, sph::KernelType KD>
 void density_range(const sph_lanes::DensityArgs& a, std::size_t first, std::size_t last,
-                   double* scratch, bool avx2) {
+                   double* scratch, LanesBuild build) {
 #ifdef STIFFBENCH_SPH_AVX2_DISPATCH
-  if (avx2) return sph_lanes_avx2::density_range<D, KD>(a, first, last, scratch);
+  if (build == LanesBuild::avx512)
+    return sph_lanes_avx512::density_range<D, KD>(a, first, last, scratch);
+  if (build == LanesBuild::avx2)
+    return sph_lanes_avx2::density_range<D, KD>(a, first, last, scratch);
 #else
-  (void)avx2;
+  (void)build;
 #endif
   sph_lanes_portable::density_range<D, KD>(a, first, last, scratch);
 }
 
 template <int D, sph::KernelType KG, bool Explicit, bool Implicit>
-void force_range(const sph_lanes::ForceArgs& a, std::size_t first, std::size_t last, bool avx2) {
+void force_range(const sph_lanes::ForceArgs& a, std::size_t first, std::size_t last,
+                 LanesBuild build) {
 #ifdef STIFFBENCH_SPH_AVX2_DISPATCH
-  if (avx2) return sph_lanes_avx2::force_range<D, KG, Explicit, Implicit>(a, first, last);
+  if (build == LanesBuild::avx512)
+    return sph_lanes_avx512::force_range<D, KG, Explicit, Implicit>(a, first, last);
+  if (build == LanesBuild::avx2)
+    return sph_lanes_avx2::force_range<D, KG, Explicit, Implicit>(a, first, last);
 #else
-  (void)avx2;
+  (void)build;
 #endif
   sph_lanes_portable::force_range<D, KG, Explicit, Implicit>(a, first, last);
 }
@@ -441,15 +481,17 @@ void SphFluid::allow_avx2(bool yes) {
 #endif
 }
 
-bool SphFluid::uses_avx2() const {
+void SphFluid::allow_avx512(bool yes) {
 #ifdef STIFFBENCH_SPH_AVX2_DISPATCH
-  return avx2_usable();
-#elif defined(__AVX2__)
-  return true;
+  g_avx512_allowed.store(yes, std::memory_order_relaxed);
 #else
-  return false;
+  (void)yes;
 #endif
 }
+
+bool SphFluid::uses_avx2() const { return lanes_build() != LanesBuild::portable; }
+
+bool SphFluid::uses_avx512() const { return lanes_build() == LanesBuild::avx512; }
 
 // Both passes work in slot order (the Verlet list's cell order): slot k is particle
 // list_order_[k], and every per-particle array they use (positions, velocities, masses,
@@ -486,7 +528,7 @@ void SphFluid::density_pass(const double* x) const {
                                     opt_.support * opt_.support,
                                     opt_.rho0,
                                     &wd_};
-  const bool avx2 = uses_avx2();
+  const LanesBuild build = lanes_build();
   // One row of squared distances per thread (+ 4: the left-pack's full-vector stores).
   scratch_.resize(static_cast<std::size_t>(parallel_ ? omp_get_max_threads() : 1) *
                   (cand_capacity_ + 4));
@@ -504,7 +546,7 @@ void SphFluid::density_pass(const double* x) const {
     double* scratch = scratch_.data() + t * (cand_capacity_ + 4);
     for (std::int64_t block; (block = blocks_.next(static_cast<int>(t))) >= 0;) {
       const auto [first, last] = slot_block(block);
-      density_range<D, KD>(args, first, last, scratch, avx2);
+      density_range<D, KD>(args, first, last, scratch, build);
       for (std::size_t k = first; k < last; ++k) {
         const double rho = srho_[k], p = pressure(rho);
         sp_[k] = p;
@@ -552,7 +594,7 @@ void SphFluid::force_pass(const double* v, double* a) const {
                                   opt_.mirror_boundary_pressure ? 2.0 : 1.0,
                                   &wg_,
                                   &wv_};
-  const bool avx2 = uses_avx2();
+  const LanesBuild build = lanes_build();
   blocks_.reset(slot_blocks(), parallel_ ? omp_get_max_threads() : 1);
 #pragma omp parallel if (parallel_)
   {
@@ -566,7 +608,7 @@ void SphFluid::force_pass(const double* v, double* a) const {
     const int me = parallel_ ? omp_get_thread_num() : 0;
     for (std::int64_t block; (block = blocks_.next(me)) >= 0;) {
       const auto [first, last] = slot_block(block);
-      force_range<D, KG, with_explicit, with_implicit>(args, first, last, avx2);
+      force_range<D, KG, with_explicit, with_implicit>(args, first, last, build);
       for (std::size_t k = first; k < last; ++k) {
         const double* xi = rec + sph_lanes::kRecLen * k + sph_lanes::kRecX;
         std::array<double, D> acc;

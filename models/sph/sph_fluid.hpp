@@ -248,10 +248,14 @@ class SphFluid final : public MechanicalSystem {
   double neighbour_skin() const { return skin_; }
   long neighbour_list_builds() const { return list_builds_; }
   // Whether the pair loops run their AVX2 build (x86-64 processors with AVX2, in a build without
-  // -mavx2, which compiles them for AVX2 throughout). allow_avx2(false) makes every SphFluid of
-  // the process use the portable build, which gives the same bits (tests compare the two).
+  // -mavx2, which compiles them for AVX2 throughout), or their AVX-512 build (processors with
+  // AVX-512F, VL and DQ, in a build without -mavx2; it counts as an AVX2 build too).
+  // allow_avx512(false) makes every SphFluid of the process use the AVX2 build instead, and
+  // allow_avx2(false) the portable build; all give the same bits (tests compare them).
   bool uses_avx2() const;
+  bool uses_avx512() const;
   static void allow_avx2(bool yes);
+  static void allow_avx512(bool yes);
   // ω_max of the pressure waves on the uniform lattice at rest (see the header comment).
   double acoustic_rate() const { return acoustic_rate_; }
   double max_density_error(CVecRef y) const;  // max_i |ρ_i/ρ0 - 1| (free surfaces included)
