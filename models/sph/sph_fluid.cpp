@@ -424,8 +424,8 @@ bool avx2_usable() {
 }
 std::atomic<bool> g_avx512_allowed{true};
 bool avx512_usable() {
-  static const bool yes = __builtin_cpu_supports("avx512f") &&
-                          __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq");
+  static const bool yes = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+                          __builtin_cpu_supports("avx512dq");
   return yes && avx2_usable() && g_avx512_allowed.load(std::memory_order_relaxed);
 }
 #endif
