@@ -116,8 +116,8 @@
 // with OpenMP when there are at least `parallel_threshold` particles, the threads taking blocks
 // of 256 slots as they become free. Each particle's sums run in four lanes (neighbour q of its
 // kept neighbours into lane q mod 4, then (L0 + L1) + (L2 + L3); sph/pair_lanes.inc), compiled
-// for SSE2 and, chosen at run time, AVX2, which give the same bits. So results are bitwise
-// identical for any thread count, schedule and processor. The state vector's order never
+// for SSE2 and, chosen at run time, AVX2 and AVX-512, which give the same bits. So results are
+// bitwise identical for any thread count, schedule and processor. The state vector's order never
 // changes.
 // Nothing edits positions or velocities outside the right-hand side: boundaries are forces, and
 // there is no velocity clamping.
