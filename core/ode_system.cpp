@@ -52,6 +52,19 @@ void MechanicalSystem::eval_rhs(double t, CVecRef y, VecRef dydt) const {
   eval_acceleration(t, y.head(n), y.tail(n), dydt.tail(n));
 }
 
+void MechanicalSystem::eval_acceleration_in_ranges(double t, CVecRef x, CVecRef v, VecRef a,
+                                                   DofRangeFn done) const {
+  eval_acceleration(t, x, v, a);
+  const Index n = dofs();
+  if (n >= 50000) {  // as the explicit Runge-Kutta passes: 64 contiguous ranges over the threads
+    const Index chunks = 64;
+#pragma omp parallel for schedule(static)
+    for (Index q = 0; q < chunks; ++q) done(n * q / chunks, n * (q + 1) / chunks);
+  } else if (n > 0) {
+    done(0, n);
+  }
+}
+
 void OdeSystem::eval_implicit_part_jacobian(double, CVecRef, SparseMat&) const {
   throw BadInput("model '" + name() + "' provides no Jacobian of the implicit part of its split");
 }

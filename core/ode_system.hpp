@@ -273,6 +273,23 @@ class OdeSystem : public ProblemMetadata, public FrameOutput {
   mutable EvalCounters counters_;
 };
 
+// A callable taking a range [begin, end) of dofs, by reference to the caller's callable (no copy,
+// no allocation): MechanicalSystem::acceleration_in_ranges's `done`. The callable must outlive
+// the call it is passed to.
+class DofRangeFn {
+ public:
+  template <class F>
+  DofRangeFn(F& f)  // NOLINT(google-explicit-constructor): a lambda binds to it at the call
+      : obj_(&f), call_([](const void* o, Index b, Index e) {
+          (*static_cast<F*>(const_cast<void*>(o)))(b, e);  // F may be const: then so is the call
+        }) {}
+  void operator()(Index begin, Index end) const { call_(obj_, begin, end); }
+
+ private:
+  const void* obj_;
+  void (*call_)(const void*, Index, Index);
+};
+
 // y = [x; v] with x' = v, v' = a(t, x, v); x and v each have dofs() entries.
 // Symplectic and Baraff–Witkin style schemes use this split; general schemes see only the
 // OdeSystem face.
@@ -286,6 +303,18 @@ class MechanicalSystem : public OdeSystem {
   void acceleration(double t, CVecRef x, CVecRef v, VecRef a) const {
     count_f_eval();
     eval_acceleration(t, x, v, a);
+  }
+
+  // The same a(t, x, v), and done(b, e) for ranges [b, e) of dofs that together cover
+  // [0, dofs()) once each. done(b, e) is called once a_b .. a_{e-1} hold their final values and
+  // the evaluation will not read entries [b, e) of x and v again, so it may overwrite them (and
+  // read and write entries [b, e) of any other vector): the explicit Runge-Kutta methods form
+  // their next stage there while the entries are still in cache. done may run on several threads
+  // at once for disjoint ranges and must not start OpenMP parallel regions itself. The values of
+  // a do not depend on what done does or on the ranges. Counted as one f evaluation.
+  void acceleration_in_ranges(double t, CVecRef x, CVecRef v, VecRef a, DofRangeFn done) const {
+    count_f_eval();
+    eval_acceleration_in_ranges(t, x, v, a, done);
   }
 
   // Whether a depends on v (damping). Leapfrog and the Verlet family require it not to, and the
@@ -352,6 +381,11 @@ class MechanicalSystem : public OdeSystem {
 
  protected:
   virtual void eval_acceleration(double t, CVecRef x, CVecRef v, VecRef a) const = 0;
+  // By default eval_acceleration(), then done over contiguous ranges (on OpenMP threads for
+  // large systems). A model that finishes a in parts overrides it to call done on each part as it
+  // finishes (MassSpringNetwork: each partition of points).
+  virtual void eval_acceleration_in_ranges(double t, CVecRef x, CVecRef v, VecRef a,
+                                           DofRangeFn done) const;
   void eval_rhs(double t, CVecRef y, VecRef dydt) const final;
   void eval_jacobian(double t, CVecRef y, SparseMat& jac) const override;
   virtual void eval_acceleration_explicit_part(double t, CVecRef x, CVecRef v, VecRef a) const;

@@ -1,6 +1,7 @@
 #include "integrators/explicit/explicit_rk.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -123,31 +124,21 @@ struct Combination {
   double* out;  // nullptr: not wanted
 };
 
-// Two combinations over the same entries in one pass: sub-blocks of kSub entries, the first
+// Two combinations over entries [lo, hi) in one pass: sub-blocks of kSub entries, the first
 // combination's then the second's, so the columns both read come from cache the second time.
 // The first is computed before the second for every entry (the second may overwrite what the
-// first reads). Returns max(‖out1‖∞, ‖out2‖∞) with Norm (NaN when an entry is NaN).
+// first reads). With Norm, max(‖out1‖∞, ‖out2‖∞) over the range into mx (nan set when an entry
+// is NaN).
 template <bool Norm>
-double combine_pair(Index n, const Combination& one, const Combination& two) {
+void pair_range(Index lo, Index hi, const Combination& one, const Combination& two, double& mx,
+                bool& nan) {
   constexpr Index kSub = 512;
   const RangeFn f1 = range_fn<Norm>(one.m), f2 = range_fn<Norm>(two.m);
-  const auto range = [&](Index lo, Index hi, double& mx, bool& nan) {
-    for (Index b = lo; b < hi; b += kSub) {
-      const Index e = std::min(hi, b + kSub);
-      if (one.out) f1(b, e, one.base, one.m, one.cols, one.coefs, one.out, mx, nan);
-      if (two.out) f2(b, e, two.base, two.m, two.cols, two.coefs, two.out, mx, nan);
-    }
-  };
-  double mx = 0.0;
-  bool nan = false;
-  if (n >= ExplicitRungeKutta::kParallelEntries) {
-    const Index chunks = 64;
-#pragma omp parallel for schedule(static) reduction(max : mx) reduction(|| : nan)
-    for (Index q = 0; q < chunks; ++q) range(n * q / chunks, n * (q + 1) / chunks, mx, nan);
-  } else {
-    range(0, n, mx, nan);
+  for (Index b = lo; b < hi; b += kSub) {
+    const Index e = std::min(hi, b + kSub);
+    if (one.out) f1(b, e, one.base, one.m, one.cols, one.coefs, one.out, mx, nan);
+    if (two.out) f2(b, e, two.base, two.m, two.cols, two.coefs, two.out, mx, nan);
   }
-  return nan ? std::numeric_limits<double>::quiet_NaN() : mx;
 }
 
 }  // namespace
@@ -278,6 +269,8 @@ Status ExplicitRungeKutta::step(const OdeSystem& sys, double t, VecRef y, double
 
 // y = [x; v], f = [v; a]: the method written in its accelerations alone (header). k_'s columns
 // hold A_i in their v-part; X_i goes to ytmp_'s head and V_i, when a depends on v, to its tail.
+// Each pass runs inside the evaluation before it (acceleration_in_ranges): on each range of dofs
+// as soon as the system has finished it, while that range's A_i, X_i and V_i are in cache.
 Status ExplicitRungeKutta::step_mechanical(const MechanicalSystem& mech, double t, VecRef y,
                                            double h) {
   const int s = tableau_.stages();
@@ -287,9 +280,12 @@ Status ExplicitRungeKutta::step_mechanical(const MechanicalSystem& mech, double 
   const bool need_v = mech.velocity_dependent();
   // Row i's two combinations: positions x + (h r_i) v + Σ (h² c_k) A_k into x_out (or, for a
   // row formed from the previous stage position, x_out + (h Δr) v + Σ (h² Δc_k) A_k in place),
-  // velocities v + Σ (h a_ij) A_j into v_out (nullptr: not formed).
-  const auto rows = [&](int i, double* x_out, double* v_out) {
+  // velocities v + Σ (h a_ij) A_j into v_out (nullptr: not formed). Rows i < s write the stage
+  // buffer, row s (the update) y itself.
+  const auto row = [&](int i, Combination& cx, Combination& cv) {
     const auto u = static_cast<std::size_t>(i);
+    double* x_out = i < s ? ytmp_.data() : x;
+    double* v_out = i < s ? (need_v ? ytmp_.data() + d : nullptr) : v;
     int mx = 0;
     if (x_v_coef_[u] != 0.0) {
       x_cols_[0] = v;
@@ -306,24 +302,45 @@ Status ExplicitRungeKutta::step_mechanical(const MechanicalSystem& mech, double 
           k_.col(terms_[u][static_cast<std::size_t>(j)]).data() + d;
       scaled_[static_cast<std::size_t>(j)] = h * coefs_[u][static_cast<std::size_t>(j)];
     }
-    const Combination cx{x_from_prev_[u] ? x_out : x, mx, x_cols_.data(), x_scaled_.data(), x_out};
-    const Combination cv{v, mv, cols_.data(), scaled_.data(), v_out};
-    return i == s ? combine_pair<true>(d, cx, cv) : combine_pair<false>(d, cx, cv);
+    cx = Combination{x_from_prev_[u] ? x_out : x, mx, x_cols_.data(), x_scaled_.data(), x_out};
+    cv = Combination{v, mv, cols_.data(), scaled_.data(), v_out};
   };
+  // The update's ‖y‖∞ over the ranges, which may finish on several threads at once (max is
+  // order-independent: the same value for any thread count).
+  std::atomic<double> norm{0.0};
+  std::atomic<bool> nan{false};
+  Combination cx{}, cv{};
+  bool update = false;  // whether the pass set up is row s's
+  const auto pass = [&](Index b, Index e) {
+    double mx = 0.0;
+    bool n = false;
+    if (!update) return pair_range<false>(b, e, cx, cv, mx, n);
+    // Positions first in each block: they read v before the velocities overwrite it.
+    pair_range<true>(b, e, cx, cv, mx, n);
+    if (n) nan.store(true, std::memory_order_relaxed);
+    for (double cur = norm.load(std::memory_order_relaxed);
+         mx > cur && !norm.compare_exchange_weak(cur, mx, std::memory_order_relaxed);) {
+    }
+  };
+  // A row without terms evaluates at y itself and needs no pass.
+  const auto has_pass = [&](int i) { return !terms_[static_cast<std::size_t>(i)].empty(); };
   for (int i = 0; i < s; ++i) {
     const double ti = t + tableau_.c[i] * h;
     auto a_i = k_.col(i).tail(d);
-    if (terms_[static_cast<std::size_t>(i)].empty()) {
-      mech.acceleration(ti, y.head(d), y.tail(d), a_i);
+    const bool at_y = !has_pass(i);
+    const Eigen::Map<const Vec> stage_x(at_y ? x : ytmp_.data(), d);
+    const Eigen::Map<const Vec> stage_v(at_y || !need_v ? v : ytmp_.data() + d, d);
+    // The pass after this stage: the next row's, or the update after the last stage.
+    if (!has_pass(i + 1)) {
+      mech.acceleration(ti, stage_x, stage_v, a_i);
       continue;
     }
-    rows(i, ytmp_.data(), need_v ? ytmp_.data() + d : nullptr);
-    const double* stage_v = need_v ? ytmp_.data() + d : v;
-    mech.acceleration(ti, ytmp_.head(d), Eigen::Map<const Vec>(stage_v, d), a_i);
+    update = i + 1 == s;
+    row(i + 1, cx, cv);
+    mech.acceleration_in_ranges(ti, stage_x, stage_v, a_i, pass);
   }
-  if (!terms_[static_cast<std::size_t>(s)].empty()) {
-    // Positions first in each block: they read v before the velocities overwrite it.
-    last_norm_ = rows(s, x, v);
+  if (has_pass(s)) {
+    last_norm_ = nan.load() ? std::numeric_limits<double>::quiet_NaN() : norm.load();
     norm_valid_ = true;
   }
   return Status::ok;

@@ -21,6 +21,11 @@
 // h² Σ_k ((A²)_ik - (A²)_jk) A_k) where that reads no more vectors: rk4's X_3 = X_2 + (h²/4) A_1.
 // For rk4 without damping that is 18 vector streams a step instead of the first-order form's 30,
 // and one write fewer to a buffer it has not read (docs/performance.md, "Stop 49", "Stop 51").
+// Each of these passes runs inside the evaluation before it (MechanicalSystem::
+// acceleration_in_ranges): on each range of dofs as soon as the system has finished it, while
+// that range's accelerations and stage values are still in cache (MassSpringNetwork: each of its
+// partitions of points). The per-entry arithmetic is the same wherever a pass runs, so the bits
+// do not depend on the system's ranges (the test compares with passes after whole evaluations).
 #pragma once
 
 #include <vector>

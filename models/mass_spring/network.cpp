@@ -836,7 +836,8 @@ void finish_points(double* __restrict a, const double* __restrict v, const doubl
 }  // namespace
 
 template <int D, MassSpringNetwork::Part P>
-void MassSpringNetwork::acceleration_impl(const double* x, const double* v, double* a) const {
+void MassSpringNetwork::acceleration_impl(const double* x, const double* v, double* a,
+                                          const DofRangeFn* done) const {
   const double gamma = opt_.point_damping;
   const Index np = num_points();
   const Index parts = rhs_parts_;
@@ -869,10 +870,14 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
   const std::uint8_t* pinned = pinned_.data();
   double g[D];
   for (int c = 0; c < D; ++c) g[c] = opt_.gravity[static_cast<std::size_t>(c)];
+  // With done (acceleration_in_ranges, no drag): partition q's dofs are final once its points
+  // are finished, and nothing after reads x or v there (the later partitions' springs have both
+  // ends in their own partitions).
   const auto partition = [&](Index q) {
     springs_of(q);
     finish_points<D, P == Part::implicit_part>(a, v, mass, pinned, g, gamma, np * q / parts,
                                                np * (q + 1) / parts);
+    if (done) (*done)(D * (np * q / parts), D * (np * (q + 1) / parts));
   };
   const Index ne = even_groups_, no = odd_groups_;
   // Even group e touches the points of partitions 2e and 2e + 1 only: it clears them just before
@@ -937,7 +942,16 @@ void MassSpringNetwork::limit_kernel_isa(SpringKernelIsa widest) {
 
 void MassSpringNetwork::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a) const {
   detail::with_dim<1, 3>(dim_, [&](auto dim) {
-    acceleration_impl<decltype(dim)::value, Part::all>(x.data(), v.data(), a.data());
+    acceleration_impl<decltype(dim)::value, Part::all>(x.data(), v.data(), a.data(), nullptr);
+  });
+}
+
+void MassSpringNetwork::eval_acceleration_in_ranges(double t, CVecRef x, CVecRef v, VecRef a,
+                                                    DofRangeFn done) const {
+  // Air drag is added after all partitions: then the default (done after the whole a).
+  if (drag()) return MechanicalSystem::eval_acceleration_in_ranges(t, x, v, a, done);
+  detail::with_dim<1, 3>(dim_, [&](auto dim) {
+    acceleration_impl<decltype(dim)::value, Part::all>(x.data(), v.data(), a.data(), &done);
   });
 }
 
@@ -945,7 +959,8 @@ void MassSpringNetwork::eval_acceleration_explicit_part(double, CVecRef x, CVecR
                                                         VecRef a) const {
   require_input(has_imex_split(), name_ + ": no split (parameter split=none)");
   detail::with_dim<1, 3>(dim_, [&](auto dim) {
-    acceleration_impl<decltype(dim)::value, Part::explicit_part>(x.data(), v.data(), a.data());
+    acceleration_impl<decltype(dim)::value, Part::explicit_part>(x.data(), v.data(), a.data(),
+                                                                 nullptr);
   });
 }
 
@@ -953,7 +968,8 @@ void MassSpringNetwork::eval_acceleration_implicit_part(double, CVecRef x, CVecR
                                                         VecRef a) const {
   require_input(has_imex_split(), name_ + ": no split (parameter split=none)");
   detail::with_dim<1, 3>(dim_, [&](auto dim) {
-    acceleration_impl<decltype(dim)::value, Part::implicit_part>(x.data(), v.data(), a.data());
+    acceleration_impl<decltype(dim)::value, Part::implicit_part>(x.data(), v.data(), a.data(),
+                                                                 nullptr);
   });
 }
 

@@ -278,6 +278,8 @@ class MassSpringNetwork final : public MechanicalSystem {
 
  protected:
   void eval_acceleration(double t, CVecRef x, CVecRef v, VecRef a) const override;
+  void eval_acceleration_in_ranges(double t, CVecRef x, CVecRef v, VecRef a,
+                                   DofRangeFn done) const override;
   void eval_acceleration_explicit_part(double t, CVecRef x, CVecRef v, VecRef a) const override;
   void eval_acceleration_implicit_part(double t, CVecRef x, CVecRef v, VecRef a) const override;
 
@@ -302,7 +304,7 @@ class MassSpringNetwork final : public MechanicalSystem {
     std::vector<Index> face_pos;
   };
   template <int D, Part P>
-  void acceleration_impl(const double* x, const double* v, double* a) const;
+  void acceleration_impl(const double* x, const double* v, double* a, const DofRangeFn* done) const;
   template <int D>
   void blocks_impl(const Structure& st, double gamma, const double* x, const double* v,
                    double* k_values, double* d_values) const;
