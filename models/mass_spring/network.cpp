@@ -330,6 +330,31 @@ void MassSpringNetwork::pack_rhs_springs() {
       if (!taken[static_cast<std::size_t>(e)]) place(e);
     group_start_.push_back(static_cast<Index>(slot));
   }
+
+  // Each partition's longest run of points that no spring between partitions touches.
+  std::vector<std::uint8_t> touched(static_cast<std::size_t>(np), 0);
+  for (const Spring& sp : springs_)
+    if (group_of(sp) >= parts) {
+      touched[static_cast<std::size_t>(sp.i)] = 1;
+      touched[static_cast<std::size_t>(sp.j)] = 1;
+    }
+  late_clear_.assign(2 * static_cast<std::size_t>(parts), 0);
+  for (Index q = 0; q < parts; ++q) {
+    const Index p0 = np * q / parts, p1 = np * (q + 1) / parts;
+    Index best_a = p0, best_b = p0;
+    for (Index a = p0; a < p1;) {
+      if (touched[static_cast<std::size_t>(a)]) {
+        ++a;
+        continue;
+      }
+      Index b = a;
+      while (b < p1 && !touched[static_cast<std::size_t>(b)]) ++b;
+      if (b - a > best_b - best_a) best_a = a, best_b = b;
+      a = b;
+    }
+    late_clear_[2 * static_cast<std::size_t>(q)] = best_a;
+    late_clear_[2 * static_cast<std::size_t>(q) + 1] = best_b;
+  }
 }
 
 const SpringNetworkView* MassSpringNetwork::spring_network() const {
@@ -874,6 +899,9 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
   // are finished, and nothing after reads x or v there (the later partitions' springs have both
   // ends in their own partitions).
   const auto partition = [&](Index q) {
+    const Index a0 = late_clear_[2 * static_cast<std::size_t>(q)],
+                a1 = late_clear_[2 * static_cast<std::size_t>(q) + 1];
+    std::fill(a + D * a0, a + D * a1, 0.0);
     springs_of(q);
     finish_points<D, P == Part::implicit_part>(a, v, mass, pinned, g, gamma, np * q / parts,
                                                np * (q + 1) / parts);
@@ -881,10 +909,13 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
   };
   const Index ne = even_groups_, no = odd_groups_;
   // Even group e touches the points of partitions 2e and 2e + 1 only: it clears them just before
-  // its springs. Partitions no even group covers (an odd count: only the single partition of a
+  // its springs (but for each partition's late-cleared range, which no group touches). Partitions no even group covers (an odd count: only the single partition of a
   // small network) are cleared in the same stage.
-  const auto clear = [&](Index q) {
-    std::fill(a + D * (np * q / parts), a + D * (np * (q + 1) / parts), 0.0);
+  const auto clear = [&](Index q) {  // all but the points cleared late (partition, above)
+    const Index a0 = late_clear_[2 * static_cast<std::size_t>(q)],
+                a1 = late_clear_[2 * static_cast<std::size_t>(q) + 1];
+    std::fill(a + D * (np * q / parts), a + D * a0, 0.0);
+    std::fill(a + D * a1, a + D * (np * (q + 1) / parts), 0.0);
   };
   const auto first_stage = [&](Index e) {
     if (e < ne) {

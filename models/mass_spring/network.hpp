@@ -371,6 +371,11 @@ class MassSpringNetwork final : public MechanicalSystem {
   Index rhs_parts_ = 1;
   std::vector<Index> group_start_, group_loose_, group_runs_;
   Index even_groups_ = 0, odd_groups_ = 0;
+  // Per partition q, points [late_clear_[2q], late_clear_[2q + 1]): the longest range of its
+  // points that no spring between partitions touches. The right-hand side clears them just
+  // before the partition's own springs (in cache) instead of with the rest of the partition
+  // before the springs between partitions: the same sums.
+  std::vector<Index> late_clear_;
   std::vector<double> point_mass_;             // per point
   std::vector<std::uint8_t> pinned_;           // per point
   std::vector<std::uint8_t> packed_implicit_;  // per packed spring: in a_I (split only)
