@@ -909,8 +909,9 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
   };
   const Index ne = even_groups_, no = odd_groups_;
   // Even group e touches the points of partitions 2e and 2e + 1 only: it clears them just before
-  // its springs (but for each partition's late-cleared range, which no group touches). Partitions no even group covers (an odd count: only the single partition of a
-  // small network) are cleared in the same stage.
+  // its springs (but for each partition's late-cleared range, which no group touches). Partitions
+  // no even group covers (an odd count: only the single partition of a small network) are cleared
+  // in the same stage.
   const auto clear = [&](Index q) {  // all but the points cleared late (partition, above)
     const Index a0 = late_clear_[2 * static_cast<std::size_t>(q)],
                 a1 = late_clear_[2 * static_cast<std::size_t>(q) + 1];
