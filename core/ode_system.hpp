@@ -9,6 +9,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -278,7 +279,9 @@ class OdeSystem : public ProblemMetadata, public FrameOutput {
 // the call it is passed to.
 class DofRangeFn {
  public:
-  template <class F>
+  // (Not for a DofRangeFn itself, which the copy constructor copies: passing one on must not wrap
+  // the wrapper.)
+  template <class F, class = std::enable_if_t<!std::is_same_v<std::remove_cv_t<F>, DofRangeFn>>>
   DofRangeFn(F& f)  // NOLINT(google-explicit-constructor): a lambda binds to it at the call
       : obj_(&f), call_([](const void* o, Index b, Index e) {
           (*static_cast<F*>(const_cast<void*>(o)))(b, e);  // F may be const: then so is the call
