@@ -3,7 +3,11 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <exception>
 #include <limits>
+#include <thread>
+
+#include <omp.h>
 
 namespace stiffbench {
 
@@ -141,6 +145,112 @@ void pair_range(Index lo, Index hi, const Combination& one, const Combination& t
   }
 }
 
+// The s stages of one step as a wavefront over an AccelerationChain's blocks (header): task
+// T(i, q) evaluates stage i on block q (its clear, link and finish calls) and runs the pass after
+// it there, pass(i + 1, b, e) on the block's dofs [b, e) (row i + 1's stage values, or the update
+// after the last stage). Sweep position p runs T(i, q) for q = p - i, i = 0 .. s-1 in that order,
+// so T(i, q) comes after T(i - 1, q + 1) (its link reads stage i's values on block q + 1) and
+// T(i, q - 1) (whose link added to block q), and before any task overwrites what it reads:
+// T(i - 1, q + 1)'s pass overwrites stage i - 1's values on block q + 1 only after T(i - 1, q),
+// and the update of block q (T(s - 1, q)) comes after every task that reads x or v there. On two
+// threads the blocks split into [0, m) and [m, Q): the second sweeps up from m as above, the first
+// down from m - 1 (the mirror image: T(i, q) links q - 1 and q), and the link between m - 1 and m
+// is the first thread's, run once the second has cleared block m for that stage (which it does
+// only after its pass of the stage before there) and awaited by the second before it finishes
+// block m. Every entry gets the same terms in the same order on either schedule (no entry has
+// terms from two links), so the bits do not depend on the threads. The calls must not throw: an
+// exception stops both sweeps and is rethrown after them.
+template <class StageX, class StageV, class StageA, class Pass>
+void chained_stages(const AccelerationChain& chain, int s, Index d, double t, double h,
+                    const Vec& c, const StageX& stage_x, const StageV& stage_v,
+                    const StageA& stage_a, const Pass& pass, bool two_threads) {
+  const Index nq = chain.blocks();
+  const auto x_of = [&](int i) { return Eigen::Map<const Vec>(stage_x(i), d); };
+  const auto v_of = [&](int i) { return Eigen::Map<const Vec>(stage_v(i), d); };
+  const auto a_of = [&](int i) { return Eigen::Map<Vec>(stage_a(i), d); };
+  const auto clear = [&](int i, Index q) { chain.clear(q, a_of(i)); };
+  const auto link = [&](int i, Index q) {
+    chain.link(q, t + c[i] * h, x_of(i), v_of(i), a_of(i));
+  };
+  const auto finish_and_pass = [&](int i, Index q) {
+    chain.finish(q, t + c[i] * h, x_of(i), v_of(i), a_of(i));
+    pass(i + 1, chain.begin(q), chain.begin(q + 1));
+  };
+  // Handshakes at the split: stages (counted from 1) for which the second thread has cleared
+  // block m, and for which the first has added the link between m - 1 and m.
+  std::atomic<int> cleared{0}, linked{0};
+  std::atomic<bool> failed{false};
+  std::exception_ptr error;
+  // Waits until c reaches `stage` (false when the other sweep failed).
+  const auto wait_for = [&](const std::atomic<int>& counter, int stage) {
+    for (int spins = 0; counter.load(std::memory_order_acquire) < stage; ++spins) {
+      if (failed.load(std::memory_order_relaxed)) return false;
+      if (spins > 32) std::this_thread::yield();
+    }
+    return true;
+  };
+  // The sweep up over [m, nq); paired: the first thread sweeps [0, m).
+  const auto up = [&](Index m, bool paired) {
+    const Index len = nq - m;
+    for (Index p = 0; p < len + s - 1; ++p)
+      for (int i = 0; i < s; ++i) {
+        const Index q = m + p - i;
+        if (q < m || q >= nq) continue;
+        if (q == m) {
+          clear(i, q);
+          if (paired) cleared.store(i + 1, std::memory_order_release);
+        }
+        if (q + 1 < nq) {
+          clear(i, q + 1);
+          link(i, q);
+        }
+        if (q == m && paired && !wait_for(linked, i + 1)) return;
+        finish_and_pass(i, q);
+      }
+  };
+  const auto down = [&](Index m) {
+    for (Index p = 0; p < m + s - 1; ++p)
+      for (int i = 0; i < s; ++i) {
+        const Index q = m - 1 - (p - i);
+        if (q < 0 || q >= m) continue;
+        if (q == m - 1) {
+          clear(i, q);
+          if (!wait_for(cleared, i + 1)) return;
+          link(i, q);
+          linked.store(i + 1, std::memory_order_release);
+        }
+        if (q > 0) {
+          clear(i, q - 1);
+          link(i, q - 1);
+        }
+        finish_and_pass(i, q);
+      }
+  };
+  const auto guarded = [&](const auto& sweep) {
+    try {
+      sweep();
+    } catch (...) {
+#pragma omp critical(stiffbench_chained_stages)
+      if (!error) error = std::current_exception();
+      failed.store(true, std::memory_order_relaxed);
+    }
+  };
+  if (!two_threads) {
+    guarded([&] { up(0, false); });
+  } else {
+#pragma omp parallel num_threads(2)
+    {
+      if (omp_get_num_threads() < 2)
+        guarded([&] { up(0, false); });
+      else if (omp_get_thread_num() == 0)
+        guarded([&] { down(nq / 2); });
+      else
+        guarded([&] { up(nq / 2, true); });
+    }
+  }
+  if (error) std::rethrow_exception(error);
+}
+
 }  // namespace
 
 ExplicitRungeKutta::ExplicitRungeKutta(ButcherTableau tableau, std::string description)
@@ -223,8 +333,15 @@ ExplicitRungeKutta::ExplicitRungeKutta(ButcherTableau tableau, std::string descr
   }
   cols_.resize(static_cast<std::size_t>(s));
   scaled_.resize(static_cast<std::size_t>(s));
-  x_cols_.resize(static_cast<std::size_t>(s) + 1);
-  x_scaled_.resize(static_cast<std::size_t>(s) + 1);
+  for (auto* w : {&row_x_cols_, &row_v_cols_}) w->resize(static_cast<std::size_t>(s) + 1);
+  for (auto* w : {&row_x_scaled_, &row_v_scaled_}) w->resize(static_cast<std::size_t>(s) + 1);
+  row_x_count_.assign(static_cast<std::size_t>(s) + 1, 0);
+  for (std::size_t i = 0; i <= static_cast<std::size_t>(s); ++i) {
+    row_x_cols_[i].resize(1 + x_terms_[i].size());
+    row_x_scaled_[i].resize(1 + x_terms_[i].size());
+    row_v_cols_[i].resize(terms_[i].size());
+    row_v_scaled_[i].resize(terms_[i].size());
+  }
 }
 
 void ExplicitRungeKutta::reset(const OdeSystem& sys, double, CVecRef) {
@@ -269,8 +386,9 @@ Status ExplicitRungeKutta::step(const OdeSystem& sys, double t, VecRef y, double
 
 // y = [x; v], f = [v; a]: the method written in its accelerations alone (header). k_'s columns
 // hold A_i in their v-part; X_i goes to ytmp_'s head and V_i, when a depends on v, to its tail.
-// Each pass runs inside the evaluation before it (acceleration_in_ranges): on each range of dofs
-// as soon as the system has finished it, while that range's A_i, X_i and V_i are in cache.
+// Each pass runs inside the evaluation before it: on each range of dofs as soon as the system
+// has finished it (acceleration_in_ranges), or block by block in a wavefront over the stages
+// (step_chained), while that range's A_i, X_i and V_i are in cache.
 Status ExplicitRungeKutta::step_mechanical(const MechanicalSystem& mech, double t, VecRef y,
                                            double h) {
   const int s = tableau_.stages();
@@ -278,44 +396,51 @@ Status ExplicitRungeKutta::step_mechanical(const MechanicalSystem& mech, double 
   double* x = y.data();
   double* v = y.data() + d;
   const bool need_v = mech.velocity_dependent();
-  // Row i's two combinations: positions x + (h r_i) v + Σ (h² c_k) A_k into x_out (or, for a
-  // row formed from the previous stage position, x_out + (h Δr) v + Σ (h² Δc_k) A_k in place),
-  // velocities v + Σ (h a_ij) A_j into v_out (nullptr: not formed). Rows i < s write the stage
-  // buffer, row s (the update) y itself.
-  const auto row = [&](int i, Combination& cx, Combination& cv) {
+  // Row i's two combinations, in row i's own workspace (so that the passes of several rows may
+  // run at once): positions x + (h r_i) v + Σ (h² c_k) A_k into x_out (or, for a row formed from
+  // the previous stage position, x_out + (h Δr) v + Σ (h² Δc_k) A_k in place), velocities
+  // v + Σ (h a_ij) A_j into v_out (nullptr: not formed). Rows i < s write the stage buffer, row s
+  // (the update) y itself.
+  const auto prepare_row = [&](int i) {
     const auto u = static_cast<std::size_t>(i);
-    double* x_out = i < s ? ytmp_.data() : x;
-    double* v_out = i < s ? (need_v ? ytmp_.data() + d : nullptr) : v;
     int mx = 0;
     if (x_v_coef_[u] != 0.0) {
-      x_cols_[0] = v;
-      x_scaled_[0] = h * x_v_coef_[u];
+      row_x_cols_[u][0] = v;
+      row_x_scaled_[u][0] = h * x_v_coef_[u];
       mx = 1;
     }
     for (std::size_t t2 = 0; t2 < x_terms_[u].size(); ++t2, ++mx) {
-      x_cols_[static_cast<std::size_t>(mx)] = k_.col(x_terms_[u][t2]).data() + d;
-      x_scaled_[static_cast<std::size_t>(mx)] = h * h * x_coefs_[u][t2];
+      row_x_cols_[u][static_cast<std::size_t>(mx)] = k_.col(x_terms_[u][t2]).data() + d;
+      row_x_scaled_[u][static_cast<std::size_t>(mx)] = h * h * x_coefs_[u][t2];
     }
-    const int mv = static_cast<int>(terms_[u].size());
-    for (int j = 0; j < mv; ++j) {
-      cols_[static_cast<std::size_t>(j)] =
-          k_.col(terms_[u][static_cast<std::size_t>(j)]).data() + d;
-      scaled_[static_cast<std::size_t>(j)] = h * coefs_[u][static_cast<std::size_t>(j)];
+    row_x_count_[u] = mx;
+    for (std::size_t j = 0; j < terms_[u].size(); ++j) {
+      row_v_cols_[u][j] = k_.col(terms_[u][j]).data() + d;
+      row_v_scaled_[u][j] = h * coefs_[u][j];
     }
-    cx = Combination{x_from_prev_[u] ? x_out : x, mx, x_cols_.data(), x_scaled_.data(), x_out};
-    cv = Combination{v, mv, cols_.data(), scaled_.data(), v_out};
+  };
+  // Row i's combinations from its prepared workspace (read only: several rows' passes may run
+  // at once).
+  const auto combinations = [&](int i) {
+    const auto u = static_cast<std::size_t>(i);
+    double* x_out = i < s ? ytmp_.data() : x;
+    double* v_out = i < s ? (need_v ? ytmp_.data() + d : nullptr) : v;
+    return std::pair{Combination{x_from_prev_[u] ? x_out : x, row_x_count_[u],
+                                 row_x_cols_[u].data(), row_x_scaled_[u].data(), x_out},
+                     Combination{v, static_cast<int>(terms_[u].size()), row_v_cols_[u].data(),
+                                 row_v_scaled_[u].data(), v_out}};
   };
   // The update's ‖y‖∞ over the ranges, which may finish on several threads at once (max is
   // order-independent: the same value for any thread count).
   std::atomic<double> norm{0.0};
   std::atomic<bool> nan{false};
-  Combination cx{}, cv{};
-  bool update = false;  // whether the pass set up is row s's
-  const auto pass = [&](Index b, Index e) {
+  // Row i's pass over dofs [b, e) (positions first in each block: they read v before the
+  // update's velocities overwrite it).
+  const auto pass = [&](int i, Index b, Index e) {
+    const auto [cx, cv] = combinations(i);
     double mx = 0.0;
     bool n = false;
-    if (!update) return pair_range<false>(b, e, cx, cv, mx, n);
-    // Positions first in each block: they read v before the velocities overwrite it.
+    if (i < s) return pair_range<false>(b, e, cx, cv, mx, n);
     pair_range<true>(b, e, cx, cv, mx, n);
     if (n) nan.store(true, std::memory_order_relaxed);
     for (double cur = norm.load(std::memory_order_relaxed);
@@ -324,20 +449,34 @@ Status ExplicitRungeKutta::step_mechanical(const MechanicalSystem& mech, double 
   };
   // A row without terms evaluates at y itself and needs no pass.
   const auto has_pass = [&](int i) { return !terms_[static_cast<std::size_t>(i)].empty(); };
-  for (int i = 0; i < s; ++i) {
-    const double ti = t + tableau_.c[i] * h;
-    auto a_i = k_.col(i).tail(d);
-    const bool at_y = !has_pass(i);
-    const Eigen::Map<const Vec> stage_x(at_y ? x : ytmp_.data(), d);
-    const Eigen::Map<const Vec> stage_v(at_y || !need_v ? v : ytmp_.data() + d, d);
-    // The pass after this stage: the next row's, or the update after the last stage.
-    if (!has_pass(i + 1)) {
-      mech.acceleration(ti, stage_x, stage_v, a_i);
-      continue;
+  bool all_passes = true;
+  for (int i = 1; i <= s; ++i) all_passes = all_passes && has_pass(i);
+  const AccelerationChain* chain = mech.acceleration_chain();
+  if (chain && all_passes && omp_get_max_threads() <= 2) {
+    for (int i = 1; i <= s; ++i) prepare_row(i);
+    for (int i = 0; i < s; ++i) mech.count_chained_evaluation();  // may throw: before any work
+    // Stage i's arguments: y itself for the first (no row), the stage buffer after.
+    const auto stage_x = [&](int i) { return i == 0 ? x : ytmp_.data(); };
+    const auto stage_v = [&](int i) { return i == 0 || !need_v ? v : ytmp_.data() + d; };
+    const auto stage_a = [&](int i) { return k_.col(i).data() + d; };
+    chained_stages(*chain, s, d, t, h, tableau_.c, stage_x, stage_v, stage_a, pass,
+                   d >= kParallelEntries && chain->blocks() >= 2 && omp_get_max_threads() == 2);
+  } else {
+    for (int i = 0; i < s; ++i) {
+      const double ti = t + tableau_.c[i] * h;
+      auto a_i = k_.col(i).tail(d);
+      const bool at_y = !has_pass(i);
+      const Eigen::Map<const Vec> stage_x(at_y ? x : ytmp_.data(), d);
+      const Eigen::Map<const Vec> stage_v(at_y || !need_v ? v : ytmp_.data() + d, d);
+      // The pass after this stage: the next row's, or the update after the last stage.
+      if (!has_pass(i + 1)) {
+        mech.acceleration(ti, stage_x, stage_v, a_i);
+        continue;
+      }
+      prepare_row(i + 1);
+      const auto ranges = [&](Index b, Index e) { pass(i + 1, b, e); };
+      mech.acceleration_in_ranges(ti, stage_x, stage_v, a_i, ranges);
     }
-    update = i + 1 == s;
-    row(i + 1, cx, cv);
-    mech.acceleration_in_ranges(ti, stage_x, stage_v, a_i, pass);
   }
   if (has_pass(s)) {
     last_norm_ = nan.load() ? std::numeric_limits<double>::quiet_NaN() : norm.load();

@@ -69,8 +69,11 @@ class ExplicitRungeKutta final : public Integrator {
   std::vector<double> x_v_coef_;
   std::vector<std::vector<int>> x_terms_;
   std::vector<std::vector<double>> x_coefs_;
-  std::vector<const double*> x_cols_;
-  std::vector<double> x_scaled_;
+  // The mechanical path's workspaces of rows 0..s: the columns and h-scaled coefficients of the
+  // position and the velocity combination, and the position's column count.
+  std::vector<std::vector<const double*>> row_x_cols_, row_v_cols_;
+  std::vector<std::vector<double>> row_x_scaled_, row_v_scaled_;
+  std::vector<int> row_x_count_;
   // Rows whose position is formed from the previous stage position in place (constructor): for
   // them x_v_coef_, x_terms_ and x_coefs_ hold the differences to that row.
   std::vector<bool> x_from_prev_;

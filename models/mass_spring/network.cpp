@@ -331,12 +331,20 @@ void MassSpringNetwork::pack_rhs_springs() {
     group_start_.push_back(static_cast<Index>(slot));
   }
 
-  // Each partition's longest run of points that no spring between partitions touches.
+  // Each partition's longest run of points that no spring between partitions touches; and
+  // whether the partitions form a chain (acceleration_chain): no spring in the last group (it
+  // joins partitions that are not neighbours), and no point with springs of two groups.
   std::vector<std::uint8_t> touched(static_cast<std::size_t>(np), 0);
+  std::vector<Index> touched_by(static_cast<std::size_t>(np), -1);
+  chain_ok_ = parts >= 2 && members.back().empty();
   for (const Spring& sp : springs_)
-    if (group_of(sp) >= parts) {
-      touched[static_cast<std::size_t>(sp.i)] = 1;
-      touched[static_cast<std::size_t>(sp.j)] = 1;
+    if (const Index grp = group_of(sp); grp >= parts) {
+      for (const Index p : {sp.i, sp.j}) {
+        const auto u = static_cast<std::size_t>(p);
+        touched[u] = 1;
+        if (touched_by[u] >= 0 && touched_by[u] != grp) chain_ok_ = false;
+        touched_by[u] = grp;
+      }
     }
   late_clear_.assign(2 * static_cast<std::size_t>(parts), 0);
   for (Index q = 0; q < parts; ++q) {
@@ -862,7 +870,7 @@ void finish_points(double* __restrict a, const double* __restrict v, const doubl
 
 template <int D, MassSpringNetwork::Part P>
 void MassSpringNetwork::acceleration_impl(const double* x, const double* v, double* a,
-                                          const DofRangeFn* done) const {
+                                          const DofRangeFn* done, const ChainCall* call) const {
   const double gamma = opt_.point_damping;
   const Index np = num_points();
   const Index parts = rhs_parts_;
@@ -927,6 +935,17 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
       clear(2 * ne + (e - ne));
     }
   };
+  if (call) {  // one piece of a chained evaluation (Chain)
+    switch (call->what) {
+      case ChainCall::What::clear:
+        return clear(call->q);
+      case ChainCall::What::link:  // the group of the springs between q and q + 1
+        return group(call->q % 2 == 0 ? call->q / 2 : ne + call->q / 2);
+      case ChainCall::What::finish:
+        return partition(call->q);
+    }
+    return;
+  }
   const Index first = ne + (parts - 2 * ne);
   const bool rest = group_start_[static_cast<std::size_t>(parts + ne + no)] <
                     group_start_[static_cast<std::size_t>(parts + ne + no) + 1];
@@ -985,6 +1004,26 @@ void MassSpringNetwork::eval_acceleration_in_ranges(double t, CVecRef x, CVecRef
   detail::with_dim<1, 3>(dim_, [&](auto dim) {
     acceleration_impl<decltype(dim)::value, Part::all>(x.data(), v.data(), a.data(), &done);
   });
+}
+
+void MassSpringNetwork::Chain::call(ChainCall::What what, Index q, const double* x,
+                                    const double* v, double* a) const {
+  const ChainCall c{what, q};
+  detail::with_dim<1, 3>(net_.dim_, [&](auto dim) {
+    net_.acceleration_impl<decltype(dim)::value, Part::all>(x, v, a, nullptr, &c);
+  });
+}
+
+void MassSpringNetwork::Chain::clear(Index q, VecRef a) const {
+  call(ChainCall::What::clear, q, nullptr, nullptr, a.data());
+}
+
+void MassSpringNetwork::Chain::link(Index q, double, CVecRef x, CVecRef v, VecRef a) const {
+  call(ChainCall::What::link, q, x.data(), v.data(), a.data());
+}
+
+void MassSpringNetwork::Chain::finish(Index q, double, CVecRef x, CVecRef v, VecRef a) const {
+  call(ChainCall::What::finish, q, x.data(), v.data(), a.data());
 }
 
 void MassSpringNetwork::eval_acceleration_explicit_part(double, CVecRef x, CVecRef v,

@@ -280,6 +280,17 @@ class MassSpringNetwork final : public MechanicalSystem {
   void eval_acceleration(double t, CVecRef x, CVecRef v, VecRef a) const override;
   void eval_acceleration_in_ranges(double t, CVecRef x, CVecRef v, VecRef a,
                                    DofRangeFn done) const override;
+
+ public:
+  // The partitions of the right-hand side as a chain (MechanicalSystem::acceleration_chain):
+  // offered when there are at least two, no spring joins partitions that are not neighbours, no
+  // point has springs to both neighbouring partitions (so no entry gets terms from two links)
+  // and there is no air drag; nullptr otherwise.
+  const AccelerationChain* acceleration_chain() const override {
+    return chain_ok_ && !drag() ? &chain_ : nullptr;
+  }
+
+ protected:
   void eval_acceleration_explicit_part(double t, CVecRef x, CVecRef v, VecRef a) const override;
   void eval_acceleration_implicit_part(double t, CVecRef x, CVecRef v, VecRef a) const override;
 
@@ -303,8 +314,34 @@ class MassSpringNetwork final : public MechanicalSystem {
     // at that position + r + s × (length of column 3q).
     std::vector<Index> face_pos;
   };
+  // One piece of a chained evaluation (Chain): clear(q), link(q) or finish(q).
+  struct ChainCall {
+    enum class What { clear, link, finish } what;
+    Index q;
+  };
+  // With call: only that piece of the evaluation.
   template <int D, Part P>
-  void acceleration_impl(const double* x, const double* v, double* a, const DofRangeFn* done) const;
+  void acceleration_impl(const double* x, const double* v, double* a, const DofRangeFn* done,
+                         const ChainCall* call = nullptr) const;
+  // The right-hand side's partitions as an AccelerationChain: block q is partition q, link(q)
+  // the group of springs between partitions q and q + 1, clear(q) the clearing of the points
+  // outside late_clear_, finish(q) the partition's late clear, interior springs and finish (the
+  // same pieces as the whole evaluation, so the same sums).
+  class Chain final : public AccelerationChain {
+   public:
+    explicit Chain(const MassSpringNetwork& net) : net_(net) {}
+    Index blocks() const override { return net_.rhs_parts_; }
+    Index begin(Index q) const override {
+      return net_.dim_ * (net_.num_points() * q / net_.rhs_parts_);
+    }
+    void clear(Index q, VecRef a) const override;
+    void link(Index q, double t, CVecRef x, CVecRef v, VecRef a) const override;
+    void finish(Index q, double t, CVecRef x, CVecRef v, VecRef a) const override;
+
+   private:
+    void call(ChainCall::What what, Index q, const double* x, const double* v, double* a) const;
+    const MassSpringNetwork& net_;
+  };
   template <int D>
   void blocks_impl(const Structure& st, double gamma, const double* x, const double* v,
                    double* k_values, double* d_values) const;
@@ -376,6 +413,8 @@ class MassSpringNetwork final : public MechanicalSystem {
   // before the partition's own springs (in cache) instead of with the rest of the partition
   // before the springs between partitions: the same sums.
   std::vector<Index> late_clear_;
+  bool chain_ok_ = false;  // acceleration_chain()'s conditions on the packing (pack_rhs_springs)
+  Chain chain_{*this};
   std::vector<double> point_mass_;             // per point
   std::vector<std::uint8_t> pinned_;           // per point
   std::vector<std::uint8_t> packed_implicit_;  // per packed spring: in a_I (split only)

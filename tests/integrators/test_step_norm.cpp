@@ -15,6 +15,8 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -168,5 +170,159 @@ TEST(StepNorm, PassesInsideTheEvaluationsGiveTheBitsOfPassesAfterThem) {
   omp_set_num_threads(threads0);
 }
 
+
+// The explicit Runge-Kutta methods run their stages as a wavefront over the blocks of a system's
+// AccelerationChain (explicit_rk.cpp, chained_stages), with two sweeps meeting at the middle block
+// on two threads. The chain's calls are the same pieces as the whole evaluation and every entry
+// gets its terms in the same order on any schedule, so the states, the step norms and the
+// evaluation counts must be bit for bit those of the same steps on the same network seen without
+// its chain (WholeEvaluation: whole evaluations, passes after them). A task run before its inputs
+// were final (a link reading a neighbour's stage values before that neighbour's pass, a finish
+// before the links into its block, an update before the last read of x or v there) or a pass
+// overwriting what a later task reads would change them. Cloth 130² (32 partitions of about four
+// rows, 50,700 coordinates: the two-thread schedule) with and without dashpots, at 1 and 2
+// threads, for the methods of the test above.
+TEST(StepNorm, ChainedStagesGiveTheBitsOfWholeEvaluations) {
+  const int threads0 = omp_get_max_threads();
+  for (const bool dashpots : {false, true}) {
+    std::vector<std::string> params = {"n=130", "perturbation=0.01"};
+    if (dashpots) params.push_back("dashpot=0.5");
+    const auto sys = testing_support::model("cloth", params);
+    const MechanicalSystem& mech = *sys->as_mechanical();
+    ASSERT_NE(mech.acceleration_chain(), nullptr);
+    ASSERT_EQ(mech.acceleration_chain()->blocks(), 32);
+    ASSERT_EQ(mech.velocity_dependent(), dashpots);
+    const WholeEvaluation whole(mech);
+    ASSERT_EQ(whole.acceleration_chain(), nullptr);
+    for (const int threads : {1, 2}) {
+      omp_set_num_threads(threads);
+      for (const std::string method : {"rk4", "rk38", "heun", "ssprk3", "kutta3", "euler"}) {
+        SCOPED_TRACE(method + (dashpots ? " dashpots" : "") + " threads " +
+                     std::to_string(threads));
+        auto a = testing_support::make(method);
+        auto b = testing_support::make(method);
+        Vec ya = sys->initial_state(), yb = ya;
+        a->reset(*sys, 0.0, ya);
+        b->reset(whole, 0.0, yb);
+        SolveStats sa, sb;
+        const long f0 = sys->counters().f_evals;
+        for (int k = 0; k < 4; ++k) {
+          ASSERT_EQ(a->step(*sys, k * 2e-3, ya, 2e-3, sa), Status::ok);
+          ASSERT_EQ(b->step(whole, k * 2e-3, yb, 2e-3, sb), Status::ok);
+          EXPECT_TRUE(ya == yb) << "step " << k << ": max |diff| "
+                                << (ya - yb).cwiseAbs().maxCoeff();
+          EXPECT_EQ(*a->last_step_max_norm(), *b->last_step_max_norm());
+        }
+        // whole's evaluations count on sys too: 2 × 4 steps × s, one a stage on each.
+        EXPECT_EQ(sys->counters().f_evals - f0, 8L * a->info().stages);
+        EXPECT_GT((ya - sys->initial_state()).cwiseAbs().maxCoeff(), 1e-6);
+      }
+    }
+  }
+  omp_set_num_threads(threads0);
+}
+
+// A user's own chain: a line of n unit masses joined by springs of a cubic force law
+// f = k (d + d³) (d the extension) with dashpots, cut into blocks of uneven sizes (at least two
+// points each, so no point has both of its springs in links). Its acceleration() is the chain's
+// pieces in one order (every clear, every link, every finish), the chained steps run them in
+// others, so the comparison checks the wavefront's order, the handshakes of its two sweeps and
+// the pass ranges on a system the testbed does not know. A link that throws must stop the step
+// with its exception on either schedule (not hang a sweep waiting for the other).
+class SpringLine final : public MechanicalSystem, public AccelerationChain {
+ public:
+  explicit SpringLine(Index n) : n_(n) {
+    for (Index b = 0; b < n;) {  // block sizes 2, 5, 9, 2, 5, 9, ... (scaled) up to n
+      starts_.push_back(b);
+      b = std::min(n, b + std::array<Index, 3>{2, 5, 9}[starts_.size() % 3] * (n / 2000 + 1));
+    }
+    starts_.push_back(n);
+  }
+  std::string name() const override { return "spring_line"; }
+  Index dofs() const override { return n_; }
+  Vec initial_state() const override {
+    Vec y(2 * n_);
+    for (Index i = 0; i < n_; ++i) {
+      y[i] = static_cast<double>(i) + 0.1 * std::sin(0.37 * static_cast<double>(i));
+      y[n_ + i] = 0.05 * std::cos(0.11 * static_cast<double>(i));
+    }
+    return y;
+  }
+  bool velocity_dependent() const override { return true; }
+  const AccelerationChain* acceleration_chain() const override {
+    return chained_ ? this : nullptr;
+  }
+  bool chained_ = true;
+  Index throw_at_ = -1;  // link(q) throws BadInput for q == throw_at_
+
+  Index blocks() const override { return static_cast<Index>(starts_.size()) - 1; }
+  Index begin(Index q) const override { return starts_[static_cast<std::size_t>(q)]; }
+  void clear(Index q, VecRef a) const override {
+    a.segment(begin(q), begin(q + 1) - begin(q)).setZero();
+  }
+  void link(Index q, double, CVecRef x, CVecRef v, VecRef a) const override {
+    if (q == throw_at_) throw BadInput("spring_line: link " + std::to_string(q));
+    spring(begin(q + 1) - 1, x, v, a);
+  }
+  void finish(Index q, double, CVecRef x, CVecRef v, VecRef a) const override {
+    for (Index i = begin(q); i + 1 < begin(q + 1); ++i) spring(i, x, v, a);
+  }
+
+ protected:
+  void eval_acceleration(double t, CVecRef x, CVecRef v, VecRef a) const override {
+    for (Index q = 0; q < blocks(); ++q) clear(q, a);
+    for (Index q = 0; q + 1 < blocks(); ++q) link(q, t, x, v, a);
+    for (Index q = 0; q < blocks(); ++q) finish(q, t, x, v, a);
+  }
+
+ private:
+  // The spring between points i and i + 1 (rest length 1, k = 40, dashpot 0.3).
+  static void spring(Index i, CVecRef x, CVecRef v, VecRef a) {
+    const double d = x[i + 1] - x[i] - 1.0;
+    const double f = 40.0 * (d + d * d * d) + 0.3 * (v[i + 1] - v[i]);
+    a[i] += f;
+    a[i + 1] -= f;
+  }
+  Index n_;
+  std::vector<Index> starts_;
+};
+
+TEST(StepNorm, AUsersChainGivesTheBitsOfItsWholeEvaluation) {
+  const int threads0 = omp_get_max_threads();
+  SpringLine line(60000);  // 60,000 coordinates: the two-thread schedule
+  ASSERT_GT(line.blocks(), 100);
+  for (const int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    for (const std::string method : {"rk4", "rk38", "heun", "euler"}) {
+      SCOPED_TRACE(method + " threads " + std::to_string(threads));
+      auto a = testing_support::make(method);
+      auto b = testing_support::make(method);
+      Vec ya = line.initial_state(), yb = ya;
+      a->reset(line, 0.0, ya);
+      b->reset(line, 0.0, yb);
+      SolveStats sa, sb;
+      for (int k = 0; k < 5; ++k) {
+        line.chained_ = true;
+        const long f0 = line.counters().f_evals;
+        ASSERT_EQ(a->step(line, k * 1e-2, ya, 1e-2, sa), Status::ok);
+        EXPECT_EQ(line.counters().f_evals - f0, a->info().stages);
+        line.chained_ = false;
+        ASSERT_EQ(b->step(line, k * 1e-2, yb, 1e-2, sb), Status::ok);
+        EXPECT_TRUE(ya == yb) << "step " << k << ": max |diff| "
+                              << (ya - yb).cwiseAbs().maxCoeff();
+        EXPECT_EQ(*a->last_step_max_norm(), *b->last_step_max_norm());
+      }
+      EXPECT_GT((ya - line.initial_state()).cwiseAbs().maxCoeff(), 1e-3);
+      // A throwing link: in the first thread's blocks, at the split, in the second's.
+      line.chained_ = true;
+      for (const Index q : {Index{3}, line.blocks() / 2 - 1, line.blocks() - 2}) {
+        line.throw_at_ = q;
+        EXPECT_THROW(a->step(line, 0.0, ya, 1e-2, sa), BadInput) << "link " << q;
+      }
+      line.throw_at_ = -1;
+    }
+  }
+  omp_set_num_threads(threads0);
+}
 }  // namespace
 }  // namespace stiffbench
