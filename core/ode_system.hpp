@@ -298,8 +298,8 @@ class DofRangeFn {
 // which every term couples at most two neighbouring blocks (MechanicalSystem::acceleration_chain;
 // MassSpringNetwork offers one). One evaluation at (t, x, v) into a is, for every block,
 //   clear(q):  zeroes the entries of a on block q that links add to (it writes a on block q only);
-//   link(q):   for q + 1 < blocks(), adds the terms coupling blocks q and q + 1 (it reads x and v on
-//              those two blocks only and adds to a on them only);
+//   link(q):   for q + 1 < blocks(), adds the terms coupling blocks q and q + 1 (it reads x
+//              and v on those two blocks only and adds to a on them only);
 //   finish(q): adds block q's own terms and finishes a there (it reads x, v and a on block q only
 //              and writes a there only); after it a on block q holds its final values;
 // in any order in which clear(q) comes before link(q - 1), link(q) and finish(q), and both links

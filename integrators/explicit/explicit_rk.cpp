@@ -169,9 +169,7 @@ void chained_stages(const AccelerationChain& chain, int s, Index d, double t, do
   const auto v_of = [&](int i) { return Eigen::Map<const Vec>(stage_v(i), d); };
   const auto a_of = [&](int i) { return Eigen::Map<Vec>(stage_a(i), d); };
   const auto clear = [&](int i, Index q) { chain.clear(q, a_of(i)); };
-  const auto link = [&](int i, Index q) {
-    chain.link(q, t + c[i] * h, x_of(i), v_of(i), a_of(i));
-  };
+  const auto link = [&](int i, Index q) { chain.link(q, t + c[i] * h, x_of(i), v_of(i), a_of(i)); };
   const auto finish_and_pass = [&](int i, Index q) {
     chain.finish(q, t + c[i] * h, x_of(i), v_of(i), a_of(i));
     pass(i + 1, chain.begin(q), chain.begin(q + 1));

@@ -1006,8 +1006,8 @@ void MassSpringNetwork::eval_acceleration_in_ranges(double t, CVecRef x, CVecRef
   });
 }
 
-void MassSpringNetwork::Chain::call(ChainCall::What what, Index q, const double* x,
-                                    const double* v, double* a) const {
+void MassSpringNetwork::Chain::call(ChainCall::What what, Index q, const double* x, const double* v,
+                                    double* a) const {
   const ChainCall c{what, q};
   detail::with_dim<1, 3>(net_.dim_, [&](auto dim) {
     net_.acceleration_impl<decltype(dim)::value, Part::all>(x, v, a, nullptr, &c);

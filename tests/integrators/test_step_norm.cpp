@@ -170,7 +170,6 @@ TEST(StepNorm, PassesInsideTheEvaluationsGiveTheBitsOfPassesAfterThem) {
   omp_set_num_threads(threads0);
 }
 
-
 // The explicit Runge-Kutta methods run their stages as a wavefront over the blocks of a system's
 // AccelerationChain (explicit_rk.cpp, chained_stages), with two sweeps meeting at the middle block
 // on two threads. The chain's calls are the same pieces as the whole evaluation and every entry
@@ -249,9 +248,7 @@ class SpringLine final : public MechanicalSystem, public AccelerationChain {
     return y;
   }
   bool velocity_dependent() const override { return true; }
-  const AccelerationChain* acceleration_chain() const override {
-    return chained_ ? this : nullptr;
-  }
+  const AccelerationChain* acceleration_chain() const override { return chained_ ? this : nullptr; }
   bool chained_ = true;
   Index throw_at_ = -1;  // link(q) throws BadInput for q == throw_at_
 
@@ -308,8 +305,7 @@ TEST(StepNorm, AUsersChainGivesTheBitsOfItsWholeEvaluation) {
         EXPECT_EQ(line.counters().f_evals - f0, a->info().stages);
         line.chained_ = false;
         ASSERT_EQ(b->step(line, k * 1e-2, yb, 1e-2, sb), Status::ok);
-        EXPECT_TRUE(ya == yb) << "step " << k << ": max |diff| "
-                              << (ya - yb).cwiseAbs().maxCoeff();
+        EXPECT_TRUE(ya == yb) << "step " << k << ": max |diff| " << (ya - yb).cwiseAbs().maxCoeff();
         EXPECT_EQ(*a->last_step_max_norm(), *b->last_step_max_norm());
       }
       EXPECT_GT((ya - line.initial_state()).cwiseAbs().maxCoeff(), 1e-3);
