@@ -458,7 +458,7 @@ Status ExplicitRungeKutta::step_mechanical(const MechanicalSystem& mech, double 
     const auto stage_v = [&](int i) { return i == 0 || !need_v ? v : ytmp_.data() + d; };
     const auto stage_a = [&](int i) { return k_.col(i).data() + d; };
     chained_stages(*chain, s, d, t, h, tableau_.c, stage_x, stage_v, stage_a, pass,
-                   d >= kParallelEntries && chain->blocks() >= 2 && omp_get_max_threads() == 2);
+                   d >= kParallelChainDofs && chain->blocks() >= 2 && omp_get_max_threads() == 2);
   } else {
     for (int i = 0; i < s; ++i) {
       const double ti = t + tableau_.c[i] * h;

@@ -44,6 +44,10 @@ class ExplicitRungeKutta final : public Integrator {
  public:
   // Vector updates of at least this many entries run over OpenMP threads.
   static constexpr Index kParallelEntries = 50000;
+  // A chained step (header) runs its two sweeps on two threads from this many dofs: the
+  // network's own parallel threshold (2048 points in 3D). Below it the handshakes cost more than
+  // the second thread gains.
+  static constexpr Index kParallelChainDofs = 6144;
 
   ExplicitRungeKutta(ButcherTableau tableau, std::string description);
 
