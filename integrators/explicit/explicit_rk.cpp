@@ -158,8 +158,9 @@ void pair_range(Index lo, Index hi, const Combination& one, const Combination& t
 // is the first thread's, run once the second has cleared block m for that stage (which it does
 // only after its pass of the stage before there) and awaited by the second before it finishes
 // block m. Every entry gets the same terms in the same order on either schedule (no entry has
-// terms from two links), so the bits do not depend on the threads. The calls must not throw: an
-// exception stops both sweeps and is rethrown after them.
+// terms from two links), so the bits do not depend on the threads. A call that throws stops both
+// sweeps (a waiting sweep sees the failure) and its exception is rethrown after them; y is then
+// partly updated, as after any failed step.
 template <class StageX, class StageV, class StageA, class Pass>
 void chained_stages(const AccelerationChain& chain, int s, Index d, double t, double h,
                     const Vec& c, const StageX& stage_x, const StageV& stage_v,
