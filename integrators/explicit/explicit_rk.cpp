@@ -160,7 +160,7 @@ void pair_range(Index lo, Index hi, const Combination& one, const Combination& t
 // block m. Every entry gets the same terms in the same order on either schedule (no entry has
 // terms from two links), so the bits do not depend on the threads. A call that throws stops both
 // sweeps (a waiting sweep sees the failure) and its exception is rethrown after them; y is then
-// partly updated, as after any failed step.
+// partly updated (the caller must not use it).
 template <class StageX, class StageV, class StageA, class Pass>
 void chained_stages(const AccelerationChain& chain, int s, Index d, double t, double h,
                     const Vec& c, const StageX& stage_x, const StageV& stage_v,
