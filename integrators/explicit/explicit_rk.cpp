@@ -387,7 +387,7 @@ Status ExplicitRungeKutta::step(const OdeSystem& sys, double t, VecRef y, double
 // hold A_i in their v-part; X_i goes to ytmp_'s head and V_i, when a depends on v, to its tail.
 // Each pass runs inside the evaluation before it: on each range of dofs as soon as the system
 // has finished it (acceleration_in_ranges), or block by block in a wavefront over the stages
-// (step_chained), while that range's A_i, X_i and V_i are in cache.
+// (chained_stages), while that range's A_i, X_i and V_i are in cache.
 Status ExplicitRungeKutta::step_mechanical(const MechanicalSystem& mech, double t, VecRef y,
                                            double h) {
   const int s = tableau_.stages();

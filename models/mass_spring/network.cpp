@@ -334,14 +334,13 @@ void MassSpringNetwork::pack_rhs_springs() {
   // Each partition's longest run of points that no spring between partitions touches; and
   // whether the partitions form a chain (acceleration_chain): no spring in the last group (it
   // joins partitions that are not neighbours), and no point with springs of two groups.
-  std::vector<std::uint8_t> touched(static_cast<std::size_t>(np), 0);
+  // touched_by[p]: the group of a spring between partitions at point p, -1 for none.
   std::vector<Index> touched_by(static_cast<std::size_t>(np), -1);
   chain_ok_ = parts >= 2 && members.back().empty();
   for (const Spring& sp : springs_)
     if (const Index grp = group_of(sp); grp >= parts) {
       for (const Index p : {sp.i, sp.j}) {
         const auto u = static_cast<std::size_t>(p);
-        touched[u] = 1;
         if (touched_by[u] >= 0 && touched_by[u] != grp) chain_ok_ = false;
         touched_by[u] = grp;
       }
@@ -351,12 +350,12 @@ void MassSpringNetwork::pack_rhs_springs() {
     const Index p0 = np * q / parts, p1 = np * (q + 1) / parts;
     Index best_a = p0, best_b = p0;
     for (Index a = p0; a < p1;) {
-      if (touched[static_cast<std::size_t>(a)]) {
+      if (touched_by[static_cast<std::size_t>(a)] >= 0) {
         ++a;
         continue;
       }
       Index b = a;
-      while (b < p1 && !touched[static_cast<std::size_t>(b)]) ++b;
+      while (b < p1 && touched_by[static_cast<std::size_t>(b)] < 0) ++b;
       if (b - a > best_b - best_a) best_a = a, best_b = b;
       a = b;
     }
