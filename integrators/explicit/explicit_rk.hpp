@@ -45,8 +45,8 @@ class ExplicitRungeKutta final : public Integrator {
   // Vector updates of at least this many entries run over OpenMP threads.
   static constexpr Index kParallelEntries = 50000;
   // A chained step (header) runs its two sweeps on two threads from this many dofs: the
-  // network's own parallel threshold (2048 points in 3D). Below it the handshakes cost more than
-  // the second thread gains.
+  // network's own parallel threshold (2048 points in 3D), so a cloth whose evaluation used two
+  // threads before the chain still does (not measured below it: docs/performance.md, "Stop 54").
   static constexpr Index kParallelChainDofs = 6144;
 
   ExplicitRungeKutta(ButcherTableau tableau, std::string description);
