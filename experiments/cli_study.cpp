@@ -38,12 +38,17 @@ void add_study_command(CLI::App& app, const StudyKind& kind) {
   for (const auto& o : kind.options) {
     std::string help = o.help;
     if (!o.choices.empty()) help += " (one of: " + join(o.choices, ", ") + ")";
-    auto* opt = cmd->add_option(option_flag(o.key), st->values[o.key], help);
-    opt->type_name(o.type == ParamType::real      ? "FLOAT"
-                   : o.type == ParamType::integer ? "INT"
-                   : o.type == ParamType::boolean ? "BOOL"
-                                                  : "TEXT");
-    if (!o.default_value.empty()) opt->default_str(o.default_value);
+    // A boolean option that is off by default is a flag: `--probe-unbounded` sets it
+    // (`--probe-unbounded=false` too is accepted); the spec-file key takes true/false.
+    const bool flag = o.type == ParamType::boolean && o.default_value == "false";
+    auto* opt = flag ? cmd->add_flag(option_flag(o.key), st->values[o.key], help)
+                     : cmd->add_option(option_flag(o.key), st->values[o.key], help);
+    if (!flag)
+      opt->type_name(o.type == ParamType::real      ? "FLOAT"
+                     : o.type == ParamType::integer ? "INT"
+                     : o.type == ParamType::boolean ? "BOOL"
+                                                    : "TEXT");
+    if (!o.default_value.empty() && !flag) opt->default_str(o.default_value);
     for (const auto& r : kind.required)
       if (r == o.key) opt->required();
     given.emplace_back(o.key, opt);

@@ -38,6 +38,34 @@ struct Spectrum {
   bool mechanical_split = false;
 };
 
+// The eigenvalues of a dense Jacobian into `s`; none when the matrix has an inf or NaN entry (an
+// overflowing coefficient): the eigensolver's output is then meaningless, finite or not (heat_2d
+// with ν = 1e308 on a 4×4 grid gave finite values with a positive real part), so `s.source`
+// says why instead.
+void dense_eigenvalues(const Mat& j, Spectrum& s) {
+  if (!j.allFinite()) {
+    s.source = "none: not finite (" + s.source + ": the matrix has inf or NaN entries)";
+    return;
+  }
+  const Eigen::EigenSolver<Mat> es(j, false);
+  for (Index k = 0; k < j.rows(); ++k) s.eigenvalues.push_back(es.eigenvalues()(k));
+}
+
+// A spectrum with a non-finite eigenvalue (an overflowing stiffness() estimate) predicts nothing:
+// it is cleared, its source saying why. Kept, the ray of an infinite eigenvalue would be NaN and
+// its limit read as "unbounded".
+void drop_non_finite(Spectrum& s) {
+  for (const cd& l : s.eigenvalues)
+    if (!std::isfinite(l.real()) || !std::isfinite(l.imag())) {
+      const std::string z = l.imag() == 0 ? num(l.real())
+                                          : num(l.real()) + (l.imag() < 0 ? " - " : " + ") +
+                                                num(std::abs(l.imag())) + "i";
+      s.source = "none: not finite (" + s.source + "; eigenvalue " + z + ")";
+      s.eigenvalues.clear();
+      return;
+    }
+}
+
 Spectrum spectrum_of(const OdeSystem& sys, double t0, const Vec& y0, const StabilitySpec& spec) {
   Spectrum s;
   const Index n = sys.dimension();
@@ -65,8 +93,7 @@ Spectrum spectrum_of(const OdeSystem& sys, double t0, const Vec& y0, const Stabi
       }
       s.source = "eigenvalues of a finite-difference Jacobian at the perturbed initial state";
     }
-    const Eigen::EigenSolver<Mat> es(j, false);
-    for (Index k = 0; k < n; ++k) s.eigenvalues.push_back(es.eigenvalues()(k));
+    dense_eigenvalues(j, s);
   } else if (rho) {
     const std::string ray = spec.ray == "auto" ? (mechanical ? "imag" : "real") : spec.ray;
     if (ray == "imag") {
@@ -80,6 +107,7 @@ Spectrum spectrum_of(const OdeSystem& sys, double t0, const Vec& y0, const Stabi
     s.source = "none (dimension " + std::to_string(n) + " above the dense limit " +
                std::to_string(spec.dense_limit) + " and no stiffness() estimate)";
   }
+  drop_non_finite(s);
   for (const cd& l : s.eigenvalues) s.omega = std::max(s.omega, std::abs(l));
   int growing = 0;
   for (const cd& l : s.eigenvalues)
@@ -110,12 +138,11 @@ Spectrum explicit_spectrum_of(const OdeSystem& sys, double t0, const Vec& y0,
       je.topRows(d).setZero();
       je.topRightCorner(d, d).setIdentity();
     }
-    const Eigen::EigenSolver<Mat> es(je, false);
-    for (Index k = 0; k < n; ++k) s.eigenvalues.push_back(es.eigenvalues()(k));
     s.source = !s.mechanical_split
                    ? "eigenvalues of J - J_I (analytic) at the perturbed initial state"
                    : "eigenvalues of [[0, I], [da_E/dx, da_E/dv]] (a_E from J - J_I, analytic) "
                      "at the perturbed initial state";
+    dense_eigenvalues(je, s);
   } else if (const auto est = sys.explicit_part_spectrum(t0, y0)) {
     if (est->ray == SpectrumEstimate::Ray::imaginary) {
       s.eigenvalues = {cd(0, est->radius), cd(0, -est->radius)};
@@ -128,6 +155,7 @@ Spectrum explicit_spectrum_of(const OdeSystem& sys, double t0, const Vec& y0,
   } else {
     s.source = "none (no analytic J and J_I within the dense limit, no explicit_part_spectrum())";
   }
+  drop_non_finite(s);
   for (const cd& l : s.eigenvalues) s.omega = std::max(s.omega, std::abs(l));
   return s;
 }
@@ -267,6 +295,7 @@ EnergyCriterion energy_criterion(const OdeSystem& sys, const StabilitySpec& spec
 
 // The linear-theory limit of the method on the system's spectrum, into `row`; for a method that
 // treats f_E explicitly on a split model, its explicit treatment's limit on the spectrum of f_E.
+// Without a prediction, row.no_prediction says why.
 void predict(const Integrator& integ, const Spectrum& spec_sys, const Spectrum* spec_explicit,
              bool mechanical, double h_cap, StabilityRow& row) {
   if (integ.explicit_part_stability() && spec_explicit) {
@@ -276,7 +305,15 @@ void predict(const Integrator& integ, const Spectrum& spec_sys, const Spectrum* 
     const bool partitioned = spec_explicit->mechanical_split;
     row.predicted_on = partitioned ? "f_E, partitioned (x' = v in f_I)" : "f_E";
     const auto le = partitioned ? integ.partitioned_stability() : integ.explicit_part_stability();
-    if (!le || spec_explicit->eigenvalues.empty()) return;
+    if (!le) {
+      row.no_prediction = partitioned ? "no partitioned stability map (x implicit, v explicit)"
+                                      : "no stability data of its explicit treatment";
+      return;
+    }
+    if (spec_explicit->eigenvalues.empty()) {
+      row.no_prediction = "no spectrum of f_E: " + spec_explicit->source;
+      return;
+    }
     const StepLimit lim = predicted_step_limit(*le, spec_explicit->eigenvalues, mechanical, h_cap);
     if (lim.unbounded)
       row.predicted_unbounded = true;
@@ -284,7 +321,12 @@ void predict(const Integrator& integ, const Spectrum& spec_sys, const Spectrum* 
       row.h_predicted = lim.h;
     return;
   }
-  if (auto ls = integ.linear_stability(); ls && !spec_sys.eigenvalues.empty()) {
+  const auto ls = integ.linear_stability();
+  if (!ls) {
+    row.no_prediction = "no linear stability data";
+  } else if (spec_sys.eigenvalues.empty()) {
+    row.no_prediction = "no spectrum: " + spec_sys.source;
+  } else {
     const StepLimit lim = predicted_step_limit(*ls, spec_sys.eigenvalues, mechanical, h_cap);
     if (lim.unbounded)
       row.predicted_unbounded = true;
@@ -316,7 +358,8 @@ double first_step(const OdeSystem& sys, const StabilityRow& row, double h_ref) {
   double h0 = h_ref;
   if (row.h_predicted && *row.h_predicted > 0)
     h0 = 0.8 * *row.h_predicted;
-  else if (auto sug = sys.suggested_step(); sug && !row.predicted_unbounded)
+  else if (auto sug = sys.suggested_step();
+           sug && sug->h > 0 && std::isfinite(sug->h) && !row.predicted_unbounded)
     h0 = sug->h;
   return h0;
 }
@@ -343,6 +386,39 @@ class LimitSearch {
     if (first.stable ? grow(first, h0) : shrink(std::move(first), h0, h_floor)) return;
     bisect();
     finish();
+  }
+
+  // A method predicted stable for every step: one run at the largest step h_cap instead of the
+  // search. Stable there: stable_up_to h_cap. Not stable: the search runs downward from h_cap
+  // (halving, then bisection) like any other; when that run grew (rather than failing in the
+  // solver, which is no stability statement) the message says the prediction is contradicted.
+  void check_at_cap(double h_floor) {
+    row_.checked_at_cap = true;
+    Probe p = run(sc_.h_cap, 1);
+    if (p.stable) {
+      set_lo(p, sc_.h_cap);
+      measured("stable_up_to");
+      return;
+    }
+    const std::string contradiction =
+        p.status == Status::unstable
+            ? "contradicts the prediction (stable for every step): unstable at the largest step "
+              "h = " +
+                  num(sc_.h_cap) + (p.message.empty() ? "" : " (" + p.message + ")")
+            : "";
+    auto with_contradiction = [&](const std::string& m) {
+      return contradiction.empty() ? m : m.empty() ? contradiction : contradiction + "; " + m;
+    };
+    try {
+      if (!shrink(std::move(p), sc_.h_cap, h_floor)) {
+        bisect();
+        finish();
+      }
+    } catch (RowEnded& e) {
+      e.message = with_contradiction(e.message);
+      throw;
+    }
+    row_.message = with_contradiction(row_.message);
   }
 
  private:
@@ -504,12 +580,17 @@ StabilityRow measure(const OdeSystem& sys, Integrator& integ, const Spectrum& sp
   const StepScales sc = step_scales(spec_sys, spec);
 
   predict(integ, spec_sys, spec_explicit, mechanical, sc.h_cap, row);
+  row.h_cap = sc.h_cap;
 
   const double h0 = first_step(sys, row, sc.h_ref);
   const double h_floor = 1e-3 * std::min(h0, sc.h_ref);
 
   try {
-    LimitSearch(sys, integ, y0, spec, sc, energy, row).search(h0, h_floor);
+    LimitSearch search(sys, integ, y0, spec, sc, energy, row);
+    if (row.predicted_unbounded && !spec.probe_unbounded)
+      search.check_at_cap(h_floor);
+    else
+      search.search(h0, h_floor);
   } catch (const RowEnded& e) {
     row.status = e.status;
     row.message = e.message;
@@ -575,6 +656,7 @@ nlohmann::json StabilitySpec::to_json() const {
   j["criterion"] = criterion;
   j["dense_limit"] = dense_limit;
   if (horizon) j["horizon"] = *horizon;
+  j["probe_unbounded"] = probe_unbounded;
   return j;
 }
 
@@ -705,10 +787,17 @@ StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress)
   return res;
 }
 
+std::string limit_kind(const StabilityRow& row) {
+  if (!row.h_measured) return "";
+  if (row.status == "stable_up_to") return "stable_up_to";
+  if (row.status == "ok" || row.status == "solver_limit") return "measured";
+  return "";
+}
+
 Table stability_table(const StabilityResult& r) {
   Table t;
-  t.columns = {"model",          "integrator",      "param", "value",
-               "h_max_measured", "h_max_predicted", "ratio", "status"};
+  t.columns = {"model",           "integrator", "param",  "value",     "h_max_measured",
+               "h_max_predicted", "ratio",      "status", "limit_kind"};
   for (const std::string& c : SolveStats::counter_names()) t.columns.push_back(c);
   // Grouped by integrator (in the order of the runs), so a plot draws each one as one line.
   std::vector<const StabilityRow*> order;
@@ -733,7 +822,8 @@ Table stability_table(const StabilityResult& r) {
                                       cell(row.h_measured),
                                       row.predicted_unbounded ? "inf" : cell(row.h_predicted),
                                       cell(ratio),
-                                      row.status};
+                                      row.status,
+                                      limit_kind(row)};
     const std::vector<std::string> counters =
         row.counters ? row.counters->counter_values()
                      : std::vector<std::string>(SolveStats::counter_names().size());
@@ -770,13 +860,19 @@ std::string markdown_report(const StabilitySpec& spec, const StabilityResult& r)
      << ", scaled into each method's stability region. A ratio near 1 means linear theory "
         "predicts the limit; `unstable_for_all_h` marks methods whose measured limit shrinks "
         "with the horizon (no stable step), `stable_up_to` methods stable up to the largest step "
-        "tried, `solver_limit` rows whose larger steps failed in the Newton iteration or the "
+        "tried, h_cap = "
+     << num(spec.h_cap_factor) << " x 2/omega (h_max measured `>= h_cap`: a lower bound, "
+     << (spec.probe_unbounded
+             ? "searched from 2/omega upward like every method"
+             : "one run at h_cap for a method predicted stable for every step, no search below "
+               "it; --probe-unbounded searches")
+     << "), `solver_limit` rows whose larger steps failed in the Newton iteration or the "
         "linear solver (not growth: h_max measured is the largest step that ran, the note says "
         "why the next one failed). A predicted 0 means unstable for every h (an undamped mode and "
         "an imaginary-axis limit of 0).\n\n";
   Table t;
-  t.columns = {"integrator", "param", "h_max measured", "h_max predicted", "ratio",
-               "status",     "note"};
+  t.columns = {"integrator", "param",  "h_max measured", "h_max predicted",
+               "ratio",      "status", "limit kind",     "note"};
   for (const auto& row : r.rows) {
     std::string note;
     if (row.status == "unstable_for_all_h") {
@@ -785,22 +881,27 @@ std::string markdown_report(const StabilitySpec& spec, const StabilityResult& r)
                                    : "unstable at every step down to h = " + num(row.growth_h);
       // What ended that run: the energy criterion can end one whose norm does not grow.
       if (!row.message.empty()) note += " (" + row.message + ")";
-    } else if (row.status == "failed" || row.status == "solver_limit") {
+    } else if (row.status == "failed" || row.status == "solver_limit" || !row.message.empty()) {
       note = row.message;
+    } else if (row.status == "stable_up_to" && row.checked_at_cap) {
+      note = "1 run, at h_cap (predicted stable for every step)";
     } else {
       note = std::to_string(row.probes) + " runs";
     }
+    if (!row.no_prediction.empty())
+      note += (note.empty() ? "" : "; ") + std::string("no prediction: ") + row.no_prediction;
     std::string ratio;
     if (row.status == "ok" && row.h_measured && row.h_predicted && *row.h_predicted > 0)
       ratio = format_fixed(*row.h_measured / *row.h_predicted, 4);
-    t.rows.push_back({row.integrator, row.param.empty() ? "" : row.param + " = " + num(row.value),
-                      row.h_measured ? num(*row.h_measured) : "",
-                      row.predicted_unbounded ? "unbounded"
-                      : row.h_predicted
-                          ? (*row.h_predicted == 0 ? std::string("0 (unstable for all h)")
-                                                   : num(*row.h_predicted))
-                          : "",
-                      ratio, row.status, note});
+    t.rows.push_back(
+        {row.integrator, row.param.empty() ? "" : row.param + " = " + num(row.value),
+         row.h_measured ? (limit_kind(row) == "stable_up_to" ? ">= " : "") + num(*row.h_measured)
+                        : "",
+         row.predicted_unbounded ? "unbounded"
+         : row.h_predicted       ? (*row.h_predicted == 0 ? std::string("0 (unstable for all h)")
+                                                          : num(*row.h_predicted))
+                                 : "none",
+         ratio, row.status, limit_kind(row), note});
   }
   md << t.to_markdown();
   if (!r.fits.empty()) {
@@ -835,12 +936,27 @@ void write_stability_outputs(const std::filesystem::path& dir, const StabilitySp
       "energy: mechanical systems with an energy invariant whose zero is not arbitrary) "
       "E <= E0 + (growth - 1) |E0| at every step of the horizon; "
       "unstable_for_all_h: unstable at 0.75 h_max over 8x the horizon; "
-      "solver_limit: the smallest failing step ended in newton_failed or solver_error";
+      "solver_limit: the smallest failing step ended in newton_failed or solver_error; "
+      "stable_up_to: stable at the largest step h_cap (limit_kind stable_up_to, a lower bound; "
+      "a method predicted stable for every step gets one run at h_cap unless probe_unbounded, "
+      "search = check_at_h_cap)";
   for (const auto& row : r.rows) {
     nlohmann::json j;
     j["integrator"] = row.integrator;
     if (!row.param.empty()) j[row.param] = row.value;
     j["status"] = row.status;
+    j["limit_kind"] = limit_kind(row);
+    if (row.h_measured) j["h_max_measured"] = *row.h_measured;
+    if (row.predicted_unbounded)
+      j["h_max_predicted"] = "unbounded";
+    else if (row.h_predicted)
+      j["h_max_predicted"] = *row.h_predicted;
+    else
+      j["no_prediction"] = row.no_prediction;
+    j["h_cap"] = row.h_cap;
+    j["search"] = !row.checked_at_cap            ? "bisection"
+                  : row.status == "stable_up_to" ? "check_at_h_cap"
+                                                 : "check_at_h_cap, then bisection below it";
     j["predicted_on"] = row.predicted_on;
     j["probes"] = row.probes;
     if (row.counters) {
@@ -998,6 +1114,10 @@ StudyKind stability_study_kind() {
       {"h_cap_factor", P::real, "1000",
        "largest step tried, in units of 2/omega (A-stable methods are reported stable_up_to it)",
        Bounds::above(1)},
+      {"probe_unbounded", P::boolean, "false",
+       "search the limit of methods predicted stable for every step too (doubling from 2/omega "
+       "up to the largest step, bisection where one fails); by default they get one run at the "
+       "largest step"},
       {"max_steps", P::integer, "20000000", "step budget of one run", Bounds::at_least(10)},
       {"ray",
        P::text,
@@ -1025,6 +1145,7 @@ StudyKind stability_study_kind() {
     s.perturbation = o.real("perturbation");
     s.seed = static_cast<unsigned long>(o.integer("seed"));
     s.h_cap_factor = o.real("h_cap_factor");
+    s.probe_unbounded = o.boolean("probe_unbounded");
     s.max_steps = o.integer("max_steps");
     s.ray = o.text("ray");
     s.dense_limit = static_cast<Index>(o.integer("dense_limit"));

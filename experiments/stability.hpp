@@ -28,8 +28,14 @@
 // Statuses (stability.csv):
 //   ok                  h_max measured to rel_tol: the bisection's upper end grew (norm or
 //                       energy criterion);
-//   stable_up_to        no instability up to the largest step tried (h_cap; A-stable methods):
-//                       h_max_measured is that step;
+//   stable_up_to        no instability up to the largest step tried, h_cap = h_cap_factor × 2/ω
+//                       (A-stable methods): h_max_measured is h_cap, a lower bound of the limit
+//                       (limit_kind stable_up_to). A method predicted unbounded (stable for
+//                       every h on the spectrum) gets one run at h_cap instead of the search
+//                       (unless probe_unbounded); if that run is not stable the search runs
+//                       downward from h_cap as for any other method, and a run that grew
+//                       (rather than failed in the solver) is said in the row's message as
+//                       contradicting the prediction;
 //   solver_limit        the bisection's upper end ended in the Newton iteration or the linear
 //                       solver (newton_failed, solver_error), not in growth: h_max_measured is
 //                       the largest step that ran stably (empty when none did down to h_floor)
@@ -56,6 +62,9 @@
 // splitting; core/linear_stability.hpp) except for multistep methods and splittings on damped
 // modes (sampled). A prediction of 0 means unstable for every h > 0: an undamped (imaginary)
 // eigenvalue and a method whose imaginary-axis limit is 0 (euler, heun, cash_karp, rkf45).
+// A spectrum with a non-finite value (an overflowing stiffness() estimate, a Jacobian with inf
+// or NaN entries) is no spectrum: no prediction (the row's no_prediction says why), never
+// "unbounded".
 //
 // IMEX and operator-splitting methods on a split model (Integrator::explicit_part_stability,
 // OdeSystem::has_imex_split): the implicit part is A-stable, so what limits the step is the
@@ -116,6 +125,10 @@ struct StabilitySpec {
   std::string criterion = "auto";
   Index dense_limit = 600;        // eigen-decompose the Jacobian up to this dimension
   std::optional<double> horizon;  // explicit horizon (time); else periods × 2π/ω
+  // Methods predicted unbounded (A-stable on the spectrum): false — one run at the largest step
+  // h_cap (stable_up_to when stable); true — the search of every other method (doubling from
+  // 2/ω up to h_cap, bisection where a step fails).
+  bool probe_unbounded = false;
 
   void validate() const;  // BadInput naming the bad flag
   nlohmann::json to_json() const;
@@ -131,6 +144,10 @@ struct StabilityRow {
   std::optional<double> h_measured;      // empty for unstable_for_all_h / failed
   std::optional<double> h_predicted;     // empty without stability data or spectrum
   bool predicted_unbounded = false;      // linear theory: stable for every h (A-stable)
+  std::string no_prediction;             // why neither h_predicted nor unbounded (else empty)
+  double h_cap = 0;                      // the largest step tried (h_cap_factor × 2/ω)
+  // Predicted unbounded and not probe_unbounded: one run at h_cap instead of the search.
+  bool checked_at_cap = false;
   // ok | stable_up_to | solver_limit | unstable_for_all_h | failed | timeout
   std::string status;
   std::optional<SolveStats> counters;       // of the run at h_measured
@@ -173,6 +190,11 @@ const StabilityResult& stability_result(const StudyJob& job);
 
 // Least-squares slope of log y against log x (at least two points, else empty).
 std::optional<double> loglog_slope(const std::vector<double>& x, const std::vector<double>& y);
+
+// What h_max_measured of a row is: "measured" (status ok or solver_limit: the largest stable step
+// below a failing one, to rel_tol), "stable_up_to" (status stable_up_to: the largest step tried,
+// a lower bound of the limit), empty without h_max_measured.
+std::string limit_kind(const StabilityRow& row);
 
 Table stability_table(const StabilityResult& r);  // the stability.csv contract
 void write_stability_outputs(const std::filesystem::path& dir, const StabilitySpec& spec,

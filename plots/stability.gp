@@ -2,18 +2,20 @@
 # integrator family.
 #   sweep = 1: h_max against the swept parameter on log-log axes, measured points joined by a
 #              solid line, the linear-theory prediction as a dashed line of the same colour
-#              (parallel lines: the method's limit scales as theory says); triangles for
-#              methods stable up to the largest step tried, squares for solver_limit rows (the
+#              (parallel lines: the method's limit scales as theory says); triangles with an
+#              upward arrow for methods stable up to the largest step tried (a lower bound of
+#              their limit), squares for solver_limit rows (the
 #              largest step that ran before Newton or the linear solver failed). Rows of one
 #              integrator must be
 #              consecutive in the CSV (stiffbench writes them grouped).
 #   sweep = 0: one column per integrator, measured h_max as a filled circle and the prediction
-#              as an open circle (they coincide when theory predicts the limit); a triangle for
-#              methods stable up to the largest step tried (a lower bound), a cross at the bottom
+#              as an open circle (they coincide when theory predicts the limit); a triangle with
+#              an upward arrow for methods stable up to the largest step tried (a lower bound of
+#              their limit), a cross at the bottom
 #              for methods with no stable step (unstable_for_all_h), a square for solver_limit
 #              (the largest step that ran before Newton or the linear solver failed).
 # Columns: 1 model, 2 integrator, 3 param, 4 value, 5 h_max_measured, 6 h_max_predicted,
-# 7 ratio, 8 status (then the solver counters, unused here).
+# 7 ratio, 8 status (then limit_kind and the solver counters, unused here).
 sw = exists("sweep") ? int(sweep) : 0
 if (!exists("xlab")) xlab = "parameter"
 load plotdir."/common.gp"
@@ -23,6 +25,8 @@ set ylabel "largest stable step h_{max}"
 set key outside right top
 # Finite positive number in column c, else NaN (empty cells, "inf").
 okval(c) = (strcol(c) ne "" && strcol(c) ne "inf" && column(c) > 0) ? column(c) : NaN
+# The upward arrow of a stable_up_to row: from h_max_measured to 3 times it (log axis).
+upval(c) = strcol(8) eq "stable_up_to" ? 2 * okval(c) : NaN
 eval panel_begin
 do for [K=1:np] {
   m = methods(K)
@@ -46,10 +50,12 @@ do for [K=1:np] {
            with lines lt j dt 2 lw 1 notitle, \
          for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && strcol(8) eq "stable_up_to" ? abs($4) : NaN):(okval(5)) \
            with points lt j pt 9 ps 1.6 notitle, \
+         for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) ? abs($4) : NaN):(okval(5)):(0):(upval(5)) \
+           with vectors lt j head filled size screen 0.012,25 notitle, \
          for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && strcol(8) eq "solver_limit" ? abs($4) : NaN):(okval(5)) \
            with points lt j pt 5 ps 1.4 notitle, \
          NaN with lines lc "black" dt 2 lw 1 title "predicted", \
-         NaN with points lc "black" pt 9 title "stable up to (largest step tried)", \
+         NaN with points lc "black" pt 9 title "stable up to (largest step tried; limit above)", \
          NaN with points lc "black" pt 5 title "solver limit (Newton/linear solver failed above)"
     set offsets 0, 0, 0, 0
     eval empty_panel_off
@@ -74,6 +80,8 @@ do for [K=1:np] {
            with points lt j pt 7 ps 1.4 notitle, \
          for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && strcol(8) eq "stable_up_to" ? j : NaN):(okval(5)) \
            with points lt j pt 9 ps 1.6 notitle, \
+         for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) ? j : NaN):(okval(5)):(0):(upval(5)) \
+           with vectors lt j head filled size screen 0.012,25 notitle, \
          for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && strcol(8) eq "solver_limit" ? j : NaN):(okval(5)) \
            with points lt j pt 5 ps 1.4 notitle, \
          for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) ? j : NaN):(okval(6)) \
@@ -82,7 +90,7 @@ do for [K=1:np] {
            with points lt j pt 2 ps 2 notitle, \
          NaN with points lc "black" pt 7 title "measured", \
          NaN with points lc "black" pt 6 ps 2 title "predicted", \
-         NaN with points lc "black" pt 9 title "stable up to (largest step tried)", \
+         NaN with points lc "black" pt 9 title "stable up to (largest step tried; limit above)", \
          NaN with points lc "black" pt 5 title "solver limit (solver failed above)", \
          NaN with points lc "black" pt 2 title "unstable for all h"
     set autoscale xy

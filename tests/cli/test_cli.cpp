@@ -534,7 +534,7 @@ TEST(Cli, StabilityWritesContractFiles) {
   const auto rows = read_csv(dir / "stability.csv");
   ASSERT_EQ(rows.size(), 3u);
   EXPECT_EQ(join_cells(rows[0]),
-            "model,integrator,param,value,h_max_measured,h_max_predicted,ratio,status,"
+            "model,integrator,param,value,h_max_measured,h_max_predicted,ratio,status,limit_kind,"
             "newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_iters,fe_"
             "evals,fi_evals");
   EXPECT_EQ(rows[1][1], "symplectic_euler");
@@ -554,4 +554,62 @@ TEST(Cli, StabilityWritesContractFiles) {
   EXPECT_EQ(unwritable.code, 2);
   EXPECT_NE(unwritable.err.find("--out"), std::string::npos) << unwritable.err;
   std::filesystem::remove_all(dir);
+}
+
+// stability on dahlquist (λ = −1: 2/ω = 2, so the largest step tried is 1000 × 2 = 2000): the
+// A-stable trapezoidal rule gets one run there and is reported stable_up_to 2000 (a lower bound:
+// limit_kind stable_up_to), rk4 its measured limit near the root 2.785294 of |R(−x)| = 1
+// (limit_kind measured). --probe-unbounded searches the trapezoidal rule too: doubling from 2 to
+// 2000 is 11 runs. A value given to the flag that is not a boolean is bad input.
+TEST(Cli, StabilityChecksUnboundedMethodsAtTheLargestStepOnly) {
+  using stiffbench::testing_support::fresh_dir;
+  using stiffbench::testing_support::slurp;
+  const auto dir = fresh_dir("cli", "stability_unbounded");
+  const Outcome o =
+      run("stability --model dahlquist --integrators rk4,trapezoidal --out " + dir.string());
+  ASSERT_EQ(o.code, 0) << o.err;
+  const auto rows = read_csv(dir / "stability.csv");
+  ASSERT_EQ(rows.size(), 3u);
+  ASSERT_GT(rows[0].size(), 8u);
+  EXPECT_EQ(rows[0][7], "status");
+  EXPECT_EQ(rows[0][8], "limit_kind");
+  EXPECT_EQ(rows[1][1], "rk4");
+  EXPECT_EQ(rows[1][7], "ok");
+  EXPECT_EQ(rows[1][8], "measured");
+  EXPECT_NEAR(std::stod(rows[1][4]) / 2.785294, 1.0, 0.01);
+  EXPECT_EQ(rows[2][1], "trapezoidal");
+  EXPECT_EQ(rows[2][5], "inf");
+  EXPECT_EQ(rows[2][7], "stable_up_to");
+  EXPECT_EQ(rows[2][8], "stable_up_to");
+  EXPECT_DOUBLE_EQ(std::stod(rows[2][4]), 2000.0);
+  const std::string json = slurp(dir / "stability.json");
+  EXPECT_NE(json.find("\"search\": \"check_at_h_cap\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"probe_unbounded\": false"), std::string::npos);
+  EXPECT_NE(slurp(dir / "stability.md").find("| >= 2.0000e+03 |"), std::string::npos);
+
+  const auto probed = fresh_dir("cli", "stability_probed");
+  const Outcome p =
+      run("stability --model dahlquist --integrators trapezoidal --probe-unbounded --out " +
+          probed.string());
+  ASSERT_EQ(p.code, 0) << p.err;
+  const std::string pjson = slurp(probed / "stability.json");
+  EXPECT_NE(pjson.find("\"probe_unbounded\": true"), std::string::npos) << pjson;
+  EXPECT_NE(pjson.find("\"search\": \"bisection\""), std::string::npos) << pjson;
+  EXPECT_NE(pjson.find("\"probes\": 11"), std::string::npos) << pjson;
+  const auto prows = read_csv(probed / "stability.csv");
+  ASSERT_EQ(prows.size(), 2u);
+  EXPECT_EQ(prows[1][7], "stable_up_to");
+  EXPECT_DOUBLE_EQ(std::stod(prows[1][4]), 2000.0);
+
+  const auto bad_dir = fresh_dir("cli", "stability_bad_flag");
+  const Outcome bad =
+      run("stability --model dahlquist --integrators trapezoidal --probe-unbounded=maybe --out " +
+          bad_dir.string());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("probe_unbounded"), std::string::npos) << bad.err;
+  EXPECT_EQ(lines(bad.err), 1) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(bad_dir / "stability.csv"));
+  std::filesystem::remove_all(dir);
+  std::filesystem::remove_all(probed);
+  std::filesystem::remove_all(bad_dir);
 }

@@ -1,12 +1,19 @@
 // The stability-limit experiment (experiments/stability.hpp): measured h_max on the fixed-fixed
-// spring chain against the closed-form limits, the unstable-for-all-h and A-stable statuses,
-// the k^(-1/2) and 1/|λ| scalings of a sweep, and the sweep parser.
+// spring chain against the closed-form limits, the unstable-for-all-h and A-stable statuses (one
+// run at the largest step for a method predicted stable for every step, the search with
+// probe_unbounded, a contradicted prediction), a non-finite spectrum as no prediction, the
+// k^(-1/2) and 1/|λ| scalings of a sweep, and the sweep parser.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <numbers>
+#include <string>
 
+#include "core/integrator.hpp"
+#include "core/linear_stability.hpp"
 #include "core/ode_system.hpp"
+#include "core/tableau.hpp"
 #include "core/types.hpp"
 #include "experiments/stability.hpp"
 
@@ -59,8 +66,8 @@ TEST(Stability, SpringChainLimitsMatchLinearTheory) {
   const Table t = stability_table(r);
   EXPECT_EQ(t.columns,
             (std::vector<std::string>{"model", "integrator", "param", "value", "h_max_measured",
-                                      "h_max_predicted", "ratio", "status", "newton_iters",
-                                      "newton_conv_failures", "error_test_failures",
+                                      "h_max_predicted", "ratio", "status", "limit_kind",
+                                      "newton_iters", "newton_conv_failures", "error_test_failures",
                                       "linear_setups", "linear_iters", "fe_evals", "fi_evals"}));
   // Counters of the largest stable run: backward Euler on a linear chain takes one Newton
   // update per step at least (the run has >= min_steps = 200 steps); euler none (no row).
@@ -240,6 +247,141 @@ TEST(Stability, BadSpecIsRefused) {
   spec.rel_tol = 1e-3;
   spec.ray = "diagonal";
   EXPECT_THROW(spec.validate(), BadInput);
+}
+
+// A method predicted stable for every step (A-stable on the spectrum) is not searched: one run
+// at the largest step, h_cap = h_cap_factor × 2/ω, is the whole row, stable_up_to h_cap. On
+// dahlquist (λ = −1: ω = 1, 2/ω = 2) h_cap = 1000 × 2 = 2000. With probe_unbounded the method is
+// searched like any other: doubling from 2/ω = 2 up to h_cap takes 1 + ceil(log2 1000) = 11 runs
+// (2, 4, ..., 1024, then 2000), with the same answer. rk4 has a finite prediction and is searched
+// either way: its real-axis limit is the root 2.785294 of |R(−x)| = 1 (Hairer–Wanner II, §IV.2).
+TEST(Stability, PredictedUnboundedIsCheckedAtTheLargestStepOnly) {
+  StabilitySpec spec;
+  spec.model = "dahlquist";
+  spec.integrators = {"backward_euler", "trapezoidal", "rk4"};
+  const StabilityResult r = run_stability(spec, nullptr);
+  for (const char* name : {"backward_euler", "trapezoidal"}) {
+    SCOPED_TRACE(name);
+    const auto& row = row_of(r, name);
+    EXPECT_TRUE(row.predicted_unbounded);
+    EXPECT_EQ(row.status, "stable_up_to") << row.message;
+    EXPECT_EQ(limit_kind(row), "stable_up_to");
+    EXPECT_TRUE(row.checked_at_cap);
+    EXPECT_EQ(row.probes, 1);
+    EXPECT_DOUBLE_EQ(row.h_cap, 2000.0);
+    ASSERT_TRUE(row.h_measured);
+    EXPECT_DOUBLE_EQ(*row.h_measured, 2000.0);
+    ASSERT_TRUE(
+        row.counters);  // of the run at h_cap: 200 steps (min_steps), one Newton update each
+    EXPECT_GE(row.counters->newton_iters, 200);
+  }
+  const auto& rk4 = row_of(r, "rk4");
+  EXPECT_EQ(rk4.status, "ok");
+  EXPECT_EQ(limit_kind(rk4), "measured");
+  EXPECT_FALSE(rk4.checked_at_cap);
+  ASSERT_TRUE(rk4.h_measured);
+  EXPECT_NEAR(*rk4.h_measured / 2.785294, 1.0, 0.01);
+
+  spec.probe_unbounded = true;
+  const StabilityResult p = run_stability(spec, nullptr);
+  for (const char* name : {"backward_euler", "trapezoidal"}) {
+    SCOPED_TRACE(name);
+    const auto& row = row_of(p, name);
+    EXPECT_EQ(row.status, "stable_up_to") << row.message;
+    EXPECT_FALSE(row.checked_at_cap);
+    EXPECT_EQ(row.probes, 11);
+    ASSERT_TRUE(row.h_measured);
+    EXPECT_DOUBLE_EQ(*row.h_measured, 2000.0);
+  }
+  // The search of a method with a finite prediction does not depend on the option.
+  ASSERT_TRUE(row_of(p, "rk4").h_measured);
+  EXPECT_EQ(*row_of(p, "rk4").h_measured, *rk4.h_measured);
+  EXPECT_EQ(row_of(p, "rk4").probes, rk4.probes);
+}
+
+// An integrator whose stability data say A-stable (backward Euler's R(z) = 1/(1 − z)) but whose
+// steps are explicit Euler's: the run at the largest step blows up, contradicting the prediction.
+// The row is not stable_up_to: the search continues downward from h_cap and finds explicit
+// Euler's limit on y' = −y, h = 2 (|1 − h| <= 1), and the message says the prediction was
+// contradicted.
+class MislabelledEuler final : public Integrator {
+ public:
+  MislabelledEuler() : Integrator(info_of()) {}
+  void reset(const OdeSystem& sys, double, CVecRef) override { k_.resize(sys.dimension()); }
+  Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats&) override {
+    sys.rhs(t, y, k_);
+    y += h * k_;
+    return Status::ok;
+  }
+  std::optional<LinearStability> linear_stability() const override {
+    ButcherTableau be;
+    be.a = Mat::Ones(1, 1);
+    be.b = Vec::Ones(1);
+    be.c = Vec::Ones(1);
+    be.order = 1;
+    return tableau_stability(be);
+  }
+
+ private:
+  static MethodInfo info_of() {
+    MethodInfo i;
+    i.name = "mislabelled_euler";
+    i.description = "explicit Euler claiming backward Euler's stability";
+    i.family = Family::explicit_rk;
+    i.order = 1;
+    i.stages = 1;
+    return i;
+  }
+  Vec k_;
+};
+
+TEST(Stability, InstabilityAtTheLargestStepContradictsThePrediction) {
+  StabilitySpec spec;
+  spec.model = "dahlquist";
+  const StabilityResult r = run_stability(
+      spec, StudyObjects{nullptr, {[] { return std::make_unique<MislabelledEuler>(); }}}, nullptr);
+  const auto& row = row_of(r, "mislabelled_euler");
+  EXPECT_TRUE(row.predicted_unbounded);
+  EXPECT_TRUE(row.checked_at_cap);
+  EXPECT_EQ(row.status, "ok") << row.message;
+  EXPECT_EQ(limit_kind(row), "measured");
+  EXPECT_NE(row.message.find("contradicts the prediction"), std::string::npos) << row.message;
+  ASSERT_TRUE(row.h_measured);
+  EXPECT_NEAR(*row.h_measured / 2.0, 1.0, 0.01);
+}
+
+// heat_2d with ν = 1e308: the spectral radius 8ν/Δx² overflows to inf (n = 32, above the dense
+// limit: the stiffness() estimate; n = 4: inf entries in the analytic Jacobian, whose
+// eigensolver output is meaningless). That is no spectrum, not "stable for every step": without
+// --horizon the study is refused naming the cause; with one, no row has a prediction and each
+// says why.
+TEST(Stability, NonFiniteSpectrumIsNoPrediction) {
+  StabilitySpec spec;
+  spec.model = "heat_2d";
+  spec.integrators = {"rk4", "backward_euler"};
+  for (const char* n : {"n=32", "n=4"}) {
+    SCOPED_TRACE(n);
+    spec.params = Params::from_assignments({"nu=1e308", n});
+    try {
+      run_stability(spec, nullptr);
+      ADD_FAILURE() << "not refused";
+    } catch (const BadInput& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("not finite"), std::string::npos) << what;
+      EXPECT_NE(what.find("--horizon"), std::string::npos) << what;
+    }
+  }
+  spec.horizon = 1e-3;
+  const StabilityResult r = run_stability(spec, nullptr);
+  EXPECT_EQ(r.spectrum_source.rfind("none: not finite", 0), 0u) << r.spectrum_source;
+  const Table t = stability_table(r);
+  for (std::size_t k = 0; k < r.rows.size(); ++k) {
+    SCOPED_TRACE(r.rows[k].integrator);
+    EXPECT_FALSE(r.rows[k].predicted_unbounded);
+    EXPECT_FALSE(r.rows[k].h_predicted);
+    EXPECT_NE(r.rows[k].no_prediction.find("not finite"), std::string::npos);
+    EXPECT_EQ(t.rows[k][5], "");  // h_max_predicted: empty, not "inf"
+  }
 }
 
 }  // namespace
