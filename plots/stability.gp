@@ -51,7 +51,7 @@ do for [K=1:np] {
          for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && strcol(8) eq "stable_up_to" ? abs($4) : NaN):(okval(5)) \
            with points lt j pt 9 ps 1.6 notitle, \
          for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) ? abs($4) : NaN):(okval(5)):(0):(upval(5)) \
-           with vectors lt j head filled size screen 0.012,25 notitle, \
+           with vectors lt j head filled size screen 0.008,20 notitle, \
          for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && strcol(8) eq "solver_limit" ? abs($4) : NaN):(okval(5)) \
            with points lt j pt 5 ps 1.4 notitle, \
          NaN with lines lc "black" dt 2 lw 1 title "predicted", \
@@ -81,7 +81,7 @@ do for [K=1:np] {
          for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && strcol(8) eq "stable_up_to" ? j : NaN):(okval(5)) \
            with points lt j pt 9 ps 1.6 notitle, \
          for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) ? j : NaN):(okval(5)):(0):(upval(5)) \
-           with vectors lt j head filled size screen 0.012,25 notitle, \
+           with vectors lt j head filled size screen 0.008,20 notitle, \
          for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && strcol(8) eq "solver_limit" ? j : NaN):(okval(5)) \
            with points lt j pt 5 ps 1.4 notitle, \
          for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) ? j : NaN):(okval(6)) \
