@@ -294,13 +294,15 @@ TEST(Cli, WorkPrecisionOnHiresErrorFallsAsWorkRises) {
             "model,integrator,setting,error,f_evals,jac_evals,lin_solves,steps,wall_s,status,mescd,"
             "newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_iters,fe_"
             "evals,fi_evals,"
-            "wall_s_median,wall_s_min,wall_s_ci_low,wall_s_ci_high,repeats");
+            "wall_s_median,wall_s_min,wall_s_ci_low,wall_s_ci_high,repeats,flag,reference_error");
   std::map<std::string, std::vector<std::pair<long, double>>> by_method;
   for (std::size_t r = 1; r < table.size(); ++r) {
     const auto& c = table[r];
     const std::string line = join_cells(c);
-    ASSERT_EQ(c.size(), 23u) << line;
+    ASSERT_EQ(c.size(), 25u) << line;
     ASSERT_EQ(c[9], "ok") << line;
+    // The reference is HIRES's published solution (good to ~1e-18): no error here is near it.
+    EXPECT_EQ(c[23], "") << line;
     EXPECT_EQ(c[22], "1") << line;    // --repeats 1
     EXPECT_EQ(c[8], c[18]) << line;   // wall_s is the median
     EXPECT_EQ(c[18], c[19]) << line;  // one run: median = min = both interval ends
