@@ -103,30 +103,7 @@ WorkPrecisionSpec::WorkPrecisionSpec() {
 
 void WorkPrecisionSpec::validate() const {
   validate_step_study();
-  if (reference == "auto" || reference == "exact" || reference == "published") return;
-  // A method file is compared by the name it registers (the same file, or one with the same
-  // text, registers one name).
-  const auto name_of = [](const std::string& token) {
-    return is_method_file_token(token) ? resolve_integrator_tokens({token}).front() : token;
-  };
-  const std::string ref = name_of(reference);
-  try {
-    integrator_registry().at(ref);  // an unknown method, with the closest names
-  } catch (const BadInput& e) {
-    throw BadInput("--reference: " + std::string(e.what()));
-  }
-  std::vector<std::string> studied;
-  for (const auto& integ : integrators) studied.push_back(name_of(integ));
-  if (std::find(studied.begin(), studied.end(), ref) == studied.end()) return;
-  std::string other;  // a reference to suggest: a stiff library code not studied here
-  for (const char* m : {"cvode_bdf", "radau5", "rodas4"})
-    if (other.empty() && std::find(studied.begin(), studied.end(), m) == studied.end()) other = m;
-  throw BadInput("--reference " + reference +
-                 " is also one of --integrators: a method measured against itself shares its "
-                 "own errors, so its points would show their correlation, not its accuracy; pass "
-                 "a method that is not studied as --reference" +
-                 (other.empty() ? "" : " (e.g. " + other + ")") +
-                 ", or --reference published / exact where the model has that solution");
+  choose_reference(*this, nullptr, 0, 0);  // the names: an unknown or a studied method
 }
 
 nlohmann::json WorkPrecisionSpec::to_json() const {
@@ -184,34 +161,27 @@ namespace {
 
 // The numerical reference R and its check run R2 (tighter by kReferenceTightening) into `r`.
 // `check_only`: R is the published solution's check, so a failed run is recorded, not thrown.
-void numerical_reference(const WorkPrecisionSpec& spec, const OdeSystem& sys, double h_fine,
-                         bool check_only, WorkPrecisionReference& r, std::ostream* progress) {
-  StepStudySpec num = spec;
-  if (num.reference == "auto" || num.reference == "published") num.reference = "cvode_bdf";
-  for (const auto& integ : spec.integrators)
-    r.method_studied = r.method_studied || integ == num.reference;
+void numerical_reference(const ReferenceChoice& choice, const OdeSystem& sys, double t_end,
+                         double h_fine, bool check_only, WorkPrecisionReference& r,
+                         const std::vector<std::string>& integrators, std::ostream* progress) {
+  for (const auto& integ : integrators)
+    r.method_studied = r.method_studied || integ == choice.method;
   try {
-    r.numerical_values = reference_at_end(num, sys, spec.t_end, h_fine, &r.numerical_description);
+    r.numerical_values =
+        reference_at_end(choice.numerical, sys, t_end, h_fine, &r.numerical_description);
   } catch (const BadInput&) {
     throw;
   } catch (const std::runtime_error& e) {
     if (!check_only) throw;
     r.numerical_failure = e.what();
-    r.numerical_description = num.reference + " (failed: " + r.numerical_failure + ")";
+    r.numerical_description = choice.method + " (failed: " + r.numerical_failure + ")";
     return;
   }
   if (progress) *progress << "numerical reference: " << r.numerical_description << "\n";
-  StepStudySpec tight = num;
-  if (tight.reference_rtol) *tight.reference_rtol /= kReferenceTightening;
-  if (tight.reference_atol) *tight.reference_atol /= kReferenceTightening;
-  // reference_at_end runs a fixed-step method at h_fine/16: h_fine/2 halves its step.
-  const bool adaptive =
-      integrator_registry().create(num.reference, spec.params)->supports_adaptive();
   try {
-    const Vec r2 = reference_at_end(tight, sys, spec.t_end, adaptive ? h_fine : h_fine / 2,
+    const Vec r2 = reference_at_end(choice.check, sys, t_end, h_fine * choice.check_h_factor,
                                     &r.check_description);
-    if (!adaptive)
-      r.check_description = num.reference + " with h = (finest h)/32 = " + format_full(h_fine / 32);
+    if (!choice.check_description.empty()) r.check_description = choice.check_description;
     r.numerical_check = max_abs_diff(r.numerical_values, r2);
     if (progress)
       *progress << "reference check: " << r.check_description << ", difference "
@@ -224,30 +194,14 @@ void numerical_reference(const WorkPrecisionSpec& spec, const OdeSystem& sys, do
   }
 }
 
-// `--reference exact` needs the model's exact solution, `--reference published` its published
-// solution at t_end (BadInput otherwise, before anything runs).
-void require_published_reference(const WorkPrecisionSpec& spec, const OdeSystem& sys) {
-  require_input(spec.reference != "exact" || sys.has_exact(),
-                "--reference exact: model '" + spec.model +
-                    "' has no exact solution (pass --reference published where it has a "
-                    "published one, or --reference METHOD, e.g. cvode_bdf)");
-  if (spec.reference != "published") return;
-  const auto pub = sys.published_solution();
-  const bool has = pub && std::abs(spec.t_end - pub->t) <= 1e-12 * std::abs(pub->t);
-  require_input(has, "--reference published: model '" + spec.model + "' has no published solution" +
-                         (pub ? " at t_end = " + format_full(spec.t_end) +
-                                    " (its published solution is at t = " + format_full(pub->t) +
-                                    ": pass --t-end " + format_full(pub->t) + ")"
-                              : std::string(" (pass --reference METHOD, e.g. cvode_bdf)")));
-}
-
 }  // namespace
 
 WorkPrecisionReference work_precision_reference(const WorkPrecisionSpec& spec, const OdeSystem& sys,
                                                 double h_fine, std::ostream* progress) {
+  const ReferenceChoice choice = choose_reference(spec, &sys, spec.t_end, h_fine);
   WorkPrecisionReference r;
-  if (spec.reference == "exact" || (spec.reference == "auto" && sys.has_exact())) {
-    r.values = reference_at_end(spec, sys, spec.t_end, h_fine, &r.description);
+  if (choice.kind == "exact") {
+    r.values = reference_at_end(choice.numerical, sys, spec.t_end, h_fine, &r.description);
     r.kind = "exact";
     r.error_estimate = 0;
     r.error_source = "the exact solution";
@@ -255,10 +209,8 @@ WorkPrecisionReference work_precision_reference(const WorkPrecisionSpec& spec, c
   }
   const auto pub = sys.published_solution();
   r.has_published = pub && std::abs(spec.t_end - pub->t) <= 1e-12 * std::abs(pub->t);
-  require_published_reference(spec, sys);
-  const bool check_only =
-      r.has_published && (spec.reference == "auto" || spec.reference == "published");
-  numerical_reference(spec, sys, h_fine, check_only, r, progress);
+  const bool check_only = r.has_published && choice.kind != "method";
+  numerical_reference(choice, sys, spec.t_end, h_fine, check_only, r, spec.integrators, progress);
   if (r.has_published) {
     r.published_t = pub->t;
     r.published_source = pub->source;
@@ -280,8 +232,8 @@ WorkPrecisionReference work_precision_reference(const WorkPrecisionSpec& spec, c
     num_source = "distance from the published solution (" + r.published_source + ")";
   }
   const bool use_published =
-      spec.reference == "published" || (spec.reference == "auto" && r.has_published &&
-                                        (!num_error || r.published_accuracy < *num_error));
+      choice.kind == "published" || (choice.kind == "auto" && r.has_published &&
+                                     (!num_error || r.published_accuracy < *num_error));
   if (use_published) {
     r.kind = "published";
     r.values = r.published_values;
@@ -460,8 +412,6 @@ WorkPrecisionRow work_precision_row(const WorkPrecisionContext& c, const WorkPre
 WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream* progress) {
   WorkPrecisionSpec spec = s;
   spec.validate();
-  if (is_method_file_token(spec.reference))
-    spec.reference = resolve_integrator_tokens({spec.reference}).front();
   require_input(spec.tol_levels >= 2,
                 "--tol-levels must be >= 2 (got " + std::to_string(spec.tol_levels) + ")");
   require_input(spec.repeats >= 1, "--repeats must be >= 1");
@@ -472,7 +422,7 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
   const double t0 = sys.initial_time();
   spec.t_end = resolve_end_time(sys, spec.t_end == 0 ? std::nan("") : spec.t_end, spec.model).value;
   require_input(spec.t_end > t0, "--t-end must be > the model's initial time");
-  require_published_reference(spec, sys);
+  choose_reference(spec, &sys, spec.t_end, 0);  // exact / published: the model has it
   const Resolved h0 = resolve_step(sys, spec.h == 0 ? std::nan("") : spec.h, spec.model, [&] {
     return Resolved{(spec.t_end - t0) / 16000, "(t_end - t0)/16000"};
   });
