@@ -643,7 +643,7 @@ std::string reference_markdown(const WorkPrecisionResult& res) {
          << "× the second run's difference: the second run underestimates the numerical "
             "reference's error.";
   }
-  if (ref.method_studied)
+  if (ref.method_studied && ref.kind == "numerical")
     md << " The numerical reference's method is also studied here: its own points near the "
           "reference's error share its errors.";
   md << "\n";
