@@ -489,6 +489,25 @@ TEST(WorkPrecisionReference, DefaultNumericalReferenceIsEstimatedBySecondRun) {
     EXPECT_EQ(row.at_reference_floor, row.error <= 10 * estimate) << row.integrator << row.setting;
 }
 
+// The stated accuracy of a published solution, by hand: ROBER's largest component
+// 0.9999999791665050 has its 16th significant digit at 1e-16, so 0.5e-16 plus its rounding to
+// double 2^-53·|y3| (y1 = 2.08e-8 and y2 = 8.3e-14 are good to 5e-24 and 5e-30); OREGO's
+// y2 = 1228.178521549917 has its 16th digit at 1e-12: 0.5e-12 + 2^-53·|y2| (y1 ≈ 1.0008 and
+// y3 ≈ 132.06 are good to ~1e-15 and ~5e-14).
+TEST(WorkPrecisionReference, StatedAccuracyOfPublishedSolutions) {
+  const auto rober = model_registry().create("robertson", Params{})->published_solution();
+  ASSERT_TRUE(rober.has_value());
+  EXPECT_DOUBLE_EQ(published_accuracy(*rober), 0.5e-16 + 0x1p-53 * 0.9999999791665050);
+  const auto orego = model_registry().create("orego", Params{})->published_solution();
+  ASSERT_TRUE(orego.has_value());
+  EXPECT_DOUBLE_EQ(published_accuracy(*orego), 0.5e-12 + 0x1p-53 * 1228.178521549917);
+  // Robertson with other rate constants has no published solution.
+  EXPECT_FALSE(model_registry()
+                   .create("robertson", Params::from_assignments({"k1=0.05"}))
+                   ->published_solution()
+                   .has_value());
+}
+
 // A --reference that is one of the integrators is refused before anything runs.
 TEST(WorkPrecisionReference, AMethodIsNotItsOwnReference) {
   WorkPrecisionSpec spec;
