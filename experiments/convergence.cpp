@@ -1400,6 +1400,68 @@ Vec reference_at_end(const StepStudySpec& spec, const OdeSystem& sys, double t_e
   return r.y;
 }
 
+ReferenceChoice choose_reference(const StepStudySpec& spec, const OdeSystem* sys, double t_end,
+                                 double h_fine) {
+  ReferenceChoice c;
+  const std::string& given = spec.reference;
+  c.kind = given == "auto" || given == "exact" || given == "published" ? given : "method";
+  c.method = c.kind == "method" ? given : "cvode_bdf";
+  if (c.kind == "method") {
+    // A method file is compared by the name it registers (the same file, or one with the same
+    // text, registers one name).
+    const auto name_of = [](const std::string& token) {
+      return is_method_file_token(token) ? resolve_integrator_tokens({token}).front() : token;
+    };
+    c.method = name_of(given);
+    try {
+      integrator_registry().at(c.method);  // an unknown method, with the closest names
+    } catch (const BadInput& e) {
+      throw BadInput("--reference: " + std::string(e.what()));
+    }
+    std::vector<std::string> studied;
+    for (const auto& integ : spec.integrators) studied.push_back(name_of(integ));
+    if (std::find(studied.begin(), studied.end(), c.method) != studied.end()) {
+      std::string other;  // a reference to suggest: a stiff library code not studied here
+      for (const char* m : {"cvode_bdf", "radau5", "rodas4"})
+        if (other.empty() && std::find(studied.begin(), studied.end(), m) == studied.end())
+          other = m;
+      throw BadInput("--reference " + given +
+                     " is also one of --integrators: a method measured against itself shares its "
+                     "own errors, so its points would show their correlation, not its accuracy; "
+                     "pass a method that is not studied as --reference" +
+                     (other.empty() ? "" : " (e.g. " + other + ")") +
+                     ", or --reference published / exact where the model has that solution");
+    }
+  }
+  if (sys) {
+    require_input(c.kind != "exact" || sys->has_exact(),
+                  "--reference exact: model '" + spec.model +
+                      "' has no exact solution (pass --reference published where it has a "
+                      "published one, or --reference METHOD, e.g. cvode_bdf)");
+    if (c.kind == "auto" && sys->has_exact()) c.kind = "exact";
+    const auto pub = sys->published_solution();
+    const bool has = pub && std::abs(t_end - pub->t) <= 1e-12 * std::abs(pub->t);
+    require_input(c.kind != "published" || has,
+                  "--reference published: model '" + spec.model + "' has no published solution" +
+                      (pub ? " at t_end = " + format_full(t_end) +
+                                 " (its published solution is at t = " + format_full(pub->t) +
+                                 ": pass --t-end " + format_full(pub->t) + ")"
+                           : std::string(" (pass --reference METHOD, e.g. cvode_bdf)")));
+  }
+  c.numerical = spec;
+  c.numerical.reference = c.kind == "exact" ? "exact" : c.method;
+  c.check = c.numerical;
+  if (c.check.reference_rtol) *c.check.reference_rtol /= kReferenceTightening;
+  if (c.check.reference_atol) *c.check.reference_atol /= kReferenceTightening;
+  if (sys && c.kind != "exact" &&
+      !integrator_registry().create(c.method, spec.params)->supports_adaptive()) {
+    // reference_at_end runs a fixed-step method at h_fine/16: half the step.
+    c.check_h_factor = 0.5;
+    c.check_description = c.method + " with h = (finest h)/32 = " + format_full(h_fine / 32);
+  }
+  return c;
+}
+
 namespace {
 
 // convergence and local-error in the study registry.

@@ -149,6 +149,23 @@ struct ConvergenceSpec : StepStudySpec {
 // fixed-step reference at h_fine/16; `description` says which.
 Vec reference_at_end(const StepStudySpec& spec, const OdeSystem& sys, double t_end, double h_fine,
                      std::string* description);
+// Work-precision's reference (experiments/work_precision.hpp, "The reference"), chosen from
+// spec.reference before anything runs. BadInput for an unknown METHOD, a METHOD that is also one
+// of spec.integrators (by name; a method file by the name it registers), `exact` on a model
+// without an exact solution, `published` without a published solution at t_end; with sys null
+// only the names are checked. `numerical` is the spec of the numerical reference for
+// reference_at_end (METHOD, or cvode_bdf for auto and published), `check` the same tighter by
+// kReferenceTightening: rtol and atol / 10, or for a fixed-step method h_fine / 2
+// (check_h_factor).
+struct ReferenceChoice {
+  std::string kind;    // "exact", "published", "auto" or "method"
+  std::string method;  // the numerical reference's integrator
+  StepStudySpec numerical, check;
+  double check_h_factor = 1;
+  std::string check_description;  // of the check run (reference_at_end's, or the halved step)
+};
+ReferenceChoice choose_reference(const StepStudySpec& spec, const OdeSystem* sys, double t_end,
+                                 double h_fine);
 // The same for a caller without a step study (recommend): `method` ("auto": the exact solution,
 // which the model must have) run adaptively at rtol and atol with `params`.
 Vec adaptive_state_at_end(const OdeSystem& sys, const Params& params, const std::string& method,

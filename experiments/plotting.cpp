@@ -199,8 +199,19 @@ bool plot_work_precision(const fs::path& csv, const std::string& title, const Pl
   const std::vector<std::string> methods = csv_column_values(csv, "integrator");
   std::vector<PlotPanel> panels = family_panels(methods);
   if (methods.size() <= 8) panels = {PlotPanel{"all methods", methods}};
-  return run_plot("work_precision.gp", stem, {{"csvfile", csv.string()}, {"ttl", title}}, panels,
-                  opt, err);
+  // The `flag` column, 1-based for gnuplot (0: a CSV written before it existed): rows marked
+  // reference_floor are drawn hollow.
+  std::string flagcol = "0";
+  std::ifstream in(csv);
+  std::string header;
+  if (std::getline(in, header)) {
+    const std::vector<std::string> cols = parse_csv_line(header);
+    const auto it = std::find(cols.begin(), cols.end(), "flag");
+    if (it != cols.end()) flagcol = std::to_string(it - cols.begin() + 1);
+  }
+  return run_plot("work_precision.gp", stem,
+                  {{"csvfile", csv.string()}, {"ttl", title}, {"flagcol", flagcol}}, panels, opt,
+                  err);
 }
 
 namespace {

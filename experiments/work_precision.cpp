@@ -6,6 +6,7 @@
 #include <limits>
 #include <ostream>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/driver.hpp"
 #include "core/run_control.hpp"
@@ -15,9 +16,8 @@ namespace stiffbench {
 
 namespace {
 
-// The declared defaults of the step ladder and the reference (cvode_bdf at rtol 1e-14: on
-// HIRES it agrees with the IVP test set's published solution to ~1e-13, rtol 1e-12 is off by
-// ~1e-11).
+// The declared defaults of the step ladder and the numerical reference (cvode_bdf at rtol
+// 1e-14, atol 1e-16).
 StepStudyDefaults work_precision_defaults() {
   StepStudyDefaults d;
   d.t_end_help = "final time (default: the model's literature end time)";
@@ -27,7 +27,10 @@ StepStudyDefaults work_precision_defaults() {
   d.ladder_levels = "4";
   d.ref_rtol = "1e-14";
   d.ref_atol = "1e-16";
-  d.ref_help = "exact | METHOD; default: exact where available, else cvode_bdf";
+  d.ref_help =
+      "auto | exact | published | METHOD (not one of --integrators); auto: the exact solution, "
+      "else the model's published solution at t_end, else cvode_bdf; its error is estimated by "
+      "a second, tighter run";
   return d;
 }
 
@@ -98,6 +101,11 @@ WorkPrecisionSpec::WorkPrecisionSpec() {
   apply_defaults(work_precision_defaults());
 }
 
+void WorkPrecisionSpec::validate() const {
+  validate_step_study();
+  choose_reference(*this, nullptr, 0, 0);  // the names: an unknown or a studied method
+}
+
 nlohmann::json WorkPrecisionSpec::to_json() const {
   nlohmann::json j = step_study_json();
   j["tol_levels"] = tol_levels;
@@ -137,6 +145,113 @@ double mescd(CVecRef y, CVecRef ref, double ratio) {
 }
 
 }  // namespace
+
+double published_accuracy(const OdeSystem::PublishedSolution& p) {
+  double acc = 0;
+  for (Index i = 0; i < p.y.size(); ++i) {
+    const double a = std::abs(p.y[i]);
+    if (a == 0) continue;
+    const double last = std::pow(10.0, std::floor(std::log10(a)) - (kPublishedDigits - 1));
+    acc = std::max(acc, 0.5 * last + kUnitRoundoff * a);
+  }
+  return acc;
+}
+
+namespace {
+
+// The numerical reference R and its check run R2 (tighter by kReferenceTightening) into `r`.
+// `check_only`: R is the published solution's check, so a failed run is recorded, not thrown.
+void numerical_reference(const ReferenceChoice& choice, const OdeSystem& sys, double t_end,
+                         double h_fine, bool check_only, WorkPrecisionReference& r,
+                         const std::vector<std::string>& integrators, std::ostream* progress) {
+  for (const auto& integ : integrators)
+    r.method_studied = r.method_studied || integ == choice.method;
+  try {
+    r.numerical_values =
+        reference_at_end(choice.numerical, sys, t_end, h_fine, &r.numerical_description);
+  } catch (const BadInput&) {
+    throw;
+  } catch (const std::runtime_error& e) {
+    if (!check_only) throw;
+    r.numerical_failure = e.what();
+    r.numerical_description = choice.method + " (failed: " + r.numerical_failure + ")";
+    return;
+  }
+  if (progress) *progress << "numerical reference: " << r.numerical_description << "\n";
+  try {
+    const Vec r2 = reference_at_end(choice.check, sys, t_end, h_fine * choice.check_h_factor,
+                                    &r.check_description);
+    if (!choice.check_description.empty()) r.check_description = choice.check_description;
+    r.numerical_check = max_abs_diff(r.numerical_values, r2);
+    if (progress)
+      *progress << "reference check: " << r.check_description << ", difference "
+                << format_short(*r.numerical_check) << "\n";
+  } catch (const BadInput&) {
+    throw;
+  } catch (const std::runtime_error& e) {
+    r.check_failure = e.what();
+    if (progress) *progress << "reference check: " << e.what() << "\n";
+  }
+}
+
+}  // namespace
+
+WorkPrecisionReference work_precision_reference(const WorkPrecisionSpec& spec, const OdeSystem& sys,
+                                                double h_fine, std::ostream* progress) {
+  const ReferenceChoice choice = choose_reference(spec, &sys, spec.t_end, h_fine);
+  WorkPrecisionReference r;
+  if (choice.kind == "exact") {
+    r.values = reference_at_end(choice.numerical, sys, spec.t_end, h_fine, &r.description);
+    r.kind = "exact";
+    r.error_estimate = 0;
+    r.error_source = "the exact solution";
+    return r;
+  }
+  const auto pub = sys.published_solution();
+  r.has_published = pub && std::abs(spec.t_end - pub->t) <= 1e-12 * std::abs(pub->t);
+  const bool check_only = r.has_published && choice.kind != "method";
+  numerical_reference(choice, sys, spec.t_end, h_fine, check_only, r, spec.integrators, progress);
+  if (r.has_published) {
+    r.published_t = pub->t;
+    r.published_source = pub->source;
+    r.published_values = pub->y;
+    r.published_accuracy = published_accuracy(*pub);
+    if (r.numerical_failure.empty())
+      r.published_distance = max_abs_diff(r.numerical_values, pub->y);
+  }
+  // The numerical reference's estimated error: the larger of its check and its distance from
+  // the published solution, where known.
+  std::optional<double> num_error;
+  std::string num_source;
+  if (r.numerical_check) {
+    num_error = *r.numerical_check;
+    num_source = "difference from a second run, " + r.check_description;
+  }
+  if (r.published_distance && (!num_error || *r.published_distance > *num_error)) {
+    num_error = *r.published_distance;
+    num_source = "distance from the published solution (" + r.published_source + ")";
+  }
+  const bool use_published =
+      choice.kind == "published" || (choice.kind == "auto" && r.has_published &&
+                                     (!num_error || r.published_accuracy < *num_error));
+  if (use_published) {
+    r.kind = "published";
+    r.values = r.published_values;
+    r.description =
+        "published solution at t = " + format_full(r.published_t) + " (" + r.published_source + ")";
+    r.error_estimate = r.published_accuracy;
+    r.error_source = "stated accuracy of the published values (" +
+                     std::to_string(kPublishedDigits) + " significant digits)";
+    return r;
+  }
+  r.kind = "numerical";
+  r.values = r.numerical_values;
+  r.description = r.numerical_description;
+  r.error_estimate = num_error;
+  r.error_source =
+      num_error ? num_source : "not estimated: the check run failed (" + r.check_failure + ")";
+  return r;
+}
 
 namespace {
 
@@ -296,7 +411,7 @@ WorkPrecisionRow work_precision_row(const WorkPrecisionContext& c, const WorkPre
 
 WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream* progress) {
   WorkPrecisionSpec spec = s;
-  spec.validate_step_study();
+  spec.validate();
   require_input(spec.tol_levels >= 2,
                 "--tol-levels must be >= 2 (got " + std::to_string(spec.tol_levels) + ")");
   require_input(spec.repeats >= 1, "--repeats must be >= 1");
@@ -307,6 +422,7 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
   const double t0 = sys.initial_time();
   spec.t_end = resolve_end_time(sys, spec.t_end == 0 ? std::nan("") : spec.t_end, spec.model).value;
   require_input(spec.t_end > t0, "--t-end must be > the model's initial time");
+  choose_reference(spec, &sys, spec.t_end, 0);  // exact / published: the model has it
   const Resolved h0 = resolve_step(sys, spec.h == 0 ? std::nan("") : spec.h, spec.model, [&] {
     return Resolved{(spec.t_end - t0) / 16000, "(t_end - t0)/16000"};
   });
@@ -325,15 +441,22 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
   res.t_end = spec.t_end;
   res.h = spec.h;
   res.h_source = h_source;
-  const Vec ref = reference_at_end(spec, sys, spec.t_end, hs.back(), &res.reference_description);
+  res.reference = work_precision_reference(spec, sys, hs.back(), progress);
+  res.reference_description = res.reference.description;
+  const Vec& ref = res.reference.values;
   if (progress) *progress << "reference: " << res.reference_description << "\n";
 
   // The points in the rows' order; run in rounds (see kRepeatBudget in the header).
   const WorkPrecisionContext c{spec, sys, setup, tols, hs, ref, progress};
   std::vector<WorkPrecisionPoint> points = work_precision_points(c);
   run_rounds(c, points);
-  for (std::size_t idx = 0; idx < points.size(); ++idx)
+  for (std::size_t idx = 0; idx < points.size(); ++idx) {
     res.rows.push_back(work_precision_row(c, points[idx], idx));
+    WorkPrecisionRow& row = res.rows.back();
+    row.at_reference_floor = row.stats.status == Status::ok && res.reference.error_estimate &&
+                             *res.reference.error_estimate > 0 &&
+                             row.error <= kFloorFactor * *res.reference.error_estimate;
+  }
   return res;
 }
 
@@ -371,9 +494,11 @@ Table work_precision_table(const WorkPrecisionResult& res) {
            "wall_s", "status", "mescd"},
           {}};
   for (const auto& c : SolveStats::counter_names()) t.columns.push_back(c);
-  for (const char* c :
-       {"wall_s_median", "wall_s_min", "wall_s_ci_low", "wall_s_ci_high", "repeats"})
+  for (const char* c : {"wall_s_median", "wall_s_min", "wall_s_ci_low", "wall_s_ci_high", "repeats",
+                        "flag", "reference_error"})
     t.columns.push_back(c);
+  const std::string ref_error =
+      res.reference.error_estimate ? format_full(*res.reference.error_estimate) : "";
   for (const auto& r : res.rows) {
     const bool ok = r.stats.status == Status::ok;
     std::vector<std::string> row = {r.model,
@@ -391,6 +516,8 @@ Table work_precision_table(const WorkPrecisionResult& res) {
     for (double w : {r.wall.median, r.wall.min, r.wall.ci_low, r.wall.ci_high})
       row.push_back(format_full(w));
     row.push_back(std::to_string(r.wall.repeats));
+    row.push_back(r.at_reference_floor ? "reference_floor" : "");
+    row.push_back(ref_error);
     t.rows.push_back(std::move(row));
   }
   return t;
@@ -430,7 +557,7 @@ Table work_precision_markdown_table(const WorkPrecisionResult& res) {
     out.push_back("[" + format_short(std::stod(row[col("wall_s_ci_low")]), 2) + ", " +
                   format_short(std::stod(row[col("wall_s_ci_high")]), 2) + "]");
     out.push_back(row[col("repeats")]);
-    out.push_back(row[col("status")]);
+    out.push_back(row[col("flag")].empty() ? row[col("status")] : row[col("flag")]);
     t.rows.push_back(std::move(out));
   }
   return t;
@@ -474,6 +601,94 @@ std::vector<std::string> tolerance_response_notes(const WorkPrecisionResult& res
 }
 
 namespace {
+
+std::size_t rows_at_reference_floor(const WorkPrecisionResult& res) {
+  return static_cast<std::size_t>(std::count_if(
+      res.rows.begin(), res.rows.end(), [](const auto& r) { return r.at_reference_floor; }));
+}
+
+// What the errors are measured against, the reference's estimated error and its checks.
+std::string reference_markdown(const WorkPrecisionResult& res) {
+  const WorkPrecisionReference& ref = res.reference;
+  std::ostringstream md;
+  md << "Reference: " << ref.description << ". ";
+  if (ref.kind == "exact") return md.str() + "\n";
+  if (ref.error_estimate)
+    md << "Its estimated error: " << format_short(*ref.error_estimate) << " (" << ref.error_source
+       << "); a row within " << kFloorFactor
+       << "× of it is marked `reference_floor` (its error measures the reference as much as the "
+          "method; drawn hollow): "
+       << rows_at_reference_floor(res) << " of " << res.rows.size() << " rows.";
+  else
+    md << "Its error is " << ref.error_source << ", so no row is checked against it.";
+  md << "\n";
+  if (!ref.numerical_description.empty())
+    md << "\nNumerical reference" << (ref.kind == "numerical" ? "" : " (a check)") << ": "
+       << ref.numerical_description << ".";
+  if (ref.numerical_check)
+    md << " Second run " << ref.check_description << ": difference "
+       << format_short(*ref.numerical_check) << ".";
+  else if (!ref.check_failure.empty())
+    md << " Second run failed: " << ref.check_failure << ".";
+  if (ref.has_published) {
+    md << " Published-solution check: the numerical reference is "
+       << (ref.published_distance ? format_short(*ref.published_distance) : "not known (no run)")
+       << " from the published values at t = " << format_full(ref.published_t) << " ("
+       << ref.published_source << "; stated accuracy " << format_short(ref.published_accuracy)
+       << ").";
+    if (ref.published_distance && ref.numerical_check &&
+        *ref.published_distance >
+            kFloorFactor * std::max(*ref.numerical_check, ref.published_accuracy))
+      md << " That distance is more than " << kFloorFactor
+         << "× the second run's difference: the second run underestimates the numerical "
+            "reference's error.";
+  }
+  if (ref.method_studied && ref.kind == "numerical")
+    md << " The numerical reference's method is also studied here: its own points near the "
+          "reference's error share its errors.";
+  md << "\n";
+  return md.str();
+}
+
+// The JSON record of the reference and its checks (see "The reference" in the header).
+nlohmann::json reference_json(const WorkPrecisionResult& res) {
+  const WorkPrecisionReference& ref = res.reference;
+  const auto opt = [](const std::optional<double>& x) {
+    return x ? nlohmann::json(*x) : nlohmann::json();
+  };
+  const auto values = [](const Vec& y) {
+    return std::vector<double>(y.data(), y.data() + y.size());
+  };
+  nlohmann::json j = {{"kind", ref.kind},
+                      {"description", ref.description},
+                      {"estimated_error", opt(ref.error_estimate)},
+                      {"estimated_error_source", ref.error_source},
+                      {"floor_factor", kFloorFactor},
+                      {"rows_at_reference_floor", rows_at_reference_floor(res)}};
+  if (!ref.numerical_description.empty()) {
+    nlohmann::json n = {{"description", ref.numerical_description},
+                        {"method_studied", ref.method_studied}};
+    if (ref.numerical_failure.empty())
+      n["values"] = values(ref.numerical_values);
+    else
+      n["failed"] = ref.numerical_failure;
+    if (!ref.check_description.empty()) n["check_description"] = ref.check_description;
+    n["check_difference"] = opt(ref.numerical_check);
+    if (!ref.check_failure.empty()) n["check_failed"] = ref.check_failure;
+    j["numerical"] = n;
+  }
+  if (ref.has_published)
+    j["published"] = {
+        {"t", ref.published_t},
+        {"source", ref.published_source},
+        {"values", values(ref.published_values)},
+        {"stated_accuracy", ref.published_accuracy},
+        {"stated_accuracy_rule", "max over i of 0.5*10^(floor(log10|y_i|) - 15) + 2^-53*|y_i| (" +
+                                     std::to_string(kPublishedDigits) + " significant digits)"},
+        {"distance_from_numerical", opt(ref.published_distance)}};
+  return j;
+}
+
 std::string tolerance_response_markdown(const WorkPrecisionResult& res) {
   std::string md;
   for (const auto& n : tolerance_response_notes(res)) md += "- " + n + "\n";
@@ -495,7 +710,8 @@ void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpe
      << " s or more runs once, and repeats stop once a row's runs total "
      << format_short(kRepeatBudget, 2) << " s), run in shuffled rounds (seed " << spec.seed
      << "), with a bootstrap 95% interval of the median (" << kBootstrapResamples
-     << " resamples).\n\n";
+     << " resamples).\n\n"
+     << reference_markdown(res) << "\n";
   std::vector<RunNote> notes;
   for (const auto& r : res.rows) notes.push_back({r.integrator + ", " + r.setting, &r.stats});
   md << work_precision_markdown_table(res).to_markdown() << tolerance_response_markdown(res)
@@ -505,6 +721,7 @@ void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpe
   nlohmann::json meta = run_metadata("work-precision", spec.to_json());
   add_step_study_metadata(meta, res.h, res.h_source, res.reference_description);
   meta["t_end_used"] = res.t_end;
+  meta["reference_check"] = reference_json(res);
   meta["error_norm"] = "max-norm of the absolute error at t_end";
   meta["timing"] = {
       {"seed", spec.seed},
@@ -522,9 +739,7 @@ namespace {
 
 class WorkPrecisionJob : public StudyJob {
  public:
-  explicit WorkPrecisionJob(WorkPrecisionSpec spec) : spec_(std::move(spec)) {
-    spec_.validate_step_study();
-  }
+  explicit WorkPrecisionJob(WorkPrecisionSpec spec) : spec_(std::move(spec)) { spec_.validate(); }
   nlohmann::json spec_json() const override { return spec_.to_json(); }
   std::vector<std::string> helper_integrators() const override {
     return spec_.reference_integrators();
@@ -548,16 +763,17 @@ class WorkPrecisionJob : public StudyJob {
 
 std::string WorkPrecisionJob::report_markdown(const std::string& note) const {
   std::ostringstream md;
-  md << note << " Reference: " << result_.reference_description
-     << ". Fixed-step methods over h, references over rtol (atol = "
+  md << note << " Fixed-step methods over h, references over rtol (atol = "
      << format_full(spec_.atol_factor) << "·rtol). Wall time: the median over up to "
      << spec_.repeats << " runs per setting in rounds shuffled with seed " << spec_.seed
-     << ", with a bootstrap 95% interval.\n\n";
+     << ", with a bootstrap 95% interval. Best error: the smallest not at the reference's "
+        "floor.\n\n"
+     << reference_markdown(result_) << "\n";
   Table summary{{"integrator", "settings", "best error", "f_evals at best", "newton_iters at best",
                  "wall s at best (median [95% interval])", "status"},
                 {}};
   for (const auto& name : spec_.integrators) {
-    int n = 0;
+    int n = 0, floor = 0;
     const WorkPrecisionRow* best = nullptr;
     std::string status = "ok";
     for (const auto& r : result_.rows) {
@@ -565,9 +781,12 @@ std::string WorkPrecisionJob::report_markdown(const std::string& note) const {
       ++n;
       if (r.stats.status != Status::ok)
         status = to_string(r.stats.status);
+      else if (r.at_reference_floor)
+        ++floor;
       else if (!best || r.error < best->error)
         best = &r;
     }
+    if (floor > 0) status += " (" + std::to_string(floor) + " at the reference floor)";
     summary.rows.push_back(
         {name, std::to_string(n), best ? format_short(best->error) : "-",
          best ? std::to_string(best->stats.f_evals) : "-",

@@ -6,15 +6,13 @@
 // the counters of SolveStats (f_evals, jac_evals, lin_solves, steps and SolveStats::counter_names),
 // and the wall time over repeated runs: its median, minimum and a bootstrap 95% interval of the
 // median (see "Timing with spread" below).
-// The reference is the exact solution where the model has one, otherwise a run of
-// `reference` (default cvode_bdf at rtol 1e-14, atol 1e-16 — on HIRES it agrees with the IVP
-// test set's published solution to ~1e-13, while rtol 1e-12 is off by ~1e-11; a fixed-step
-// reference method runs at (finest h)/16).
+// The reference and its check: see "The reference" below.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 #include <iosfwd>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -48,7 +46,68 @@ struct WorkPrecisionSpec : StepStudySpec {
   unsigned long seed = 1;
 
   nlohmann::json to_json() const;
+  // validate_step_study, and a --reference that is also one of the integrators is BadInput
+  // (see "The reference" below).
+  void validate() const;
 };
+
+// --- The reference ------------------------------------------------------------------------
+// `reference` (--reference) is
+//  - `auto` (default): the exact solution where the model has one; else the model's published
+//    solution when it has one at t_end and its stated accuracy is below the numerical
+//    reference's estimated error (below); else the numerical reference, cvode_bdf;
+//  - `exact`: the exact solution (BadInput without one);
+//  - `published`: the model's published solution at t_end (BadInput without one there);
+//  - an integrator (a name or a method file): the numerical reference is that method.
+// The numerical reference R is reference_at_end (experiments/convergence.hpp): an adaptive
+// method at --reference-rtol/--reference-atol (default 1e-14, 1e-16), a fixed-step one at
+// (finest h)/16. Its accuracy is estimated as convergence estimates its reference's: a second
+// run R2, tighter by kReferenceTightening (rtol/10 and atol/10; half the step), and
+// ‖R − R2‖∞. Where the model has a published solution P at t_end (ProblemMetadata, the IVP test
+// set's), R is also checked against it: ‖R − P‖∞ is recorded beside P's stated accuracy
+// (published_accuracy). With `auto`/`published` R is run only as that check (a failed run is
+// recorded, not fatal). The reference's estimated error, the floor of the study, is 0 for the
+// exact solution, P's stated accuracy when P is the reference, and otherwise the larger of
+// ‖R − R2‖∞ and ‖R − P‖∞ (empty when neither is known: the check run failed, no P).
+// A row that ended ok with error <= kFloorFactor (10) times that estimate is marked
+// `reference_floor` (WorkPrecisionRow::at_reference_floor; the CSV's `flag` column): its error
+// measures the reference as much as the method; the plot draws it hollow.
+// A --reference method that is also one of the integrators (the same name, or the same method
+// file) is BadInput before anything runs: a method measured against itself shares its own
+// errors, so its points would show their correlation, not its accuracy. With `auto` the
+// numerical reference cvode_bdf may be studied too; that is recorded (method_studied) and said
+// in the Markdown.
+struct WorkPrecisionReference {
+  std::string kind;  // "exact", "published" or "numerical": what the errors are measured against
+  std::string description;
+  Vec values;                            // the reference state at t_end
+  std::optional<double> error_estimate;  // the floor (see above); empty: unknown
+  std::string error_source;              // how error_estimate was obtained
+  // The numerical reference R (empty description: none ran) and its check run R2.
+  std::string numerical_description, check_description;
+  std::string numerical_failure, check_failure;  // what a failed run said (auto/published)
+  Vec numerical_values;
+  std::optional<double> numerical_check;  // ‖R − R2‖∞
+  bool method_studied = false;            // R's method is also among the integrators (auto)
+  // The model's published solution at t_end, when it has one there.
+  bool has_published = false;
+  double published_t = 0;
+  std::string published_source;
+  Vec published_values;
+  double published_accuracy = 0;             // published_accuracy(P)
+  std::optional<double> published_distance;  // ‖R − P‖∞
+};
+// The stated accuracy of a published solution (max-norm): its values are given to
+// kPublishedDigits significant digits (the IVP test set's reference solutions, computed with
+// RADAU at rtol = atol = 1.1e-18 with unit round-off 1.01e-19, Mazzia & Magherini 2008), so
+// each component is good to half a unit in its last digit, 0.5·10^(floor(log10|y_i|) − 15),
+// plus its rounding to double, 2^-53·|y_i|; the largest over the components.
+constexpr int kPublishedDigits = 16;
+double published_accuracy(const OdeSystem::PublishedSolution& p);
+// The reference of a work-precision study at spec.t_end (the spec resolved: t_end > t0, the
+// reference a name); h_fine: the finest step of the fixed-step ladder. BadInput as above.
+WorkPrecisionReference work_precision_reference(const WorkPrecisionSpec& spec, const OdeSystem& sys,
+                                                double h_fine, std::ostream* progress);
 
 // --- Timing with spread -------------------------------------------------------------------
 // Every point (one integrator at one h or tolerance) runs in round 1; in round k >= 2 it runs
@@ -94,11 +153,14 @@ struct WorkPrecisionRow {
   double error = 0, mescd = 0;
   SolveStats stats;  // the first run's (wall_s: the median over the repeats)
   TimingSpread wall;
+  // ok, and error <= kFloorFactor × the reference's estimated error (see "The reference").
+  bool at_reference_floor = false;
 };
 
 struct WorkPrecisionResult {
   std::vector<WorkPrecisionRow> rows;
-  std::string reference_description;
+  std::string reference_description;  // reference.description
+  WorkPrecisionReference reference;
   double t_end = 0;
   double h = 0;          // coarsest step of the fixed-step methods
   std::string h_source;  // where it came from
@@ -123,6 +185,11 @@ WorkPrecisionRow run_work_precision_setting(const OdeSystem& sys, const std::str
                                             double t_end, const Vec& ref, int repeats,
                                             unsigned long seed, std::size_t stream,
                                             double wall_limit_s);
+// The CSV contract: model, integrator, setting, error, f_evals, jac_evals, lin_solves, steps,
+// wall_s, status, mescd, the solver counters (SolveStats::counter_names), wall_s_median,
+// wall_s_min, wall_s_ci_low, wall_s_ci_high, repeats, then flag (`reference_floor` for a row
+// at_reference_floor, else empty) and reference_error (the reference's estimated error, the same
+// on every row; empty when unknown).
 Table work_precision_table(const WorkPrecisionResult& r);
 // Adaptive methods whose error does not follow the tolerance, one Markdown line each: among a
 // method's ok rows at rtol settings (3 or more, errors > 0), the least-squares slope of

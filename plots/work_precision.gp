@@ -10,9 +10,17 @@
 # wall_s_ci_low, 20 wall_s_ci_high (its bootstrap 95% interval, drawn as error bars on the wall
 # time; a CSV written before these columns existed is drawn without them). Rows without f
 # evaluations (stable_fluids composes the model's operators and never evaluates f) are left out
-# of the f-evaluation panel.
+# of the f-evaluation panel. flagcol: the column `flag` (stiffbench passes it; 0 for a CSV
+# without it): rows flagged reference_floor (error within 10x of the reference's estimated
+# error) are drawn as hollow rings, not joined to the method's line.
 panelh = 460
 load plotdir."/common.gp"
+FC = exists("flagcol") ? int(flagcol) : 0
+isfloor(dummy) = (FC > 0) ? (strcol(FC) eq "reference_floor") : 0
+stats csvfile every ::1 using (isfloor(0) ? 1 : NaN) nooutput
+nfloor = exists("STATS_records") ? STATS_records : 0
+undefine STATS_*
+floortitle = "hollow: reference floor"
 # Two panels (f evaluations, wall time) per family: override the layout of common.gp.
 if (term eq "svg") {
   set terminal svg size 1400, np*panelh + 40 enhanced font "Helvetica,11" background rgb "white"
@@ -39,8 +47,11 @@ do for [K=1:np] {
   set xlabel "error at t_{end} (max-norm)"
   set ylabel "f evaluations"
   set title ptitle(K)." - f evaluations" noenhanced
-  plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 && column(5) > 0 ? $4 : NaN):5 \
-       with linespoints lt j title word(m, j)
+  plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 && column(5) > 0 && !isfloor(0) ? $4 : NaN):5 \
+       with linespoints lt j title word(m, j), \
+       for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 && column(5) > 0 && isfloor(0) ? $4 : NaN):5 \
+       with points lt j pt 6 ps 1.6 notitle, \
+       keyentry with points pt 6 ps 1.6 lc rgb "black" title (nfloor > 0 ? floortitle : "")
   eval empty_panel_off
   if (valid == 0) { eval empty_panel_on }
   stats csvfile every ::1 using (inlist(strcol(2), m) && column(4) > 0 && column(20) > 0 ? $20 : NaN) nooutput
@@ -49,12 +60,18 @@ do for [K=1:np] {
   set title ptitle(K)." - wall time" noenhanced
   if (spread > 0) {
     set ylabel "wall time [s] (median, bootstrap 95% interval)"
-    plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 ? $4 : NaN):9:19:20 \
-         with yerrorlines lt j title word(m, j)
+    plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 && !isfloor(0) ? $4 : NaN):9:19:20 \
+         with yerrorlines lt j title word(m, j), \
+         for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 && isfloor(0) ? $4 : NaN):9 \
+         with points lt j pt 6 ps 1.6 notitle, \
+         keyentry with points pt 6 ps 1.6 lc rgb "black" title (nfloor > 0 ? floortitle : "")
   } else {
     set ylabel "wall time [s]"
-    plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 ? $4 : NaN):9 \
-         with linespoints lt j title word(m, j)
+    plot for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 && !isfloor(0) ? $4 : NaN):9 \
+         with linespoints lt j title word(m, j), \
+         for [j=1:n] csvfile every ::1 using (strcol(2) eq word(m, j) && column(4) > 0 && isfloor(0) ? $4 : NaN):9 \
+         with points lt j pt 6 ps 1.6 notitle, \
+         keyentry with points pt 6 ps 1.6 lc rgb "black" title (nfloor > 0 ? floortitle : "")
   }
   eval empty_panel_off
 }

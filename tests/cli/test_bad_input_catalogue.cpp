@@ -214,6 +214,20 @@ INSTANTIATE_TEST_SUITE_P(
                 "convergence --model harmonic_oscillator --integrators rk4 --t-end 1 --h 0.1 "
                 "--out garbled",
                 {"garbled/convergence.json", "not valid JSON", "--force"}},
+        // A work-precision reference that is one of the methods studied (their errors would
+        // be correlated with its own), or a published solution the model does not have.
+        CliCase{"wp_reference_is_studied",
+                "work-precision --model hires --integrators radau5,rodas4 --reference radau5 "
+                "--out out",
+                {"--reference radau5", "also one of --integrators"}},
+        CliCase{"wp_reference_published_missing",
+                "work-precision --model van_der_pol --integrators radau5 --reference published "
+                "--out out",
+                {"--reference published", "van_der_pol", "no published solution"}},
+        CliCase{"wp_reference_published_elsewhere",
+                "work-precision --model hires --integrators radau5 --t-end 10 --reference "
+                "published --out out",
+                {"--reference published", "t = 321.8122"}},
         // A bad input discovered after the output folder was prepared leaves no folder.
         CliCase{"conv_bad_after_out",
                 "convergence --model harmonic_oscillator --integrators rk4 --t-end 1 --h 0.1 "

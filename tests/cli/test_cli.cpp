@@ -7,8 +7,10 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 #include <vector>
@@ -294,13 +296,15 @@ TEST(Cli, WorkPrecisionOnHiresErrorFallsAsWorkRises) {
             "model,integrator,setting,error,f_evals,jac_evals,lin_solves,steps,wall_s,status,mescd,"
             "newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_iters,fe_"
             "evals,fi_evals,"
-            "wall_s_median,wall_s_min,wall_s_ci_low,wall_s_ci_high,repeats");
+            "wall_s_median,wall_s_min,wall_s_ci_low,wall_s_ci_high,repeats,flag,reference_error");
   std::map<std::string, std::vector<std::pair<long, double>>> by_method;
   for (std::size_t r = 1; r < table.size(); ++r) {
     const auto& c = table[r];
     const std::string line = join_cells(c);
-    ASSERT_EQ(c.size(), 23u) << line;
+    ASSERT_EQ(c.size(), 25u) << line;
     ASSERT_EQ(c[9], "ok") << line;
+    // The reference is HIRES's published solution (good to ~1e-18): no error here is near it.
+    EXPECT_EQ(c[23], "") << line;
     EXPECT_EQ(c[22], "1") << line;    // --repeats 1
     EXPECT_EQ(c[8], c[18]) << line;   // wall_s is the median
     EXPECT_EQ(c[18], c[19]) << line;  // one run: median = min = both interval ends
@@ -320,6 +324,46 @@ TEST(Cli, WorkPrecisionOnHiresErrorFallsAsWorkRises) {
     for (std::size_t i = 1; i < points.size(); ++i)
       EXPECT_LT(points[i].second, points[i - 1].second)
           << method << " at f_evals " << points[i].first;
+  }
+  std::filesystem::remove_all(dir);
+}
+
+// A deliberately loose reference (cvode_bdf at rtol 1e-11) on HIRES: radau5's rows near the
+// reference's own error (its distance from the published solution, ~1e-11; radau5 at rtol 1e-10
+// is far more accurate, tests/experiments/test_work_precision.cpp) carry flag reference_floor in
+// the CSV, the loosest does not, the JSON counts them, and `plot DIR` redraws the figure (the
+// flagged rows hollow) from the CSV alone.
+TEST(Cli, WorkPrecisionFlagsRowsAtTheReferenceFloorAndPlotRedrawsThem) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   (std::string("sb_wp_floor") + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  const Outcome o = run(
+      "work-precision --model hires --integrators radau5 --reference cvode_bdf --reference-rtol "
+      "1e-11 --reference-atol 1e-14 --repeats 1 --out " +
+      dir.string());
+  ASSERT_EQ(o.code, 0) << o.err;
+  const auto table = read_csv(dir / "work_precision.csv");
+  ASSERT_EQ(table.size(), 7u);  // header and rtol 1e-5 ... 1e-10
+  const auto& header = table.front();
+  const auto flag =
+      static_cast<std::size_t>(std::find(header.begin(), header.end(), "flag") - header.begin());
+  ASSERT_LT(flag, header.size());
+  EXPECT_EQ(table[1][2], "rtol=1e-05");
+  EXPECT_EQ(table[1][flag], "");
+  EXPECT_EQ(table[6][2], "rtol=1e-10");
+  EXPECT_EQ(table[6][flag], "reference_floor");
+  long flagged = 0;
+  for (std::size_t r = 1; r < table.size(); ++r) flagged += table[r][flag] == "reference_floor";
+  std::ifstream js(dir / "work_precision.json");
+  const std::string json((std::istreambuf_iterator<char>(js)), {});
+  EXPECT_NE(json.find("\"rows_at_reference_floor\": " + std::to_string(flagged)), std::string::npos)
+      << json;
+  if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
+    ASSERT_TRUE(std::filesystem::exists(dir / "work_precision.png"));
+    std::filesystem::remove(dir / "work_precision.png");
+    const Outcome p = run("plot " + dir.string());
+    EXPECT_EQ(p.code, 0) << p.err;
+    EXPECT_TRUE(std::filesystem::exists(dir / "work_precision.png")) << p.out << p.err;
   }
   std::filesystem::remove_all(dir);
 }

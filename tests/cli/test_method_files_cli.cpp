@@ -106,6 +106,34 @@ TEST(MethodFilesCli, OverclaimedOrderExitsTwoNamingTheFile) {
   EXPECT_FALSE(fs::exists(dir / "out" / "convergence.csv"));
 }
 
+// A method file studied by work-precision cannot also be its reference: given by path in both
+// flags, or by path in one and by its registered name in the other, the method is the same.
+// Exit 2, one message naming --reference, nothing written. As a reference of other methods the
+// file is accepted.
+TEST(MethodFilesCli, WorkPrecisionRefusesAMethodFileAsItsOwnReference) {
+  const fs::path dir = fresh_dir("methods", "wp_self_reference");
+  const fs::path file = write_heun3(dir, "heun3.toml");
+  const std::string path = shell_quote(file.string());
+  const std::string common =
+      "work-precision --model harmonic_oscillator --t-end 1 --h 0.1 "
+      "--levels 2 --repeats 1 --out " +
+      shell_quote((dir / "out").string());
+  for (const std::string& pair : {"--integrators " + path + " --reference " + path,
+                                  "--integrators rk4," + path + " --reference heun3",
+                                  "--integrators heun3.toml --reference " + path}) {
+    const auto r = run_cli(common + " " + pair, dir);
+    EXPECT_EQ(r.code, 2) << pair << "\n" << r.err;
+    EXPECT_NE(r.err.find("is also one of --integrators"), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out" / "work_precision.csv")) << pair;
+  }
+  const auto ok = run_cli(common + " --integrators rk4 --reference " + path, dir);
+  EXPECT_EQ(ok.code, 0) << ok.err;
+  EXPECT_NE(slurp(dir / "out" / "work_precision.json").find("\"kind\": \"numerical\""),
+            std::string::npos);
+  fs::remove_all(dir);
+}
+
 TEST(MethodFilesCli, SearchPathInListAndDescribe) {
   const fs::path dir = fresh_dir("methods", "search");
   write_heun3(dir, "heun3.toml");

@@ -145,7 +145,8 @@ TEST(WorkPrecisionTiming, ColumnsAndRepeats) {
       "newton_iters",  "newton_conv_failures", "error_test_failures",
       "linear_setups", "linear_iters",         "fe_evals",
       "fi_evals",      "wall_s_median",        "wall_s_min",
-      "wall_s_ci_low", "wall_s_ci_high",       "repeats"};
+      "wall_s_ci_low", "wall_s_ci_high",       "repeats",
+      "flag",          "reference_error"};
   ASSERT_EQ(t.columns.size(), 11u + tail.size());
   EXPECT_EQ(std::vector<std::string>(t.columns.begin() + 11, t.columns.end()), tail);
   ASSERT_EQ(t.rows.size(), 6u);
@@ -162,7 +163,11 @@ TEST(WorkPrecisionTiming, ColumnsAndRepeats) {
     EXPECT_LE(r.wall.ci_low, r.wall.median);
     EXPECT_LE(r.wall.median, r.wall.ci_high);
     EXPECT_EQ(row[column(t, "newton_iters")], std::to_string(r.stats.newton_iters));
+    // The exact solution is the reference: its error is 0 and no row is at its floor.
+    EXPECT_EQ(row[column(t, "reference_error")], "0");
+    EXPECT_EQ(row[column(t, "flag")], "");
   }
+  EXPECT_EQ(res.reference.kind, "exact");
   // rk4 is explicit: no Newton iterations, no set-ups; backward Euler and CVODE's BDF solve a
   // nonlinear system per step.
   EXPECT_EQ(res.rows[0].stats.newton_iters, 0);
@@ -315,6 +320,214 @@ TEST(WorkPrecisionTolerance, AMethodWhoseErrorIgnoresTheToleranceIsNamed) {
   // A failed run is no evidence either way: with the 2e-3 row failed, two settings remain.
   res.rows[8].stats.status = Status::newton_failed;  // flat at rtol=1e-08
   EXPECT_TRUE(tolerance_response_notes(res).empty());
+}
+
+// --- The reference and its check ---------------------------------------------------------
+
+// The IVP test set's HIRES solution at t = 321.8122 (Mazzia & Magherini 2008, problem hires),
+// typed from the literature (not read from the model).
+const std::vector<double> kHiresPublished = {
+    0.7371312573325668e-3, 0.1442485726316185e-3, 0.5888729740967575e-4, 0.1175651343283149e-2,
+    0.2386356198831331e-2, 0.6238968252742796e-2, 0.2849998395185769e-2, 0.2850001604814231e-2};
+constexpr double kHiresEnd = 321.8122;
+
+// An independent run of a library code on a fresh copy of `model` to t at rtol and atol.
+Vec library_state(const std::string& model, const std::string& method, double t, double rtol,
+                  double atol) {
+  const auto sys = model_registry().create(model, Params{});
+  Params p;
+  p.set("rtol", format_full(rtol));
+  p.set("atol", format_full(atol));
+  const auto integ = integrator_registry().create(method, p);
+  const RunResult r = run_adaptive(*sys, *integ, {t, 0});
+  EXPECT_EQ(r.stats.status, Status::ok) << r.stats.message;
+  return r.y;
+}
+
+double max_distance(const Vec& a, const std::vector<double>& b) {
+  double d = 0;
+  for (std::size_t i = 0; i < b.size(); ++i)
+    d = std::max(d, std::abs(a[static_cast<Index>(i)] - b[i]));
+  return d;
+}
+
+std::vector<double> as_vector(const Vec& y) {
+  return std::vector<double>(y.data(), y.data() + y.size());
+}
+
+nlohmann::json written_json(const WorkPrecisionSpec& spec, const WorkPrecisionResult& res,
+                            const std::string& tag) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("sb_wp_ref_" + tag + "_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  write_work_precision_outputs(dir.string(), spec, res);
+  std::ifstream js(dir / "work_precision.json");
+  const auto meta = nlohmann::json::parse(js);
+  std::filesystem::remove_all(dir);
+  return meta;
+}
+
+// HIRES with the default reference: the published solution is the reference (its stated
+// accuracy, ~1e-18, is far below cvode_bdf's at rtol 1e-14), and the JSON records the
+// published-solution check of the numerical reference. Every recorded number is recomputed here:
+// cvode_bdf by an independent run, the distance from the literature's values, and the stated
+// accuracy by hand: y6 = 0.6238968252742796e-2 is the largest component and its 16th significant
+// digit is the 1e-18 place, so half a unit is 0.5e-18, plus its rounding to double 2^-53·|y6|
+// (every other component's last digit is at 1e-18 or 1e-19 and its value smaller).
+TEST(WorkPrecisionReference, PublishedSolutionIsTheReferenceAndChecksTheNumericalOne) {
+  WorkPrecisionSpec spec;
+  spec.model = "hires";
+  spec.integrators = {"radau5"};
+  spec.rtol_max = 1e-6;
+  spec.tol_levels = 2;
+  spec.repeats = 1;
+  const WorkPrecisionResult res = run_work_precision(spec, nullptr);
+  const auto rc = written_json(spec, res, "published").at("reference_check");
+  EXPECT_EQ(rc.at("kind"), "published");
+  const auto& pub = rc.at("published");
+  EXPECT_EQ(pub.at("t").get<double>(), kHiresEnd);
+  EXPECT_EQ(pub.at("values").get<std::vector<double>>(), kHiresPublished);
+  const double stated = 0.5e-18 + 0x1p-53 * 0.6238968252742796e-2;
+  EXPECT_DOUBLE_EQ(pub.at("stated_accuracy").get<double>(), stated);
+  EXPECT_DOUBLE_EQ(rc.at("estimated_error").get<double>(), stated);
+
+  // The numerical reference: cvode_bdf at rtol 1e-14, atol 1e-16 (deterministic: the same
+  // state), its distance from the published values, and its second run at rtol and atol / 10.
+  const Vec r = library_state("hires", "cvode_bdf", kHiresEnd, 1e-14, 1e-16);
+  const Vec r2 = library_state("hires", "cvode_bdf", kHiresEnd, 1e-15, 1e-16 / 10);
+  const auto& num = rc.at("numerical");
+  EXPECT_EQ(num.at("values").get<std::vector<double>>(), as_vector(r));
+  const double distance = max_distance(r, kHiresPublished);
+  EXPECT_DOUBLE_EQ(pub.at("distance_from_numerical").get<double>(), distance);
+  EXPECT_DOUBLE_EQ(num.at("check_difference").get<double>(), max_distance(r, as_vector(r2)));
+  // The model's notes: CVODE BDF at rtol 1e-13 reproduces the published values to 3e-11
+  // relative (components below 1e-2): rtol 1e-14 is within 1e-12 absolute, and not exact.
+  EXPECT_GT(distance, 0);
+  EXPECT_LT(distance, 1e-12);
+  EXPECT_TRUE(num.at("method_studied") == false);
+
+  // The errors are against the published values; radau5 at rtol 1e-6 and 1e-7 is far above
+  // 10 × 1.2e-18, so no row is marked.
+  EXPECT_EQ(rc.at("rows_at_reference_floor"), 0);
+  const Table t = work_precision_table(res);
+  for (const auto& row : t.rows) {
+    EXPECT_EQ(row[column(t, "flag")], "");
+    EXPECT_DOUBLE_EQ(std::stod(row[column(t, "reference_error")]), stated);
+  }
+}
+
+// A deliberately loose reference (cvode_bdf at rtol 1e-11, atol 1e-14) on HIRES: its estimated
+// error is the larger of its second run's difference and its distance from the published
+// solution, both recomputed here; the rows within 10 times of it are marked reference_floor. By
+// the triangle inequality a row's error against the reference is within radau5's own error
+// (against the published values, computed here) of the reference's distance d: radau5 at rtol
+// 1e-10 is far more accurate than d, so its error is about d and the row is marked; at rtol
+// 1e-5 its own error is more than 10 d + d, so that row is not.
+TEST(WorkPrecisionReference, RowsAtALooseReferenceAreMarked) {
+  WorkPrecisionSpec spec;
+  spec.model = "hires";
+  spec.integrators = {"radau5"};
+  spec.reference = "cvode_bdf";
+  spec.reference_rtol = 1e-11;
+  spec.reference_atol = 1e-14;
+  spec.tol_levels = 6;  // rtol 1e-5 ... 1e-10
+  spec.repeats = 1;
+  const WorkPrecisionResult res = run_work_precision(spec, nullptr);
+  const Vec r = library_state("hires", "cvode_bdf", kHiresEnd, 1e-11, 1e-14);
+  const Vec r2 = library_state("hires", "cvode_bdf", kHiresEnd, 1e-12, 1e-15);
+  const double d = max_distance(r, kHiresPublished);
+  const double estimate = std::max(d, max_distance(r, as_vector(r2)));
+  ASSERT_TRUE(res.reference.error_estimate.has_value());
+  EXPECT_EQ(res.reference.kind, "numerical");
+  EXPECT_DOUBLE_EQ(*res.reference.error_estimate, estimate);
+
+  const double own_tight =
+      max_distance(library_state("hires", "radau5", kHiresEnd, 1e-10, 1e-13), kHiresPublished);
+  const double own_loose =
+      max_distance(library_state("hires", "radau5", kHiresEnd, 1e-5, 1e-8), kHiresPublished);
+  ASSERT_LT(own_tight, 0.1 * d);
+  ASSERT_GT(own_loose, 11 * estimate);
+  const Table t = work_precision_table(res);
+  ASSERT_EQ(t.rows.size(), 6u);
+  EXPECT_EQ(t.rows.front()[column(t, "setting")], "rtol=1e-05");
+  EXPECT_EQ(t.rows.front()[column(t, "flag")], "");
+  EXPECT_EQ(t.rows.back()[column(t, "setting")], "rtol=1e-10");
+  EXPECT_EQ(t.rows.back()[column(t, "flag")], "reference_floor");
+  std::size_t marked = 0;
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    const bool floor = res.rows[i].error <= 10 * estimate;
+    EXPECT_EQ(res.rows[i].at_reference_floor, floor) << res.rows[i].setting;
+    EXPECT_EQ(t.rows[i][column(t, "flag")], floor ? "reference_floor" : "");
+    EXPECT_DOUBLE_EQ(std::stod(t.rows[i][column(t, "reference_error")]), estimate);
+    marked += floor ? 1 : 0;
+  }
+  const auto meta = written_json(spec, res, "loose");
+  EXPECT_EQ(meta.at("reference_check").at("rows_at_reference_floor"), marked);
+}
+
+// The default reference on a model with neither an exact nor a published solution (van der
+// Pol): cvode_bdf at rtol 1e-14, its error estimated by the second run at rtol 1e-15 (recomputed
+// here); radau5 studied down to rtol 1e-9 has its rows within 10 times of it marked.
+TEST(WorkPrecisionReference, DefaultNumericalReferenceIsEstimatedBySecondRun) {
+  WorkPrecisionSpec spec;
+  spec.model = "van_der_pol";
+  spec.integrators = {"radau5", "cvode_bdf"};
+  spec.rtol_max = 1e-8;
+  spec.tol_levels = 2;
+  spec.repeats = 1;
+  const WorkPrecisionResult res = run_work_precision(spec, nullptr);
+  const double t_end = res.t_end;
+  const Vec r = library_state("van_der_pol", "cvode_bdf", t_end, 1e-14, 1e-16);
+  const Vec r2 = library_state("van_der_pol", "cvode_bdf", t_end, 1e-15, 1e-16 / 10);
+  const double estimate = max_distance(r, as_vector(r2));
+  EXPECT_EQ(res.reference.kind, "numerical");
+  EXPECT_FALSE(res.reference.has_published);
+  EXPECT_TRUE(res.reference.method_studied);  // cvode_bdf is also studied (allowed with auto)
+  ASSERT_TRUE(res.reference.error_estimate.has_value());
+  EXPECT_DOUBLE_EQ(*res.reference.error_estimate, estimate);
+  for (const auto& row : res.rows)
+    EXPECT_EQ(row.at_reference_floor, row.error <= 10 * estimate) << row.integrator << row.setting;
+}
+
+// The stated accuracy of a published solution, by hand: ROBER's largest component
+// 0.9999999791665050 has its 16th significant digit at 1e-16, so 0.5e-16 plus its rounding to
+// double 2^-53·|y3| (y1 = 2.08e-8 and y2 = 8.3e-14 are good to 5e-24 and 5e-30); OREGO's
+// y2 = 1228.178521549917 has its 16th digit at 1e-12: 0.5e-12 + 2^-53·|y2| (y1 ≈ 1.0008 and
+// y3 ≈ 132.06 are good to ~1e-15 and ~5e-14).
+TEST(WorkPrecisionReference, StatedAccuracyOfPublishedSolutions) {
+  const auto rober = model_registry().create("robertson", Params{})->published_solution();
+  ASSERT_TRUE(rober.has_value());
+  EXPECT_DOUBLE_EQ(published_accuracy(*rober), 0.5e-16 + 0x1p-53 * 0.9999999791665050);
+  const auto orego = model_registry().create("orego", Params{})->published_solution();
+  ASSERT_TRUE(orego.has_value());
+  EXPECT_DOUBLE_EQ(published_accuracy(*orego), 0.5e-12 + 0x1p-53 * 1228.178521549917);
+  // Robertson with other rate constants has no published solution.
+  EXPECT_FALSE(model_registry()
+                   .create("robertson", Params::from_assignments({"k1=0.05"}))
+                   ->published_solution()
+                   .has_value());
+}
+
+// A --reference that is one of the integrators is refused before anything runs.
+TEST(WorkPrecisionReference, AMethodIsNotItsOwnReference) {
+  WorkPrecisionSpec spec;
+  spec.model = "hires";
+  spec.integrators = {"radau5", "rodas4"};
+  spec.reference = "radau5";
+  try {
+    spec.validate();
+    ADD_FAILURE() << "radau5 as its own reference was accepted";
+  } catch (const BadInput& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("--reference radau5 is also one of --integrators"), std::string::npos)
+        << msg;
+    EXPECT_NE(msg.find("cvode_bdf"), std::string::npos) << msg;  // a method to use instead
+  }
+  EXPECT_THROW(run_work_precision(spec, nullptr), BadInput);
+  spec.reference = "cvode_bdf";
+  EXPECT_NO_THROW(spec.validate());
+  spec.reference = "published";
+  EXPECT_NO_THROW(spec.validate());
 }
 
 }  // namespace
