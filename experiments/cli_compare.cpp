@@ -16,15 +16,20 @@ void add_compare_command(CLI::App& app) {
   auto st = std::make_shared<State>();
   auto* cmd = app.add_subcommand(
       "compare",
-      "compare two runs: the output folders OLD and NEW of the same study, report, profile or "
-      "run (files matched by relative path). Reports which specs, revisions, compilers, flags, "
-      "CPUs, thread counts, seeds and library versions differ; per row (matched by model, "
-      "integrator, h / setting, ...) the ratio NEW/OLD of the error, f evaluations and every "
-      "counter; and the wall times with both bootstrap intervals and a verdict (faster, slower, "
-      "not resolved). Prints the Markdown summary and writes DIR/compare.{md,csv,json}. Exit 0 "
-      "when every counter and text cell is equal and every other number agrees within the "
-      "tolerances, 1 when a row differs or a file or row is on one side only (the changed rows "
-      "are named), 2 on bad input");
+      "compare two runs (output folders OLD and NEW of a study, report, profile or run): which "
+      "run records differ, per row the ratios NEW/OLD of error, f_evals and counters, wall times "
+      "with both intervals and a verdict; writes DIR/compare.{md,csv,json}. Exit code 1: the "
+      "results differ");
+  cmd->footer(
+      "Files are matched by their path relative to OLD and NEW. Run records (*.json): spec, "
+      "versions (stiffbench, Eigen, SUNDIALS, GSL), git revision, compiler, flags, CPU model, "
+      "thread count and seed. Rows of each CSV are matched by their key columns (model, "
+      "integrator, h, setting, ...); counters and text must be equal, other numbers agree within "
+      "--rtol/--atol; timing columns are reported, not compared. Wall time: faster/slower when "
+      "the bootstrap 95% intervals of the medians are disjoint and each side has at least 4 "
+      "runs, else not resolved. Prints the Markdown summary. Exit 0 same results, 1 a row "
+      "differs or a file or row is on one side only (the changed rows are named on stderr), 2 "
+      "bad input. See docs/commands/compare.md.");
   cmd->add_option("old", st->old_dir, "output folder of the first run")->required();
   cmd->add_option("new", st->new_dir, "output folder of the second run")->required();
   cmd->add_option("--rtol", st->opt.rtol,

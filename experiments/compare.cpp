@@ -16,6 +16,7 @@
 #include "core/params.hpp"
 #include "core/types.hpp"
 #include "experiments/csv.hpp"
+#include "experiments/work_precision.hpp"
 
 namespace stiffbench {
 
@@ -58,19 +59,19 @@ bool is_integer_text(const std::string& s) {
 }
 
 bool is_timing_column(const std::string& c) {
-  return c.find("wall") != std::string::npos || c.rfind("ms_per_frame", 0) == 0 || c == "repeats" ||
-         c == "timed_runs";
+  return c.find("wall") != std::string::npos || c.rfind("ms_per_frame", 0) == 0 ||
+         c == kWallTimingColumns.runs || c == "timed_runs";
 }
 
 // The relative paths of the *.csv and *.json files below DIR, sorted; hidden files and folders
-// named `reference` (the reference caches) are left out.
+// are left out.
 std::vector<std::string> result_files(const fs::path& dir) {
   std::vector<std::string> files;
   for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator();
        ++it) {
     const std::string name = it->path().filename().string();
     if (it->is_directory()) {
-      if (name == "reference" || (!name.empty() && name[0] == '.')) it.disable_recursion_pending();
+      if (!name.empty() && name[0] == '.') it.disable_recursion_pending();
       continue;
     }
     if (!it->is_regular_file() || name.empty() || name[0] == '.') continue;
@@ -96,7 +97,8 @@ CsvTable read_csv(const fs::path& path) {
   while (std::getline(in, line)) {
     ++number;
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty()) continue;
+    // Comment lines (a reference cache's key and its note with the time it took) are not data.
+    if (line.empty() || line[0] == '#') continue;
     auto cells = parse_csv_line(line);
     if (t.header.empty()) {
       t.header = std::move(cells);
@@ -147,9 +149,10 @@ struct TimingColumns {
 };
 std::optional<TimingColumns> timing_columns(const std::vector<std::string>& header) {
   const auto has = [&](const std::string& c) { return contains(header, c); };
-  if (has("wall_s_ci_low") && has("wall_s_ci_high"))
-    return TimingColumns{has("wall_s_median") ? "wall_s_median" : "wall_s", "wall_s_ci_low",
-                         "wall_s_ci_high", has("repeats") ? "repeats" : ""};
+  const auto& w = kWallTimingColumns;
+  if (has(w.ci_low) && has(w.ci_high))
+    return TimingColumns{has(w.median) ? w.median : "wall_s", w.ci_low, w.ci_high,
+                         has(w.runs) ? w.runs : ""};
   if (has("ms_per_frame_ci_low") && has("ms_per_frame_ci_high") && has("ms_per_frame_median"))
     return TimingColumns{"ms_per_frame_median", "ms_per_frame_ci_low", "ms_per_frame_ci_high",
                          has("timed_runs") ? "timed_runs" : ""};
@@ -603,7 +606,7 @@ std::string compare_markdown(const CompareResult& r) {
   for (const auto& f : r.files) {
     if (f.presence != FileComparison::Presence::both || !f.is_table) continue;
     md << "\n## " << f.file << "\n\n"
-       << f.rows << " rows matched by "
+       << f.rows << (f.rows == 1 ? " row" : " rows") << " matched by "
        << (f.key_columns.empty() ? "row number" : join(f.key_columns, ", ")) << ": ";
     md << (f.changed_rows ? std::to_string(f.changed_rows) + " differ" : "all agree") << ".\n";
     for (const auto& n : f.notes) md << "- " << n << "\n";

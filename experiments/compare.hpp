@@ -3,13 +3,15 @@
 // method, of the testbed or of the machine.
 //
 // Files are matched by their path relative to OLD and NEW (every *.csv and *.json below them;
-// hidden files and the reference caches, folders named `reference`, are left out).
+// hidden files are left out; lines starting with '#' are comments, e.g. the key of a reference
+// cache and its note with the time it took).
 //  - Run records: every JSON file that records a run (run_metadata in experiments/output.hpp,
 //    at its top or under "metadata" for `run`): the spec (every differing key), the experiment,
 //    stiffbench, Eigen, SUNDIALS and GSL versions, git revision, compiler, build type, flags,
 //    CPU model, thread count, seed and caller. Dates and command lines are not compared.
 //  - Tables: every CSV. Rows are matched by their key columns (kCompareKeyColumns that the
-//    table has, e.g. model, integrator, h or setting; a key seen twice gets "#2", "#3", ... in
+//    table has, e.g. model, integrator, h or setting; budget's grid by h and total_iterations,
+//    which fix substeps and iterations; a key seen twice gets "#2", "#3", ... in
 //    file order; without key columns, by row number). Every other column both tables have is
 //    compared cell by cell: text exactly, counters exactly (kCompareCounterColumns, and any
 //    column whose every value in both tables is an integer), other numbers within
@@ -41,9 +43,9 @@ namespace stiffbench {
 
 // The columns that identify a row, looked up in each table in this order.
 inline const std::vector<std::string> kCompareKeyColumns = {
-    "unit", "problem", "model",  "integrator", "method",     "setting", "h",
-    "t",    "param",   "value",  "substeps",   "iterations", "mode",    "nu",
-    "tree", "check",   "system", "tau",        "cost",       "kind"};
+    "unit", "problem", "model", "integrator", "method", "setting", "h",     "total_iterations",
+    "t",    "param",   "value", "mode",       "nu",     "tree",    "check", "system",
+    "tau",  "cost",    "kind"};
 // The counters: compared exactly, and each one that differs is listed with its ratio (any
 // other column whose every value is an integer, e.g. a claimed order, is compared exactly too).
 inline const std::vector<std::string> kCompareCounterColumns = {"steps",
@@ -56,8 +58,7 @@ inline const std::vector<std::string> kCompareCounterColumns = {"steps",
                                                                 "linear_setups",
                                                                 "linear_iters",
                                                                 "fe_evals",
-                                                                "fi_evals",
-                                                                "total_iterations"};
+                                                                "fi_evals"};
 // The first of these a table has is its error column (its ratio is reported for every row).
 inline const std::vector<std::string> kCompareErrorColumns = {
     "error", "local_error", "max_rel_error", "strain_error_max", "rel_error"};
