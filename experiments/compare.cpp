@@ -119,13 +119,15 @@ std::size_t column_index(const std::vector<std::string>& header, const std::stri
 
 // The key of every row: "name=value, ..." of the key columns, "#k" for the k-th repeat of a key.
 std::vector<std::string> row_keys(const CsvTable& t, const std::vector<std::string>& keys) {
+  std::vector<std::size_t> cols;
+  for (const auto& name : keys) cols.push_back(column_index(t.header, name));
   std::vector<std::string> out;
   std::map<std::string, int> seen;
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
     std::string k;
-    for (const auto& name : keys) {
+    for (std::size_t i = 0; i < keys.size(); ++i) {
       if (!k.empty()) k += ", ";
-      k += name + "=" + t.rows[r][column_index(t.header, name)];
+      k += keys[i] + "=" + t.rows[r][cols[i]];
     }
     if (keys.empty()) k = "row " + std::to_string(r + 1);
     const int n = ++seen[k];
@@ -214,20 +216,27 @@ void compare_table_files(const fs::path& old_path, const fs::path& new_path, Fil
   if (!only_old.empty()) f.notes.push_back("columns only in OLD: " + join(only_old, ", "));
   if (!only_new.empty()) f.notes.push_back("columns only in NEW: " + join(only_new, ", "));
 
-  // Compared exactly: the counters (named ones) and every column whose every value on both
-  // sides is an integer (a claimed order, a count of levels).
-  std::set<std::string> exact;
+  // The compared columns (common, neither key nor timing), each with its place in both tables.
+  // Compared exactly: the counters (named ones) and every column whose every value on both sides
+  // is an integer (a claimed order, a count of levels).
+  struct Column {
+    std::string name;
+    std::size_t ia, ib;
+    bool exact, counter;
+  };
+  std::vector<Column> compared;
   for (const auto& c : common) {
     if (contains(f.key_columns, c) || is_timing_column(c)) continue;
+    const std::size_t ia = column_index(a.header, c), ib = column_index(b.header, c);
     bool all_integers = true, any = false;
-    for (const CsvTable* t : {&a, &b})
+    for (const auto& [t, i] : {std::pair{&a, ia}, std::pair{&b, ib}})
       for (const auto& row : t->rows) {
-        const std::string& v = row[column_index(t->header, c)];
-        if (v.empty()) continue;
+        if (row[i].empty()) continue;
         any = true;
-        all_integers = all_integers && is_integer_text(v);
+        all_integers = all_integers && is_integer_text(row[i]);
       }
-    if (contains(kCompareCounterColumns, c) || (any && all_integers)) exact.insert(c);
+    const bool counter = contains(kCompareCounterColumns, c);
+    compared.push_back({c, ia, ib, counter || (any && all_integers), counter});
   }
   std::string error_column;
   for (const auto& c : kCompareErrorColumns)
@@ -235,23 +244,29 @@ void compare_table_files(const fs::path& old_path, const fs::path& new_path, Fil
       error_column = c;
       break;
     }
+  const bool has_f_evals = contains(common, "f_evals");
   const auto timing = timing_columns(common);
+  // A wall-time cost (profile.csv) is a measurement, like the timing columns.
   const bool has_cost = contains(f.key_columns, "cost");
+  // The error and f_evals of a row on one side.
+  const auto fill = [&](const CsvTable& t, const std::vector<std::string>& cells,
+                        std::string& error, std::string& f_evals) {
+    if (!error_column.empty()) error = cells[column_index(t.header, error_column)];
+    if (has_f_evals) f_evals = cells[column_index(t.header, "f_evals")];
+  };
 
   const auto ka = row_keys(a, f.key_columns), kb = row_keys(b, f.key_columns);
   std::map<std::string, std::size_t> new_index;
   for (std::size_t i = 0; i < kb.size(); ++i) new_index[kb[i]] = i;
   std::vector<bool> matched(kb.size(), false);
-  f.rows = 0;
+  const std::size_t first = out.size();
   for (std::size_t i = 0; i < ka.size(); ++i) {
     RowComparison row;
     row.file = f.file;
     row.key = ka[i];
     row.error_column = error_column;
     const auto& ra = a.rows[i];
-    const auto cell_a = [&](const std::string& c) { return ra[column_index(a.header, c)]; };
-    if (!error_column.empty()) row.error_old = cell_a(error_column);
-    if (contains(common, "f_evals")) row.f_evals_old = cell_a("f_evals");
+    fill(a, ra, row.error_old, row.f_evals_old);
     const auto it = new_index.find(ka[i]);
     if (it == new_index.end()) {
       row.presence = RowComparison::Presence::old_only;
@@ -262,26 +277,21 @@ void compare_table_files(const fs::path& old_path, const fs::path& new_path, Fil
     }
     matched[it->second] = true;
     const auto& rb = b.rows[it->second];
-    const auto cell_b = [&](const std::string& c) { return rb[column_index(b.header, c)]; };
-    if (!error_column.empty()) row.error_new = cell_b(error_column);
-    if (contains(common, "f_evals")) row.f_evals_new = cell_b("f_evals");
-    // A wall-time cost (profile.csv) is a measurement, like the timing columns.
-    const bool timed_row = has_cost && cell_a("cost") == "wall";
-    for (const auto& c : common) {
-      if (contains(f.key_columns, c) || is_timing_column(c)) continue;
-      const std::string &x = cell_a(c), &y = cell_b(c);
-      bool equal = x == y;
-      if (!equal && !exact.count(c)) {
+    fill(b, rb, row.error_new, row.f_evals_new);
+    const bool timed_row = has_cost && ra[column_index(a.header, "cost")] == "wall";
+    for (const Column& c : compared) {
+      const std::string &x = ra[c.ia], &y = rb[c.ib];
+      if (x == y) continue;
+      bool equal = false;
+      if (!c.exact) {
         const auto p = as_number(x), q = as_number(y);
-        if (p && q) {
+        if (p && q)
           equal = (std::isnan(*p) && std::isnan(*q)) ||
                   (std::isfinite(*p) && std::isfinite(*q) &&
                    std::abs(*p - *q) <= opt.rtol * std::max(std::abs(*p), std::abs(*q)) + opt.atol);
-        }
       }
-      if (contains(kCompareCounterColumns, c) && x != y)
-        row.counter_changes.push_back(change_text(c, x, y));
-      if (!equal && !timed_row) row.differences.push_back(change_text(c, x, y));
+      if (c.counter) row.counter_changes.push_back(change_text(c.name, x, y));
+      if (!equal && !timed_row) row.differences.push_back(change_text(c.name, x, y));
     }
     row.changed = !row.differences.empty();
     if (timing) {
@@ -298,16 +308,14 @@ void compare_table_files(const fs::path& old_path, const fs::path& new_path, Fil
     row.presence = RowComparison::Presence::new_only;
     row.changed = true;
     row.error_column = error_column;
-    if (!error_column.empty()) row.error_new = b.rows[j][column_index(b.header, error_column)];
-    if (contains(common, "f_evals")) row.f_evals_new = b.rows[j][column_index(b.header, "f_evals")];
+    fill(b, b.rows[j], row.error_new, row.f_evals_new);
     row.differences.push_back("row only in NEW");
     out.push_back(std::move(row));
   }
-  for (const auto& r : out)
-    if (r.file == f.file) {
-      ++f.rows;
-      if (r.changed) ++f.changed_rows;
-    }
+  f.rows = static_cast<long>(out.size() - first);
+  f.changed_rows =
+      static_cast<long>(std::count_if(out.begin() + static_cast<std::ptrdiff_t>(first), out.end(),
+                                      [](const RowComparison& r) { return r.changed; }));
 }
 
 // The run record of a JSON file: the object holding "experiment" (at the top, or under
