@@ -181,7 +181,7 @@ TimingComparison compare_timing(const TimingColumns& c, const CsvTable& a,
   const auto runs = [&](const CsvTable& tab, const std::vector<std::string>& row) {
     if (c.runs.empty()) return 1;
     const double n = cell(tab, row, c.runs);
-    return std::isfinite(n) ? static_cast<int>(n) : 0;
+    return std::isfinite(n) ? static_cast<int>(std::clamp(n, 0.0, 1e9)) : 0;
   };
   t.old_runs = runs(a, ra);
   t.new_runs = runs(b, rb);
@@ -204,6 +204,57 @@ TimingComparison compare_timing(const TimingColumns& c, const CsvTable& a,
   return t;
 }
 
+// A column compared cell by cell (common to both tables, neither key nor timing), with its place
+// in each. Compared exactly: the counters (named ones) and every column whose every value on both
+// sides is an integer (a claimed order, a count of levels).
+struct ComparedColumn {
+  std::string name;
+  std::size_t ia, ib;
+  bool exact, counter;
+};
+
+std::vector<ComparedColumn> compared_columns(const CsvTable& a, const CsvTable& b,
+                                             const std::vector<std::string>& common,
+                                             const std::vector<std::string>& keys) {
+  std::vector<ComparedColumn> compared;
+  for (const auto& c : common) {
+    if (contains(keys, c) || is_timing_column(c)) continue;
+    const std::size_t ia = column_index(a.header, c), ib = column_index(b.header, c);
+    bool all_integers = true, any = false;
+    for (const auto& [t, i] : {std::pair{&a, ia}, std::pair{&b, ib}})
+      for (const auto& row : t->rows) {
+        if (row[i].empty()) continue;
+        any = true;
+        all_integers = all_integers && is_integer_text(row[i]);
+      }
+    const bool counter = contains(kCompareCounterColumns, c);
+    compared.push_back({c, ia, ib, counter || (any && all_integers), counter});
+  }
+  return compared;
+}
+
+// The cells of one matched row: counters that changed go to row.counter_changes, cells that
+// differ beyond the tolerance to row.differences (not for a row of measured times).
+void compare_cells(const std::vector<ComparedColumn>& columns, const std::vector<std::string>& ra,
+                   const std::vector<std::string>& rb, const CompareOptions& opt, bool timed_row,
+                   RowComparison& row) {
+  for (const ComparedColumn& c : columns) {
+    const std::string &x = ra[c.ia], &y = rb[c.ib];
+    if (x == y) continue;
+    bool equal = false;
+    if (!c.exact) {
+      const auto p = as_number(x), q = as_number(y);
+      if (p && q)
+        equal = (std::isnan(*p) && std::isnan(*q)) ||
+                (std::isfinite(*p) && std::isfinite(*q) &&
+                 std::abs(*p - *q) <= opt.rtol * std::max(std::abs(*p), std::abs(*q)) + opt.atol);
+    }
+    if (c.counter) row.counter_changes.push_back(change_text(c.name, x, y));
+    if (!equal && !timed_row) row.differences.push_back(change_text(c.name, x, y));
+  }
+  row.changed = !row.differences.empty();
+}
+
 void compare_table_files(const fs::path& old_path, const fs::path& new_path, FileComparison& f,
                          std::vector<RowComparison>& out, const CompareOptions& opt) {
   const CsvTable a = read_csv(old_path), b = read_csv(new_path);
@@ -216,28 +267,7 @@ void compare_table_files(const fs::path& old_path, const fs::path& new_path, Fil
   if (!only_old.empty()) f.notes.push_back("columns only in OLD: " + join(only_old, ", "));
   if (!only_new.empty()) f.notes.push_back("columns only in NEW: " + join(only_new, ", "));
 
-  // The compared columns (common, neither key nor timing), each with its place in both tables.
-  // Compared exactly: the counters (named ones) and every column whose every value on both sides
-  // is an integer (a claimed order, a count of levels).
-  struct Column {
-    std::string name;
-    std::size_t ia, ib;
-    bool exact, counter;
-  };
-  std::vector<Column> compared;
-  for (const auto& c : common) {
-    if (contains(f.key_columns, c) || is_timing_column(c)) continue;
-    const std::size_t ia = column_index(a.header, c), ib = column_index(b.header, c);
-    bool all_integers = true, any = false;
-    for (const auto& [t, i] : {std::pair{&a, ia}, std::pair{&b, ib}})
-      for (const auto& row : t->rows) {
-        if (row[i].empty()) continue;
-        any = true;
-        all_integers = all_integers && is_integer_text(row[i]);
-      }
-    const bool counter = contains(kCompareCounterColumns, c);
-    compared.push_back({c, ia, ib, counter || (any && all_integers), counter});
-  }
+  const std::vector<ComparedColumn> compared = compared_columns(a, b, common, f.key_columns);
   std::string error_column;
   for (const auto& c : kCompareErrorColumns)
     if (contains(common, c)) {
@@ -279,21 +309,7 @@ void compare_table_files(const fs::path& old_path, const fs::path& new_path, Fil
     const auto& rb = b.rows[it->second];
     fill(b, rb, row.error_new, row.f_evals_new);
     const bool timed_row = has_cost && ra[column_index(a.header, "cost")] == "wall";
-    for (const Column& c : compared) {
-      const std::string &x = ra[c.ia], &y = rb[c.ib];
-      if (x == y) continue;
-      bool equal = false;
-      if (!c.exact) {
-        const auto p = as_number(x), q = as_number(y);
-        if (p && q)
-          equal = (std::isnan(*p) && std::isnan(*q)) ||
-                  (std::isfinite(*p) && std::isfinite(*q) &&
-                   std::abs(*p - *q) <= opt.rtol * std::max(std::abs(*p), std::abs(*q)) + opt.atol);
-      }
-      if (c.counter) row.counter_changes.push_back(change_text(c.name, x, y));
-      if (!equal && !timed_row) row.differences.push_back(change_text(c.name, x, y));
-    }
-    row.changed = !row.differences.empty();
+    compare_cells(compared, ra, rb, opt, timed_row, row);
     if (timing) {
       row.has_timing = true;
       row.timing = compare_timing(*timing, a, ra, b, rb);
