@@ -204,5 +204,28 @@ TEST(CompareCli, BadInputExitsTwoAndWritesNothing) {
   fs::remove_all(dir);
 }
 
+// A comparison already in --out is not replaced by one of other folders without --force.
+TEST(CompareCli, OtherComparisonInOutIsKeptWithoutForce) {
+  const fs::path dir = fresh_dir("compare_cli", "keep");
+  for (const char* side : {"a", "b", "c"}) {
+    fs::create_directories(dir / side);
+    std::ofstream(dir / side / "x.csv")
+        << "model,error\nm," << (side[0] == 'c' ? "2" : "1") << "\n";
+  }
+  const auto q = [&](const std::string& s) { return shell_quote((dir / s).string()); };
+  // a and b hold the same table: exit 0.
+  ASSERT_EQ(run_cli("compare " + q("a") + " " + q("b") + " --out " + q("out")).code, 0);
+  const std::string first = slurp(dir / "out" / "compare.csv");
+  const auto o = run_cli("compare " + q("a") + " " + q("c") + " --out " + q("out"));
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("--force"), std::string::npos) << o.err;
+  EXPECT_EQ(slurp(dir / "out" / "compare.csv"), first);
+  // With --force: replaced; c's error 2 against a's 1 is a change (exit 1).
+  EXPECT_EQ(run_cli("compare " + q("a") + " " + q("c") + " --out " + q("out") + " --force").code,
+            1);
+  EXPECT_NE(slurp(dir / "out" / "compare.csv").find("error 1 -> 2"), std::string::npos);
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace stiffbench
