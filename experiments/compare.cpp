@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "core/params.hpp"
+#include "core/solve_stats.hpp"
 #include "core/types.hpp"
 #include "experiments/csv.hpp"
 #include "experiments/work_precision.hpp"
@@ -216,6 +217,7 @@ struct ComparedColumn {
 std::vector<ComparedColumn> compared_columns(const CsvTable& a, const CsvTable& b,
                                              const std::vector<std::string>& common,
                                              const std::vector<std::string>& keys) {
+  const std::vector<std::string> counters = compare_counter_columns();
   std::vector<ComparedColumn> compared;
   for (const auto& c : common) {
     if (contains(keys, c) || is_timing_column(c)) continue;
@@ -227,7 +229,7 @@ std::vector<ComparedColumn> compared_columns(const CsvTable& a, const CsvTable& 
         any = true;
         all_integers = all_integers && is_integer_text(row[i]);
       }
-    const bool counter = contains(kCompareCounterColumns, c);
+    const bool counter = contains(counters, c);
     compared.push_back({c, ia, ib, counter || (any && all_integers), counter});
   }
   return compared;
@@ -456,6 +458,13 @@ std::string interval_text(double median, double low, double high, int runs, bool
 }
 
 }  // namespace
+
+std::vector<std::string> compare_counter_columns() {
+  std::vector<std::string> names;
+  for (const auto& n : SolveStats::field_names())
+    if (n != "status" && n != "wall_s") names.push_back(n);
+  return names;
+}
 
 long CompareResult::changed_rows() const {
   return static_cast<long>(

@@ -13,7 +13,7 @@
 //    table has, e.g. model, integrator, h or setting; budget's grid by h and total_iterations,
 //    which fix substeps and iterations; a key seen twice gets "#2", "#3", ... in
 //    file order; without key columns, by row number). Every other column both tables have is
-//    compared cell by cell: text exactly, counters exactly (kCompareCounterColumns, and any
+//    compared cell by cell: text exactly, counters exactly (compare_counter_columns(), and any
 //    column whose every value in both tables is an integer), other numbers within
 //    |new - old| <= rtol·max(|old|, |new|) + atol (NaN equals NaN). Timing columns (a name
 //    containing "wall", starting with "ms_per_frame", or `repeats`/`timed_runs`, whose counts
@@ -46,19 +46,11 @@ inline const std::vector<std::string> kCompareKeyColumns = {
     "unit", "problem", "model", "integrator", "method", "setting", "h",     "total_iterations",
     "t",    "param",   "value", "mode",       "nu",     "tree",    "check", "system",
     "tau",  "cost",    "kind"};
-// The counters: compared exactly, and each one that differs is listed with its ratio (any
-// other column whose every value is an integer, e.g. a claimed order, is compared exactly too).
-inline const std::vector<std::string> kCompareCounterColumns = {"steps",
-                                                                "f_evals",
-                                                                "jac_evals",
-                                                                "lin_solves",
-                                                                "newton_iters",
-                                                                "newton_conv_failures",
-                                                                "error_test_failures",
-                                                                "linear_setups",
-                                                                "linear_iters",
-                                                                "fe_evals",
-                                                                "fi_evals"};
+// The counters: the integer fields of SolveStats (steps, f_evals, jac_evals, lin_solves and the
+// solver counters newton_iters ... fi_evals), in its order. Compared exactly, and each one that
+// differs is listed with its ratio (any other column whose every value is an integer, e.g. a
+// claimed order, is compared exactly too).
+std::vector<std::string> compare_counter_columns();
 // The first of these a table has is its error column (its ratio is reported for every row).
 inline const std::vector<std::string> kCompareErrorColumns = {
     "error", "local_error", "max_rel_error", "strain_error_max", "rel_error"};
