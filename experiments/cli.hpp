@@ -31,6 +31,11 @@ void add_solve_command(CLI::App& app);    // experiments/cli_solve.cpp
 void add_report_command(CLI::App& app);   // experiments/cli_report.cpp
 void add_profile_command(CLI::App& app);  // experiments/cli_report.cpp
 void add_plot_command(CLI::App& app);
-void add_run_commands(CLI::App& app);  // run SPEC.toml and merge (experiments/cli_run.cpp)
+void add_run_commands(CLI::App& app);     // run SPEC.toml and merge (experiments/cli_run.cpp)
+void add_compare_command(CLI::App& app);  // compare OLD NEW (experiments/cli_compare.cpp)
+
+// A command's own exit code for cli_main to return when nothing else failed (compare: 1 when the
+// runs differ); reset to 0 at the start of each cli_main call.
+void set_command_exit_code(int code);
 
 }  // namespace stiffbench

@@ -1,6 +1,6 @@
 // The stiffbench command line (experiments/cli_main.hpp). Exit codes: 0 success, 2 bad input
 // (one message on stderr naming what is wrong), 3 a row ended with status error or timeout,
-// 128 + signal when interrupted by SIGINT/SIGTERM, 1 anything else.
+// 128 + signal when interrupted by SIGINT/SIGTERM, 1 anything else (compare: the runs differ).
 #include "experiments/cli_main.hpp"
 
 #include <CLI/CLI.hpp>
@@ -81,6 +81,8 @@ void add_run_limits(CLI::App& app) {
   }
 }
 
+int g_command_exit_code = 0;
+
 int interrupted_exit(int sig) {
   remove_created_output_dirs();  // only folders this run created and left empty
   std::cerr << "stiffbench: interrupted by " << (sig == SIGTERM ? "SIGTERM" : "SIGINT")
@@ -90,8 +92,11 @@ int interrupted_exit(int sig) {
 
 }  // namespace
 
+void set_command_exit_code(int code) { g_command_exit_code = code; }
+
 int cli_main(int argc, char** argv) {
   set_command_line(argc, argv);
+  g_command_exit_code = 0;
   // Failed audit checks of this call only (a program may call cli_main more than once).
   // The process-wide counters as this command found them: a program (or a test) that calls
   // cli_main several times judges each call by its own runs only.
@@ -104,7 +109,7 @@ int cli_main(int argc, char** argv) {
       "stiffbench: a testbed comparing time integrators on stiff ODEs from physically based "
       "simulation.\nExit codes: 0 success, 2 bad input, 3 a row ended with status error or timeout "
       "or an audit check failed (its table is written), 130/143 interrupted by SIGINT/SIGTERM, 1 "
-      "other errors."};
+      "other errors (compare: the runs differ)."};
   app.require_subcommand(1);
   // Method files: the search path (STIFFBENCH_METHOD_PATH and --methods DIR) is loaded once the
   // command line is parsed, before the command runs (experiments/catalog.hpp).
@@ -124,6 +129,7 @@ int cli_main(int argc, char** argv) {
   add_study_commands(app);
   add_plot_command(app);
   add_run_commands(app);
+  add_compare_command(app);
 
   add_run_limits(app);
   // --max-wall and --force are reset when cli_main returns.
@@ -188,7 +194,7 @@ int cli_main(int argc, char** argv) {
               << " failed (status fail in audit.csv; the reason column says why)\n";
     return kExitRowsFailed;
   }
-  return 0;
+  return g_command_exit_code;
 }
 
 }  // namespace stiffbench

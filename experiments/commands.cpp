@@ -85,6 +85,10 @@ Table experiments_table() {
       {"profile", "DIR/profile.{csv,md,json}, profile_<tau>_<cost>.png, one run folder per problem",
        "performance and data profiles over a suite of work-precision specs (stiff, "
        "mechanical or a folder) at each --tau and --cost, rankings"});
+  t.rows.push_back({"compare", "DIR/compare.{md,csv,json}",
+                    "two runs of the same study, report or profile: which specs, revisions, "
+                    "compilers, CPUs and versions differ; per row the error, f_evals and counter "
+                    "ratios and wall times with a verdict; exit 1 when results differ"});
   // Studies registered from outside the library (register_study).
   for (const auto& k : study_kinds()) {
     bool listed = false;

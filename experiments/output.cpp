@@ -21,6 +21,8 @@
 
 #include "core/types.hpp"
 #include "experiments/build_info.hpp"
+#include "integrators/reference/gsl.hpp"
+#include "integrators/reference/sundials.hpp"
 
 namespace stiffbench {
 
@@ -351,6 +353,23 @@ void clear_command_line() {
   g_command_line.clear();
 }
 
+std::string cpu_model() {
+  // Read once: the processor does not change while the program runs.
+  static const std::string model = [] {
+    std::ifstream in("/proc/cpuinfo");
+    std::string line;
+    while (std::getline(in, line)) {
+      if (line.rfind("model name", 0) != 0) continue;
+      const auto colon = line.find(':');
+      if (colon == std::string::npos) continue;
+      const auto start = line.find_first_not_of(" \t", colon + 1);
+      return start == std::string::npos ? std::string("unknown") : line.substr(start);
+    }
+    return std::string("unknown");
+  }();
+  return model;
+}
+
 nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json& spec) {
   const auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
   std::tm tm{};
@@ -368,7 +387,13 @@ nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json&
   j["eigen_version"] = std::to_string(EIGEN_WORLD_VERSION) + "." +
                        std::to_string(EIGEN_MAJOR_VERSION) + "." +
                        std::to_string(EIGEN_MINOR_VERSION);
+  j["sundials_version"] = sundials_library_version();
+  j["gsl_version"] = gsl_library_version();
+  j["cpu_model"] = cpu_model();
   j["threads"] = omp_get_max_threads();
+  // The seed of the study's random numbers (shuffled run order, bootstrap, perturbations); null
+  // for a study that draws none.
+  j["seed"] = spec.is_object() && spec.contains("seed") ? spec["seed"] : nlohmann::json(nullptr);
   j["date"] = date;
   // A program calling the studies directly has no command line: say so rather than record "".
   if (g_command_line_set) {

@@ -135,9 +135,12 @@ struct RunNote {
 };
 std::string failed_runs_markdown(const std::vector<RunNote>& runs);
 
-// Metadata common to every experiment: spec, versions, compiler, flags, git revision, thread
-// count, date, command line.
+// Metadata common to every experiment: spec, versions (stiffbench, Eigen, SUNDIALS, GSL),
+// compiler, build type, flags, git revision, CPU model, thread count (OpenMP max threads), seed
+// (the spec's "seed"; null when the study has none), date, command line.
 nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json& spec);
+// The CPU's "model name" in /proc/cpuinfo ("unknown" where there is none).
+std::string cpu_model();
 
 // The command line recorded in run metadata: set by cli_main() for the duration of its run
 // (cleared again when it returns, so later library calls in the same process record none).

@@ -494,7 +494,8 @@ Table work_precision_table(const WorkPrecisionResult& res) {
            "wall_s", "status", "mescd"},
           {}};
   for (const auto& c : SolveStats::counter_names()) t.columns.push_back(c);
-  for (const char* c : {"wall_s_median", "wall_s_min", "wall_s_ci_low", "wall_s_ci_high", "repeats",
+  const auto& timing = kWallTimingColumns;
+  for (const char* c : {timing.median, timing.min, timing.ci_low, timing.ci_high, timing.runs,
                         "flag", "reference_error"})
     t.columns.push_back(c);
   const std::string ref_error =

@@ -144,6 +144,14 @@ struct TimingSpread {
 TimingSpread timing_spread(const std::vector<double>& samples, std::uint64_t seed,
                            std::uint64_t stream, int resamples = kBootstrapResamples);
 
+// The timing columns of work_precision.csv, in order: the median, the fastest run, the
+// bootstrap interval of the median and the number of runs (read by experiments/compare.cpp).
+struct TimingColumnNames {
+  const char *median, *min, *ci_low, *ci_high, *runs;
+};
+inline constexpr TimingColumnNames kWallTimingColumns{"wall_s_median", "wall_s_min",
+                                                      "wall_s_ci_low", "wall_s_ci_high", "repeats"};
+
 // The option of the studies timed this way (work-precision, budget): the most runs per
 // setting, declared once.
 ParamSpec timing_repeats_option(const std::string& default_value);

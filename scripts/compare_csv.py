@@ -8,6 +8,10 @@
 The timing columns (wall_s, wall_s_* and repeats, whose count follows the measured times; and,
 with --run, unit, unit_rows, unit_status, unit_message) are left out; every other field must be
 equal as text. Prints one line per file and exits 1 on a difference.
+
+`stiffbench compare OLD NEW` (docs/commands/compare.md) is the full comparison of two result
+folders: rows matched by their keys, a tolerance on reals, ratios, run records and wall-time
+verdicts.
 """
 import csv
 import os

@@ -33,6 +33,8 @@
 //                                           writers
 //   experiments/profile.hpp                 performance and data profiles over a suite of
 //                                           work-precision specs (run_profile, make_profile_suite)
+//   experiments/compare.hpp                 two runs compared (compare_runs): run records, rows
+//                                           by key, tolerances, wall-time verdicts
 //   experiments/output.hpp, experiments/plotting.hpp
 //                                           tables, atomic files, run metadata, gnuplot plots
 //   experiments/cli_main.hpp                the whole command line as cli_main(argc, argv)
@@ -56,6 +58,7 @@
 #include "experiments/audit.hpp"
 #include "experiments/catalog.hpp"
 #include "experiments/cli_main.hpp"
+#include "experiments/compare.hpp"
 #include "experiments/convergence.hpp"
 #include "experiments/energy.hpp"
 #include "experiments/output.hpp"

@@ -2,6 +2,7 @@
 
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_odeiv2.h>
+#include <gsl/gsl_version.h>
 
 #include <cmath>
 #include <iostream>
@@ -312,5 +313,7 @@ void register_gsl_integrators(IntegratorRegistry& reg) {
               }});
   }
 }
+
+std::string gsl_library_version() { return gsl_version; }
 
 }  // namespace stiffbench

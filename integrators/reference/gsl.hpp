@@ -24,10 +24,15 @@
 // make none, and Krylov iterations are 0 for all.
 #pragma once
 
+#include <string>
+
 #include "core/registry_types.hpp"
 
 namespace stiffbench {
 
 void register_gsl_integrators(IntegratorRegistry& reg);
+
+// The version of the GSL library linked (its gsl_version), recorded in run metadata.
+std::string gsl_library_version();
 
 }  // namespace stiffbench

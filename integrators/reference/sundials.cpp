@@ -6,6 +6,7 @@
 #include <arkode/arkode_mristep.h>
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
+#include <sundials/sundials_version.h>
 #include <sunlinsol/sunlinsol_band.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunlinsol/sunlinsol_klu.h>
@@ -1311,6 +1312,12 @@ void register_sundials_integrators(IntegratorRegistry& reg) {
               return std::make_unique<ArkodeIntegrator>(info, ArkodeMode::imex, s);
             }});
   register_arkode_mri(reg, lsetup);
+}
+
+std::string sundials_library_version() {
+  char version[64] = {};
+  if (SUNDIALSGetVersion(version, static_cast<int>(sizeof version)) != 0) return "unknown";
+  return version;
 }
 
 }  // namespace stiffbench

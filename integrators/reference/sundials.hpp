@@ -59,6 +59,9 @@ namespace stiffbench {
 
 void register_sundials_integrators(IntegratorRegistry& reg);
 
+// The version of the SUNDIALS library linked (SUNDIALSGetVersion), recorded in run metadata.
+std::string sundials_library_version();
+
 // linear_solver=auto of every SUNDIALS integrator with a linear solver (cvode_bdf, cvode_adams,
 // arkode_dirk, arkode_imex): a dense matrix up to kSundialsAutoDenseMax unknowns; above, KLU
 // when the run uses the model's analytic sparse Jacobian (has_jacobian() and jacobian != dq) —
