@@ -362,7 +362,9 @@ Table read_rows(const fs::path& csv) {
   text << in.rdbuf();
   const CsvContent c = parse_run_csv(text.str());
   Table t;
-  t.columns = parse_csv_line(c.header);
+  std::string header = c.header;
+  while (!header.empty() && (header.back() == '\n' || header.back() == '\r')) header.pop_back();
+  t.columns = parse_csv_line(header);
   for (const auto& [u, unit] : c.units)
     for (const auto& line : unit.lines) {
       std::string l = line;

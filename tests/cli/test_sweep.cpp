@@ -30,7 +30,9 @@ const std::string kSweep = (kSource / "experiments/specs/sweep_spring_chain.toml
 
 using Outcome = stiffbench::testing_support::CliOutcome;
 using stiffbench::testing_support::slurp;
-Outcome run(const std::string& args) { return stiffbench::testing_support::run_cli(args); }
+Outcome run(const std::string& args, const fs::path& cwd = {}) {
+  return stiffbench::testing_support::run_cli(args, cwd);
+}
 
 // The CSV with the wall_s column removed (the only column that differs between runs).
 std::string without_wall_time(const std::string& csv) {
@@ -118,9 +120,16 @@ void killed_run_resumes_to_the_same_csv(const std::string& spec, const fs::path&
   ASSERT_GE(pid, 0);
   if (pid == 0) {
     const std::string out = part.string();
+    // push_back one at a time: GCC 12 reports a false -Wstringop-overflow (-Werror) for
+    // initializer-list inserts into this vector once the spec path is not a constant.
     std::vector<const char*> argv = {STIFFBENCH_BIN, "run", spec.c_str()};
-    for (const std::string& s : larger) argv.insert(argv.end(), {"--set", s.c_str()});
-    argv.insert(argv.end(), {"--out", out.c_str(), nullptr});
+    for (const std::string& s : larger) {
+      argv.push_back("--set");
+      argv.push_back(s.c_str());
+    }
+    argv.push_back("--out");
+    argv.push_back(out.c_str());
+    argv.push_back(nullptr);
     ::execv(STIFFBENCH_BIN, const_cast<char* const*>(argv.data()));
     ::_exit(127);
   }

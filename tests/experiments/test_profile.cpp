@@ -271,7 +271,8 @@ TEST(Profile, TinySuiteEndToEndAndReused) {
   EXPECT_EQ(meta2["ran"].size(), 0u);
   // Full settings against the quick run's folders (profile.* removed): refused with exit 2
   // before any problem runs, the quick rows kept.
-  for (const char* f : {"profile.json", "profile.csv", "profile.md"}) fs::remove(out / f);
+  for (const char* f : {"profile.json", "profile.csv", "profile.md", "profile_status.csv"})
+    fs::remove(out / f);
   std::vector<std::string> full = args;
   full.erase(full.begin() + 2);  // --quick
   EXPECT_EQ(run_cli(full, &o, &e), 2) << e;
@@ -394,14 +395,18 @@ TEST(Profile, AMethodFileSuiteIsReusedUntilAFileChanges) {
   fs::remove_all(out);
 }
 
-// Units whose runs do not end ok are the profile's data (unsolved there), not its failure: with
-// max_steps = 3 no run of dopri5 or bs3 reaches t_end = 1 at rtol <= 1e-3 (their first steps
-// are no larger than ~0.1 for this oscillator), so every unit is "failed"; the profile is written,
-// exit 0, and profile_status.csv, profile.md and profile.json list each unit.
+// Units whose runs do not end ok are the profile's data (unsolved there), not its failure. With
+// max_steps = 1 no run of dopri5 or bs3 reaches t_end = 1: the first step of an adaptive run is
+// at most (0.01 / ||f(y0)||_w)^(1/(p+1)) (HNW I, Sect. II.4, the starting-step rule of
+// integrators/adaptive/controller.cpp) with the weighted norm ||f(y0)||_w >= 1 / (atol + rtol)
+// >= 500 for these problems (|f(y0)| >= |y0| = 1) at rtol <= 1e-3, so h <= 0.2 < 1. Every unit
+// is then "failed"; the profile is written, exit 0, and profile_status.csv, profile.md and
+// profile.json list each unit.
 TEST(Profile, UnitsThatDidNotEndOkAreRecordedPerProblem) {
   const fs::path suite = tiny_suite("not_ok");
-  for (const char* f : {"01_oscillator.toml", "02_decay.toml"})
-    std::ofstream(suite / f, std::ios::app) << "max_steps = 3\n";
+  // 02_decay.toml ends in its [params] table, 01_oscillator.toml in [quick].
+  std::ofstream(suite / "01_oscillator.toml", std::ios::app) << "[params]\nmax_steps = 1\n";
+  std::ofstream(suite / "02_decay.toml", std::ios::app) << "max_steps = 1\n";
   const fs::path out = fs::temp_directory_path() / ("profile_not_ok_" + std::to_string(getpid()));
   fs::remove_all(out);
   std::string o, e;
