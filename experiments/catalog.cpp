@@ -385,7 +385,16 @@ std::string register_method_file(const std::string& given, const std::string& ba
   auto& files = loaded_method_files();
   if (const auto it = files.find(m.name); it != files.end()) {
     // The same file (or one with the same text) again: registered once.
-    if (it->second.canonical == canonical || it->second.text == text) return m.name;
+    if (it->second.text == text) return m.name;
+    // The same file, edited since this process registered it (a program running several
+    // studies): the method is what the file says now, and its hash records the new text.
+    if (it->second.canonical == canonical) {
+      IntegratorRegistry::Entry entry = method_registry_entry(m);
+      entry.built_in = false;
+      mutable_integrator_registry().add_or_replace(std::move(entry));
+      it->second = {path, canonical, text};
+      return m.name;
+    }
     throw BadInput(path + ": method '" + m.name + "' is already defined by " + it->second.path +
                    " (a different method); give one of them another name");
   }

@@ -14,8 +14,10 @@
 #include <cstring>
 #include <ctime>
 #include <fstream>
+#include <map>
 #include <ostream>
 #include <sstream>
+#include <utility>
 
 #include <unistd.h>
 
@@ -237,10 +239,11 @@ bool g_force_output = false;
 
 std::string shown(const nlohmann::json& v) { return v.dump(); }
 
-// First difference of two JSON values below `path` (empty when equal).
-std::string first_difference(const nlohmann::json& a, const nlohmann::json& b,
-                             const std::string& path) {
-  if (a == b) return "";
+// The differences of two JSON values below `path` (none when equal), in key order, each as
+// "KEY = A there, B here" ("(absent)" for a missing key).
+void collect_differences(const nlohmann::json& a, const nlohmann::json& b, const std::string& path,
+                         std::vector<std::string>& out) {
+  if (a == b) return;
   const std::string key = path.empty() ? "spec" : path;
   if (a.is_object() && b.is_object()) {
     std::vector<std::string> keys;  // sorted union (nlohmann objects iterate in key order)
@@ -250,23 +253,100 @@ std::string first_difference(const nlohmann::json& a, const nlohmann::json& b,
     std::sort(keys.begin(), keys.end());
     for (const auto& k : keys) {
       const std::string sub = path.empty() ? k : path + "." + k;
-      if (!a.contains(k)) return sub + " = (absent) there, " + shown(b[k]) + " here";
-      if (!b.contains(k)) return sub + " = " + shown(a[k]) + " there, (absent) here";
-      if (auto d = first_difference(a[k], b[k], sub); !d.empty()) return d;
+      if (!a.contains(k))
+        out.push_back(sub + " = (absent) there, " + shown(b[k]) + " here");
+      else if (!b.contains(k))
+        out.push_back(sub + " = " + shown(a[k]) + " there, (absent) here");
+      else
+        collect_differences(a[k], b[k], sub, out);
     }
-    return "";
+    return;
   }
-  return key + " = " + shown(a) + " there, " + shown(b) + " here";
+  out.push_back(key + " = " + shown(a) + " there, " + shown(b) + " here");
+}
+
+// The method files a spec record names, at any depth (a profile's record holds its problems'
+// specs): method name -> (file, content hash).
+using MethodFiles = std::map<std::string, std::pair<std::string, std::string>>;
+void gather_method_files(const nlohmann::json& j, MethodFiles& out) {
+  if (j.is_array())
+    for (const auto& x : j) gather_method_files(x, out);
+  if (!j.is_object()) return;
+  for (const auto& [k, v] : j.items()) {
+    if (k == "method_files" && v.is_object()) {
+      for (const auto& [name, rec] : v.items())
+        if (rec.is_object())
+          out[name] = {rec.value("file", std::string()), rec.value("fnv1a64", std::string())};
+    } else {
+      gather_method_files(v, out);
+    }
+  }
+}
+
+// `j` with every "method_files" object reduced to {name: content hash} (keep = true) or removed.
+void reduce_method_files(nlohmann::json& j, bool keep) {
+  if (j.is_array())
+    for (auto& x : j) reduce_method_files(x, keep);
+  if (!j.is_object()) return;
+  if (j.contains("method_files") && j["method_files"].is_object()) {
+    if (!keep) {
+      j.erase("method_files");
+    } else {
+      nlohmann::json h = nlohmann::json::object();
+      for (const auto& [name, rec] : j["method_files"].items())
+        h[name] = rec.is_object() ? rec.value("fnv1a64", std::string()) : std::string();
+      j["method_files"] = h;
+    }
+  }
+  for (auto& item : j.items())
+    if (item.key() != "method_files") reduce_method_files(item.value(), keep);
 }
 }  // namespace
+
+nlohmann::json spec_identity(const nlohmann::json& spec) {
+  nlohmann::json id = spec;
+  reduce_method_files(id, true);
+  return id;
+}
+
+std::vector<std::string> spec_differences(const nlohmann::json& recorded,
+                                          const nlohmann::json& requested) {
+  // Through text, as the record was written: NaN becomes null, integers and reals compare alike.
+  nlohmann::json a = nlohmann::json::parse(recorded.dump());
+  nlohmann::json b = nlohmann::json::parse(requested.dump());
+  std::vector<std::string> out;
+  // The method files first, by name and file: "method file F (method 'm') changed".
+  MethodFiles fa, fb;
+  gather_method_files(a, fa);
+  gather_method_files(b, fb);
+  for (const auto& [name, here] : fb) {
+    const std::string what = "method file " + here.first + " (method '" + name + "')";
+    if (const auto it = fa.find(name); it == fa.end())
+      out.push_back(what + ": not read from a method file there");
+    else if (it->second.second != here.second)
+      out.push_back(what + " changed since that run: content hash " + it->second.second +
+                    " there, " + here.second + " here");
+  }
+  for (const auto& [name, there] : fa)
+    if (!fb.count(name))
+      out.push_back("method '" + name + "': read from the method file " + there.first +
+                    " there, not from a method file here");
+  reduce_method_files(a, false);
+  reduce_method_files(b, false);
+  collect_differences(a, b, "", out);
+  return out;
+}
 
 void set_force_output(bool force) { g_force_output = force; }
 bool force_output() { return g_force_output; }
 
 std::string spec_difference(const nlohmann::json& recorded, const nlohmann::json& requested) {
-  // Through text, as the record was written: NaN becomes null, integers and reals compare alike.
-  return first_difference(nlohmann::json::parse(recorded.dump()),
-                          nlohmann::json::parse(requested.dump()), "");
+  const std::vector<std::string> d = spec_differences(recorded, requested);
+  constexpr std::size_t kShown = 4;
+  std::string text;
+  for (std::size_t i = 0; i < d.size() && i < kShown; ++i) text += (i ? "; " : "") + d[i];
+  if (d.size() > kShown) text += "; and " + std::to_string(d.size() - kShown) + " more";
+  return text;
 }
 
 bool check_existing_results(const std::filesystem::path& dir, const std::string& record,

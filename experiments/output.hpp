@@ -103,10 +103,10 @@ void remove_created_output_dirs();
 //    null agree): the results are recomputed and replaced; a one-line note goes to `note`
 //    (when not null) and the function returns true.
 //  - `record` holds a different spec, is not valid JSON or has no "spec", or a result file exists
-//    without a record: BadInput naming the folder, the file and (for a different spec) the first
-//    differing key with both values, telling the user to choose another --out or pass --force;
-//    nothing is written or removed. With `force` the results are replaced instead (a note to
-//    `note`; returns true).
+//    without a record: BadInput naming the folder, the file and (for a different spec) the
+//    differing keys with both values (spec_difference), telling the user to choose another --out or
+//    pass --force; nothing is written or removed. With `force` the results are replaced instead (a
+//    note to `note`; returns true).
 // A program linking the library calls it before write_convergence_outputs & co. the same way
 // (the *_study functions do, with force_output()).
 bool check_existing_results(const std::filesystem::path& dir, const std::string& record,
@@ -117,9 +117,18 @@ bool check_existing_results(const std::filesystem::path& dir, const std::string&
 bool check_study_output(const std::filesystem::path& dir, const std::string& name,
                         const nlohmann::json& spec, bool force, std::ostream* note,
                         const std::vector<std::string>& extra = {});
-// The first difference between a recorded spec and a requested one, as
-// "KEY = A there, B here" (nested keys joined with '.'; "(absent)" for a missing key); empty when
-// they are equal after a round trip through JSON text.
+// A spec record's identity: the record with "method_files" reduced to {method: content hash}
+// (where a method file was read from is not part of the spec; its content is). Two runs are of
+// the same spec when their identities are equal; `run` hashes it (spec_hash).
+nlohmann::json spec_identity(const nlohmann::json& spec);
+// Every difference between a recorded spec and a requested one (their identities, after a round
+// trip through JSON text): first each method file whose content changed ("method file F
+// (method 'm') changed since the run: content hash A there, B here") or that is new or gone,
+// then every other key as "KEY = A there, B here" (nested keys joined with '.'; "(absent)" for a
+// missing key). Empty when they are the same spec.
+std::vector<std::string> spec_differences(const nlohmann::json& recorded,
+                                          const nlohmann::json& requested);
+// spec_differences joined with "; " (the first four, then "and N more"); empty when equal.
 std::string spec_difference(const nlohmann::json& recorded, const nlohmann::json& requested);
 // --force of the command line: set by cli_main() for the duration of a command (false again
 // when it returns). A library program may set it before calling the *_study functions.

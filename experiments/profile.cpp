@@ -362,7 +362,9 @@ Table read_rows(const fs::path& csv) {
   text << in.rdbuf();
   const CsvContent c = parse_run_csv(text.str());
   Table t;
-  t.columns = parse_csv_line(c.header);
+  std::string header = c.header;
+  while (!header.empty() && (header.back() == '\n' || header.back() == '\r')) header.pop_back();
+  t.columns = parse_csv_line(header);
   for (const auto& [u, unit] : c.units)
     for (const auto& line : unit.lines) {
       std::string l = line;
@@ -372,9 +374,12 @@ Table read_rows(const fs::path& csv) {
   return t;
 }
 
-// What DIR holds of `spec`: a run of it (run.json's hash), and every unit of it in the CSV.
+// What DIR holds of `spec`: a run of it (run.json's hash, computed like `run` computes it: after
+// the spec's method files are resolved, from their content), and every unit of it in the CSV;
+// for a run of another spec, the keys that differ.
 struct HeldRun {
   bool same_spec = false, complete = false;
+  std::string difference;  // another spec's run: what differs (spec_difference)
 };
 HeldRun held_run(const fs::path& dir, const SpecFile& spec) {
   HeldRun h;
@@ -384,9 +389,17 @@ HeldRun held_run(const fs::path& dir, const SpecFile& spec) {
   try {
     run = nlohmann::json::parse(in);
   } catch (const nlohmann::json::exception&) {
+    h.difference = (dir / "run.json").string() + " is not valid JSON";
     return h;
   }
   h.same_spec = run.value("spec_hash", "") == spec_hash(spec);
+  if (!h.same_spec) {
+    h.difference = run.contains("spec") ? spec_difference(run["spec"], spec_record(spec))
+                                        : (dir / "run.json").string() + " records no \"spec\"";
+    if (h.difference.empty())  // equal identities under another hash: a record of another version
+      h.difference = "spec_hash = \"" + run.value("spec_hash", "") + "\" there, \"" +
+                     spec_hash(spec) + "\" here";
+  }
   if (!h.same_spec || !run.value("missing_units", nlohmann::json::array()).empty()) return h;
   std::ifstream csv_in(dir / "work_precision.csv");
   std::stringstream text;
@@ -454,8 +467,26 @@ void plot_profiles(const ProfileResult& r, const fs::path& dir, const PlotOption
 nlohmann::json profile_spec(const ProfileSuite& suite, const ProfileOptions& opt) {
   nlohmann::json problems = nlohmann::json::array();
   for (const auto& p : suite.problems)
-    problems.push_back({{"name", p.name}, {"spec", p.spec.to_json()}});
+    problems.push_back({{"name", p.name}, {"spec", spec_record(p.spec)}});
   return {{"suite", suite.name}, {"quick", opt.quick}, {"problems", problems}};
+}
+
+// The units of one problem's rows that did not end ok, into r.not_ok (one entry per method).
+void note_units_not_ok(ProfileResult& r, const std::string& problem, const Table& rows) {
+  const auto col = [&](const char* name) {
+    return std::find(rows.columns.begin(), rows.columns.end(), name) - rows.columns.begin();
+  };
+  const auto integ = col("integrator"), status = col("unit_status"), message = col("unit_message");
+  const auto n = static_cast<std::ptrdiff_t>(rows.columns.size());
+  if (integ == n || status == n || message == n) return;
+  std::set<std::string> seen;
+  for (const auto& row : rows.rows) {
+    if (static_cast<std::ptrdiff_t>(row.size()) != n) continue;
+    const std::string& s = row[static_cast<std::size_t>(status)];
+    const std::string& m = row[static_cast<std::size_t>(integ)];
+    if (s == "ok" || !seen.insert(m).second) continue;
+    r.not_ok.push_back({problem, m, s, row[static_cast<std::size_t>(message)]});
+  }
 }
 
 // Runs or reuses every problem; returns its rows.
@@ -466,11 +497,11 @@ std::vector<Table> run_problems(ProfileResult& r, const ProfileOptions& opt, std
   // unless --force (`run` would refuse it only when its turn came).
   for (const auto& p : r.suite.problems) {
     const fs::path dir = fs::path(opt.out_dir) / p.name;
-    require_input(opt.force || !fs::exists(dir / "run.json") || held_run(dir, p.spec).same_spec,
-                  "--out " + dir.string() + " holds a run of another spec (" +
-                      (dir / "run.json").string() +
-                      "; e.g. --quick against full settings); choose another --out or pass "
-                      "--force to replace it");
+    if (opt.force || !fs::exists(dir / "run.json")) continue;
+    const HeldRun held = held_run(dir, p.spec);
+    require_input(held.same_spec, "--out " + dir.string() + " holds a run of another spec (" +
+                                      (dir / "run.json").string() + ": " + held.difference +
+                                      "); choose another --out or pass --force to replace it");
   }
   for (std::size_t i = 0; i < n; ++i) {
     const ProfileProblem& p = r.suite.problems[i];
@@ -491,6 +522,7 @@ std::vector<Table> run_problems(ProfileResult& r, const ProfileOptions& opt, std
       r.ran.push_back(p.name);
     }
     rows.push_back(read_rows(dir / "work_precision.csv"));
+    note_units_not_ok(r, p.name, rows.back());
   }
   return rows;
 }
@@ -507,6 +539,18 @@ Table profile_csv_table(const ProfileResult& r) {
           for (const auto& pt : kind == 0 ? performance_curve(tab, m) : data_curve(tab, m))
             t.rows.push_back({tau_text(r.taus[i]), r.costs[c], kind == 0 ? "performance" : "data",
                               tab.methods[m], format_full(pt.x), format_full(pt.fraction)});
+    }
+  return t;
+}
+
+Table profile_status_table(const ProfileResult& r) {
+  Table t{{"problem", "method", "unit_status", "unit_message"}, {}};
+  for (const auto& p : r.suite.problems)
+    for (const auto& m : r.suite.methods) {
+      std::vector<std::string> row = {p.name, m, "ok", ""};
+      for (const auto& u : r.not_ok)
+        if (u.problem == p.name && u.method == m) row = {p.name, m, u.status, u.message};
+      t.rows.push_back(std::move(row));
     }
   return t;
 }
@@ -573,6 +617,12 @@ std::string profile_markdown(const ProfileResult& r) {
       md << "![profiles](" << plot_stem(r, i, c) << ".png)\n\n";
     }
   md << "## Wall time against counters\n\n" << disagreement_markdown(r);
+  md << "\n## Units that did not end ok\n\n";
+  if (r.not_ok.empty()) md << "None: every problem x method unit ended ok.\n";
+  for (const auto& u : r.not_ok)
+    md << "- " << u.problem << ", " << u.method << ": " << u.status
+       << (u.message.empty() ? "" : " (" + u.message + ")")
+       << "; its failed runs count as unsolved\n";
   return md.str();
 }
 
@@ -619,8 +669,9 @@ ProfileResult run_profile(const ProfileSuite& suite, const ProfileOptions& opt, 
   require_input(!suite.problems.empty(), "profile: suite " + suite.name + " is empty");
   require_output_dir(opt.out_dir);
   const nlohmann::json spec = profile_spec(suite, opt);
-  check_existing_results(opt.out_dir, "profile.json", {"profile.csv", "profile.md", "profile.html"},
-                         spec, opt.force, &err);
+  check_existing_results(opt.out_dir, "profile.json",
+                         {"profile.csv", "profile.md", "profile.html", "profile_status.csv"}, spec,
+                         opt.force, &err);
   const auto start = std::chrono::steady_clock::now();
   ProfileResult r;
   r.suite = suite;
@@ -638,6 +689,7 @@ ProfileResult run_profile(const ProfileSuite& suite, const ProfileOptions& opt, 
   const fs::path dir = opt.out_dir;
   write_file_atomic(dir / "profile.csv", profile_csv_table(r).to_csv());
   write_file_atomic(dir / "profile.md", profile_markdown(r));
+  write_file_atomic(dir / "profile_status.csv", profile_status_table(r).to_csv());
   nlohmann::json meta = run_metadata("profile", spec);
   meta["tau"] = opt.taus;
   meta["cost"] = opt.costs;
@@ -648,14 +700,25 @@ ProfileResult run_profile(const ProfileSuite& suite, const ProfileOptions& opt, 
   meta["reused"] = r.reused;
   meta["ran"] = r.ran;
   meta["disagreements"] = r.disagreements;
+  nlohmann::json not_ok = nlohmann::json::array();
+  for (const auto& u : r.not_ok)
+    not_ok.push_back({{"problem", u.problem},
+                      {"method", u.method},
+                      {"status", u.status},
+                      {"message", u.message}});
+  meta["units_not_ok"] = not_ok;
   meta["wall_s"] = r.wall_s;
   write_file_atomic(dir / "profile.json", meta.dump(2) + "\n");
   PlotOptions plot = opt.plot;
   plot.svg = plot.svg || opt.html;
   plot_profiles(r, dir, plot, err);
   if (opt.html) write_profile_html(r, dir, meta, out);
-  out << "wrote " << (dir / "profile.md").string() << ", profile.csv, profile.json ("
-      << format_short(r.wall_s, 3) << " s)\n";
+  for (const auto& u : r.not_ok)
+    err << "note: " << u.problem << ", " << u.method << ": unit " << u.status
+        << (u.message.empty() ? "" : " (" + u.message + ")") << ": counted as unsolved there\n";
+  out << "wrote " << (dir / "profile.md").string()
+      << ", profile.csv, profile_status.csv, profile.json (" << format_short(r.wall_s, 3)
+      << " s)\n";
   return r;
 }
 

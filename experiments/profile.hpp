@@ -131,8 +131,14 @@ struct ProfileResult {
   ProfileSuite suite;
   std::vector<double> taus;
   std::vector<std::string> costs;
-  std::vector<CostTable> tables;           // [tau index * costs.size() + cost index]
-  std::vector<std::string> reused, ran;    // problems
+  std::vector<CostTable> tables;         // [tau index * costs.size() + cost index]
+  std::vector<std::string> reused, ran;  // problems
+  // Every unit (problem x method) whose run did not end ok: unit_status "failed" (some setting's
+  // run ended with a status other than ok: unsolved there) or "error" (the unit threw: no rows).
+  struct UnitStatus {
+    std::string problem, method, status, message;
+  };
+  std::vector<UnitStatus> not_ok;
   std::vector<std::string> disagreements;  // wall against counter rankings
   double wall_s = 0;
   const CostTable& table(std::size_t tau, std::size_t cost) const {
@@ -141,14 +147,19 @@ struct ProfileResult {
 };
 
 // The profiles of a suite: runs or reuses each problem in DIR/<problem>/, then writes
-// DIR/profile.{csv,md,json} and DIR/profile_<tau>_<cost>.png (performance and data panels)
-// and prints the rankings on `out`. Progress and notes go to `err`.
+// DIR/profile.{csv,md,json}, DIR/profile_status.csv (every problem x method with its unit
+// status) and DIR/profile_<tau>_<cost>.png (performance and data panels) and prints the rankings
+// on `out`. Progress and notes go to `err`. A unit that did not end ok is data, not a failure of
+// the profile: its runs count as unsolved; it is listed in profile_status.csv, profile.md,
+// profile.json ("units_not_ok") and on `err`.
 ProfileResult run_profile(const ProfileSuite& suite, const ProfileOptions& opt, std::ostream& out,
                           std::ostream& err);
 // `stiffbench profile`: load_profile_suite(opt.suite, opt.quick), then run_profile.
 ProfileResult cmd_profile(const ProfileOptions& opt, std::ostream& out, std::ostream& err);
 
 Table profile_csv_table(const ProfileResult& r);
+// profile_status.csv: problem, method, unit_status (ok | failed | error), unit_message.
+Table profile_status_table(const ProfileResult& r);
 std::string profile_markdown(const ProfileResult& r);
 
 }  // namespace stiffbench

@@ -125,7 +125,7 @@ nlohmann::json report_spec(const ReportOptions& opt) {
   if (!opt.suite.empty()) {
     nlohmann::json files = nlohmann::json::array();
     for (const auto& f : report_suite_files(opt.suite))
-      files.push_back(load_spec_file(f, {}).to_json());
+      files.push_back(spec_record(load_spec_file(f, {})));  // with its method files
     j["spec_files"] = files;
   }
   return j;

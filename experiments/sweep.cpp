@@ -213,15 +213,6 @@ std::string md_name(const std::string& kind) {
   return fs::path(csv_name(kind)).replace_extension(".md").string();
 }
 
-}  // namespace
-
-// The spec's hash; with the method files it names (so a changed file is a different spec).
-std::string spec_hash(const SpecFile& s) {
-  return hex16(fnv1a64(with_method_files(s.to_json()).dump()));
-}
-
-namespace {
-
 // `spec` with the method files among its integrators registered and replaced by their names;
 // relative paths are relative to the spec file's folder (catalog.hpp).
 SpecFile with_method_names(SpecFile spec) {
@@ -233,6 +224,23 @@ SpecFile with_method_names(SpecFile spec) {
   }
   return spec;
 }
+
+// The record of a spec whose method files are resolved: its JSON with "method_files".
+nlohmann::json resolved_record(const SpecFile& resolved) {
+  return with_method_files(resolved.to_json());
+}
+
+}  // namespace
+
+nlohmann::json spec_record(const SpecFile& spec) {
+  return resolved_record(with_method_names(spec));
+}
+
+std::string spec_hash(const SpecFile& spec) {
+  return hex16(fnv1a64(spec_identity(spec_record(spec)).dump()));
+}
+
+namespace {
 
 void write_all(const fs::path& path, const std::string& header,
                const std::map<long, UnitRows>& units) {
@@ -410,8 +418,8 @@ std::map<long, UnitRows> kept_units(const RunOptions& opt, const SpecFile& spec,
                 "--resume and --force: choose one (--resume keeps the units in " + dir.string() +
                     ", --force starts over)");
   const std::string shard = std::to_string(opt.shard_index) + "/" + std::to_string(opt.shard_count);
-  if (check_existing_results(dir, "run.json", {csv_name(kind), md_name(kind)}, spec.to_json(),
-                             opt.force, opt.force ? &err : nullptr) &&
+  if (check_existing_results(dir, "run.json", {csv_name(kind), md_name(kind)},
+                             resolved_record(spec), opt.force, opt.force ? &err : nullptr) &&
       !opt.resume && !opt.force) {
     const long present = static_cast<long>(read_run_csv(csv).units.size());
     if (present > 0) {
@@ -432,9 +440,13 @@ std::map<long, UnitRows> kept_units(const RunOptions& opt, const SpecFile& spec,
   std::map<long, UnitRows> done;
   if (opt.resume && fs::exists(csv)) {
     const nlohmann::json prev = read_json(dir / "run.json");
-    if (prev.value("spec_hash", "") != hash)
-      throw BadInput("--resume: " + dir.string() + " holds a run of a different spec (hash " +
-                     prev.value("spec_hash", "?") + ", this spec " + hash + ")");
+    if (prev.value("spec_hash", "") != hash) {
+      const std::string d =
+          prev.contains("spec") ? spec_difference(prev["spec"], resolved_record(spec)) : "";
+      throw BadInput(
+          "--resume: " + dir.string() + " holds a run of a different spec (" +
+          (d.empty() ? "hash " + prev.value("spec_hash", "?") + ", this spec " + hash : d) + ")");
+    }
     if (prev.value("shard", "") != shard)
       throw BadInput("--resume: " + dir.string() + " holds shard " + prev.value("shard", "?"));
     CsvContent c = read_run_csv(csv);
@@ -453,7 +465,7 @@ void write_run_json(const RunOptions& opt, const SpecFile& spec, const Expansion
   const std::string kind = spec.kind;
   const std::string shard = std::to_string(opt.shard_index) + "/" + std::to_string(opt.shard_count);
   nlohmann::json run;
-  run["spec"] = with_method_files(spec.to_json());
+  run["spec"] = resolved_record(spec);
   run["spec_file"] = fs::absolute(spec.file).string();
   run["spec_hash"] = hash;
   run["kind"] = kind;
@@ -631,9 +643,13 @@ int merge_shards(const std::string& out_dir, const std::vector<std::string>& dir
     if (first.is_null()) {
       first = run;
     } else if (run.value("spec_hash", "") != first.value("spec_hash", "")) {
-      throw BadInput("merge: " + d + " holds a different spec (hash " +
-                     run.value("spec_hash", "?") + ") than " + dirs.front() + " (hash " +
-                     first.value("spec_hash", "?") + ")");
+      const std::string diff = run.contains("spec") && first.contains("spec")
+                                   ? spec_difference(first["spec"], run["spec"])
+                                   : "";
+      throw BadInput(
+          "merge: " + d + " holds a different spec (hash " + run.value("spec_hash", "?") +
+          ") than " + dirs.front() + " (hash " + first.value("spec_hash", "?") + ")" +
+          (diff.empty() ? "" : ": " + diff + " (there: " + dirs.front() + ", here: " + d + ")"));
     }
     const CsvContent c = read_run_csv(fs::path(d) / run.value("csv", ""));
     if (c.header.empty()) throw BadInput("merge: " + d + " has no rows file");

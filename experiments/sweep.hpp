@@ -22,6 +22,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 namespace stiffbench {
 
 class StudyJob;
@@ -60,8 +62,12 @@ int merge_shards(const std::string& out_dir, const std::vector<std::string>& dir
 // `stiffbench profile`); opt.spec_file and opt.sets are not used.
 int run_loaded_spec(const SpecFile& spec, const RunOptions& opt, std::ostream& out,
                     std::ostream& err);
-// The hash `run` records in OUT/run.json (spec_hash): of the canonical spec with the method
-// files it names.
+// The record of a spec (what OUT/run.json holds under "spec"): the canonical spec after every
+// method file among its integrators is registered and replaced by its method's name, with
+// "method_files" naming each file and its content hash. Resolving registers the files.
+nlohmann::json spec_record(const SpecFile& spec);
+// The hash `run` records in OUT/run.json (spec_hash): of spec_identity(spec_record(spec)), so an
+// edited method file makes another spec and an unchanged one (from any path) the same spec.
 std::string spec_hash(const SpecFile& spec);
 
 // "I/N" of --shard (BadInput naming --shard unless 0 <= I < N).

@@ -13,6 +13,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "tests/cli_support.hpp"
@@ -29,7 +30,9 @@ const std::string kSweep = (kSource / "experiments/specs/sweep_spring_chain.toml
 
 using Outcome = stiffbench::testing_support::CliOutcome;
 using stiffbench::testing_support::slurp;
-Outcome run(const std::string& args) { return stiffbench::testing_support::run_cli(args); }
+Outcome run(const std::string& args, const fs::path& cwd = {}) {
+  return stiffbench::testing_support::run_cli(args, cwd);
+}
 
 // The CSV with the wall_s column removed (the only column that differs between runs).
 std::string without_wall_time(const std::string& csv) {
@@ -98,8 +101,8 @@ TEST(Sweep, ShardsMergedReproduceTheUnshardedRun) {
   EXPECT_NE(refused.err.find("different spec"), std::string::npos) << refused.err;
 }
 
-TEST(Sweep, KilledRunResumesToTheSameCsv) {
-  const fs::path base = fresh_dir("resume");
+// A run of `spec` killed after three units and resumed gives the uninterrupted run's CSV.
+void killed_run_resumes_to_the_same_csv(const std::string& spec, const fs::path& base) {
   // Larger than the spec's default so that the kill lands mid-sweep (about 2.5 s a run in a Release
   // build, the 9 units after the third well over the 5 ms the loop below polls at). The same
   // settings for the shell command lines and the killed child's argument vector.
@@ -107,7 +110,7 @@ TEST(Sweep, KilledRunResumesToTheSameCsv) {
   std::string sets;
   for (const std::string& s : larger) sets += " --set '" + s + "'";
   sets += " --out ";
-  const Outcome full = run("run " + kSweep + sets + (base / "full").string());
+  const Outcome full = run("run " + spec + sets + (base / "full").string());
   ASSERT_EQ(full.code, 0) << full.err;
   const std::string csv = slurp(base / "full/convergence.csv");
   ASSERT_EQ(count_lines(csv), 1 + 12 * 6);
@@ -117,9 +120,16 @@ TEST(Sweep, KilledRunResumesToTheSameCsv) {
   ASSERT_GE(pid, 0);
   if (pid == 0) {
     const std::string out = part.string();
-    std::vector<const char*> argv = {STIFFBENCH_BIN, "run", kSweep.c_str()};
-    for (const std::string& s : larger) argv.insert(argv.end(), {"--set", s.c_str()});
-    argv.insert(argv.end(), {"--out", out.c_str(), nullptr});
+    // push_back one at a time: GCC 12 reports a false -Wstringop-overflow (-Werror) for
+    // initializer-list inserts into this vector once the spec path is not a constant.
+    std::vector<const char*> argv = {STIFFBENCH_BIN, "run", spec.c_str()};
+    for (const std::string& s : larger) {
+      argv.push_back("--set");
+      argv.push_back(s.c_str());
+    }
+    argv.push_back("--out");
+    argv.push_back(out.c_str());
+    argv.push_back(nullptr);
     ::execv(STIFFBENCH_BIN, const_cast<char* const*>(argv.data()));
     ::_exit(127);
   }
@@ -141,14 +151,109 @@ TEST(Sweep, KilledRunResumesToTheSameCsv) {
   // leaves it; --resume drops it.
   { std::ofstream(part / "convergence.csv", std::ios::app) << "11,6,128,spring_chain,sdi"; }
 
-  const Outcome resumed = run("run " + kSweep + sets + part.string() + " --resume");
+  const Outcome resumed = run("run " + spec + sets + part.string() + " --resume");
   ASSERT_EQ(resumed.code, 0) << resumed.err;
   EXPECT_NE(resumed.out.find("already done"), std::string::npos) << resumed.out;
   EXPECT_EQ(without_wall_time(slurp(part / "convergence.csv")), without_wall_time(csv));
 
   // --resume of a different spec into the same folder is refused.
-  const Outcome wrong = run("run " + kSweep + " --out " + part.string() + " --resume");
+  const Outcome wrong = run("run " + spec + " --out " + part.string() + " --resume");
   EXPECT_EQ(wrong.code, 2);
+}
+
+TEST(Sweep, KilledRunResumesToTheSameCsv) {
+  killed_run_resumes_to_the_same_csv(kSweep, fresh_dir("resume"));
+}
+
+// The sweep spec with two of its integrators given as method files by relative paths (copies of
+// rk4 and sdirk2 under other names, in a folder beside the spec): the spec's identity is taken
+// after the files are read, from their content, so resume, shards and merge work as for named
+// methods, from any working folder; an edited file is another spec, named in the refusal.
+fs::path spec_with_method_files(const fs::path& dir) {
+  fs::create_directories(dir / "methods");
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{"rk4", "my_rk4"},
+                                 std::pair<std::string, std::string>{"sdirk2", "my_sdirk2"}}) {
+    std::string text = slurp(kSource / "methods" / (from + ".toml"));
+    const std::string key = "name = \"" + from + "\"";
+    const auto at = text.find(key);
+    if (at == std::string::npos)
+      ADD_FAILURE() << "no " << key << " in methods/" << from << ".toml";
+    else
+      text.replace(at, key.size(), "name = \"" + to + "\"");
+    std::ofstream(dir / "methods" / (to + ".toml")) << text;
+  }
+  std::string spec = slurp(kSweep);
+  const std::string list = "integrators = [\"rk4\", \"velocity_verlet\", \"sdirk2\"]";
+  const auto at = spec.find(list);
+  if (at == std::string::npos)
+    ADD_FAILURE() << "no integrator list in " << kSweep;
+  else
+    spec.replace(at, list.size(),
+                 "integrators = [\"methods/my_rk4.toml\", \"velocity_verlet\", "
+                 "\"methods/my_sdirk2.toml\"]");
+  std::ofstream(dir / "sweep.toml") << spec;
+  return dir / "sweep.toml";
+}
+
+TEST(Sweep, MethodFilesResumeShardAndMergeLikeNamedMethods) {
+  const fs::path base = fresh_dir("method_files");
+  const fs::path spec = spec_with_method_files(base / "spec");
+  killed_run_resumes_to_the_same_csv(spec.string(), base / "killed");
+
+  const Outcome full = run("run " + spec.string() + " --out " + (base / "full").string());
+  ASSERT_EQ(full.code, 0) << full.err;
+  const std::string csv = slurp(base / "full/convergence.csv");
+  EXPECT_EQ(count_lines(csv), 1 + 12 * 4);
+  // Four shards, two of them started from the spec's own folder with a relative spec path (the
+  // method files are then reached by other paths: the same spec).
+  std::string shards;
+  for (int i = 0; i < 4; ++i) {
+    const fs::path out = base / ("shard-" + std::to_string(i));
+    const Outcome s =
+        i % 2 ? run("run sweep.toml --shard " + std::to_string(i) + "/4 --out " + out.string(),
+                    base / "spec")
+              : run("run " + spec.string() + " --shard " + std::to_string(i) + "/4 --out " +
+                    out.string());
+    ASSERT_EQ(s.code, 0) << s.err;
+    shards += " " + out.string();
+  }
+  const Outcome m = run("merge --out " + (base / "merged").string() + shards);
+  ASSERT_EQ(m.code, 0) << m.err;
+  EXPECT_EQ(without_wall_time(slurp(base / "merged/convergence.csv")), without_wall_time(csv));
+
+  // Resuming the complete run: every unit already done.
+  const Outcome again =
+      run("run " + spec.string() + " --out " + (base / "full").string() + " --resume");
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_NE(again.out.find("12 of 12 unit(s) already done"), std::string::npos) << again.out;
+
+  // An edited method file (a comment is enough: the identity is the file's content) is another
+  // spec: refused, naming the file, and the rows are left as they were; --force runs it again.
+  { std::ofstream(base / "spec/methods/my_rk4.toml", std::ios::app) << "# edited\n"; }
+  const Outcome edited =
+      run("run " + spec.string() + " --out " + (base / "full").string() + " --resume");
+  EXPECT_EQ(edited.code, 2);
+  EXPECT_NE(edited.err.find("my_rk4.toml (method 'my_rk4') changed"), std::string::npos)
+      << edited.err;
+  EXPECT_EQ(edited.err.find("--quick"), std::string::npos) << edited.err;
+  EXPECT_EQ(slurp(base / "full/convergence.csv"), csv);
+  const Outcome plain = run("run " + spec.string() + " --out " + (base / "full").string());
+  EXPECT_EQ(plain.code, 2);
+  EXPECT_NE(plain.err.find("my_rk4.toml (method 'my_rk4') changed"), std::string::npos)
+      << plain.err;
+  const Outcome forced =
+      run("run " + spec.string() + " --out " + (base / "full").string() + " --force");
+  ASSERT_EQ(forced.code, 0) << forced.err;
+  EXPECT_EQ(without_wall_time(slurp(base / "full/convergence.csv")), without_wall_time(csv));
+  // A shard of the edited spec does not merge with the others.
+  const Outcome edited_shard =
+      run("run " + spec.string() + " --shard 1/4 --out " + (base / "edited-1").string());
+  ASSERT_EQ(edited_shard.code, 0) << edited_shard.err;
+  const Outcome refused = run("merge --out " + (base / "bad").string() + " " +
+                              (base / "shard-0").string() + " " + (base / "edited-1").string());
+  EXPECT_EQ(refused.code, 2);
+  EXPECT_NE(refused.err.find("my_rk4.toml (method 'my_rk4') changed"), std::string::npos)
+      << refused.err;
 }
 
 TEST(Sweep, ExpansionOrderAndRowTags) {

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <limits>
 #include <random>
 #include <sstream>
@@ -198,6 +199,11 @@ int run_cli(std::vector<std::string> args, std::string* out, std::string* err) {
   return code;
 }
 
+std::string slurp_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
 const char* kTinySpec = R"(kind = "work-precision"
 integrators = ["dopri5", "bs3"]
 t_end = 1.0
@@ -265,7 +271,8 @@ TEST(Profile, TinySuiteEndToEndAndReused) {
   EXPECT_EQ(meta2["ran"].size(), 0u);
   // Full settings against the quick run's folders (profile.* removed): refused with exit 2
   // before any problem runs, the quick rows kept.
-  for (const char* f : {"profile.json", "profile.csv", "profile.md"}) fs::remove(out / f);
+  for (const char* f : {"profile.json", "profile.csv", "profile.md", "profile_status.csv"})
+    fs::remove(out / f);
   std::vector<std::string> full = args;
   full.erase(full.begin() + 2);  // --quick
   EXPECT_EQ(run_cli(full, &o, &e), 2) << e;
@@ -320,6 +327,102 @@ TEST(Profile, AMethodFileGivenByPathIsProfiledUnderItsName) {
         line == "1e-03,f_evals,performance,my_dopri5,1,1")
       ++ones;
   EXPECT_EQ(ones, 2) << "profile.csv rows at alpha = 1 with rho = 1";
+  fs::remove_all(suite);
+  fs::remove_all(out);
+}
+
+// A suite whose specs name two method files by path (dopri5's and bs3's tableaux under other
+// names, beside the specs): the problems' identities are taken after the files are read, from
+// their content, so a second run (with --html), and a third with another --tau, reuse every
+// problem; an edited file makes the next run refuse, naming the file, and --force reruns.
+TEST(Profile, AMethodFileSuiteIsReusedUntilAFileChanges) {
+  const fs::path suite = tiny_suite("reuse_files");
+  fs::create_directories(suite / "my");
+  for (const char* m : {"dopri5", "bs3"}) {
+    std::string text;
+    for (const auto& [file, body] : embedded_method_files())
+      if (file == std::string(m) + ".toml") text = std::string(body);
+    const std::string key = "name = \"" + std::string(m) + "\"";
+    ASSERT_NE(text.find(key), std::string::npos) << m;
+    text.replace(text.find(key), key.size(), "name = \"my_" + std::string(m) + "\"");
+    std::ofstream(suite / "my" / ("my_" + std::string(m) + ".toml")) << text;
+  }
+  for (const char* f : {"01_oscillator.toml", "02_decay.toml"}) {
+    std::ifstream in(suite / f);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    std::string text = ss.str();
+    const std::string list = "integrators = [\"dopri5\", \"bs3\"]";
+    ASSERT_NE(text.find(list), std::string::npos);
+    text.replace(text.find(list), list.size(),
+                 "integrators = [\"my/my_dopri5.toml\", \"my/my_bs3.toml\"]");
+    std::ofstream(suite / f) << text;
+  }
+  const fs::path out = fs::temp_directory_path() / ("profile_reuse_" + std::to_string(getpid()));
+  fs::remove_all(out);
+  const auto profile = [&](std::vector<std::string> extra, std::string* o, std::string* e) {
+    std::vector<std::string> args = {"profile", suite.string(), "--quick", "--out", out.string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_cli(args, o, e);
+  };
+  const auto json = [&](const char* f) {
+    std::ifstream in(out / f);
+    return nlohmann::json::parse(in);
+  };
+  std::string o, e;
+  ASSERT_EQ(profile({"--tau", "1e-3"}, &o, &e), 0) << o << e;
+  EXPECT_EQ(json("profile.json")["ran"].size(), 2u);
+  const std::string rows = slurp_file(out / "oscillator" / "work_precision.csv");
+  ASSERT_EQ(profile({"--tau", "1e-3", "--html"}, &o, &e), 0) << o << e;
+  EXPECT_EQ(json("profile.json")["reused"].size(), 2u) << e;
+  ASSERT_EQ(profile({"--tau", "1e-4"}, &o, &e), 0) << o << e;
+  EXPECT_EQ(json("profile.json")["reused"].size(), 2u) << e;
+  EXPECT_EQ(slurp_file(out / "oscillator" / "work_precision.csv"), rows);
+  // profile_status.csv: every problem x method, all ok here.
+  EXPECT_EQ(slurp_file(out / "profile_status.csv"),
+            "problem,method,unit_status,unit_message\n"
+            "oscillator,my_dopri5,ok,\noscillator,my_bs3,ok,\n"
+            "decay,my_dopri5,ok,\ndecay,my_bs3,ok,\n");
+
+  { std::ofstream(suite / "my" / "my_bs3.toml", std::ios::app) << "# edited\n"; }
+  EXPECT_EQ(profile({"--tau", "1e-3"}, &o, &e), 2);
+  EXPECT_NE(e.find("my_bs3.toml (method 'my_bs3') changed"), std::string::npos) << e;
+  EXPECT_EQ(e.find("--quick"), std::string::npos) << e;
+  EXPECT_EQ(slurp_file(out / "oscillator" / "work_precision.csv"), rows);
+  ASSERT_EQ(profile({"--tau", "1e-3", "--force"}, &o, &e), 0) << o << e;
+  EXPECT_EQ(json("profile.json")["ran"].size(), 2u) << e;
+  fs::remove_all(suite);
+  fs::remove_all(out);
+}
+
+// Units whose runs do not end ok are the profile's data (unsolved there), not its failure. With
+// max_steps = 1 no run of dopri5 or bs3 reaches t_end = 1: the first step of an adaptive run is
+// at most (0.01 / ||f(y0)||_w)^(1/(p+1)) (HNW I, Sect. II.4, the starting-step rule of
+// integrators/adaptive/controller.cpp) with the weighted norm ||f(y0)||_w >= 1 / (atol + rtol)
+// >= 500 for these problems (|f(y0)| >= |y0| = 1) at rtol <= 1e-3, so h <= 0.2 < 1. Every unit
+// is then "failed"; the profile is written, exit 0, and profile_status.csv, profile.md and
+// profile.json list each unit.
+TEST(Profile, UnitsThatDidNotEndOkAreRecordedPerProblem) {
+  const fs::path suite = tiny_suite("not_ok");
+  // 02_decay.toml ends in its [params] table, 01_oscillator.toml in [quick].
+  std::ofstream(suite / "01_oscillator.toml", std::ios::app) << "[params]\nmax_steps = 1\n";
+  std::ofstream(suite / "02_decay.toml", std::ios::app) << "max_steps = 1\n";
+  const fs::path out = fs::temp_directory_path() / ("profile_not_ok_" + std::to_string(getpid()));
+  fs::remove_all(out);
+  std::string o, e;
+  ASSERT_EQ(run_cli({"profile", suite.string(), "--quick", "--tau", "1e-3", "--cost", "f_evals",
+                     "--out", out.string()},
+                    &o, &e),
+            0)
+      << o << e;
+  const std::string status = slurp_file(out / "profile_status.csv");
+  for (const char* row : {"oscillator,dopri5,failed,", "oscillator,bs3,failed,",
+                          "decay,dopri5,failed,", "decay,bs3,failed,"})
+    EXPECT_NE(status.find(row), std::string::npos) << row << "\n" << status;
+  std::ifstream in(out / "profile.json");
+  EXPECT_EQ(nlohmann::json::parse(in)["units_not_ok"].size(), 4u);
+  EXPECT_NE(slurp_file(out / "profile.md").find("## Units that did not end ok"), std::string::npos);
+  EXPECT_NE(e.find("counted as unsolved"), std::string::npos) << e;
   fs::remove_all(suite);
   fs::remove_all(out);
 }
