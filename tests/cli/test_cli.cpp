@@ -207,7 +207,7 @@ TEST(Cli, ConvergenceWritesContractFiles) {
   EXPECT_EQ(header,
             "model,integrator,order,h,steps,error,observed_order,f_evals,jac_evals,lin_solves,wall_"
             "s,status,newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_"
-            "iters,fe_evals,fi_evals,roundoff_floor,reference_floor");
+            "iters,fe_evals,fi_evals,roundoff_floor,reference_floor,floor_used,floor_source");
   int rows = 0;
   for (std::string line; std::getline(f, line);) ++rows;
   EXPECT_EQ(rows, 6);
@@ -224,7 +224,7 @@ TEST(Cli, ConvergenceWritesContractFiles) {
   EXPECT_EQ(header,
             "model,integrator,order,h,local_error,observed_order,status,f_evals,jac_evals,lin_"
             "solves,newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_"
-            "iters,fe_evals,fi_evals,roundoff_floor,reference_floor");
+            "iters,fe_evals,fi_evals,roundoff_floor,reference_floor,floor_used,floor_source");
   EXPECT_TRUE(std::filesystem::exists(dir / "local_error_orders.csv"));
   std::filesystem::remove_all(dir);
 }
