@@ -141,11 +141,16 @@ std::uint64_t splitmix64(std::uint64_t& state) {
 Vec perturbed_initial_state(const Vec& y0, int sign) {
   std::uint64_t state = kFloorSeed;
   Vec y = y0;
+  // y0 = 0: every component moves by ±kFloorPerturbation (absolute: the solution's scale 1).
+  const bool all_zero = !(y0.array() != 0.0).any();
   for (Index i = 0; i < y.size(); ++i) {
     // One draw per component, zero or not, so a component's sign depends on its index only.
     const std::uint64_t r = splitmix64(state);
     const double s = ((r >> 32) & 1U) != 0 ? 1.0 : -1.0;
-    if (y[i] != 0 && std::isfinite(y[i])) y[i] *= 1 + sign * s * kFloorPerturbation;
+    if (all_zero)
+      y[i] = sign * s * kFloorPerturbation;
+    else if (y[i] != 0 && std::isfinite(y[i]))
+      y[i] *= 1 + sign * s * kFloorPerturbation;
   }
   return y;
 }
@@ -153,7 +158,6 @@ Vec perturbed_initial_state(const Vec& y0, int sign) {
 std::optional<double> measure_roundoff_floor(
     const Vec& y0, const Vec& y, const std::function<std::optional<Vec>(const Vec&)>& run,
     std::vector<double>* spreads) {
-  if (!(y0.array() != 0.0).any()) return std::nullopt;
   const std::optional<Vec> up = run(perturbed_initial_state(y0, 1));
   const std::optional<Vec> down = run(perturbed_initial_state(y0, -1));
   auto usable = [&](const std::optional<Vec>& v) {
@@ -877,8 +881,7 @@ ConvergenceResult::Floor integrator_floor(const StudyState& st, Integrator& inte
   fl.h = rows[finest].h;
   fl.steps = std::max(1L, rows[finest].steps);
   if (!measured) {
-    fl.note =
-        (st.y0.array() != 0.0).any() ? "no perturbed rerun ended ok" : "y0 = 0: nothing to perturb";
+    fl.note = "a perturbed rerun did not end ok";
     return fl;
   }
   fl.value = *measured;
@@ -1579,9 +1582,8 @@ std::string floors_sentence(const ConvergenceResult& res, bool local) {
   if (res.floor_mode == "auto") {
     int measured = 0;
     for (const auto& f : res.floors) measured += f.source == "perturbed" ? 1 : 0;
-    os << "measured per method from two reruns at its finest step from y0 scaled by 1 ± "
-       << g_short(kFloorPerturbation)
-       << " per component: twice the max-norm of (y₊ + y₋)/2 − y, the part of the result that "
+    os << "measured per method from two reruns at its finest step from y0 scaled by 1 ± 2^-30 "
+          "per component: twice the max-norm of (y₊ + y₋)/2 − y, the part of the result that "
           "is rounding; the `floor_used` column";
     if (measured < static_cast<int>(res.floors.size()))
       os << "; the model " << model << " for " << res.floors.size() - measured
@@ -1838,7 +1840,7 @@ StudyKind step_size_kind(bool local) {
   k.options.push_back(
       {"floor", ParamType::text, "auto",
        "the round-off floor a row must stay 10x above to enter the order fit: auto (measured per "
-       "method from reruns at its finest step with y0 perturbed by a few ulps), model (N*u*s, "
+       "method from two reruns at its finest step with y0 scaled by 1 +- 2^-30), model (N*u*s, "
        "an upper bound) or an absolute error VALUE"});
   k.extra_files = {std::string(local ? "local_error" : "convergence") + "_orders.csv"};
   for (auto& o : k.options) {

@@ -37,18 +37,18 @@
 //    `auto` (the default): measured per integrator. At its finest level that ran ok the run is
 //      repeated twice from y0 with every nonzero component scaled by 1 ± kFloorPerturbation
 //      (2^-30; the signs s_i = ±1 from a fixed-seed generator, so runs are reproducible; zero
-//      components stay exact): y₊ from 1 + s_i·2^-30, y₋ from 1 − s_i·2^-30. Their mean minus the
-//      unperturbed result y, d = (y₊ + y₋)/2 − y, cancels the first-order response to the
-//      perturbation (the second-order one, about 2^-60 relative, is far below the rounding), so
-//      it is rounding only: three runs whose rounding differs (the perturbation moves every
-//      increment h·k by many ulps of y, which a perturbation of a few ulps of y0 does not: both
-//      runs would round y + h·k alike). The floor is 2‖d‖∞ (about 2σ, σ the rounding error of a
-//      run, when the three are independent), at least u·‖y‖∞. A level with N steps gets the
-//      floor scaled by √(N/N_f), N_f the steps of the measurement (a random walk of rounding
-//      errors; rk4 on the oscillator grows faster, about N^0.8, so coarser levels get a larger
-//      floor than their rounding); the local error's one step has the measured floor at every h.
-//      Source `perturbed`; `model` when there is nothing to measure (no level ran ok, a rerun
-//      failed, or y0 = 0).
+//      components stay exact, except when y0 = 0, whose components move by ±2^-30): y₊ from 1 +
+//      s_i·2^-30, y₋ from 1 − s_i·2^-30. Their mean minus the unperturbed result y, d = (y₊ + y₋)/2
+//      − y, cancels the first-order response to the perturbation (the second-order one, about 2^-60
+//      relative, is far below the rounding), so it is rounding only: three runs whose rounding
+//      differs (the perturbation moves every increment h·k by many ulps of y, which a perturbation
+//      of a few ulps of y0 does not: both runs would round y + h·k alike). The floor is 2‖d‖∞
+//      (about 2σ, σ the rounding error of a run, when the three are independent), at least u·‖y‖∞.
+//      A level with N steps gets the floor scaled by √(N/N_f), N_f the steps of the measurement (a
+//      random walk of rounding errors; rk4 on the oscillator grows faster, about N^0.8, so coarser
+//      levels get a larger floor than their rounding); the local error's one step has the measured
+//      floor at every h. Source `perturbed`; `model` when there is nothing to measure (no level ran
+//      ok or a rerun failed).
 //    `model`: the bound N·u·s for a global error after N steps and u·s for a local error (one
 //      step), with u = 2^-53 the unit round-off and s = max(1, ‖y0‖∞, ‖y_ref‖∞) the solution's
 //      size (y_ref at t_end, or at t0 + h for the local error). Every row carries it
@@ -217,13 +217,14 @@ constexpr double kFloorKeepFactor = 2;
 // (perturbed_initial_state with sign +1 and -1). `run(y0')` returns the final state of a run from
 // y0', empty when it did not end ok; `y` is the unperturbed run's final state. The floor is
 // kFloorSecondDifferenceFactor ‖(y₊ + y₋)/2 − y‖∞, at least u·‖y‖∞; empty when a rerun did not
-// end ok or y0 has no nonzero component. `spreads` receives ‖y₊ − y‖∞, ‖y₋ − y‖∞ and
+// end ok. `spreads` receives ‖y₊ − y‖∞, ‖y₋ − y‖∞ and
 // ‖(y₊ + y₋)/2 − y‖∞.
 std::optional<double> measure_roundoff_floor(
     const Vec& y0, const Vec& y, const std::function<std::optional<Vec>(const Vec&)>& run,
     std::vector<double>* spreads = nullptr);
 // y0 with each nonzero component scaled by 1 + sign·s_i·kFloorPerturbation, s_i = ±1 from a
-// splitmix64 sequence seeded with kFloorSeed (deterministic; zero components stay exact).
+// splitmix64 sequence seeded with kFloorSeed (deterministic; zero components stay exact; when y0
+// = 0 every component becomes sign·s_i·kFloorPerturbation).
 Vec perturbed_initial_state(const Vec& y0, int sign);
 
 struct ConvergenceRow {

@@ -264,8 +264,9 @@ TEST(Cli, ConvergenceRowsOfImplicitMethodsCountJacobiansAndSolves) {
   for (std::size_t r = 1; r < table.size(); ++r) {
     const auto& cells = table[r];
     const std::string line = join_cells(cells);
-    // 12 contract columns, the 5 solver counters and the 2 floors.
-    ASSERT_EQ(cells.size(), 21u) << line;
+    // 12 contract columns, the 7 solver counters, the 2 floors and the floor in use with its
+    // source.
+    ASSERT_EQ(cells.size(), 23u) << line;
     EXPECT_GT(std::stol(cells[8]), 0) << line;  // jac_evals
     EXPECT_GT(std::stol(cells[9]), 0) << line;  // lin_solves
     ++rows;
