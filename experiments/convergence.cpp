@@ -904,7 +904,7 @@ void apply_floor(ConvergenceRow& row, const ConvergenceResult::Floor& fl, bool n
 }
 
 // A measured floor estimates the rounding of a level, it does not observe it: a row within
-// kFloorFactor of it (but at least kFloorKeepFactor times it) whose pairwise order with the coarser
+// kFloorFactor of it (but above kFloorKeepFactor times it) whose pairwise order with the coarser
 // usable level is within kOrderTolerance of the expected slope still falls at the method's order,
 // so rounding does not set its error; it stays ok (and so may the next level, by the same test).
 void keep_rows_still_falling(std::vector<ConvergenceRow>& rows, bool local) {
@@ -912,7 +912,7 @@ void keep_rows_still_falling(std::vector<ConvergenceRow>& rows, bool local) {
     ConvergenceRow& r = rows[k];
     const ConvergenceRow& prev = rows[k - 1];
     if (!r.at_floor || prev.at_floor || prev.stats.status != Status::ok || !(prev.error > 0) ||
-        !(r.error > 0) || r.error < kFloorKeepFactor * r.floor_used ||
+        !(r.error > 0) || r.error <= kFloorKeepFactor * r.floor_used ||
         r.error <= kFloorFactor * r.reference_floor)
       continue;
     const double q = std::log(prev.error / r.error) / std::log(prev.h / r.h);

@@ -60,12 +60,12 @@
 //    for an adaptive reference; half the step for a fixed-step one); it is cached like the first
 //    (another key). An exact reference has no such floor (0).
 // A row whose error is at most kFloorFactor (10) times either floor has status `floor` (its error
-// stays in the table) and is left out of order fits; except, for a measured floor, a row at least
-// kFloorKeepFactor (2) times it whose pairwise order with the coarser usable level is within
-// kOrderTolerance (0.1) of the expected slope: its error still falls at the method's order, so
-// rounding does not set it (checked level by level from the coarse end). With a measured floor F ≈
-// 2σ (σ the rounding error), an error 10 F = 20σ carries a relative noise of 5%, which moves a
-// pairwise order by about 0.07 for refine 2.
+// stays in the table) and is left out of order fits; except, for a measured floor, a row above it
+// (kFloorKeepFactor = 1; the floor is about 2σ) whose pairwise order with the coarser usable
+// level is within kOrderTolerance (0.1) of the expected slope: its error still falls at the
+// method's order, so rounding does not set it (checked level by level from the coarse end). With a
+// measured floor F ≈ 2σ (σ the rounding error), an error 10 F = 20σ carries a relative noise of 5%,
+// which moves a pairwise order by about 0.07 for refine 2.
 //
 // Orders (fit_order): over the rows of one integrator, the asymptotic window is the longest run
 // of consecutive levels that ran ok, are above both floors, and whose pairwise observed orders
@@ -209,9 +209,9 @@ constexpr int kProbeRuns = 8;                // at most this many probe runs per
 constexpr double kFloorPerturbation = 0x1p-30;
 constexpr unsigned long long kFloorSeed = 0x9e3779b97f4a7c15ULL;
 constexpr double kFloorSecondDifferenceFactor = 2;
-// A row between kFloorKeepFactor and kFloorFactor times a measured floor stays ok when its
+// A row above kFloorKeepFactor and within kFloorFactor times a measured floor stays ok when its
 // pairwise order with the coarser usable level is within kOrderTolerance of the expected slope.
-constexpr double kFloorKeepFactor = 2;
+constexpr double kFloorKeepFactor = 1;
 
 // The floor measurement of --floor auto: two reruns from y0 scaled by 1 ± kFloorPerturbation
 // (perturbed_initial_state with sign +1 and -1). `run(y0')` returns the final state of a run from

@@ -426,7 +426,22 @@ TEST(RoundoffFloor, ChemAkzoKeepsRowsBelowTheModelFloorAndFits) {
     below_model += !r.at_floor && r.error <= kFloorFactor * r.roundoff_floor ? 1 : 0;
   }
   EXPECT_GE(below_model, 2);  // radau5 at h = 0.025 and 0.0125
+  // Per-method ladders (radau5 from h = 0.119, its finest error 6e-16 just above its floor and
+  // still at order 5): the same fit and rule.
+  spec.ladder = "per-method";
+  spec.levels = 6;
+  spec.integrators = {"radau5"};
+  const auto own = run_convergence(spec, chemakzo(), nullptr);
+  ASSERT_TRUE(own.fits[0].fitted.has_value()) << own.fits[0].reason;
+  EXPECT_NEAR(*own.fits[0].fitted, 5.0, 0.1) << own.fits[0].reason;
+  for (const auto& r : own.rows) {
+    if (r.at_floor && r.observed_order) {
+      EXPECT_GT(std::abs(*r.observed_order - r.order), kOrderTolerance) << "h = " << r.h;
+    }
+  }
   // --floor model: radau5 keeps only the two coarsest levels, no fit (the reported problem).
+  spec.ladder = "common";
+  spec.levels = 7;
   spec.floor = "model";
   spec.integrators = {"radau5"};
   const auto old = run_convergence(spec, chemakzo(), nullptr);
