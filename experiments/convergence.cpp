@@ -1584,10 +1584,13 @@ std::string floors_sentence(const ConvergenceResult& res, bool local) {
     for (const auto& f : res.floors) measured += f.source == "perturbed" ? 1 : 0;
     os << "measured per method from two reruns at its finest step from y0 scaled by 1 ± 2^-30 "
           "per component: twice the max-norm of (y₊ + y₋)/2 − y, the part of the result that "
-          "is rounding; the `floor_used` column";
+          "is rounding"
+       << (local ? "" : ", times √(N/N_f) at a level of N steps") << "; the `floor_used` column";
     if (measured < static_cast<int>(res.floors.size()))
       os << "; the model " << model << " for " << res.floors.size() - measured
          << " method(s) with nothing to measure";
+    os << "; a row above a measured floor whose pairwise order is within "
+       << g_short(kOrderTolerance) << " of the expected slope stays ok";
   } else if (res.floor_mode == "model") {
     os << "the model " << model << ", from --floor model";
   } else {
