@@ -95,6 +95,20 @@ void read_step_study_options(const Params& o, StepStudySpec& spec) {
   if (o.contains("reference_atol")) spec.reference_atol = o.real("reference_atol");
 }
 
+std::optional<double> ConvergenceSpec::given_floor() const {
+  if (floor == "auto" || floor == "model") return std::nullopt;
+  std::size_t used = 0;
+  double v = std::numeric_limits<double>::quiet_NaN();
+  try {
+    v = std::stod(floor, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  require_input(!floor.empty() && used == floor.size() && std::isfinite(v) && v > 0,
+                "--floor must be auto, model or a positive number (got '" + floor + "')");
+  return v;
+}
+
 void ConvergenceSpec::validate() const {
   require_input(std::isfinite(t_end) && t_end > 0,
                 "--t-end must be > 0 (got " + format_full(t_end) + ")");
@@ -102,12 +116,62 @@ void ConvergenceSpec::validate() const {
   validate_step_study();
   require_input(ladder == "common" || ladder == "per-method",
                 "--ladder must be common or per-method (got '" + ladder + "')");
+  given_floor();
 }
 
 nlohmann::json ConvergenceSpec::to_json() const {
   nlohmann::json j = step_study_json();
   j["ladder"] = ladder;
+  j["floor"] = floor;
   return j;
+}
+
+namespace {
+
+// splitmix64 (Steele, Lea & Flood, OOPSLA 2014): the perturbations' deterministic generator.
+std::uint64_t splitmix64(std::uint64_t& state) {
+  std::uint64_t z = (state += 0x9e3779b97f4a7c15ULL);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+}  // namespace
+
+Vec perturbed_initial_state(const Vec& y0, int sign) {
+  std::uint64_t state = kFloorSeed;
+  Vec y = y0;
+  // y0 = 0: every component moves by ±kFloorPerturbation (absolute: the solution's scale 1).
+  const bool all_zero = !(y0.array() != 0.0).any();
+  for (Index i = 0; i < y.size(); ++i) {
+    // One draw per component, zero or not, so a component's sign depends on its index only.
+    const std::uint64_t r = splitmix64(state);
+    const double s = ((r >> 32) & 1U) != 0 ? 1.0 : -1.0;
+    if (all_zero)
+      y[i] = sign * s * kFloorPerturbation;
+    else if (y[i] != 0 && std::isfinite(y[i]))
+      y[i] *= 1 + sign * s * kFloorPerturbation;
+  }
+  return y;
+}
+
+std::optional<double> measure_roundoff_floor(
+    const Vec& y0, const Vec& y, const std::function<std::optional<Vec>(const Vec&)>& run,
+    std::vector<double>* spreads) {
+  const std::optional<Vec> up = run(perturbed_initial_state(y0, 1));
+  const std::optional<Vec> down = run(perturbed_initial_state(y0, -1));
+  auto usable = [&](const std::optional<Vec>& v) {
+    return v && v->size() == y.size() && v->allFinite();
+  };
+  if (!usable(up) || !usable(down)) return std::nullopt;
+  const double d = (0.5 * (*up + *down) - y).cwiseAbs().maxCoeff();
+  if (spreads) {
+    spreads->push_back(max_abs_diff(*up, y));
+    spreads->push_back(max_abs_diff(*down, y));
+    spreads->push_back(d);
+  }
+  return std::max(kFloorSecondDifferenceFactor * d,
+                  kUnitRoundoff * (y.size() ? y.cwiseAbs().maxCoeff() : 0.0));
 }
 
 namespace {
@@ -491,10 +555,13 @@ double inf_norm(CVecRef y) { return y.size() ? y.cwiseAbs().maxCoeff() : 0.0; }
 
 // The per-method probe (see the header): the coarsest step of one integrator's ladder.
 // error_at(h): the error of a run at h (NaN when it failed); floor_at(h): the larger floor of a
-// run at h; q: the expected slope.
+// run at h; q: the expected slope. calibrate(h), when set, is called once before stage 2 with the
+// finest step of the coarsest allowed ladder (--floor auto measures the round-off floor there,
+// which floor_at then uses).
 double probe_ladder(const ConvergenceSpec& spec, double t_span, bool local, double s, int q,
                     const std::function<double(double)>& error_at,
                     const std::function<double(double)>& floor_at,
+                    const std::function<void(double)>& calibrate,
                     ConvergenceResult::Ladder& record) {
   const double target = kLadderTop * s;
   // Not below h/64, nor so small that the finest level would exceed the driver's step limit.
@@ -584,6 +651,7 @@ double probe_ladder(const ConvergenceSpec& spec, double t_span, bool local, doub
   const double h0_min = std::max(lo, h_top / span);
   const double fine_lo = h0_min / span, fine_hi = h_top / span;
   double h_fine = fine_hi;
+  if (calibrate) calibrate(fine_hi);
   auto fine_target = [&](double hf) { return kLadderFloorMargin * floor_at(hf); };
   if (predict(h_fine) <= fine_target(h_fine)) return h_top;  // already reaches the floor region
   for (int it = 0; it < 3; ++it)
@@ -622,11 +690,35 @@ struct StudyState {
   StudyState(const ConvergenceSpec& s, const OdeSystem& system, bool is_local, std::ostream* out)
       : spec(s), sys(system), local(is_local), progress(out) {}
 
-  RunResult run_at(Integrator& integ, double h) const {
+  std::optional<double> given_floor;  // --floor VALUE
+
+  RunResult run_at(Integrator& integ, double h) const { return run_from(integ, h, y0); }
+  RunResult run_from(Integrator& integ, double h, const Vec& start) const {
     FixedStepOptions opt;
     opt.t_end = local ? t0 + h : spec.t_end;
     opt.h = h;
-    return run_fixed_step_from(sys, integ, t0, y0, opt);
+    return run_fixed_step_from(sys, integ, t0, start, opt);
+  }
+  // The model round-off floor N·u·s of a run at h (u·s for the local error).
+  double model_floor(double h) const {
+    if (local) return kUnitRoundoff * std::max(1.0, y0_norm);
+    return static_cast<double>(step_count(h)) * kUnitRoundoff * s_end;
+  }
+  long step_count(double h) const {
+    return local ? 1 : fixed_step_count(t0, spec.t_end, h, FixedStepOptions{}.max_steps);
+  }
+  // --floor auto: the measured round-off floor of `integ` at step h (measure_roundoff_floor),
+  // `y` the unperturbed run's final state; empty when it cannot be measured.
+  std::optional<double> measured_floor(Integrator& integ, double h, const Vec& y,
+                                       std::vector<double>* spreads) const {
+    return measure_roundoff_floor(
+        y0, y,
+        [&](const Vec& start) -> std::optional<Vec> {
+          const RunResult r = run_from(integ, h, start);
+          if (r.stats.status != Status::ok) return std::nullopt;
+          return r.y;
+        },
+        spreads);
   }
 };
 
@@ -697,14 +789,35 @@ std::vector<std::vector<double>> per_method_ladders(const StudyState& st, Setup&
       // The probe's local reference is computed directly (uncached): one short run.
       return max_abs_diff(r.y, compute_reference(st.plan, st.sys, {st.t0 + h})[0]);
     };
-    auto floor_at = [&](double h) {
-      if (local) return kUnitRoundoff * std::max(1.0, st.y0_norm);
-      const double n =
-          static_cast<double>(fixed_step_count(st.t0, spec.t_end, h, FixedStepOptions{}.max_steps));
-      return std::max(n * kUnitRoundoff * st.s_end, st.ref_acc_end);
+    // The round-off floor of the probe: given, measured once (calibrate; in proportion to the
+    // steps below the measured step) or the model.
+    std::optional<double> measured;
+    double measured_steps = 1;
+    auto roundoff_at = [&](double h) {
+      if (st.given_floor) return *st.given_floor;
+      if (measured)
+        return *measured * std::max(1.0, static_cast<double>(st.step_count(h)) / measured_steps);
+      return st.model_floor(h);
     };
-    rec.h0 = probe_ladder(spec, spec.t_end - st.t0, local,
-                          local ? std::max(1.0, st.y0_norm) : st.s_end, q, error_at, floor_at, rec);
+    auto floor_at = [&](double h) {
+      return local ? roundoff_at(h) : std::max(roundoff_at(h), st.ref_acc_end);
+    };
+    std::function<void(double)> calibrate;
+    if (spec.floor == "auto")
+      calibrate = [&](double h) {
+        const RunResult r = st.run_at(integ, h);
+        if (r.stats.status != Status::ok) return;
+        std::vector<double> spreads;
+        if (const auto f = st.measured_floor(integ, h, r.y, &spreads)) {
+          measured = *f;
+          measured_steps = static_cast<double>(st.step_count(h));
+          rec.floor_h = h;
+          rec.floor = *f;
+        }
+      };
+    rec.h0 =
+        probe_ladder(spec, spec.t_end - st.t0, local, local ? std::max(1.0, st.y0_norm) : st.s_end,
+                     q, error_at, floor_at, calibrate, rec);
     ladders.push_back(spec.step_ladder(rec.h0));
     for (double h : ladders.back())
       fixed_step_count(st.t0, spec.t_end, h, FixedStepOptions{}.max_steps);
@@ -717,14 +830,16 @@ std::vector<std::vector<double>> per_method_ladders(const StudyState& st, Setup&
 }
 
 // One row: the run at h, its error against the reference (index ref_index of the local ones)
-// and its floors.
+// and its model and reference floors (the round-off floor in use comes later: apply_floor).
+// `y_end` receives the run's final state.
 ConvergenceRow measure_row(const StudyState& st, Integrator& integ, double h, std::size_t ref_index,
-                           const ConvergenceResult& result) {
+                           const ConvergenceResult& result, Vec& y_end) {
   ConvergenceRow row;
   row.model = st.spec.model;
   row.integrator = integ.info().name;
   row.order = integ.info().order;
   const RunResult r = st.run_at(integ, h);
+  y_end = r.y;
   row.h = r.h;
   row.steps = r.stats.steps;  // the steps taken: N unless the run ended early
   row.stats = r.stats;
@@ -737,10 +852,72 @@ ConvergenceRow measure_row(const StudyState& st, Integrator& integ, double h, st
   if (st.numerical_ref && result.reference_accuracy)
     row.reference_floor =
         st.local ? max_abs_diff(st.ref_local[ref_index], st.ref2_local[ref_index]) : st.ref_acc_end;
-  row.at_floor = r.stats.status == Status::ok &&
-                 (row.error <= kFloorFactor * row.roundoff_floor ||
-                  (st.numerical_ref && row.error <= kFloorFactor * row.reference_floor));
   return row;
+}
+
+// The round-off floor of one integrator's rows (--floor): given, the model, or measured by
+// perturbed reruns at its finest level that ran ok (`finest_y`: each level's final state).
+ConvergenceResult::Floor integrator_floor(const StudyState& st, Integrator& integ,
+                                          const std::vector<ConvergenceRow>& rows,
+                                          const std::vector<Vec>& finals) {
+  ConvergenceResult::Floor fl;
+  fl.integrator = integ.info().name;
+  if (st.given_floor) {
+    fl.value = *st.given_floor;
+    fl.source = "given";
+    return fl;
+  }
+  fl.source = "model";
+  fl.value = rows.empty() ? 0.0 : rows.back().roundoff_floor;
+  if (st.spec.floor == "model") return fl;
+  std::size_t finest = rows.size();
+  for (std::size_t k = 0; k < rows.size(); ++k)
+    if (rows[k].stats.status == Status::ok) finest = k;
+  if (finest == rows.size()) {
+    fl.note = "no level ran ok: nothing to measure";
+    return fl;
+  }
+  const auto measured = st.measured_floor(integ, rows[finest].h, finals[finest], &fl.spreads);
+  fl.h = rows[finest].h;
+  fl.steps = std::max(1L, rows[finest].steps);
+  if (!measured) {
+    fl.note = "a perturbed rerun did not end ok";
+    return fl;
+  }
+  fl.value = *measured;
+  fl.source = "perturbed";
+  return fl;
+}
+
+// The floor in use for a row and its status: at a floor when its error is at most kFloorFactor
+// times the round-off floor or (numerical reference) the reference's accuracy. A measured floor
+// scales to the row's steps N as √(N/N_f) (N_f: the steps of the measurement).
+void apply_floor(ConvergenceRow& row, const ConvergenceResult::Floor& fl, bool numerical_ref) {
+  row.floor_used = fl.source == "model" ? row.roundoff_floor : fl.value;
+  if (fl.source == "perturbed")
+    row.floor_used = fl.value * std::sqrt(static_cast<double>(std::max(1L, row.steps)) /
+                                          static_cast<double>(std::max(1L, fl.steps)));
+  row.floor_source = fl.source;
+  row.at_floor = row.stats.status == Status::ok &&
+                 (row.error <= kFloorFactor * row.floor_used ||
+                  (numerical_ref && row.error <= kFloorFactor * row.reference_floor));
+}
+
+// A measured floor estimates the rounding of a level, it does not observe it: a row within
+// kFloorFactor of it (but above kFloorKeepFactor times it) whose pairwise order with the coarser
+// usable level is within kOrderTolerance of the expected slope still falls at the method's order,
+// so rounding does not set its error; it stays ok (and so may the next level, by the same test).
+void keep_rows_still_falling(std::vector<ConvergenceRow>& rows, bool local) {
+  for (std::size_t k = 1; k < rows.size(); ++k) {
+    ConvergenceRow& r = rows[k];
+    const ConvergenceRow& prev = rows[k - 1];
+    if (!r.at_floor || prev.at_floor || prev.stats.status != Status::ok || !(prev.error > 0) ||
+        !(r.error > 0) || r.error <= kFloorKeepFactor * r.floor_used ||
+        r.error <= kFloorFactor * r.reference_floor)
+      continue;
+    const double q = std::log(prev.error / r.error) / std::log(prev.h / r.h);
+    if (std::abs(q - (r.order + (local ? 1 : 0))) <= kOrderTolerance) r.at_floor = false;
+  }
 }
 
 ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress, bool local) {
@@ -778,6 +955,8 @@ ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress
   result.ladder = spec.ladder;
   if (st.numerical_ref) result.reference_check_description = st.plan2.description;
 
+  st.given_floor = spec.given_floor();
+  result.floor_mode = spec.floor;
   st.y0 = sys.initial_state();
   st.y0_norm = inf_norm(st.y0);
   if (!local) global_reference(st, result);
@@ -792,15 +971,34 @@ ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress
   for (const auto& ladder : ladders) total += ladder.size();
   std::size_t done = 0, ref_index = 0;
   for (std::size_t i = 0; i < setup.integrators.size(); ++i) {
+    Integrator& integ = *setup.integrators[i];
+    std::vector<ConvergenceRow> rows;
+    std::vector<Vec> finals;
     for (double h : ladders[i]) {
-      result.rows.push_back(measure_row(st, *setup.integrators[i], h, ref_index++, result));
-      if (progress) *progress << progress_line(++done, total, result.rows.back()) << std::flush;
+      finals.emplace_back();
+      rows.push_back(measure_row(st, integ, h, ref_index++, result, finals.back()));
+      if (progress) *progress << progress_line(++done, total, rows.back()) << std::flush;
     }
+    ConvergenceResult::Floor fl = integrator_floor(st, integ, rows, finals);
+    if (progress && fl.source != "model")
+      *progress << "floor: " << fl.integrator << " " << format_short(fl.value) << " (" << fl.source
+                << (fl.source == "perturbed" ? ", two reruns at h = " + format_short(fl.h)
+                                             : std::string())
+                << ")\n";
+    if (progress && !fl.note.empty())
+      *progress << "floor: " << fl.integrator << " uses the model N·u·s (" << fl.note << ")\n";
+    for (auto& row : rows) apply_floor(row, fl, st.numerical_ref);
+    if (fl.source == "perturbed") keep_rows_still_falling(rows, local);
+    for (auto& row : rows) result.rows.push_back(std::move(row));
+    result.floors.push_back(std::move(fl));
   }
   add_observed_orders(result.rows);
-  for (const auto& integ : setup.integrators) {
-    OrderFit fit = fit_order(result.rows, integ->info().name, local);
-    if (const auto a = coefficient_analysis(*integ)) fit.analysed_order = a->order;
+  for (std::size_t i = 0; i < setup.integrators.size(); ++i) {
+    const Integrator& integ = *setup.integrators[i];
+    OrderFit fit = fit_order(result.rows, integ.info().name, local, result.ladder);
+    if (const auto a = coefficient_analysis(integ)) fit.analysed_order = a->order;
+    fit.floor_used = result.floors[i].value;
+    fit.floor_source = result.floors[i].source;
     result.fits.push_back(std::move(fit));
   }
   return result;
@@ -966,10 +1164,89 @@ std::string reduced_trend(const std::vector<double>& q) {
          format_fixed(q.back(), 2) + " to " + format_fixed(q.front(), 2) + ")";
 }
 
+// The round-off floor of a row in words: how it was found and its value.
+std::string roundoff_words(const ConvergenceRow& r) {
+  if (r.floor_source == "perturbed")
+    return "the round-off floor (measured by perturbed reruns: " + format_short(r.floor_used) + ")";
+  if (r.floor_source == "given")
+    return "the round-off floor (--floor " + format_short(r.floor_used) + ")";
+  return "the round-off floor (the model N·u·s)";
+}
+
+// The finest usable level at or after `from` (`from` itself when none is finer).
+std::size_t finest_usable(const FitLevels& lv, std::size_t from) {
+  std::size_t last = from;
+  for (std::size_t b = from; b < lv.rs.size(); ++b)
+    if (lv.usable[b]) last = b;
+  return last;
+}
+
+// Whether a level finer than `last` (the finest usable one) is at a floor: the floor, not the
+// ladder's length, ends the usable levels, so finer steps cannot add usable ones.
+bool floor_ends_ladder(const FitLevels& lv, std::size_t last) {
+  for (std::size_t b = last + 1; b < lv.rs.size(); ++b)
+    if (lv.rs[b]->at_floor) return true;
+  return false;
+}
+
+// The pairwise orders through the round-off floor rows just finer than `last` (ok rows with a
+// positive error, at most two pairs), as "q q" when each is within 0.3 of the expected slope: the
+// floor marks levels whose errors still fall at the method's order. Empty otherwise.
+std::string orders_through_floor(const FitLevels& lv, std::size_t last, double expected) {
+  std::string s;
+  int pairs = 0;
+  for (std::size_t b = last + 1; b < lv.rs.size() && pairs < 2; ++b) {
+    const auto& r = *lv.rs[b];
+    const auto& p = *lv.rs[b - 1];
+    if (!r.at_floor || r.stats.status != Status::ok || !(r.error > 0) || !(p.error > 0) ||
+        p.stats.status != Status::ok)
+      break;
+    if (r.error > kFloorFactor * r.floor_used) break;  // at the reference's floor, not round-off
+    const double q = lv.pair_order(b);
+    if (!(std::abs(q - expected) <= 0.3)) return "";
+    s += (s.empty() ? "" : " ") + format_fixed(q, 2);
+    ++pairs;
+  }
+  return s;
+}
+
+// What changes the result when the floor ends the ladder below its finest usable level `last`: a
+// floor that marks levels whose errors still fall at the expected slope is named (the model
+// bound: --floor auto measures it; a given one: lower it); otherwise a denser ladder, which keeps
+// more levels above the floor over the same range of errors.
+std::string floor_end_advice(const FitLevels& lv, std::size_t last, double expected) {
+  const auto& r = *lv.rs[std::min(last + 1, lv.rs.size() - 1)];
+  const std::string through = orders_through_floor(lv, last, expected);
+  if (!through.empty()) {
+    const std::string marks = " marks finer levels whose errors still fall at about order " +
+                              std::to_string(static_cast<int>(expected)) + " (pairwise orders " +
+                              through + ")";
+    if (r.floor_source == "given")
+      return "--floor " + format_short(r.floor_used) + marks + ": a smaller --floor keeps them";
+    if (r.floor_source != "perturbed")
+      return "the model N·u·s" + marks + ": --floor auto measures the floor instead of bounding it";
+    return "the measured floor" + marks + ": a smaller --refine puts more levels above it";
+  }
+  return "the floor ends the ladder below them: a smaller --refine puts more levels above it";
+}
+
+// What gives more levels where the pairwise orders can settle: finer steps, unless the floor ends
+// the ladder (floor_end_advice); a per-method ladder ends about kLadderFloorMargin times above the
+// floors by design, whatever --levels says, so only a common ladder goes finer.
+std::string finer_levels_advice(const FitLevels& lv, std::size_t last, double expected,
+                                const std::string& ladder) {
+  if (floor_ends_ladder(lv, last)) return floor_end_advice(lv, last, expected);
+  if (ladder == "per-method")
+    return "the per-method ladder ends about " + g_short(kLadderFloorMargin) +
+           "x above the floors by design: --ladder common with a smaller --h goes down to " +
+           g_short(kFloorFactor) + "x";
+  return "add --levels or use a smaller --h";
+}
+
 // Why a fit over the window [a, a + len) is more than kOrderTolerance from the expected slope,
 // read from the pairwise orders.
 std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, double slope,
-                           int expected_slope) {
+                           int expected_slope, const std::string& ladder) {
   const std::size_t n = lv.rs.size();
   const double expected = expected_slope;
   const double q_first = lv.pair_order(a + 1), q_last = lv.pair_order(a + len - 1);
@@ -988,7 +1265,14 @@ std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, 
     w_hi = std::max(w_hi, lv.pair_order(b));
   }
   const std::vector<double> last_orders = last_pair_orders(lv, a + len - 1);
-  const bool approaching = orders_approach(last_orders, expected);
+  // The finest usable level of the integrator (not only of the window): orders still moving
+  // towards the expected slope there make the whole approach pre-asymptotic too.
+  const std::size_t last_usable = finest_usable(lv, a + len - 1);
+  const bool approaching = orders_approach(last_orders, expected) ||
+                           orders_approach(last_pair_orders(lv, last_usable), expected);
+  const auto& finest = *lv.rs[last_usable];
+  const bool near_floors =
+      finest.error <= kLadderFloorMargin * std::max(finest.floor_used, finest.reference_floor);
   const auto limit = order_limit(last_orders);
   const std::string levelling =
       limit ? " (levelling off near " + format_fixed(*limit, 2) + ")" : std::string();
@@ -998,8 +1282,8 @@ std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, 
   if (approaching)
     reason = "pre-asymptotic: the pairwise orders are still moving towards " +
              std::to_string(expected_slope) + " at the finest level above the floors (" + all +
-             "), so " + format_fixed(slope, 2) +
-             " is not the method's order on this problem: add --levels or use a smaller --h";
+             "), so " + format_fixed(slope, 2) + " is not the method's order on this problem: " +
+             finer_levels_advice(lv, last_usable, expected, ladder);
   // Below the classical order by more than kOrderReductionSpread over a window whose pairwise
   // orders agree (within kOrderAgreement, as every fit window): the method's reduced order on
   // this problem.
@@ -1025,6 +1309,13 @@ std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, 
              "parts commute on the solution's manifold, or a superconvergent point); pairwise "
              "orders " +
              all;
+  // Above the classical order by less than half an order where the floors end the ladder: the
+  // next error term still weighs there; the asymptotic order is not reached above the floors.
+  else if (slope > expected && near_floors)
+    reason = format_fixed(slope - expected, 2) + " above " + std::to_string(expected_slope) +
+             " where the floors end the ladder (pairwise orders " + all +
+             "): the next error term still weighs at these steps, so the asymptotic order is not "
+             "reached above the floors";
   else if (w_hi - w_lo <= kOrderTolerance)
     reason = "a steady order of " + format_fixed(slope, 2) + ", not " +
              std::to_string(expected_slope) +
@@ -1038,11 +1329,7 @@ std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, 
     reason = "fitted order differs from the classical one by " + format_fixed(slope - expected, 2) +
              "; pairwise orders " + all;
   // The finest usable level of the integrator (not only of the window) near the floors.
-  std::size_t last_usable = a + len - 1;
-  for (std::size_t b = last_usable; b < n; ++b)
-    if (lv.usable[b]) last_usable = b;
-  const auto& finest = *lv.rs[last_usable];
-  if (finest.error <= kLadderFloorMargin * std::max(finest.roundoff_floor, finest.reference_floor))
+  if (!approaching && near_floors && !(slope > expected))
     reason += "; the floors (within " + g_short(kLadderFloorMargin) +
               "x of the finest level above them) stop the ladder before the orders settle";
   return reason;
@@ -1051,7 +1338,7 @@ std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, 
 }  // namespace
 
 OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& integrator,
-                   bool local) {
+                   bool local, const std::string& ladder) {
   OrderFit fit;
   fit.integrator = integrator;
   FitLevels lv;
@@ -1076,7 +1363,7 @@ OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& i
       ++n_failed;
       failed_status = to_string(r.stats.status);
     } else if (r.at_floor) {
-      ++(r.error <= kFloorFactor * r.roundoff_floor ? n_roundoff : n_reference);
+      ++(r.error <= kFloorFactor * r.floor_used ? n_roundoff : n_reference);
     }
   }
   const auto [best_a, best_len] = asymptotic_window(lv);
@@ -1114,23 +1401,63 @@ OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& i
                      format_short(lv.rs[b_finest - 1]->h) + " to " +
                      format_short(lv.rs[b_finest]->h) + ") gives " + format_fixed(q_finest, 2) +
                      ", the classical order, after " + format_fixed(slope, 2) +
-                     " over the window (pairwise orders " + lv.pair_orders(1, n) +
-                     "): add levels below h = " + format_short(lv.rs[b_finest]->h) +
-                     " to fit the asymptotic range";
+                     " over the window (pairwise orders " + lv.pair_orders(1, n) + "): " +
+                     (floor_ends_ladder(lv, b_finest)
+                          ? floor_end_advice(lv, b_finest, fit.expected_slope)
+                          : "add levels below h = " + format_short(lv.rs[b_finest]->h) +
+                                " to fit the asymptotic range");
       else
-        fit.reason = off_fit_reason(lv, best_a, best_len, slope, fit.expected_slope) +
+        fit.reason = off_fit_reason(lv, best_a, best_len, slope, fit.expected_slope, ladder) +
                      (finer.empty() ? "" : "; " + fit.reason);
     }
     return fit;
   }
   const std::string k = std::to_string(n_usable);
   const std::string levels = n_usable == 1 ? " level" : " levels";
+  const double expected = fit.expected_slope;
   if (n_usable >= 3) {
-    fit.reason = "pairwise orders do not settle (no 3 consecutive levels agree within " +
-                 g_short(kOrderAgreement) + "): add --levels";
+    // No three consecutive usable levels agree: still approaching the order (pre-asymptotic) or
+    // wandering (unsettled); finer levels help unless the floor ends the ladder.
+    std::size_t last = 0;
+    for (std::size_t b = 0; b < n; ++b)
+      if (lv.usable[b]) last = b;
+    const std::string all = lv.pair_orders(1, n);
+    const std::string agree =
+        "no three consecutive levels agree within " + g_short(kOrderAgreement);
+    if (orders_approach(last_pair_orders(lv, last), expected))
+      fit.reason =
+          "pre-asymptotic: the pairwise orders above the floors are still moving "
+          "towards " +
+          std::to_string(fit.expected_slope) + " (" + all + "; " + agree +
+          "): " + finer_levels_advice(lv, last, expected, ladder);
+    else
+      fit.reason =
+          "unsettled orders: the pairwise orders above the floors (" + all + ") " +
+          "neither settle (" + agree + ") nor approach " + std::to_string(fit.expected_slope) +
+          " (noise, a solver tolerance or a change of regime at these steps): " +
+          (floor_ends_ladder(lv, last) ? floor_end_advice(lv, last, expected)
+                                       : "add --levels to see whether they settle at finer steps");
   } else if (n_roundoff > 0) {
-    fit.reason = "only " + k + levels +
-                 " above the round-off floor: use a larger --h (or --ladder per-method)";
+    // The finest usable level (or the coarsest level when none is usable) and the first
+    // round-off floor row after it, whose floor the reason names.
+    std::size_t last = 0;
+    for (std::size_t b = 0; b < n; ++b)
+      if (lv.usable[b]) last = b;
+    const ConvergenceRow* floor_row = nullptr;
+    for (const auto* r : lv.rs)
+      if (r->at_floor && r->error <= kFloorFactor * r->floor_used && !floor_row) floor_row = r;
+    const std::string through = n_usable > 0 ? orders_through_floor(lv, last, expected) : "";
+    std::string advice;
+    if (!through.empty() && floor_row->floor_source != "perturbed")
+      advice = floor_end_advice(lv, last, expected);
+    else if (ladder == "per-method")
+      advice =
+          "use a larger --h (the probe's steps stay within [h/64, 16·h]) or a smaller "
+          "--refine (the same levels over a shorter range of steps)";
+    else
+      advice = "use a larger --h or --ladder per-method";
+    fit.reason = "only " + k + levels + " above " + roundoff_words(*floor_row) + ", " +
+                 std::to_string(n_roundoff) + " at it: " + advice;
   } else if (n_reference > 0) {
     fit.reason = "only " + k + levels +
                  " above the reference's accuracy: tighten --reference-rtol or use a more "
@@ -1151,12 +1478,16 @@ void add_trailing_columns(Table& t) {
   for (const auto& c : SolveStats::counter_names()) t.columns.push_back(c);
   t.columns.push_back("roundoff_floor");
   t.columns.push_back("reference_floor");
+  t.columns.push_back("floor_used");
+  t.columns.push_back("floor_source");
 }
 
 void add_trailing_values(std::vector<std::string>& row, const ConvergenceRow& r) {
   for (const auto& v : r.stats.counter_values()) row.push_back(v);
   row.push_back(format_full(r.roundoff_floor));
   row.push_back(format_full(r.reference_floor));
+  row.push_back(format_full(r.floor_used));
+  row.push_back(r.floor_source);
 }
 
 }  // namespace
@@ -1209,14 +1540,15 @@ Table local_error_table(const ConvergenceResult& res) {
 
 Table orders_table(const ConvergenceResult& res) {
   Table t{{"integrator", "order", "analysed_order", "fitted_order", "fitted_order_se", "h_min",
-           "h_max", "levels_used", "reason"},
+           "h_max", "levels_used", "reason", "floor_used", "floor_source"},
           {}};
   for (const auto& f : res.fits)
     t.rows.push_back({f.integrator, std::to_string(f.order),
                       f.analysed_order ? std::to_string(*f.analysed_order) : "",
                       optional_full(f.fitted), optional_full(f.fitted_se),
                       f.fitted ? format_full(f.h_min) : "", f.fitted ? format_full(f.h_max) : "",
-                      std::to_string(f.levels_used), f.reason});
+                      std::to_string(f.levels_used), f.reason, format_full(f.floor_used),
+                      f.floor_source});
   return t;
 }
 
@@ -1243,9 +1575,28 @@ Table fits_markdown_table(const ConvergenceResult& res, bool local) {
 // The floors, in words, for the Markdown and the report.
 std::string floors_sentence(const ConvergenceResult& res, bool local) {
   std::ostringstream os;
+  const std::string model =
+      std::string(local ? "u·s" : "N·u·s") + ", u = 2^-53, s = max(1, ‖y0‖∞, ‖y_ref‖∞)";
   os << "Rows with status `floor` have an error within " << g_short(kFloorFactor)
-     << "× the round-off floor (" << (local ? "u·s" : "N·u·s")
-     << ", u = 2^-53, s = max(1, ‖y0‖∞, ‖y_ref‖∞))";
+     << "× the round-off floor (";
+  if (res.floor_mode == "auto") {
+    int measured = 0;
+    for (const auto& f : res.floors) measured += f.source == "perturbed" ? 1 : 0;
+    os << "measured per method from two reruns at its finest step from y0 scaled by 1 ± 2^-30 "
+          "per component: twice the max-norm of (y₊ + y₋)/2 − y, the part of the result that "
+          "is rounding"
+       << (local ? "" : ", times √(N/N_f) at a level of N steps") << "; the `floor_used` column";
+    if (measured < static_cast<int>(res.floors.size()))
+      os << "; the model " << model << " for " << res.floors.size() - measured
+         << " method(s) with nothing to measure";
+    os << "; a row above a measured floor whose pairwise order is within "
+       << g_short(kOrderTolerance) << " of the expected slope stays ok";
+  } else if (res.floor_mode == "model") {
+    os << "the model " << model << ", from --floor model";
+  } else {
+    os << "--floor " << res.floor_mode;
+  }
+  os << ")";
   if (res.reference_accuracy)
     os << " or the reference's accuracy (≈ " << format_short(*res.reference_accuracy)
        << (local ? " at worst" : "") << ", from a second run: " << res.reference_check_description
@@ -1292,7 +1643,7 @@ std::string markdown_report(const std::string& name, const ConvergenceSpec& spec
     for (std::size_t c = 0; c < detail.columns.size(); ++c) {
       const auto& col = detail.columns[c];
       if ((col == "h" || col == "error" || col == "local_error" || col == "wall_s" ||
-           col == "roundoff_floor" || col == "reference_floor") &&
+           col == "roundoff_floor" || col == "reference_floor" || col == "floor_used") &&
           !row[c].empty())
         row[c] = format_short(std::stod(row[c]), col == "wall_s" ? 2 : 3);
       if (col == "observed_order" && !row[c].empty()) row[c] = format_fixed(std::stod(row[c]));
@@ -1330,6 +1681,23 @@ void write_convergence_outputs(const std::string& dir, const std::string& name,
   meta["unit_roundoff"] = kUnitRoundoff;
   meta["roundoff_floor"] =
       local ? "u*s, s = max(1, |y0|inf, |y_ref|inf)" : "N*u*s, s = max(1, |y0|inf, |y_ref|inf)";
+  meta["floor"] = res.floor_mode;
+  meta["floor_perturbation"] = kFloorPerturbation;
+  meta["floor_seed"] = kFloorSeed;
+  nlohmann::json floors = nlohmann::json::array();
+  for (const auto& f : res.floors) {
+    nlohmann::json j = {{"integrator", f.integrator}, {"floor", f.value}, {"source", f.source}};
+    if (f.source == "perturbed" || !f.spreads.empty()) {
+      j["h"] = f.h;
+      j["steps"] = f.steps;
+      nlohmann::json sp = nlohmann::json::array();
+      for (double x : f.spreads) sp.push_back(std::isfinite(x) ? nlohmann::json(x) : nullptr);
+      j["spreads"] = sp;
+    }
+    if (!f.note.empty()) j["note"] = f.note;
+    floors.push_back(j);
+  }
+  meta["floors"] = floors;
   meta["order_agreement"] = kOrderAgreement;
   if (res.reference_accuracy) {
     meta["reference_check"] = res.reference_check_description;
@@ -1346,7 +1714,9 @@ void write_convergence_outputs(const std::string& dir, const std::string& name,
       nlohmann::json probes = nlohmann::json::array();
       for (const auto& [h, e] : l.probes)
         probes.push_back({{"h", h}, {"error", std::isfinite(e) ? nlohmann::json(e) : nullptr}});
-      lad.push_back({{"integrator", l.integrator}, {"h0", l.h0}, {"probes", probes}});
+      nlohmann::json entry = {{"integrator", l.integrator}, {"h0", l.h0}, {"probes", probes}};
+      if (l.floor_h > 0) entry["probe_floor"] = {{"h", l.floor_h}, {"floor", l.floor}};
+      lad.push_back(entry);
     }
     meta["ladders"] = lad;
   }
@@ -1532,6 +1902,11 @@ StudyKind step_size_kind(bool local) {
        "found by a short probe so its errors run from about 1e-2 of the solution's size down to "
        "well above its floor",
        {"common", "per-method"}});
+  k.options.push_back(
+      {"floor", ParamType::text, "auto",
+       "the round-off floor a row must stay 10x above to enter the order fit: auto (measured per "
+       "method from two reruns at its finest step with y0 scaled by 1 +- 2^-30), model (N*u*s, "
+       "an upper bound) or an absolute error VALUE"});
   k.extra_files = {std::string(local ? "local_error" : "convergence") + "_orders.csv"};
   for (auto& o : k.options) {
     if (o.key == "reference_rtol") o.help += " (default 1e-12)";
@@ -1548,6 +1923,7 @@ StudyKind step_size_kind(bool local) {
     spec.integrators = t.integrators;
     read_step_study_options(o, spec);
     spec.ladder = o.text("ladder");
+    spec.floor = o.text("floor");
     spec.cache_dir = ctx.cache_dir;
     return std::make_unique<ConvergenceJob>(std::move(spec), local);
   };

@@ -33,15 +33,39 @@
 //
 // Floors. Every row is checked against two floors below which its error says nothing about the
 // method:
-//  - the round-off floor: kFloorRoundoff = N·u·s for a global error after N steps and u·s for a
-//    local error (one step), with u = 2^-53 the unit round-off and s = max(1, ‖y0‖∞, ‖y_ref‖∞)
-//    the solution's size (y_ref at t_end, or at t0 + h for the local error);
+//  - the round-off floor, chosen by --floor:
+//    `auto` (the default): measured per integrator. At its finest level that ran ok the run is
+//      repeated twice from y0 with every nonzero component scaled by 1 ± kFloorPerturbation
+//      (2^-30; the signs s_i = ±1 from a fixed-seed generator, so runs are reproducible; zero
+//      components stay exact, except when y0 = 0, whose components move by ±2^-30): y₊ from 1 +
+//      s_i·2^-30, y₋ from 1 − s_i·2^-30. Their mean minus the unperturbed result y, d = (y₊ + y₋)/2
+//      − y, cancels the first-order response to the perturbation (the second-order one, about 2^-60
+//      relative, is far below the rounding), so it is rounding only: three runs whose rounding
+//      differs (the perturbation moves every increment h·k by many ulps of y, which a perturbation
+//      of a few ulps of y0 does not: both runs would round y + h·k alike). The floor is 2‖d‖∞
+//      (about 2σ, σ the rounding error of a run, when the three are independent), at least u·‖y‖∞.
+//      A level with N steps gets the floor scaled by √(N/N_f), N_f the steps of the measurement (a
+//      random walk of rounding errors; rk4 on the oscillator grows faster, about N^0.8, so coarser
+//      levels get a larger floor than their rounding); the local error's one step has the measured
+//      floor at every h. Source `perturbed`; `model` when there is nothing to measure (no level ran
+//      ok or a rerun failed).
+//    `model`: the bound N·u·s for a global error after N steps and u·s for a local error (one
+//      step), with u = 2^-53 the unit round-off and s = max(1, ‖y0‖∞, ‖y_ref‖∞) the solution's
+//      size (y_ref at t_end, or at t0 + h for the local error). Every row carries it
+//      (roundoff_floor) whatever --floor says; it is an upper bound of the accumulated rounding
+//      of a stable run, far above it on a damped (stiff) problem.
+//    a number: that absolute error for every row (source `given`).
 //  - for a numerical reference, the reference's own accuracy: ‖y_ref − y_ref2‖∞ at the same
 //    time, where y_ref2 is a second reference run, tighter by a factor 10 (rtol/10 and atol/10
 //    for an adaptive reference; half the step for a fixed-step one); it is cached like the first
 //    (another key). An exact reference has no such floor (0).
 // A row whose error is at most kFloorFactor (10) times either floor has status `floor` (its error
-// stays in the table) and is left out of order fits.
+// stays in the table) and is left out of order fits; except, for a measured floor, a row above it
+// (kFloorKeepFactor = 1; the floor is about 2σ) whose pairwise order with the coarser usable
+// level is within kOrderTolerance (0.1) of the expected slope: its error still falls at the
+// method's order, so rounding does not set it (checked level by level from the coarse end). With a
+// measured floor F ≈ 2σ (σ the rounding error), an error 10 F = 20σ carries a relative noise of 5%,
+// which moves a pairwise order by about 0.07 for refine 2.
 //
 // Orders (fit_order): over the rows of one integrator, the asymptotic window is the longest run
 // of consecutive levels that ran ok, are above both floors, and whose pairwise observed orders
@@ -53,7 +77,9 @@
 // orders (docs/commands/convergence.md lists the cases): orders still moving towards the expected
 // slope at the window's finest level, or a finest pair at it beyond a window that is not, are
 // pre-asymptotic, never an order reduction or a higher order. For a local error the fitted slope
-// is order + 1.
+// is order + 1. A reason names what removed levels (the round-off floor and how it was found, the
+// reference's accuracy, failed runs, pre-asymptotic or unsettled orders) and advises only a change
+// that can alter the result (no_fit_reason).
 //
 // Ladders (--ladder): `common` runs every integrator on h_k = h/refine^k. `per-method` gives
 // each integrator its own coarsest step h0 (then h0/refine^k, same levels and refine), found by
@@ -65,12 +91,17 @@
 // probe, never at or past a probe that failed or overshot). Stage 2: the ladder moves down, by at
 // most its own length (h0 ≥ h_top·refine^-(levels-1)), until its predicted finest error is about
 // kLadderFloorMargin (100) times the larger floor, checked by one or two runs at that finest step
-// (within a factor 3): the most asymptotic levels that stay well above the floors. h0 stays
+// (within a factor 3): the most asymptotic levels that stay well above the floors. With --floor
+// auto the round-off floor of stage 2 is measured once, by the two perturbed reruns at the
+// finest step of the coarsest allowed ladder (h_top·refine^-(levels-1)), and grows in proportion
+// to the number of steps below that step (a bound for the accumulated rounding); the study then
+// measures it again at the ladder's own finest level. h0 stays
 // within [h/64, 16·h], for the global error at most (t_end − t0)/4 and with its finest level
 // within the driver's step limit. A fixed-step reference runs at (finest h of the common
 // ladder)/16 in both modes (for the local error at most (t − t0)/16 at each reference time t).
 #pragma once
 
+#include <functional>
 #include <iosfwd>
 #include <optional>
 #include <string>
@@ -139,6 +170,11 @@ struct ConvergenceSpec : StepStudySpec {
   // Folder holding the reference cache (DIR/reference/); empty: no cache. Not part of the spec's
   // JSON (it is where the outputs go).
   std::string cache_dir;
+  // The round-off floor (--floor): "auto" (measured per integrator by perturbed reruns), "model"
+  // (N·u·s per row) or a positive number (that absolute error for every row). See the top.
+  std::string floor = "auto";
+  // The number of --floor VALUE; empty for auto and model. BadInput naming --floor otherwise.
+  std::optional<double> given_floor() const;
 
   void validate() const;  // BadInput naming the bad flag
   nlohmann::json to_json() const;
@@ -185,6 +221,28 @@ constexpr double kReferenceTightening = 10;  // the second reference run: tolera
 constexpr double kLadderTop = 1e-2;          // per-method ladder: coarsest error ≤ about 1e-2·s
 constexpr double kLadderFloorMargin = 100;   // predicted finest error ≥ 100 × floor
 constexpr int kProbeRuns = 8;                // at most this many probe runs per integrator
+// --floor auto (the top of this file): the relative perturbation of y0 and its signs' seed, and
+// the factor from the second difference to the floor.
+constexpr double kFloorPerturbation = 0x1p-30;
+constexpr unsigned long long kFloorSeed = 0x9e3779b97f4a7c15ULL;
+constexpr double kFloorSecondDifferenceFactor = 2;
+// A row above kFloorKeepFactor and within kFloorFactor times a measured floor stays ok when its
+// pairwise order with the coarser usable level is within kOrderTolerance of the expected slope.
+constexpr double kFloorKeepFactor = 1;
+
+// The floor measurement of --floor auto: two reruns from y0 scaled by 1 ± kFloorPerturbation
+// (perturbed_initial_state with sign +1 and -1). `run(y0')` returns the final state of a run from
+// y0', empty when it did not end ok; `y` is the unperturbed run's final state. The floor is
+// kFloorSecondDifferenceFactor ‖(y₊ + y₋)/2 − y‖∞, at least u·‖y‖∞; empty when a rerun did not
+// end ok. `spreads` receives ‖y₊ − y‖∞, ‖y₋ − y‖∞ and
+// ‖(y₊ + y₋)/2 − y‖∞.
+std::optional<double> measure_roundoff_floor(
+    const Vec& y0, const Vec& y, const std::function<std::optional<Vec>(const Vec&)>& run,
+    std::vector<double>* spreads = nullptr);
+// y0 with each nonzero component scaled by 1 + sign·s_i·kFloorPerturbation, s_i = ±1 from a
+// splitmix64 sequence seeded with kFloorSeed (deterministic; zero components stay exact; when y0
+// = 0 every component becomes sign·s_i·kFloorPerturbation).
+Vec perturbed_initial_state(const Vec& y0, int sign);
 
 struct ConvergenceRow {
   std::string model, integrator;
@@ -194,9 +252,11 @@ struct ConvergenceRow {
   double error = 0;
   std::optional<double> observed_order;
   SolveStats stats;
-  double roundoff_floor = 0;   // N·u·s (global) or u·s (local)
+  double roundoff_floor = 0;   // the model N·u·s (global) or u·s (local), whatever --floor says
   double reference_floor = 0;  // the reference's estimated accuracy (0: exact reference)
-  bool at_floor = false;       // ok and error <= kFloorFactor × one of the floors
+  double floor_used = 0;       // the round-off floor the row is checked against (--floor)
+  std::string floor_source;    // how it was found: perturbed, model or given
+  bool at_floor = false;       // ok and error <= kFloorFactor × floor_used or reference_floor
   // "floor" for a row at a floor, else the run's status.
   std::string status_text() const;
 };
@@ -212,15 +272,20 @@ struct OrderFit {
   std::optional<double> fitted, fitted_se;  // slope of log(error) against log(h) and its SE
   double h_min = 0, h_max = 0;              // the window's steps (0: no fit)
   int levels_used = 0;
+  // The round-off floor of the integrator's rows and how it was found (perturbed, given; for
+  // model the bound at its finest level).
+  double floor_used = 0;
+  std::string floor_source;
   // Why there is no fit, or why the fit is more than kOrderTolerance from the expected slope
   // (what the pairwise orders show); empty otherwise.
   std::string reason;
 };
 
 // The fit over the asymptotic window of the rows of `integrator` (in ladder order; their
-// at_floor and status must be set). `local`: the expected slope is order + 1.
+// at_floor and status must be set). `local`: the expected slope is order + 1. `ladder`: the
+// ladder that ran ("common" or "per-method"), so that the advice never names the one in use.
 OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& integrator,
-                   bool local);
+                   bool local, const std::string& ladder = "common");
 
 struct ConvergenceResult {
   std::vector<ConvergenceRow> rows;
@@ -241,9 +306,23 @@ struct ConvergenceResult {
     std::string integrator;
     double h0 = 0;
     std::vector<std::pair<double, double>> probes;  // (h, error; NaN when the run failed)
+    // --floor auto: the round-off floor the probe measured and the step of its reruns (0: none).
+    double floor = 0, floor_h = 0;
   };
   std::vector<Ladder> ladders;
   std::vector<OrderFit> fits;  // one per integrator, in run order
+  // The round-off floor of each integrator (one per integrator, in run order).
+  struct Floor {
+    std::string integrator;
+    double value = 0;    // the floor at the finest level (a row with N steps: value·√(N/N_f))
+    std::string source;  // perturbed, model or given
+    double h = 0;        // perturbed: the step of the reruns
+    long steps = 0;      // perturbed: their number of steps N_f
+    std::vector<double> spreads;  // perturbed: ‖y_m − y‖∞ of each rerun (NaN: it failed)
+    std::string note;             // auto that fell back to the model: why
+  };
+  std::vector<Floor> floors;
+  std::string floor_mode = "auto";  // the spec's --floor
 };
 
 // Progress lines go to `progress` when non-null.
@@ -271,8 +350,8 @@ std::optional<double> last_observed_order(const std::vector<ConvergenceRow>& row
 
 Table convergence_table(const ConvergenceResult& r);  // the convergence.csv contract
 Table local_error_table(const ConvergenceResult& r);  // the local_error.csv contract
-// NAME_orders.csv:
-// integrator,order,analysed_order,fitted_order,fitted_order_se,h_min,h_max,levels_used,reason.
+// NAME_orders.csv: integrator,order,analysed_order,fitted_order,fitted_order_se,h_min,h_max,
+// levels_used,reason,floor_used,floor_source.
 Table orders_table(const ConvergenceResult& r);
 
 // Writes DIR/NAME.csv, DIR/NAME_orders.csv, DIR/NAME.md and DIR/NAME.json (NAME = convergence or

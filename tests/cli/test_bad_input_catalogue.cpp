@@ -131,6 +131,8 @@ INSTANTIATE_TEST_SUITE_P(
         CliCase{"h_negative", "solve --model kepler --integrator rk4 --h -0.1 --t-end 1", {"h"}},
         CliCase{"levels_zero", kConv + " --levels 0", {"levels"}},
         CliCase{"refine_one", kConv + " --refine 1", {"refine"}},
+        CliCase{"floor_word", kConv + " --floor low", {"--floor", "'low'"}},
+        CliCase{"floor_zero", kConv + " --floor 0", {"--floor", "'0'"}},
         CliCase{"outputs_zero", kSolve + " --outputs 0", {"outputs"}},
         // Absurd sizes: refused before anything is allocated.
         CliCase{"cloth_1e9",

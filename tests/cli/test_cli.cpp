@@ -209,7 +209,7 @@ TEST(Cli, ConvergenceWritesContractFiles) {
   EXPECT_EQ(header,
             "model,integrator,order,h,steps,error,observed_order,f_evals,jac_evals,lin_solves,wall_"
             "s,status,newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_"
-            "iters,fe_evals,fi_evals,roundoff_floor,reference_floor");
+            "iters,fe_evals,fi_evals,roundoff_floor,reference_floor,floor_used,floor_source");
   int rows = 0;
   for (std::string line; std::getline(f, line);) ++rows;
   EXPECT_EQ(rows, 6);
@@ -226,7 +226,7 @@ TEST(Cli, ConvergenceWritesContractFiles) {
   EXPECT_EQ(header,
             "model,integrator,order,h,local_error,observed_order,status,f_evals,jac_evals,lin_"
             "solves,newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_"
-            "iters,fe_evals,fi_evals,roundoff_floor,reference_floor");
+            "iters,fe_evals,fi_evals,roundoff_floor,reference_floor,floor_used,floor_source");
   EXPECT_TRUE(std::filesystem::exists(dir / "local_error_orders.csv"));
   std::filesystem::remove_all(dir);
 }
@@ -266,8 +266,9 @@ TEST(Cli, ConvergenceRowsOfImplicitMethodsCountJacobiansAndSolves) {
   for (std::size_t r = 1; r < table.size(); ++r) {
     const auto& cells = table[r];
     const std::string line = join_cells(cells);
-    // 12 contract columns, the 5 solver counters and the 2 floors.
-    ASSERT_EQ(cells.size(), 21u) << line;
+    // 12 contract columns, the 7 solver counters, the 2 floors and the floor in use with its
+    // source.
+    ASSERT_EQ(cells.size(), 23u) << line;
     EXPECT_GT(std::stol(cells[8]), 0) << line;  // jac_evals
     EXPECT_GT(std::stol(cells[9]), 0) << line;  // lin_solves
     ++rows;
