@@ -75,10 +75,18 @@ std::string printable(const std::string& text);
 void require_printable(const std::string& text, const std::string& where, const std::string& key,
                        bool multiline = false);
 
-// Writes `content` to PATH atomically: first to a temporary file `.NAME.tmp.PID` in PATH's
-// folder (hidden, and named by the process id, so it cannot collide with a user's file or with
-// another process writing the same table), then renamed over PATH. When writing the temporary
-// fails or throws, the temporary is removed before the error propagates: no `*.tmp*` is left.
+// Creates an empty file DIR/PREFIXxxxxxx with a random suffix, exclusively (O_CREAT | O_EXCL:
+// never through an existing file or a symlink) and returns its path; std::runtime_error with the
+// system's reason when it cannot.
+std::filesystem::path create_exclusive_file(const std::filesystem::path& dir,
+                                            const std::string& prefix);
+
+// Writes `content` to PATH atomically: first to a temporary file `.NAME.tmp.XXXXXX` in PATH's
+// folder (hidden, created exclusively under a random suffix, so it cannot collide with a user's
+// file or with another process writing the same table, nor be a planted symlink), then renamed
+// over PATH; a write error names the system's reason (e.g. "No space left on device"). When writing
+// the temporary fails or throws, the temporary is removed before the error propagates: no `*.tmp*`
+// is left.
 void write_file_atomic(const std::filesystem::path& path, const std::string& content);
 
 // The same for a file written as a stream, so that a large file (a long trajectory) is never
