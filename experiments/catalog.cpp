@@ -11,6 +11,7 @@
 #include <memory>
 #include <set>
 #include <sstream>
+#include <utility>
 
 #include "experiments/output.hpp"
 #include "integrators/method_file.hpp"
@@ -357,13 +358,7 @@ std::map<std::string, LoadedMethodFile>& loaded_method_files() {
   return files;
 }
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw BadInput(path + ": cannot read the method file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
+std::string read_text(const std::string& path) { return read_input_file(path, "method file"); }
 
 }  // namespace
 
@@ -382,6 +377,10 @@ std::string register_method_file(const std::string& given, const std::string& ba
   const std::string text = read_text(path);
   const std::string canonical = fs::weakly_canonical(p, ec).string();
   MethodDefinition m = parse_method_file(text, path);
+  for (const auto& [key, value] : {std::pair<const char*, const std::string*>{"name", &m.name},
+                                   {"description", &m.description},
+                                   {"reference", &m.reference}})
+    require_printable(*value, path, key);
   auto& files = loaded_method_files();
   if (const auto it = files.find(m.name); it != files.end()) {
     // The same file (or one with the same text) again: registered once.

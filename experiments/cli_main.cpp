@@ -15,6 +15,7 @@
 #include "experiments/catalog.hpp"
 #include "experiments/cli.hpp"
 #include "experiments/commands.hpp"
+#include "experiments/plotting.hpp"
 #include "experiments/study.hpp"
 #include "experiments/sweep.hpp"
 
@@ -102,6 +103,7 @@ int cli_main(int argc, char** argv) {
   // cli_main several times judges each call by its own runs only.
   const long audit_failures_before = audit_failed_checks();
   const long faults_before = fault_count();
+  const long plots_before = failed_plot_count();
   const struct ForgetCommandLine {
     ~ForgetCommandLine() { clear_command_line(); }
   } forget;
@@ -187,6 +189,13 @@ int cli_main(int argc, char** argv) {
     std::cerr << "stiffbench: " << faults << " run" << (faults == 1 ? "" : "s")
               << " ended with status error or timeout (see the status and message columns)\n";
     return kExitRowsFailed;
+  }
+  // A plot that gnuplot did not complete (its warning above): the tables are written, the
+  // command still fails so that a script notices.
+  if (const long plots = failed_plot_count() - plots_before; plots > 0) {
+    std::cerr << "stiffbench: " << plots << " plot" << (plots == 1 ? "" : "s")
+              << " not written (see the warnings above); the tables are complete\n";
+    return 1;
   }
   // `stiffbench audit`: a claim that does not hold (status fail) fails the command.
   if (const long failed = audit_failed_checks() - audit_failures_before; failed > 0) {

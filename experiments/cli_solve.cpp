@@ -1,7 +1,11 @@
 // `stiffbench solve`: one run (experiments/commands.hpp, cmd_solve).
+#include <cmath>
 #include <iostream>
 #include <memory>
+#include <string>
+#include <utility>
 
+#include "core/types.hpp"
 #include "experiments/cli.hpp"
 #include "experiments/commands.hpp"
 
@@ -60,6 +64,13 @@ void add_solve_command(CLI::App& app) {
       ->check(CLI::IsMember({"vtu", "vtk"}))
       ->capture_default_str();
   solve->callback([st, solve]() {
+    // A real flag given as nan or inf is named as such (not taken for "not given").
+    for (const auto& [flag, value] : {std::pair<const char*, double>{"--t-end", st->opt.t_end},
+                                      {"--h", st->opt.h},
+                                      {"--log-first", st->opt.log_first}})
+      require_input(!solve->count(flag) || std::isfinite(value),
+                    std::string(flag) + ": '" + solve->get_option(flag)->as<std::string>() +
+                        "' is not a finite number");
     st->opt.params = Params::from_assignments(st->params);
     if (solve->count("--times")) st->opt.times = parse_times(st->times);
     cmd_solve(st->opt, std::cout, std::cerr);

@@ -19,6 +19,9 @@
 #include <sstream>
 #include <utility>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include "core/types.hpp"
@@ -123,13 +126,42 @@ std::string Table::to_markdown() const {
   return os.str();
 }
 
+namespace {
+// The process's umask (read by setting it and setting it back; no other thread creates files
+// while an output file is being opened).
+mode_t current_umask() {
+  const mode_t m = ::umask(022);
+  ::umask(m);
+  return m;
+}
+}  // namespace
+
+std::filesystem::path create_exclusive_file(const std::filesystem::path& dir,
+                                            const std::string& prefix) {
+  // mkostemp: a name no other process can predict, created with O_CREAT | O_EXCL (never through
+  // an existing file or symlink), mode 0600 until the caller's umask-respecting rename.
+  std::string name =
+      (dir.empty() ? std::filesystem::path(".") : dir).string() + "/" + prefix + "XXXXXX";
+  const int fd = ::mkostemp(name.data(), O_CLOEXEC);
+  if (fd < 0)
+    throw std::runtime_error("cannot create a file in " + dir.string() + ": " +
+                             std::strerror(errno));
+  ::fchmod(fd, 0666 & ~current_umask());
+  ::close(fd);
+  return name;
+}
+
 AtomicFileStream::AtomicFileStream(std::filesystem::path path) : path_(std::move(path)) {
   namespace fs = std::filesystem;
   if (path_.has_parent_path()) fs::create_directories(path_.parent_path());
-  // Hidden and per process: cannot collide with a user's file or another process's temporary.
-  tmp_ = path_.parent_path() / ("." + path_.filename().string() + ".tmp." +
-                                std::to_string(static_cast<long>(::getpid())));
-  file_.open(tmp_, std::ios::binary | std::ios::trunc);
+  // Hidden, with an unpredictable suffix, created exclusively (create_exclusive_file): it cannot
+  // collide with a user's file or another process's temporary, nor be a planted symlink.
+  try {
+    tmp_ = create_exclusive_file(path_.parent_path(), "." + path_.filename().string() + ".tmp.");
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error("cannot write " + path_.string() + " (" + e.what() + ")");
+  }
+  file_.open(tmp_, std::ios::binary | std::ios::out);
   if (!file_)
     throw std::runtime_error("cannot write " + path_.string() + " (temporary " + tmp_.string() +
                              ": " + std::strerror(errno) + ")");
@@ -143,18 +175,49 @@ AtomicFileStream::~AtomicFileStream() {
 }
 
 void AtomicFileStream::commit() {
+  errno = 0;
+  file_.flush();
+  const int flush_error = errno;
   file_.close();
-  if (!file_)
+  if (!file_) {
+    int e = errno ? errno : flush_error;
+    // A stream does not keep errno; a full file system is the usual cause.
+    struct statvfs info {};
+    if (e == 0 &&
+        ::statvfs(tmp_.parent_path().empty() ? "." : tmp_.parent_path().c_str(), &info) == 0 &&
+        info.f_bavail == 0)
+      e = ENOSPC;
     throw std::runtime_error("error writing " + path_.string() + " (temporary " + tmp_.string() +
-                             ")");
+                             "): " + (e ? std::strerror(e) : "the stream failed"));
+  }
   std::filesystem::rename(tmp_, path_);
   committed_ = true;
 }
 
 void write_file_atomic(const std::filesystem::path& path, const std::string& content) {
-  AtomicFileStream f(path);
-  f.stream() << content;
-  f.commit();  // on an exception the destructor removes the temporary
+  namespace fs = std::filesystem;
+  if (path.has_parent_path()) fs::create_directories(path.parent_path());
+  fs::path tmp;
+  try {
+    tmp = create_exclusive_file(path.parent_path(), "." + path.filename().string() + ".tmp.");
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error("cannot write " + path.string() + " (" + e.what() + ")");
+  }
+  // Written with write(2), so a failure carries the system's reason (errno), e.g. ENOSPC.
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CLOEXEC | O_NOFOLLOW);
+  int error = fd < 0 ? errno : 0;
+  for (std::size_t done = 0; fd >= 0 && error == 0 && done < content.size();) {
+    const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
+    if (n < 0 && errno != EINTR) error = errno;
+    if (n > 0) done += static_cast<std::size_t>(n);
+  }
+  if (fd >= 0 && ::close(fd) != 0 && error == 0) error = errno;
+  if (error != 0) {
+    std::error_code ignore;
+    fs::remove(tmp, ignore);
+    throw std::runtime_error("error writing " + path.string() + ": " + std::strerror(error));
+  }
+  fs::rename(tmp, path);
 }
 
 namespace {
@@ -189,18 +252,17 @@ void require_output_dir(const std::filesystem::path& dir, const std::string& fla
     undo();
     throw BadInput(flag + " " + dir.string() + ": cannot create the folder (" + ec.message() + ")");
   }
-  const auto probe = dir / ".stiffbench_write_test";
+  // The probe is created exclusively under an unpredictable name: a symlink planted in the
+  // folder is never opened, so its target is never touched.
   bool ok = false;
-  int error = 0;
-  {
-    errno = 0;
-    std::ofstream f(probe, std::ios::binary | std::ios::trunc);
-    ok = f.good();
-    error = errno;
+  std::string reason = "cannot create a file";
+  try {
+    fs::remove(create_exclusive_file(dir, ".stiffbench_write_test."), ec);
+    ok = true;
+  } catch (const std::runtime_error& e) {
+    reason = e.what();
   }
-  fs::remove(probe, ec);
   if (!ok) {
-    const std::string reason = error ? std::strerror(error) : "cannot create a file";
     undo();
     throw BadInput(flag + " " + dir.string() + ": cannot write there (" + reason + ")");
   }
@@ -493,6 +555,66 @@ nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json&
     }
   }
   return j;
+}
+
+std::string read_input_file(const std::filesystem::path& path, const std::string& what) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);  // follows a symlink
+  const std::string p = path.string();
+  if (ec || !fs::exists(st)) throw BadInput(p + ": cannot read the " + what + " (no such file)");
+  if (fs::is_directory(st)) throw BadInput(p + ": a folder, not a " + what);
+  if (!fs::is_regular_file(st))
+    throw BadInput(p + ": not a regular file (a FIFO, device or socket), not a " + what);
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec) throw BadInput(p + ": cannot read the " + what + ": " + ec.message());
+  if (size > kMaxInputFileBytes)
+    throw BadInput(p + ": " + std::to_string(size) + " bytes, more than a " + what + " may hold (" +
+                   std::to_string(kMaxInputFileBytes >> 20) + " MiB)");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw BadInput(p + ": cannot read the " + what + ": " + std::strerror(errno));
+  // The size read above (+1 to see growth), whatever the file grew to since.
+  std::string text(static_cast<std::size_t>(size) + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > size)
+    throw BadInput(p + ": changed while it was read (" + std::to_string(size) +
+                   " bytes, then more)");
+  return text;
+}
+
+void require_printable(const std::string& text, const std::string& where, const std::string& key,
+                       bool multiline) {
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if ((c < 0x20 || c == 0x7f) && !(multiline && (c == '\n' || c == '\t' || c == '\r')))
+      throw BadInput(where + ": key '" + key + "': holds a control character (code " +
+                     std::to_string(c) + " at character " + std::to_string(i + 1) +
+                     "); text fields take printable characters" +
+                     (multiline ? ", newlines and tabs" : ""));
+  }
+}
+
+std::string printable(const std::string& text) {
+  std::string out;
+  for (const char ch : text) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else if (c == '\r') {
+      out += "\\r";
+    } else if (c < 0x20 || c == 0x7f) {
+      static const char* hex = "0123456789abcdef";
+      out += "\\x";
+      out += hex[c >> 4];
+      out += hex[c & 15];
+    } else {
+      out += ch;
+    }
+  }
+  return out;
 }
 
 }  // namespace stiffbench

@@ -56,10 +56,37 @@ std::string format_short(double x, int digits = 3);
 // Fixed-point form with `digits` decimals (observed orders).
 std::string format_fixed(double x, int digits = 3);
 
-// Writes `content` to PATH atomically: first to a temporary file `.NAME.tmp.PID` in PATH's
-// folder (hidden, and named by the process id, so it cannot collide with a user's file or with
-// another process writing the same table), then renamed over PATH. When writing the temporary
-// fails or throws, the temporary is removed before the error propagates: no `*.tmp*` is left.
+// The largest input file (method, spec, suite file) the testbed reads: 4 MiB, far above any real
+// one (a 200-stage tableau written with expressions is well under 1 MiB).
+inline constexpr std::uintmax_t kMaxInputFileBytes = 4u << 20;
+// The text of an input file named by the user, `what` saying which kind ("method file", "spec
+// file"). BadInput, before anything is read, for a path that does not exist, a folder, anything
+// but a regular file (a FIFO would block, /dev/zero never ends) or a file over
+// kMaxInputFileBytes; a symlink to a regular file is followed.
+std::string read_input_file(const std::filesystem::path& path, const std::string& what);
+
+// `text` with each control character (below 0x20, 0x7f) written as \n, \t, \r or \xNN, to show
+// a bad value in a message without letting it act on the terminal.
+std::string printable(const std::string& text);
+// BadInput "WHERE: key 'KEY': holds a control character (code N at character I) ..." when `text`
+// holds a byte below 0x20 or 0x7f (DEL) — other than newline and tab where `multiline` — so a
+// text field of an input file cannot move the cursor, clear the terminal or hide a line when it
+// is printed.
+void require_printable(const std::string& text, const std::string& where, const std::string& key,
+                       bool multiline = false);
+
+// Creates an empty file DIR/PREFIXxxxxxx with a random suffix, exclusively (O_CREAT | O_EXCL:
+// never through an existing file or a symlink) and returns its path; std::runtime_error with the
+// system's reason when it cannot.
+std::filesystem::path create_exclusive_file(const std::filesystem::path& dir,
+                                            const std::string& prefix);
+
+// Writes `content` to PATH atomically: first to a temporary file `.NAME.tmp.XXXXXX` in PATH's
+// folder (hidden, created exclusively under a random suffix, so it cannot collide with a user's
+// file or with another process writing the same table, nor be a planted symlink), then renamed
+// over PATH; a write error names the system's reason (e.g. "No space left on device"). When writing
+// the temporary fails or throws, the temporary is removed before the error propagates: no `*.tmp*`
+// is left.
 void write_file_atomic(const std::filesystem::path& path, const std::string& content);
 
 // The same for a file written as a stream, so that a large file (a long trajectory) is never

@@ -7,10 +7,14 @@
 #include "experiments/stability.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <cerrno>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <map>
 
 #include <nlohmann/json.hpp>
@@ -20,12 +24,17 @@
 #include <utility>
 #include <vector>
 
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/statvfs.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "core/params.hpp"
 #include "experiments/build_info.hpp"
 #include "experiments/catalog.hpp"
 #include "experiments/csv.hpp"
+#include "experiments/output.hpp"
 
 namespace stiffbench {
 
@@ -65,10 +74,13 @@ namespace {
 // Writes the embedded scripts once per process into a private temporary folder and returns it.
 fs::path embedded_plots_dir() {
   static const fs::path dir = [] {
-    const fs::path d = fs::temp_directory_path() /
-                       ("stiffbench-plots-" + std::to_string(::getpid()) + "-" +
-                        std::to_string(reinterpret_cast<std::uintptr_t>(&embedded_plot_scripts)));
-    fs::create_directories(d);
+    // mkdtemp: a new folder (mode 0700) under a name no other process can predict, so no file
+    // planted in /tmp is ever written through.
+    std::string folder = (fs::temp_directory_path() / "stiffbench-plots-XXXXXX").string();
+    if (!::mkdtemp(folder.data()))
+      throw std::runtime_error("cannot create a folder for the plot scripts in " +
+                               fs::temp_directory_path().string() + ": " + std::strerror(errno));
+    const fs::path d = folder;
     for (const auto& [name, text] : embedded_plot_scripts()) {
       std::ofstream out(d / std::string(name), std::ios::binary);
       out.write(text.data(), static_cast<std::streamsize>(text.size()));
@@ -104,17 +116,78 @@ fs::path plots_dir() {
 
 namespace {
 
-// A value for a gnuplot single-quoted string inside a shell double-quoted argument: single
-// quotes are doubled, characters the shell would expand are dropped.
+// A value as a gnuplot single-quoted string: a single quote is doubled, every other character is
+// taken literally by gnuplot (no shell is involved: run_gnuplot passes arguments directly), and
+// a control character becomes a space (a newline would end the -e command).
 std::string gnuplot_quote(const std::string& value) {
-  std::string quoted;
+  std::string quoted = "'";
   for (char ch : value) {
-    if (ch == '"' || ch == '$' || ch == '`' || ch == '\\') continue;
     if (ch == '\'') quoted += '\'';
-    quoted += ch;
+    quoted += static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f ? ' ' : ch;
   }
-  return quoted;
+  return quoted + "'";
 }
+
+// Runs `gnuplot ARGS...` without a shell, stdout to /dev/null, its stderr collected into
+// `messages`; returns its exit status (127 when it could not be started).
+int run_gnuplot(const std::vector<std::string>& args, std::string& messages) {
+  int fds[2];
+  if (::pipe2(fds, O_CLOEXEC) != 0) {
+    messages = std::string("cannot create a pipe: ") + std::strerror(errno);
+    return 127;
+  }
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  std::vector<char*> argv;
+  std::vector<std::string> all = {"gnuplot"};
+  all.insert(all.end(), args.begin(), args.end());
+  for (auto& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int spawned = ::posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(fds[1]);
+  if (spawned != 0) {
+    ::close(fds[0]);
+    messages = std::string("cannot start gnuplot: ") + std::strerror(spawned);
+    return 127;
+  }
+  char buf[4096];
+  for (;;) {
+    const ssize_t n = ::read(fds[0], buf, sizeof buf);
+    if (n > 0) {
+      if (messages.size() < (1u << 20)) messages.append(buf, static_cast<std::size_t>(n));
+    } else if (n == 0 || errno != EINTR) {
+      break;
+    }
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status)
+                           : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+}
+
+// Why the plot file PATH (of format EXT) is not complete, or "" when it is: empty, a PNG without
+// its IEND chunk, an SVG without its closing tag (a full disk or a killed gnuplot leaves these).
+std::string incomplete_plot(const fs::path& path, const std::string& ext) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes{std::istreambuf_iterator<char>(in), {}};
+  if (bytes.empty()) return "gnuplot wrote an empty file";
+  if (ext == "png") {
+    static const std::string iend("\x00\x00\x00\x00IEND\xae\x42\x60\x82", 12);
+    if (bytes.size() < iend.size() || bytes.compare(bytes.size() - iend.size(), iend.size(), iend))
+      return "the PNG has no end chunk (IEND): truncated";
+  } else if (ext == "svg" && bytes.find("</svg>") == std::string::npos) {
+    return "the SVG has no closing </svg>: truncated";
+  }
+  return "";
+}
+
+std::atomic<long> g_failed_plots{0};
 
 std::string join_spaces(const std::vector<std::string>& v) {
   std::string s;
@@ -152,29 +225,54 @@ bool run_plot(const std::string& script, const fs::path& out_stem, const PlotVar
   if (opt.svg) outputs.emplace_back("svg", "svg");
   bool ok = true;
   for (const auto& [term, ext] : outputs) {
-    std::ostringstream cmd;
-    cmd << "gnuplot -e \"";
+    const fs::path final_path = out_stem.string() + "." + ext;
+    // gnuplot writes a temporary created exclusively beside the plot; it is renamed over the
+    // plot only once it is complete, so a failed or truncated plot never has the final name.
+    fs::path tmp;
+    try {
+      tmp = create_exclusive_file(final_path.parent_path(),
+                                  "." + final_path.filename().string() + ".tmp.");
+    } catch (const std::runtime_error& e) {
+      err << "warning: plot " << final_path.string() << " not written: " << e.what() << "\n";
+      ok = false;
+      continue;
+    }
     PlotVars with_out = all;
-    with_out.emplace_back("outfile", out_stem.string() + "." + ext);
+    with_out.emplace_back("outfile", tmp.string());
     with_out.emplace_back("term", term);
-    for (const auto& [name, value] : with_out) cmd << name << "='" << gnuplot_quote(value) << "'; ";
-    cmd << "\" '" << gnuplot_quote((dir / script).string()) << "'";
-    // gnuplot's own warnings (e.g. a method without finite points) go to a log that is shown
-    // only when the plot fails.
-    const fs::path log =
-        fs::temp_directory_path() / ("stiffbench_gnuplot_" + std::to_string(::getpid()) + ".log");
-    const std::string full = cmd.str() + " 2>'" + log.string() + "'";
-    if (std::system(full.c_str()) != 0) {
-      err << "warning: gnuplot failed: " << cmd.str() << "\n";
-      std::ifstream in(log);
-      err << in.rdbuf();
+    std::string defs;
+    for (const auto& [name, value] : with_out) defs += name + "=" + gnuplot_quote(value) + "; ";
+    // gnuplot's own warnings (e.g. a method without finite points) come through a pipe and are
+    // shown only when the plot fails.
+    std::string messages;
+    const int status = run_gnuplot({"-e", defs, (dir / script).string()}, messages);
+    std::string problem = status != 0 ? "gnuplot exited with status " + std::to_string(status)
+                                      : incomplete_plot(tmp, ext);
+    // gnuplot does not report a failed write; a full file system is the usual cause.
+    struct statvfs fs_info {};
+    if (!problem.empty() && ::statvfs(tmp.parent_path().c_str(), &fs_info) == 0 &&
+        static_cast<unsigned long long>(fs_info.f_bavail) * fs_info.f_frsize < (64u << 10))
+      problem +=
+          " (" + std::string(std::strerror(ENOSPC)) + ": " +
+          std::to_string(static_cast<unsigned long long>(fs_info.f_bavail) * fs_info.f_frsize) +
+          " bytes free there)";
+    std::error_code ec;
+    if (problem.empty()) {
+      fs::rename(tmp, final_path, ec);
+      if (ec) problem = "cannot rename the finished plot into place: " + ec.message();
+    }
+    if (!problem.empty()) {
+      fs::remove(tmp, ec);
+      err << "warning: plot " << final_path.string() << " not written: " << problem << "\n";
+      if (!messages.empty()) err << messages << (messages.back() == '\n' ? "" : "\n");
       ok = false;
     }
-    std::error_code ec;
-    fs::remove(log, ec);
   }
+  if (!ok) ++g_failed_plots;
   return ok;
 }
+
+long failed_plot_count() { return g_failed_plots.load(); }
 
 bool plot_convergence(const fs::path& csv, const std::string& title, bool local,
                       const PlotOptions& opt, std::ostream& err) {

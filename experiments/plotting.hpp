@@ -49,11 +49,17 @@ using PlotVars = std::vector<std::pair<std::string, std::string>>;
 
 // Runs plots/SCRIPT with gnuplot, writing OUT_STEM.png (and OUT_STEM.svg with opt.svg). `vars`
 // are defined as gnuplot strings; outfile, term, plotdir and the panel variables are added.
-// Returns false when nothing was drawn: gnuplot missing (one warning per process on `err`) or
-// failing (its command is reported).
+// gnuplot runs without a shell (every character of a path or title reaches it as given) and
+// writes each plot to a temporary created exclusively beside it, renamed over OUT_STEM.EXT only
+// when complete (non-empty; a PNG with its IEND chunk, an SVG with its closing tag). Returns
+// false when nothing was drawn: gnuplot missing (one warning per process on `err`) or a plot
+// failing (a warning naming the plot and why, with gnuplot's messages; counted by
+// failed_plot_count, and the command line then exits 1).
 bool run_plot(const std::string& script, const std::filesystem::path& out_stem,
               const PlotVars& vars, const std::vector<PlotPanel>& panels, const PlotOptions& opt,
               std::ostream& err);
+// The plots that failed in this process (gnuplot present but a plot not written).
+long failed_plot_count();
 
 // The plots of the convergence, local-error and work-precision tables (DIR/NAME.csv →
 // DIR/NAME.png). The integrators are read from the CSV.

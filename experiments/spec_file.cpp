@@ -188,11 +188,7 @@ void require_ascii_outside_strings(const std::string& text, const std::string& w
 
 SpecFile load_spec_file(const std::string& file, const std::vector<std::string>& sets,
                         const SpecSchema& schema) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw BadInput(file + ": cannot read the spec file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return parse_spec_text(buffer.str(), file, sets, schema);
+  return parse_spec_text(read_input_file(file, "spec file"), file, sets, schema);
 }
 
 namespace {
@@ -205,6 +201,8 @@ void read_quick(const toml::table& table, const std::string& file, const SpecKin
     SpecEntry e = entry_of(qnode, "quick." + qkey, qkey, where_of(file, qnode));
     if (qkey == "title" || qkey == "note") {
       if (e.is_list || e.values.front().type != Type::text) spec_error(e, "expected a string");
+      require_printable(e.values.front().text, where_of(file, qnode), "quick." + qkey,
+                        qkey == "note");
     } else if (qkey == "skip") {
       if (e.is_list || e.values.front().type != Type::boolean)
         spec_error(e, "expected true or false");
@@ -313,6 +311,7 @@ SpecFile parse_spec_text(const std::string& source, const std::string& file,
     if (key == "title" || key == "note") {
       const auto* str = node.as_string();
       if (!str) throw BadInput(where + ": key '" + key + "': expected a string");
+      require_printable(str->get(), where, key, key == "note");
       (key == "title" ? spec.title : spec.note) = str->get();
       continue;
     }

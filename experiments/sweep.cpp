@@ -1,6 +1,7 @@
 #include "experiments/sweep.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -11,6 +12,8 @@
 #include <memory>
 #include <set>
 #include <sstream>
+#include <string_view>
+#include <utility>
 
 #include "core/run_control.hpp"
 #include "core/types.hpp"
@@ -50,8 +53,23 @@ Expansion expand(const SpecFile& spec) {
   for (const auto& e : spec.params) all.push_back(&e);
   for (const auto* e : all)
     if (e->is_list) ex.dims.push_back(e);
+  ex.units_per_point = !study_kind(spec.kind).unit_per_integrator
+                           ? 1
+                           : static_cast<long>(std::max<std::size_t>(1, spec.integrators.size()));
+  // The size first, with every product checked against the limit, before anything is expanded.
   long n = 1;
-  for (const auto* d : ex.dims) n *= static_cast<long>(d->values.size());
+  std::string sizes;
+  for (const auto* d : ex.dims)
+    sizes += (sizes.empty() ? "" : " x ") + d->path + " (" + std::to_string(d->values.size()) + ")";
+  for (const auto* d : ex.dims) {
+    const auto size = static_cast<long>(d->values.size());
+    if (size > 0 && n > kMaxSweepUnits / size / ex.units_per_point)
+      throw BadInput(spec.file + ": the sweep " + sizes + " x " +
+                     std::to_string(ex.units_per_point) + " integrator(s) has more than " +
+                     std::to_string(kMaxSweepUnits) +
+                     " units, the most a run takes; split it into several spec files");
+    n *= size;
+  }
   for (long p = 0; p < n; ++p) {
     Point pt;
     // Digits of p in the mixed radix of the dimensions, the last dimension fastest.
@@ -79,9 +97,6 @@ Expansion expand(const SpecFile& spec) {
     }
     ex.points.push_back(std::move(pt));
   }
-  ex.units_per_point = !study_kind(spec.kind).unit_per_integrator
-                           ? 1
-                           : static_cast<long>(std::max<std::size_t>(1, spec.integrators.size()));
   return ex;
 }
 
@@ -578,6 +593,17 @@ int run_spec(const RunOptions& opt, std::ostream& out, std::ostream& err) {
 
 int run_loaded_spec(const SpecFile& loaded, const RunOptions& opt, std::ostream& out,
                     std::ostream& err) {
+  // Written verbatim into #SBATCH lines of the job scripts: a newline would start a shell
+  // command there. Slurm's partition names and time limits need none of the other characters.
+  for (const auto& [flag, value] :
+       {std::pair<const char*, const std::string*>{"--partition", &opt.partition},
+        {"--time", &opt.time_limit}})
+    for (const char c : *value)
+      require_input(std::isalnum(static_cast<unsigned char>(c)) ||
+                        std::string_view("_.,:+-").find(c) != std::string_view::npos,
+                    std::string(flag) + ": '" + printable(*value) + "' holds a character a Slurm " +
+                        (std::string(flag) == "--time" ? "time limit" : "partition name") +
+                        " does not have (allowed: letters, digits and _ . , : + -)");
   const SpecFile spec = with_method_names(loaded);
   const Expansion ex = expand(spec);
   for (const auto& p : ex.points) validate_point(spec, p);

@@ -26,6 +26,10 @@
 
 namespace stiffbench {
 
+// The most units (points x integrators) one spec may expand to; a larger sweep is refused before
+// anything is expanded (split it into several spec files, or shard it across runs).
+inline constexpr long kMaxSweepUnits = 100000;
+
 class StudyJob;
 struct SpecFile;
 

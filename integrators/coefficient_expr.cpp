@@ -3,6 +3,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <string>
 #include <vector>
 
 #include "core/params.hpp"
@@ -24,13 +25,35 @@ class Parser {
     skip_space();
     if (pos_ != s_.size()) fail(pos_, "unexpected '" + std::string(1, s_[pos_]) + "'");
     if (!std::isfinite(v)) fail(0, "the value is not finite");
+    // Evaluated in long double, used in double: a value that is finite only in long double
+    // (e.g. 1e400) is as unusable as an infinite one, for every kind of coefficient.
+    if (!std::isfinite(static_cast<double>(v)))
+      fail(0, "the value is outside the range of double (|x| > 1.8e308)");
     return v;
   }
 
+  // The nesting depth: parentheses, function calls and chains of unary signs each recurse; past
+  // kMaxCoefficientDepth the expression is refused instead of overflowing the stack.
+  struct Nest {
+    Parser& p;
+    explicit Nest(Parser& parser) : p(parser) {
+      if (++p.depth_ > kMaxCoefficientDepth)
+        p.fail(p.pos_, "nested deeper than " + std::to_string(kMaxCoefficientDepth) +
+                           " levels (parentheses, function calls or signs)");
+    }
+    ~Nest() { --p.depth_; }
+    Nest(const Nest&) = delete;
+    Nest& operator=(const Nest&) = delete;
+  };
+
  private:
   [[noreturn]] void fail(std::size_t at, const std::string& what) const {
-    throw BadInput("expression \"" + s_ + "\": at position " + std::to_string(at + 1) + ": " +
-                   what);
+    // A long expression is shown by its beginning and length (the position locates the fault).
+    const std::string shown =
+        s_.size() <= 80 ? s_
+                        : s_.substr(0, 60) + "...\" (" + std::to_string(s_.size()) + " characters";
+    throw BadInput("expression \"" + shown + (s_.size() <= 80 ? "\"" : ")") + ": at position " +
+                   std::to_string(at + 1) + ": " + what);
   }
 
   void skip_space() {
@@ -83,6 +106,7 @@ class Parser {
   }
 
   long double unary() {
+    const Nest nest(*this);
     if (accept('-')) return -unary();
     if (accept('+')) return unary();
     return power();
@@ -170,6 +194,7 @@ class Parser {
   const std::string& s_;
   const CoefficientConstants& constants_;
   std::size_t pos_ = 0;
+  int depth_ = 0;
 };
 
 }  // namespace

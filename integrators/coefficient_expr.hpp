@@ -15,8 +15,9 @@
 //   func    := sqrt | cbrt
 //   name    := [A-Za-z_][A-Za-z0-9_]*         a constant of the file's [constants] table
 // A bad expression (a syntax error, an unknown name, a division by zero, the square root of a
-// negative number, a non-integer exponent, a result that is not finite) is BadInput naming the
-// expression and the 1-based position of the fault.
+// negative number, a non-integer exponent, a result that is not finite or not finite as a double,
+// nesting deeper than kMaxCoefficientDepth) is BadInput naming the expression and the 1-based
+// position of the fault.
 #pragma once
 
 #include <map>
@@ -25,6 +26,11 @@
 namespace stiffbench {
 
 using CoefficientConstants = std::map<std::string, long double>;
+
+// The deepest nesting an expression may have: every '(' , function call and unary sign is a
+// level (a hand-written coefficient needs a handful; 20,000 nested parentheses would otherwise
+// overflow the parser's stack).
+inline constexpr int kMaxCoefficientDepth = 200;
 
 long double evaluate_coefficient(const std::string& expression,
                                  const CoefficientConstants& constants = {});

@@ -4,6 +4,7 @@
 // unknown flags, empty lists, t_end <= t0, malformed spec files. The parameters of every
 // registered model and integrator: tests/experiments/test_bad_input_catalogue.cpp.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -76,6 +77,46 @@ void write_specs(const fs::path& dir) {
         "energy.json", "region.json", "solve.json", "run.json", "report.json"})
     std::ofstream(dir / "held" / record) << other;
   std::ofstream(dir / "held" / "traj.csv") << "t,y0\n0,1\n";
+  // Input files that must be refused before they are read or used: a coefficient nested 20,000
+  // parentheses deep (40 kB), coefficients finite only in long double (1e400) in each kind of
+  // method, a control character in a description, a FIFO, and sweeps of 2^64 and 32^6 (about
+  // 1e9) points.
+  std::string deep = "\"" + std::string(20000, '(') + "1" + std::string(20000, ')') + "\"";
+  std::ofstream(dir / "deep.toml") << "name = \"deep\"\nkind = \"explicit_rk\"\norder = 1\n"
+                                      "description = \"d\"\nA = [[0]]\nb = ["
+                                   << deep << "]\n";
+  put("huge_rk.toml",
+      "name = \"huge_rk\"\nkind = \"explicit_rk\"\norder = 1\n"
+      "description = \"d\"\nA = [[0]]\n"
+      "b = [\"1e400\"]\n");
+  put("huge_kick.toml",
+      "name = \"huge_kick\"\nkind = \"splitting\"\norder = 1\n"
+      "description = \"d\"\n"
+      "velocity_independent = false\nkick = [\"1e400\"]\ndrift = [1]\n");
+  put("huge_gamma.toml",
+      "name = \"huge_gamma\"\nkind = \"rosenbrock\"\norder = 1\n"
+      "description = \"d\"\n"
+      "gamma = \"1e400\"\nalpha = [[0]]\ngamma_offdiag = [[0]]\nb = [1]\n");
+  put("huge_imex.toml",
+      "name = \"huge_imex\"\nkind = \"imex_ark\"\norder = 1\n"
+      "description = \"d\"\nc = [0, 1]\n"
+      "[explicit]\nA = [[0, 0], [\"1e400\", 0]]\nb = [1, 0]\n"
+      "[implicit]\nA = [[0, 0], [0, 1]]\nb = [0, 1]\n");
+  put("control.toml",
+      "name = \"control\"\nkind = \"explicit_rk\"\norder = 1\n"
+      "description = \"clears \\u001b[2J the screen\"\nA = [[0]]\nb = [1]\n");
+  if (::mkfifo((dir / "fifo.toml").c_str(), 0600) != 0) ADD_FAILURE() << "mkfifo failed";
+  std::string wide =
+      "kind = \"convergence\"\nmodel = \"kepler\"\nintegrators = [\"rk4\"]\n"
+      "t_end = 1.0\nh = 0.1\n[params]\n";
+  std::string wide64 = wide;
+  for (int k = 0; k < 64; ++k) wide64 += "p" + std::to_string(k) + " = [1, 2]\n";
+  std::ofstream(dir / "sweep_2_64.toml") << wide64;
+  std::string list32 = "[";
+  for (int v = 0; v < 32; ++v) list32 += (v ? ", " : "") + std::to_string(v + 1);
+  list32 += "]\n";
+  for (const char* k : {"a", "b", "c", "d", "e", "f"}) wide += std::string(k) + " = " + list32;
+  std::ofstream(dir / "sweep_1e9.toml") << wide;
   fs::create_directories(dir / "garbled");
   std::ofstream(dir / "garbled" / "convergence.json") << "{\"spec\": ";
   std::ofstream(dir / "garbled" / "convergence.csv") << "model\n";
@@ -134,6 +175,35 @@ INSTANTIATE_TEST_SUITE_P(
         CliCase{"floor_word", kConv + " --floor low", {"--floor", "'low'"}},
         CliCase{"floor_zero", kConv + " --floor 0", {"--floor", "'0'"}},
         CliCase{"outputs_zero", kSolve + " --outputs 0", {"outputs"}},
+        CliCase{"t_end_nan",
+                "solve --model kepler --integrator rk4 --h 0.1 --t-end nan",
+                {"--t-end", "'nan'", "not a finite number"}},
+        // Input files refused before they are read or used.
+        CliCase{"deep_expression", "analyze deep.toml", {"deep.toml", "nested deeper than 200"}},
+        CliCase{"huge_rk", "analyze huge_rk.toml", {"huge_rk.toml", "1e400"}},
+        CliCase{"huge_kick", "analyze huge_kick.toml", {"huge_kick.toml", "range of double"}},
+        CliCase{"huge_gamma", "analyze huge_gamma.toml", {"huge_gamma.toml", "range of double"}},
+        CliCase{"huge_imex", "analyze huge_imex.toml", {"huge_imex.toml", "range of double"}},
+        CliCase{"control_characters",
+                "analyze control.toml",
+                {"control.toml", "'description'", "control character (code 27"}},
+        CliCase{"fifo_method_file", "analyze fifo.toml", {"fifo.toml", "not a regular file"}},
+        CliCase{"fifo_spec_file", "run fifo.toml --out out", {"fifo.toml", "not a regular file"}},
+        CliCase{
+            "dev_zero_spec_file", "run /dev/zero --out out", {"/dev/zero", "not a regular file"}},
+        CliCase{"folder_spec_file", "run held --out out", {"held", "a folder, not a spec file"}},
+        CliCase{"sweep_2_64",
+                "run sweep_2_64.toml --out out",
+                {"sweep_2_64.toml", "more than 100000 units"}},
+        CliCase{"sweep_1e9",
+                "run sweep_1e9.toml --out out",
+                {"params.a (32) x params.b (32)", "more than 100000 units"}},
+        CliCase{"slurm_partition_newline",
+                "run ok.toml --slurm 2 --partition \"$(printf 'debug\\necho pwned')\" --out out",
+                {"--partition", "debug\\necho pwned", "Slurm partition name"}},
+        CliCase{"slurm_time_space",
+                "run ok.toml --slurm 2 --time '1:00 ; x' --out out",
+                {"--time", "Slurm time limit"}},
         // Absurd sizes: refused before anything is allocated.
         CliCase{"cloth_1e9",
                 "solve --model cloth --param n=1000000000 --integrator rk4 --h 0.001 --t-end 0.01 "

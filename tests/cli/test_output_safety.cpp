@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -248,3 +249,93 @@ TEST(OutputSafety, MergeRefusesAnotherSpecUnlessForce) {
 }
 
 }  // namespace
+
+namespace {
+
+const std::string kSmallConvergence =
+    "convergence --model harmonic_oscillator --integrators rk4,heun --t-end 1 --h 0.1 --levels 3";
+
+bool have_gnuplot() { return std::system("command -v gnuplot >/dev/null 2>&1") == 0; }
+
+// A PNG is complete when it ends with its IEND chunk (PNG specification, Sect. 11.2.5: length 0,
+// type IEND, CRC ae 42 60 82).
+bool complete_png(const fs::path& p) {
+  const std::string b = slurp(p);
+  static const std::string iend("\x00\x00\x00\x00IEND\xae\x42\x60\x82", 12);
+  return b.size() > iend.size() && b.compare(b.size() - iend.size(), iend.size(), iend) == 0;
+}
+
+}  // namespace
+
+// Symlinks planted under the names the testbed writes (the write probe's old fixed name, a
+// temporary's, the outputs') never have their target changed: probes and temporaries are created
+// exclusively under random names, outputs are renamed over the link (which replaces the link).
+TEST(OutputSafety, SymlinksInTheOutputFolderNeverChangeTheirTarget) {
+  const fs::path base = stiffbench::testing_support::fresh_dir("safety", "symlinks");
+  fs::create_directories(base / "R");
+  const fs::path victim = base / "victim.txt";
+  std::ofstream(victim) << "precious\n";
+  for (const char* name : {".stiffbench_write_test", ".convergence.csv.tmp.0", "convergence.png",
+                           "convergence.md", "convergence.csv", "convergence.json"})
+    fs::create_symlink(victim, base / "R" / name);
+  // Links under the result names are results that cannot be identified: refused, then replaced
+  // with --force.
+  const Outcome refused = run(kSmallConvergence + " --out " + (base / "R").string());
+  EXPECT_EQ(refused.code, 2) << refused.err;
+  EXPECT_EQ(slurp(victim), "precious\n");
+  const Outcome forced = run(kSmallConvergence + " --out " + (base / "R").string() + " --force");
+  EXPECT_EQ(forced.code, 0) << forced.err;
+  EXPECT_EQ(slurp(victim), "precious\n");
+  EXPECT_FALSE(fs::is_symlink(base / "R" / "convergence.csv"));
+  EXPECT_NE(slurp(base / "R" / "convergence.csv").find("rk4"), std::string::npos);
+  EXPECT_TRUE(fs::is_symlink(base / "R" / ".stiffbench_write_test"));  // left alone
+  fs::remove_all(base);
+}
+
+// Shell characters in --out reach gnuplot as given (no shell between): the plot lands in that
+// folder, and no folder named by what a shell would have made of the path is written.
+TEST(OutputSafety, ShellCharactersInOutReachThePlots) {
+  if (!have_gnuplot()) GTEST_SKIP() << "gnuplot not installed";
+  const fs::path base = stiffbench::testing_support::fresh_dir("safety", "shell_chars");
+  fs::create_directories(base);
+  const fs::path out = base / "R$x\"y'z`w`\\v";
+  const Outcome o =
+      run(kSmallConvergence + " --out " + stiffbench::testing_support::shell_quote(out.string()));
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_TRUE(complete_png(out / "convergence.png"));
+  std::size_t entries = 0;
+  for (const auto& e : fs::directory_iterator(base)) {
+    (void)e;
+    ++entries;
+  }
+  EXPECT_EQ(entries, 1u);  // only the folder given
+  fs::remove_all(base);
+}
+
+// A full disk: on a 32 KiB tmpfs the tables fit and the plot does not; the command exits
+// non-zero naming ENOSPC, and no file under a final name is incomplete (the PNG, when present, is
+// whole). Needs root for the mount; skipped elsewhere.
+TEST(OutputSafety, AFullDiskLeavesNoIncompleteFileAndSaysSo) {
+  if (!have_gnuplot()) GTEST_SKIP() << "gnuplot not installed";
+  const fs::path mnt = stiffbench::testing_support::fresh_dir("safety", "tmpfs");
+  fs::create_directories(mnt);
+  if (::geteuid() != 0 ||
+      std::system(("mount -t tmpfs -o size=32k tmpfs " + mnt.string() + " 2>/dev/null").c_str()) !=
+          0) {
+    fs::remove_all(mnt);
+    GTEST_SKIP() << "cannot mount a tmpfs here (needs root)";
+  }
+  const Outcome o =
+      run("convergence --model harmonic_oscillator --integrators rk4,heun,euler,midpoint "
+          "--t-end 1 --h 0.1 --levels 6 --out " +
+          (mnt / "R").string());
+  EXPECT_NE(o.code, 0) << o.err;
+  EXPECT_NE(o.err.find("No space left on device"), std::string::npos) << o.err;
+  if (fs::exists(mnt / "R" / "convergence.png")) {
+    EXPECT_TRUE(complete_png(mnt / "R" / "convergence.png"));
+  }
+  for (const auto& e : fs::directory_iterator(mnt / "R"))
+    EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+  std::system(("umount " + mnt.string()).c_str());
+  fs::remove_all(mnt);
+}
