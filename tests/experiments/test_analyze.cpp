@@ -203,6 +203,11 @@ TEST(AnalyzeStudy, WritesTheAnalysisOfRk4Ssprk3Dopri5) {
   // method) and limits.
   EXPECT_NE(out.str().find("| rk4 | explicit_rk | 4 | - | 1 |"), std::string::npos) << out.str();
   EXPECT_NE(out.str().find("2.785293563405282"), std::string::npos) << out.str();
+  // ssprk3's SSP coefficient 1 (Shu & Osher 1988) comes from a bisection: printed with its
+  // relative tolerance, which the CSV gives in its own column (none for rk4's exact 0).
+  EXPECT_NE(out.str().find("| 1 (bisection, relative +-1e-12) |"), std::string::npos) << out.str();
+  EXPECT_EQ(ssprk3.at("ssp_relative_tolerance"), "1e-12");
+  EXPECT_EQ(rk4.at("ssp_relative_tolerance"), "");
   if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
     EXPECT_TRUE(fs::exists(dir / "analyze.png"));
   }
