@@ -207,7 +207,7 @@ std::string polynomial_text(const Polynomial& p, const std::string& sep = ";") {
 std::string order_text(int order) { return order > 0 ? std::to_string(order) : "none"; }
 
 // The SSP coefficient with its precision: a positive finite value comes from a bisection
-// (kSspRelativeTolerance); 0 (absolute monotonicity fails at r = 0+) is exact.
+// (kSspRelativeTolerance); 0 (a negative entry of K, or a radius below 1e-12) is printed as is.
 std::string ssp_text(double ssp) {
   if (ssp < 0) return "-";
   if (ssp == 0 || std::isinf(ssp)) return limit_text(ssp, false);
