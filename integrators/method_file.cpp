@@ -290,23 +290,25 @@ class Reader {
       const toml::node& v = *t->get(k);
       // A value that is no coefficient, or a key of the format (of another kind: the file's own
       // kind's keys were taken as top-level keys by lift_misplaced_keys) whose value does not
-      // evaluate: a method key written after the header.
+      // evaluate: likely a method key written after the header. The message says so (with the
+      // expression's own error, in case a constant was meant).
       const std::vector<std::string> kinds = kinds_with_key(k);
-      const auto misplaced = [&] {
+      const auto misplaced = [&](const std::string& detail) {
         throw BadInput(where(v) + ": key '" + k + "' is inside the table [constants] " +
                        kTomlTables + ", but " +
                        (kinds.empty() ? std::string("a constant is a number or a string holding "
                                                     "an expression")
                                       : "'" + k + "' is a method-file key (of kind " + join(kinds) +
                                             "), not a constant") +
+                       detail +
                        ": write the method's keys before the [constants] header, or move the "
                        "[constants] table to the end of the file");
       };
-      if (!v.is_number() && !v.is_string()) misplaced();
+      if (!v.is_number() && !v.is_string()) misplaced("");
       if (!kinds.empty() && v.is_string()) try {
           (void)evaluate_coefficient(v.as_string()->get(), constants_);
-        } catch (const BadInput&) {
-          misplaced();
+        } catch (const BadInput& e) {
+          misplaced(" (as a constant: " + std::string(e.what()) + ")");
         }
       bool ok = !k.empty() && (std::isalpha(static_cast<unsigned char>(k[0])) || k[0] == '_');
       for (char ch : k) ok = ok && (std::isalnum(static_cast<unsigned char>(ch)) || ch == '_');

@@ -249,6 +249,16 @@ b = [1]
                      "cannot name constants)"),
             std::string::npos)
       << msg;
+  // A key of another kind whose string is no expression: named as misplaced, with the
+  // expression's own error in case a constant was meant.
+  msg =
+      bad_input([&] { parse_method_file(dirk + "[constants]\nsolver = \"radau5\"\n", "d.toml"); });
+  EXPECT_NE(msg.find("d.toml:8: key 'solver' is inside the table [constants]"), std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("'solver' is a method-file key (of kind irk), not a constant (as a "
+                     "constant: "),
+            std::string::npos)
+      << msg;
   // An imex_ark file: a key after [implicit] that is no key of that table nor of the kind.
   const std::string imex = R"toml(name = "ie"
 kind = "imex_ark"
