@@ -264,11 +264,121 @@ bool absolutely_monotonic(const MatL& k, ld r) {
   return sums.maxCoeff() <= 1.0L + 1e-13L;
 }
 
+// The bi-coloured trees of W-methods up to kMaxWOrder vertices: a tree of order n is a W-vertex
+// over one tree of order n − 1, or an f-vertex over a non-decreasing list of earlier trees whose
+// orders sum to n − 1. σ(W[u]) = σ(u); σ of an f-root as for rooted trees. γ(t) is the density
+// of the tree with the colours forgotten (a W-vertex counted as a vertex).
+std::vector<WTree> build_w_trees() {
+  std::vector<WTree> trees;
+  trees.push_back({1, false, {}, false, 1.0, 1.0, "t"});
+  for (int n = 2; n <= kMaxWOrder; ++n) {
+    const int before = static_cast<int>(trees.size());
+    for (int i = 0; i < before; ++i) {
+      const WTree& u = trees[static_cast<std::size_t>(i)];
+      if (u.order != n - 1) continue;
+      trees.push_back({n, true, {i}, true, n * u.density, u.symmetry, "W[" + u.name + "]"});
+    }
+    std::vector<int> pick;
+    std::function<void(int, int)> rec = [&](int remaining, int min_index) {
+      if (remaining == 0) {
+        WTree t;
+        t.order = n;
+        t.children = pick;
+        t.density = n;
+        t.symmetry = 1.0;
+        std::string name = "[";
+        for (std::size_t i = 0; i < pick.size();) {
+          std::size_t j = i;
+          while (j < pick.size() && pick[j] == pick[i]) ++j;
+          const WTree& u = trees[static_cast<std::size_t>(pick[i])];
+          t.has_w = t.has_w || u.has_w;
+          for (std::size_t k = i; k < j; ++k) {
+            t.density *= u.density;
+            t.symmetry *= u.symmetry * static_cast<double>(k - i + 1);
+          }
+          name += (i > 0 ? "," : "") + u.name + (j - i > 1 ? "^" + std::to_string(j - i) : "");
+          i = j;
+        }
+        t.name = name + "]";
+        trees.push_back(std::move(t));
+        return;
+      }
+      for (int i = min_index; i < before; ++i) {
+        const int o = trees[static_cast<std::size_t>(i)].order;
+        if (o > remaining) continue;
+        pick.push_back(i);
+        rec(remaining - o, i);
+        pick.pop_back();
+      }
+    };
+    rec(n - 1, 0);
+  }
+  return trees;
+}
+
+// The stability figures of the embedded formula R̂ = P̂/Q̂.
+EmbeddedStability embedded_figures(const LinearStability& s) {
+  EmbeddedStability e;
+  e.p = s.rational->p;
+  e.q = s.rational->q;
+  const std::size_t dp = e.p.size() - 1, dq = e.q.size() - 1;
+  e.r_infinity = dp > dq ? kInf : dp < dq ? 0.0 : std::abs(e.p.back() / e.q.back());
+  e.a_stable = a_stable_exact(s).value_or(false);
+  e.l_stable = e.a_stable && e.r_infinity <= 1e-12;
+  const AxisLimit re = real_axis_limit(s), im = imaginary_axis_limit(s);
+  e.real_axis_limit = re.limit;
+  e.real_axis_unbounded = re.unbounded;
+  e.imag_axis_limit = im.limit;
+  e.imag_axis_unbounded = im.unbounded;
+  return e;
+}
+
 }  // namespace
 
 const std::vector<RootedTree>& rooted_trees() {
   static const std::vector<RootedTree> trees = build_rooted_trees();
   return trees;
+}
+
+const std::vector<WTree>& w_trees() {
+  static const std::vector<WTree> trees = build_w_trees();
+  return trees;
+}
+
+std::vector<OrderCondition> rosenbrock_w_conditions(const RosenbrockTableau& t, const Vec& w,
+                                                    int max_order) {
+  require_input(max_order >= 1 && max_order <= kMaxWOrder,
+                "W-conditions: the largest order must be in 1..6");
+  const Index s = w.size();
+  require_input(s >= 1 && t.alpha.rows() == s && t.alpha.cols() == s && t.gamma_lower.rows() == s &&
+                    t.gamma_lower.cols() == s,
+                "W-conditions: alpha and gamma must be s x s with s the number of weights");
+  const MatL alpha = t.alpha.cast<ld>();
+  const MatL gamma = t.gamma_lower.cast<ld>() + static_cast<ld>(t.gamma) * MatL::Identity(s, s);
+  const VecL wl = w.cast<ld>();
+  const auto& trees = w_trees();
+  std::vector<VecL> phi;
+  std::vector<OrderCondition> out;
+  for (std::size_t i = 0; i < trees.size(); ++i) {
+    const WTree& tree = trees[i];
+    if (tree.order > max_order) break;
+    VecL v = VecL::Ones(s);
+    if (tree.w_root)
+      v = gamma * phi[static_cast<std::size_t>(tree.children[0])];
+    else
+      for (int ch : tree.children) v = v.cwiseProduct(alpha * phi[static_cast<std::size_t>(ch)]);
+    const ld residual = wl.dot(v) - (tree.has_w ? 0.0L : 1.0L / static_cast<ld>(tree.density));
+    phi.push_back(std::move(v));
+    out.push_back({tree.order, static_cast<int>(i), tree.name, static_cast<double>(residual),
+                   static_cast<double>(residual / static_cast<ld>(tree.symmetry))});
+  }
+  return out;
+}
+
+int rosenbrock_w_order(const RosenbrockTableau& t, const Vec& w, double tol) {
+  const auto first =
+      first_violated_condition(rosenbrock_w_conditions(t, w, kMaxWOrder), kMaxWOrder, tol);
+  return first ? first->order - 1 : kMaxWOrder;
 }
 
 std::vector<OrderCondition> rk_order_conditions(const ButcherTableau& t, const Vec& w,
@@ -343,7 +453,9 @@ MethodAnalysis analyze_runge_kutta(const ButcherTableau& t, const std::string& k
   if (tab.b_embedded.size() == s) {
     ButcherTableau embedded = tab;
     embedded.b = tab.b_embedded;
-    note_embedded_stability(m, stab, tableau_stability(embedded));
+    const LinearStability es = tableau_stability(embedded);
+    note_embedded_stability(m, stab, es);
+    if (es.rational) m.embedded_stability = embedded_figures(es);
   }
   if (tab.is_explicit()) {
     m.ssp_coefficient = ssp_coefficient(tab);
@@ -371,18 +483,27 @@ MethodAnalysis analyze_rosenbrock(const RosenbrockTableau& t) {
   fill_order(m);
   if (t.b_embedded.size() == s)
     m.embedded_order = achieved_order(conditions_from(al, bl, t.b_embedded.cast<ld>(), kMaxOrder));
+  m.w_conditions = rosenbrock_w_conditions(t, t.b, kMaxWOrder);
+  const auto w_fail = first_violated_condition(m.w_conditions, kMaxWOrder, kConditionTol);
+  m.w_order = w_fail ? w_fail->order - 1 : kMaxWOrder;
+  m.embedded_w_order = t.b_embedded.size() == s ? rosenbrock_w_order(t, t.b_embedded) : 0;
+  m.claimed_w_order = t.w_order;
   // Stiffly accurate (HW II, IV.7): b_i = β_si and α_s = 1, so y⁺ is the last stage's argument
   // plus k_s (R(∞) = 0 when in addition the method is A-stable).
   m.stiffly_accurate = (beta.row(s - 1).transpose() - t.b).cwiseAbs().maxCoeff() <= 1e-12 &&
                        std::abs(t.alpha.row(s - 1).sum() - 1.0) <= 1e-12;
   m.max_coefficient = std::max({max_abs(t.alpha), max_abs(gamma), max_abs(t.b)});
   m.notes.push_back(
-      "Rosenbrock: order conditions of Hairer & Wanner II, IV.7 (exact Jacobian); "
-      "stability from A = alpha + Gamma");
+      "Rosenbrock: order conditions of Hairer & Wanner II, IV.7 (exact Jacobian); W-order from "
+      "the conditions with an arbitrary matrix W in place of J (bi-coloured trees to order 6, "
+      "autonomous problems); stability from A = alpha + Gamma");
   const LinearStability stab = rosenbrock_stability(t.alpha, gamma, t.b);
   fill_stability(m, stab, beta, t.b);
-  if (t.b_embedded.size() == s)
-    note_embedded_stability(m, stab, rosenbrock_stability(t.alpha, gamma, t.b_embedded));
+  if (t.b_embedded.size() == s) {
+    const LinearStability es = rosenbrock_stability(t.alpha, gamma, t.b_embedded);
+    note_embedded_stability(m, stab, es);
+    if (es.rational) m.embedded_stability = embedded_figures(es);
+  }
   return m;
 }
 

@@ -15,6 +15,17 @@
 //     Math. 44 (2003) 139–181, §2.1).
 //   - Rosenbrock methods in the form of Hairer & Wanner II, §IV.7 (α, Γ = γI + strictly lower
 //     γ_ij): their own elementary weights (a vertex with one son takes β = α + Γ, others α).
+//   - W-methods: the same scheme with an arbitrary matrix W in place of the Jacobian J
+//     (Steihaug & Wolfbrandt, Math. Comp. 33 (1979) 521–534; Hairer & Wanner II, §IV.7,
+//     "W-methods"). Its B-series runs over bi-coloured trees: f-vertices (any number of sons,
+//     elementary weight factor α along their edges) and W-vertices (exactly one son, factor Γ
+//     with its diagonal γ), the root either. Order p for every W when, for every such tree with
+//     at most p vertices, wᵀΦ(t) = 1/γ(t) if it has no W-vertex and 0 otherwise (the exact
+//     solution has no term with W). With W = J a W-vertex and an f-vertex with one son give the
+//     same elementary differential, and the sum of the two conditions is the Rosenbrock one
+//     (β = α + Γ): the W-order is at most the classical order.
+//   - The embedded formula's stability function R̂ = P̂/Q̂ (the weights b̂ in place of b): |R̂(∞)|,
+//     A- and L-stability, the exact axis limits, as for the main formula.
 //   - A-stability: no pole of R in Re z < 0 and |Q(iy)|² − |P(iy)|² >= 0 for all real y,
 //     checked on the coefficients of that even polynomial (exact, no sampling); L-stability:
 //     A-stable and R(∞) = 0.
@@ -68,7 +79,39 @@ std::vector<OrderCondition> rk_order_conditions(const ButcherTableau& t, const V
 std::optional<OrderCondition> first_violated_condition(const std::vector<OrderCondition>& c,
                                                        int order, double tol = 1e-12);
 
+// ---- W-methods ---------------------------------------------------------------------------------
+// A bi-coloured tree of a W-method (see above): an f-vertex root with sons `children` (indices
+// into w_trees(), non-decreasing), or a W-vertex root (w_root) with exactly one son.
+struct WTree {
+  int order = 0;
+  bool w_root = false;
+  std::vector<int> children;
+  bool has_w = false;   // some vertex is a W-vertex (the condition's right-hand side is 0)
+  double density = 0;   // γ(t) of the tree without colours (used when !has_w)
+  double symmetry = 0;  // σ(t): the automorphisms that keep the colours
+  std::string name;     // bracket notation, a W-vertex written W[...]: "W[t]", "[W[t]]"
+};
+inline constexpr int kMaxWOrder = 6;
+// Every bi-coloured tree with at most kMaxWOrder vertices (1, 2, 5, 13, 37, 108 of each order),
+// order by order.
+const std::vector<WTree>& w_trees();
+// The W-conditions of order <= max_order (<= kMaxWOrder) for weights w (tree = the index into
+// w_trees(), name its bracket name, residual wᵀΦ(t) − (has_w ? 0 : 1/γ(t))).
+std::vector<OrderCondition> rosenbrock_w_conditions(const RosenbrockTableau& t, const Vec& w,
+                                                    int max_order = kMaxWOrder);
+// Largest p <= kMaxWOrder with every W-condition of order <= p met to tol.
+int rosenbrock_w_order(const RosenbrockTableau& t, const Vec& w, double tol = 1e-12);
+
 // ---- The analysis of one method ----------------------------------------------------------------
+// What an embedded formula's stability function gives (the same figures as the main one's).
+struct EmbeddedStability {
+  Polynomial p, q;        // R̂ = P̂/Q̂, ascending powers
+  double r_infinity = 0;  // |R̂(∞)| (+inf when deg P̂ > deg Q̂)
+  bool a_stable = false, l_stable = false;
+  double real_axis_limit = 0, imag_axis_limit = 0;
+  bool real_axis_unbounded = false, imag_axis_unbounded = false;
+};
+
 struct MethodAnalysis {
   std::string name;
   std::string kind;  // explicit_rk, dirk, irk, rosenbrock, splitting
@@ -77,6 +120,10 @@ struct MethodAnalysis {
   int order = 0;           // achieved: every condition up to it holds to 1e-12 (8: at least 8)
   int stage_order = -1;    // largest q with C(q); -1 where not defined (Rosenbrock, splitting)
   int embedded_order = 0;  // achieved order of the embedded weights (0: none)
+  // Rosenbrock: the W-order (every W-condition up to it holds to 1e-12; kMaxWOrder means at
+  // least that) of b and of b̂ (0: no embedded weights); -1 for other kinds.
+  int w_order = -1, embedded_w_order = -1;
+  int claimed_w_order = 0;  // the method's claim (0: none)
   bool fsal = false, stiffly_accurate = false;
   std::vector<double> residual_by_order;        // [k-1]: max |residual| over the trees of order k
   double error_norm_2 = 0, error_norm_max = 0;  // of τ over the trees of order p+1
@@ -95,8 +142,11 @@ struct MethodAnalysis {
   // The embedded weights give the same R(z) as b (P·Q̂ = P̂·Q to 1e-12): the error estimate
   // vanishes on linear constant-coefficient problems (ros3p). A note says so.
   bool embedded_same_stability = false;
-  std::vector<OrderCondition> conditions;  // every condition up to order 8
-  std::vector<std::string> notes;          // what was not analysed, and why
+  // The embedded formula's stability (embedded pairs with a stability function; empty otherwise).
+  std::optional<EmbeddedStability> embedded_stability;
+  std::vector<OrderCondition> conditions;    // every condition up to order 8
+  std::vector<OrderCondition> w_conditions;  // Rosenbrock: every W-condition up to kMaxWOrder
+  std::vector<std::string> notes;            // what was not analysed, and why
 };
 
 // Runge–Kutta (kind "explicit_rk", "dirk" or "irk"), Rosenbrock and kick/drift methods.
@@ -122,6 +172,9 @@ struct DispersionPoint {
 std::vector<DispersionPoint> dissipation_dispersion(const RationalForm& r, int n = 121);
 
 // The SSP coefficient (radius of absolute monotonicity) of a Runge–Kutta tableau; 0 when none.
+// Found by bisection and rounded to 12 significant digits: the true value lies within
+// kSspRelativeTolerance (relative) of it.
+inline constexpr double kSspRelativeTolerance = 1e-12;
 double ssp_coefficient(const ButcherTableau& t);
 
 }  // namespace stiffbench

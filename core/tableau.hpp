@@ -123,6 +123,9 @@ struct RosenbrockTableau {
   Vec b;
   Vec b_embedded = Vec();  // optional embedded weights (size 0: none)
   int embedded_order = 0;
+  // Claimed W-order: the order kept when an arbitrary matrix W replaces the Jacobian (0: not
+  // claimed; core/method_analysis.hpp checks it).
+  int w_order = 0;
 
   Index stages() const { return b.size(); }
   Mat gamma_full() const;  // Γ = gamma_lower + γ I

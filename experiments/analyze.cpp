@@ -206,6 +206,24 @@ std::string polynomial_text(const Polynomial& p, const std::string& sep = ";") {
 
 std::string order_text(int order) { return order > 0 ? std::to_string(order) : "none"; }
 
+// The SSP coefficient with its precision: a positive finite value comes from a bisection
+// (kSspRelativeTolerance); 0 (a negative entry of K, or a radius below 1e-12) is printed as is.
+std::string ssp_text(double ssp) {
+  if (ssp < 0) return "-";
+  if (ssp == 0 || std::isinf(ssp)) return limit_text(ssp, false);
+  return format_full(ssp) + " (bisection, relative +-" + format_full(kSspRelativeTolerance) + ")";
+}
+
+// A Rosenbrock method's W-order (">= 6" at the last order analysed, the claim when it differs);
+// "-" for other kinds.
+std::string w_order_text(const MethodAnalysis& a) {
+  if (a.w_order < 0) return "-";
+  std::string t = (a.w_order >= kMaxWOrder ? ">= " : "") + std::to_string(a.w_order);
+  if (a.claimed_w_order && a.claimed_w_order != a.w_order)
+    t += " (claimed " + std::to_string(a.claimed_w_order) + ")";
+  return t;
+}
+
 std::string notes_text(const AnalyzedMethod& m) { return join(m.analysis.notes, "; "); }
 
 bool has_stability_function(const AnalyzedMethod& m) {
@@ -240,6 +258,9 @@ std::vector<std::string> coefficient_row(const AnalyzedMethod& m) {
                                   std::to_string(a.order),
                                   rk ? std::to_string(a.stage_order) : "",
                                   a.embedded_order ? std::to_string(a.embedded_order) : "",
+                                  a.w_order >= 0 ? std::to_string(a.w_order) : "",
+                                  a.embedded_w_order > 0 ? std::to_string(a.embedded_w_order) : "",
+                                  a.claimed_w_order ? std::to_string(a.claimed_w_order) : "",
                                   yes_no(a.fsal),
                                   yes_no(a.stiffly_accurate)};
   for (int k = 0; k < kMaxOrder; ++k)
@@ -259,9 +280,20 @@ std::vector<std::string> coefficient_row(const AnalyzedMethod& m) {
   row.push_back(r ? format_full(a.internal_amplification_real) : "");
   row.push_back(r ? format_full(a.internal_amplification_imag) : "");
   row.push_back(a.ssp_coefficient >= 0 ? format_full(a.ssp_coefficient) : "");
+  row.push_back(a.ssp_coefficient > 0 && std::isfinite(a.ssp_coefficient)
+                    ? format_full(kSspRelativeTolerance)
+                    : "");
   row.push_back(r ? order_text(a.dissipation_order) : "");
   row.push_back(r ? order_text(a.dispersion_order) : "");
   row.push_back(a.kind == "splitting" ? limit_text(a.oscillator_limit, false) : "");
+  const auto& e = a.embedded_stability;
+  row.push_back(e ? polynomial_text(e->p) : "");
+  row.push_back(e ? polynomial_text(e->q) : "");
+  row.push_back(e ? format_full(e->r_infinity) : "");
+  row.push_back(e ? yes_no(e->a_stable) : "");
+  row.push_back(e ? yes_no(e->l_stable) : "");
+  row.push_back(e ? limit_text(e->real_axis_limit, e->real_axis_unbounded) : "");
+  row.push_back(e ? limit_text(e->imag_axis_limit, e->imag_axis_unbounded) : "");
   row.push_back(notes_text(m));
   return row;
 }
@@ -289,16 +321,38 @@ std::vector<std::string> stability_row(const AnalyzedMethod& m,
 }  // namespace
 
 Table analyze_table(const AnalyzeResult& r) {
-  Table t{{"integrator", "kind", "stages", "claimed_order", "order", "stage_order",
-           "embedded_order", "fsal", "stiffly_accurate"},
-          {}};
+  Table t{
+      {"integrator", "kind", "stages", "claimed_order", "order", "stage_order", "embedded_order",
+       "w_order", "embedded_w_order", "claimed_w_order", "fsal", "stiffly_accurate"},
+      {}};
   for (int k = 1; k <= kMaxOrder; ++k) t.columns.push_back("residual_order_" + std::to_string(k));
-  for (const char* c :
-       {"error_norm_2", "error_norm_max", "error_norm_2_next", "error_norm_max_next",
-        "max_coefficient", "p_coefficients", "q_coefficients", "r_infinity", "a_stable", "l_stable",
-        "real_axis_limit", "imaginary_axis_limit", "internal_amplification_real",
-        "internal_amplification_imag", "ssp_coefficient", "dissipation_order", "dispersion_order",
-        "oscillator_limit", "notes"})
+  for (const char* c : {"error_norm_2",
+                        "error_norm_max",
+                        "error_norm_2_next",
+                        "error_norm_max_next",
+                        "max_coefficient",
+                        "p_coefficients",
+                        "q_coefficients",
+                        "r_infinity",
+                        "a_stable",
+                        "l_stable",
+                        "real_axis_limit",
+                        "imaginary_axis_limit",
+                        "internal_amplification_real",
+                        "internal_amplification_imag",
+                        "ssp_coefficient",
+                        "ssp_relative_tolerance",
+                        "dissipation_order",
+                        "dispersion_order",
+                        "oscillator_limit",
+                        "embedded_p_coefficients",
+                        "embedded_q_coefficients",
+                        "embedded_r_infinity",
+                        "embedded_a_stable",
+                        "embedded_l_stable",
+                        "embedded_real_axis_limit",
+                        "embedded_imaginary_axis_limit",
+                        "notes"})
     t.columns.push_back(c);
   for (const auto& m : r.methods)
     t.rows.push_back(m.coefficient_defined ? coefficient_row(m) : stability_row(m, t.columns));
@@ -306,11 +360,13 @@ Table analyze_table(const AnalyzeResult& r) {
 }
 
 Table analyze_conditions_table(const AnalyzeResult& r) {
-  Table t{{"integrator", "order", "tree", "residual", "error_coefficient"}, {}};
+  Table t{{"integrator", "order", "tree", "residual", "error_coefficient", "set"}, {}};
   for (const auto& m : r.methods)
-    for (const auto& c : m.analysis.conditions)
-      t.rows.push_back({m.integrator, std::to_string(c.order), c.name, format_full(c.residual),
-                        std::isnan(c.error_coefficient) ? "" : format_full(c.error_coefficient)});
+    for (const auto* set : {&m.analysis.conditions, &m.analysis.w_conditions})
+      for (const auto& c : *set)
+        t.rows.push_back({m.integrator, std::to_string(c.order), c.name, format_full(c.residual),
+                          std::isnan(c.error_coefficient) ? "" : format_full(c.error_coefficient),
+                          set == &m.analysis.conditions ? "order" : "W"});
   return t;
 }
 
@@ -332,14 +388,15 @@ std::string stability_class(bool a_stable, bool l_stable) {
 }  // namespace
 
 Table analyze_summary_table(const AnalyzeResult& r) {
-  Table t{{"integrator", "kind", "order", "stage order", "error norm A(p+1)", "abs R(inf)",
-           "A/L-stable", "real-axis limit", "imaginary-axis limit", "SSP"},
+  Table t{{"integrator", "kind", "order", "W-order", "stage order", "error norm A(p+1)",
+           "abs R(inf)", "A/L-stable", "embedded abs R(inf)", "embedded A/L-stable",
+           "real-axis limit", "imaginary-axis limit", "SSP"},
           {}};
   for (const auto& m : r.methods) {
     const MethodAnalysis& a = m.analysis;
     if (!m.coefficient_defined) {
-      t.rows.push_back({m.integrator, kNotCoefficientDefined, "-", "-", "-", "-",
-                        m.a_stable ? (*m.a_stable ? "A" : "no") : "-",
+      t.rows.push_back({m.integrator, kNotCoefficientDefined, "-", "-", "-", "-", "-",
+                        m.a_stable ? (*m.a_stable ? "A" : "no") : "-", "-", "-",
                         m.real_axis ? limit_text(m.real_axis) : "-",
                         m.imaginary_axis ? limit_text(m.imaginary_axis)
                         : m.oscillator   ? "oscillator h*omega < " + limit_text(m.oscillator)
@@ -352,15 +409,18 @@ Table analyze_summary_table(const AnalyzeResult& r) {
     if (a.order >= analysed_to(a)) order = ">= " + order;
     if (a.claimed_order && a.claimed_order != a.order)
       order += " (claimed " + std::to_string(a.claimed_order) + ")";
+    const auto& e = a.embedded_stability;
     t.rows.push_back(
-        {m.integrator, a.kind, order, a.stage_order >= 0 ? std::to_string(a.stage_order) : "-",
+        {m.integrator, a.kind, order, w_order_text(a),
+         a.stage_order >= 0 ? std::to_string(a.stage_order) : "-",
          a.order < kMaxOrder && has_error_norms(a) ? format_full(a.error_norm_2) : "-",
          rf ? format_full(a.r_infinity) : "-", rf ? stability_class(a.a_stable, a.l_stable) : "-",
+         e ? format_full(e->r_infinity) : "-", e ? stability_class(e->a_stable, e->l_stable) : "-",
          rf ? limit_text(a.real_axis_limit, a.real_axis_unbounded) : "-",
          rf ? limit_text(a.imag_axis_limit, a.imag_axis_unbounded)
             : (a.kind == "splitting" ? "oscillator h*omega < " + format_full(a.oscillator_limit)
                                      : "-"),
-         a.ssp_coefficient >= 0 ? format_full(a.ssp_coefficient) : "-"});
+         ssp_text(a.ssp_coefficient)});
   }
   return t;
 }
@@ -370,10 +430,11 @@ Table analyze_summary_table(const AnalyzeResult& r) {
 namespace {
 
 Table order_markdown_table(const AnalyzeResult& r) {
-  Table t{{"integrator", "kind", "stages", "claimed order", "order", "stage order",
-           "embedded order", "FSAL", "stiffly accurate", "2-norm tau(p+1)", "max tau(p+1)",
-           "2-norm tau(p+2)", "max tau(p+2)", "max abs coefficient"},
-          {}};
+  Table t{
+      {"integrator", "kind", "stages", "claimed order", "order", "stage order", "embedded order",
+       "W-order", "embedded W-order", "FSAL", "stiffly accurate", "2-norm tau(p+1)", "max tau(p+1)",
+       "2-norm tau(p+2)", "max tau(p+2)", "max abs coefficient"},
+      {}};
   for (const auto& m : r.methods) {
     if (!m.coefficient_defined) continue;
     const MethodAnalysis& a = m.analysis;
@@ -385,6 +446,8 @@ Table order_markdown_table(const AnalyzeResult& r) {
         (a.order >= analysed_to(a) ? ">= " : "") + std::to_string(a.order),
         a.stage_order >= 0 ? std::to_string(a.stage_order) : "-",
         a.embedded_order ? std::to_string(a.embedded_order) : "-",
+        w_order_text(a),
+        a.embedded_w_order > 0 ? std::to_string(a.embedded_w_order) : "-",
         yes_no(a.fsal),
         yes_no(a.stiffly_accurate)};
     for (auto& e : error_norms(a)) row.push_back(e.empty() ? "-" : e);
@@ -402,9 +465,8 @@ Table residual_markdown_table(const AnalyzeResult& r) {
     std::vector<std::string> row = {m.integrator};
     for (int k = 0; k < kMaxOrder; ++k) {
       const auto& res = m.analysis.residual_by_order;
-      row.push_back(k < static_cast<int>(res.size())
-                        ? format_short(res[static_cast<std::size_t>(k)], 2)
-                        : "-");
+      row.push_back(k < static_cast<int>(res.size()) ? format_full(res[static_cast<std::size_t>(k)])
+                                                     : "-");
     }
     t.rows.push_back(std::move(row));
   }
@@ -413,7 +475,8 @@ Table residual_markdown_table(const AnalyzeResult& r) {
 
 Table stability_markdown_table(const AnalyzeResult& r) {
   Table t{{"integrator", "P (ascending)", "Q (ascending)", "abs R(inf)", "A-stable", "L-stable",
-           "real-axis limit", "imaginary-axis limit", "internal amplification (real, imag)", "SSP",
+           "real-axis limit", "imaginary-axis limit",
+           "internal amplification (real, imag; largest of 2001 samples each)", "SSP",
            "dissipation order", "dispersion order"},
           {}};
   for (const auto& m : r.methods) {
@@ -423,10 +486,28 @@ Table stability_markdown_table(const AnalyzeResult& r) {
                       format_full(a.r_infinity), yes_no(a.a_stable), yes_no(a.l_stable),
                       limit_text(a.real_axis_limit, a.real_axis_unbounded),
                       limit_text(a.imag_axis_limit, a.imag_axis_unbounded),
-                      format_short(a.internal_amplification_real, 3) + ", " +
-                          format_short(a.internal_amplification_imag, 3),
-                      a.ssp_coefficient >= 0 ? format_full(a.ssp_coefficient) : "-",
-                      order_text(a.dissipation_order), order_text(a.dispersion_order)});
+                      format_full(a.internal_amplification_real) + ", " +
+                          format_full(a.internal_amplification_imag),
+                      ssp_text(a.ssp_coefficient), order_text(a.dissipation_order),
+                      order_text(a.dispersion_order)});
+  }
+  return t;
+}
+
+// The embedded formulas of the pairs with a stability function: R̂ = P̂/Q̂ and its figures.
+Table embedded_markdown_table(const AnalyzeResult& r) {
+  Table t{{"integrator", "embedded order", "P (ascending)", "Q (ascending)", "abs R(inf)",
+           "A-stable", "L-stable", "real-axis limit", "imaginary-axis limit"},
+          {}};
+  for (const auto& m : r.methods) {
+    const auto& e = m.analysis.embedded_stability;
+    if (!m.coefficient_defined || !e) continue;
+    t.rows.push_back({m.integrator,
+                      m.analysis.embedded_order ? std::to_string(m.analysis.embedded_order) : "-",
+                      polynomial_text(e->p, "; "), polynomial_text(e->q, "; "),
+                      format_full(e->r_infinity), yes_no(e->a_stable), yes_no(e->l_stable),
+                      limit_text(e->real_axis_limit, e->real_axis_unbounded),
+                      limit_text(e->imag_axis_limit, e->imag_axis_unbounded)});
   }
   return t;
 }
@@ -461,9 +542,13 @@ std::string markdown_report(const AnalyzeResult& r) {
      << "From each method's coefficients, nothing is integrated. Order conditions by rooted "
         "trees up to order 8 (residual wᵀΦ(t) − 1/γ(t); the achieved order is the largest p "
         "with every residual up to p below 1e-12), stage order (C(q)), the embedded weights' "
-        "order; error coefficients τ(t) = residual/σ(t) and their 2- and max-norms over the "
+        "order; for Rosenbrock methods the W-order (the order for an arbitrary matrix W in "
+        "place of the Jacobian: bi-coloured trees to order 6; Steihaug & Wolfbrandt 1979, Hairer "
+        "& Wanner II, IV.7); error coefficients τ(t) = residual/σ(t) and their 2- and max-norms "
+        "over the "
         "trees of order p+1 and p+2 (Butcher, Numerical Methods for ODEs, 2016; Kennedy & "
-        "Carpenter 2003). Figures compared with published values are at full precision.\n\n"
+        "Carpenter 2003). Every figure is the shortest decimal that reads back as the same double; "
+        "the SSP coefficient, from a bisection, states its relative tolerance.\n\n"
      << "## Order and error coefficients\n\n"
      << order_markdown_table(r).to_markdown() << "\n## Largest residual per order\n\n"
      << residual_markdown_table(r).to_markdown() << "\n## Stability function R = P/Q\n\n"
@@ -476,6 +561,13 @@ std::string markdown_report(const AnalyzeResult& r) {
         "arg R(iν) − ν (`none`: none to the series' length). The curves are in "
         "`analyze_dispersion.csv` (drawn in `analyze.png`).\n\n"
      << stability_markdown_table(r).to_markdown();
+  if (const Table emb = embedded_markdown_table(r); !emb.rows.empty())
+    os << "\n## Embedded formulas\n\n"
+       << "The stability function R̂ = P̂/Q̂ of each embedded pair's second formula (the weights b̂ "
+          "in place of b), with the same figures as above: what the error estimate's formula "
+          "does on stiff (|R̂(∞)|, A-/L-stability) and on oscillatory or dissipative (axis "
+          "limits) modes.\n\n"
+       << emb.to_markdown();
   const Table other = other_markdown_table(r);
   if (!other.rows.empty())
     os << "\n## Splittings, IMEX pairs and methods without coefficients\n\n"
@@ -510,6 +602,8 @@ void write_analyze_outputs(const std::filesystem::path& dir, const AnalyzeSpec& 
   meta["nu"] = "10^(-2 + 3k/(points - 1)), k = 0..points-1";
   meta["order_tolerance"] = 1e-12;
   meta["max_order"] = kMaxOrder;
+  meta["max_w_order"] = kMaxWOrder;
+  meta["ssp_relative_tolerance"] = kSspRelativeTolerance;
   write_file_atomic(dir / "analyze.json", meta.dump(2) + "\n");
 }
 
@@ -571,9 +665,10 @@ StudyKind analyze_study_kind() {
   k.stem = "analyze";
   k.summary =
       "what each method's coefficients say, without running it: order conditions by rooted "
-      "trees to order 8, stage and embedded order, error norms, R = P/Q, |R(inf)|, A-/L-"
-      "stability, exact axis limits, internal stability, SSP coefficient, dissipation and "
-      "dispersion; writes analyze.{csv,md,json,png}, analyze_conditions.csv and "
+      "trees to order 8, stage and embedded order, a Rosenbrock method's W-order, error norms, "
+      "R = P/Q, |R(inf)|, A-/L-stability, exact axis limits (of the embedded formula too), "
+      "internal stability, SSP coefficient, dissipation and dispersion; writes "
+      "analyze.{csv,md,json,png}, analyze_conditions.csv and "
       "analyze_dispersion.csv";
   k.takes_model = false;
   k.takes_params = false;

@@ -14,8 +14,9 @@
 //
 // Files (DIR/):
 //   analyze.csv             one row per integrator (analyze_table below);
-//   analyze_conditions.csv  integrator, order, tree, residual, error_coefficient: every order
-//                           condition up to order 8 of the weights b;
+//   analyze_conditions.csv  integrator, order, tree, residual, error_coefficient, set: every order
+//                           condition up to order 8 of the weights b (set `order`) and a
+//                           Rosenbrock method's W-conditions up to order 6 (set `W`);
 //   analyze_dispersion.csv  integrator, nu, amplification, phase_error: |R(iν)| and
 //                           arg R(iν) − ν on ν ∈ [1e-2, 10] (log-spaced), for every method with a
 //                           stability function R = P/Q;
@@ -92,23 +93,28 @@ AnalyzeResult analyze_study(AnalyzeSpec spec, const std::vector<IntegratorFactor
 const AnalyzeResult& analyze_result(const StudyJob& job);
 
 // analyze.csv: integrator, kind, stages, claimed_order, order, stage_order, embedded_order,
-// fsal, stiffly_accurate, residual_order_1 … residual_order_8 (max |wᵀΦ(t) − 1/γ(t)| over the
-// trees of that order), error_norm_2, error_norm_max (of the error coefficients of order p+1),
-// error_norm_2_next, error_norm_max_next (order p+2), max_coefficient, p_coefficients,
-// q_coefficients (ascending powers joined by ';'), r_infinity, a_stable, l_stable,
+// w_order, embedded_w_order, claimed_w_order (Rosenbrock: the W-conditions' order of b and b̂,
+// and the method's claim), fsal, stiffly_accurate, residual_order_1 … residual_order_8 (max |wᵀΦ(t)
+// − 1/γ(t)| over the trees of that order), error_norm_2, error_norm_max (of the error coefficients
+// of order p+1), error_norm_2_next, error_norm_max_next (order p+2), max_coefficient,
+// p_coefficients, q_coefficients (ascending powers joined by ';'), r_infinity, a_stable, l_stable,
 // real_axis_limit (r: stable on [−r, 0]), imaginary_axis_limit (r: stable on [−ir, ir]),
 // internal_amplification_real, internal_amplification_imag, ssp_coefficient,
+// ssp_relative_tolerance (of the bisection that found a positive SSP coefficient),
 // dissipation_order, dispersion_order, oscillator_limit (largest stable hω on x'' = −ω²x),
-// notes. Reals at full precision; an unbounded limit is `unbounded`; a dissipation or
-// dispersion order of `none`: none to the series' length (|R(iν)| = 1, or no phase error);
-// empty where a figure does not apply (a not coefficient-defined method has kind
-// `not coefficient-defined` and only its stability figures).
+// embedded_p_coefficients, embedded_q_coefficients, embedded_r_infinity, embedded_a_stable,
+// embedded_l_stable, embedded_real_axis_limit, embedded_imaginary_axis_limit (the embedded
+// formula's stability function R̂ = P̂/Q̂ and its figures), notes. Reals at full precision; an
+// unbounded limit is `unbounded`; a dissipation or dispersion order of `none`: none to the series'
+// length (|R(iν)| = 1, or no phase error); empty where a figure does not apply (a not
+// coefficient-defined method has kind `not coefficient-defined` and only its stability figures).
 Table analyze_table(const AnalyzeResult& r);
 Table analyze_conditions_table(const AnalyzeResult& r);
 Table analyze_dispersion_table(const AnalyzeResult& r);
-// The summary printed by the command and shown in the report: integrator, kind, order, stage
-// order, error norm ‖τ^(p+1)‖₂, |R(∞)|, A-/L-stable, real- and imaginary-axis limits, SSP
-// coefficient (full precision).
+// The summary printed by the command and shown in the report: integrator, kind, order, W-order
+// (Rosenbrock), stage order, error norm ‖τ^(p+1)‖₂, |R(∞)|, A-/L-stable, the embedded formula's
+// |R̂(∞)| and A-/L-stable, real- and imaginary-axis limits (full precision), SSP coefficient
+// (with the bisection's relative tolerance).
 Table analyze_summary_table(const AnalyzeResult& r);
 
 // Writes the CSV files, DIR/analyze.md and DIR/analyze.json.

@@ -12,6 +12,7 @@
 
 #include "core/additive_conditions.hpp"
 #include "core/driver.hpp"
+#include "core/method_analysis.hpp"
 #include "experiments/catalog.hpp"
 #include "integrators/implicit/dirk.hpp"
 
@@ -709,10 +710,62 @@ void additive_checks(std::vector<AuditRow>& rows, const std::string& name, const
       skip(name, "stage_order", t.name + " (additive)", "an additive pair claims no stage order"));
 }
 
+// A claimed order against the achieved one of a set of conditions (Rosenbrock: the classical
+// conditions of core/method_analysis.hpp to order 8, or the W-conditions to kMaxWOrder): the
+// claim must be the order, no more and no less.
+AuditRow conditions_row(const std::string& name, const std::string& check, const std::string& label,
+                        const std::vector<OrderCondition>& conditions, int measured, int max_order,
+                        int claimed, const std::string& what) {
+  if (claimed >= max_order)
+    return row(name, check, label, std::to_string(claimed),
+               measured >= max_order ? ">= " + std::to_string(max_order) : std::to_string(measured),
+               measured >= max_order,
+               what + " up to order " + std::to_string(max_order) + " checked");
+  std::string reason;
+  if (measured < claimed) {
+    if (const auto c = first_violated_condition(conditions, measured + 1))
+      reason = "the " + what + " of tree " + c->name + " (order " + std::to_string(c->order) +
+               ") fails by " + num(c->residual, 3);
+  } else if (measured > claimed) {
+    reason = "every " + what + " of order " + std::to_string(claimed + 1) +
+             " holds as well: the claim is not the order";
+  }
+  return row(name, check, label, std::to_string(claimed), std::to_string(measured),
+             measured == claimed, reason);
+}
+
+// A Rosenbrock method's claims: its order and embedded order from the order conditions of
+// Hairer & Wanner II, IV.7 (rooted trees to order 8, β = α + Γ on a vertex with one son), its
+// W-order when it claims one (the conditions with an arbitrary matrix in place of J).
+void rosenbrock_checks(std::vector<AuditRow>& rows, const std::string& name,
+                       const Integrator& integ, const RosenbrockTableau& t) {
+  const MethodAnalysis m = analyze_rosenbrock(t);
+  const std::string label = t.name + " (Rosenbrock)";
+  rows.push_back(conditions_row(name, "tableau_order", label, m.conditions, m.order, 8,
+                                integ.info().order, "order condition"));
+  if (t.b_embedded.size() == t.stages()) {
+    RosenbrockTableau embedded = t;
+    embedded.b = t.b_embedded;
+    const MethodAnalysis e = analyze_rosenbrock(embedded);
+    rows.push_back(conditions_row(name, "embedded_order", label, e.conditions, e.order, 8,
+                                  t.embedded_order, "order condition"));
+  }
+  if (t.w_order > 0)
+    rows.push_back(conditions_row(name, "w_order", label, m.w_conditions, m.w_order, kMaxWOrder,
+                                  t.w_order, "W-condition"));
+  else
+    rows.push_back(skip(
+        name, "w_order", label,
+        "no W-order claimed (the W-conditions hold to order " + std::to_string(m.w_order) + ")"));
+  rows.push_back(skip(name, "stage_order", label, "a Rosenbrock method has no stage order"));
+}
+
 void tableau_checks(std::vector<AuditRow>& rows, const std::string& name) {
   auto integ = create(name);
   if (const AdditiveTableau* a = integ->additive_tableau())
     return additive_checks(rows, name, *integ, *a);
+  if (const RosenbrockTableau* r = integ->rosenbrock_tableau())
+    return rosenbrock_checks(rows, name, *integ, *r);
   const ButcherTableau* t = tableau_of(*integ);
   if (!t) {
     rows.push_back(skip(name, "tableau", "-", "not defined by a Butcher tableau"));

@@ -27,7 +27,11 @@
 //     every order condition up to the claimed order met to 1e-12 and some condition of the next
 //     order not (order_defect generates the rooted trees up to order 6: a claim of 6 or more is
 //     checked up to 6), the claimed stage order's C(q) and the FSAL property against the
-//     coefficients.
+//     coefficients;
+//   tableau_order, embedded_order, w_order (Rosenbrock methods): the claimed order and embedded
+//     order are exactly those of the Rosenbrock order conditions (rooted trees to order 8,
+//     core/method_analysis.hpp), a claimed W-order exactly that of the W-conditions (an
+//     arbitrary matrix in place of J, to order 6; no claim: skip, with the W-order that holds).
 // A check that does not apply is a row with status `skip` and the reason (a method that needs a
 // spring network, constraints or a grid fluid on a system without one; variable-order library
 // methods for the slope and exactness checks; a library's internal f count).

@@ -77,7 +77,7 @@ std::vector<std::string> kind_keys(MethodKind k) {
     case MethodKind::rosenbrock:
       return {"convention", "gamma",          "alpha", "gamma_offdiag", "b",
               "b_embedded", "embedded_order", "a",     "c_transformed", "m",
-              "m_embedded"};
+              "m_embedded", "w_order"};
     case MethodKind::splitting:
       return {"kick", "drift", "composition", "velocity_independent"};
     case MethodKind::imex_ark:
@@ -85,6 +85,29 @@ std::vector<std::string> kind_keys(MethodKind k) {
   }
   return {};
 }
+
+// The top-level keys of a file of kind k (the common ones, [constants] aside, and the kind's).
+std::vector<std::string> top_level_keys(MethodKind k) {
+  std::vector<std::string> keys;
+  for (const auto& key : kCommonKeys)
+    if (key != "constants") keys.push_back(key);
+  for (auto& key : kind_keys(k)) keys.push_back(std::move(key));
+  return keys;
+}
+
+// The kinds whose top-level keys include `key`.
+std::vector<std::string> kinds_with_key(const std::string& key) {
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < kMethodKindNames.size(); ++i) {
+    const auto keys = top_level_keys(static_cast<MethodKind>(i));
+    if (std::find(keys.begin(), keys.end(), key) != keys.end())
+      out.emplace_back(kMethodKindNames[i]);
+  }
+  return out;
+}
+
+constexpr const char* kTomlTables =
+    "(TOML puts every key after a [table] header into that table, up to the next header)";
 
 std::string num(long double x) {
   std::ostringstream os;
@@ -120,7 +143,14 @@ class Reader {
   }
   [[noreturn]] void fail(const toml::node& n, const std::string& key,
                          const std::string& what) const {
-    throw BadInput(where(n) + ": key '" + prefix_ + key + "': " + what);
+    const auto l = prefix_.empty() ? lifted_.find(key) : lifted_.end();
+    throw BadInput(where(n) + ": key '" + prefix_ + key + "': " + what +
+                   (l == lifted_.end() ? std::string()
+                                       : " (written inside the table [" + l->second +
+                                             "], read as the method's top-level key" +
+                                             (l->second == "constants"
+                                                  ? ": the format's keys cannot name constants)"
+                                                  : ")")));
   }
 
   const toml::node* get(const std::string& key) const { return root_.get(key); }
@@ -258,6 +288,28 @@ class Reader {
     });
     for (const auto& [pos, k] : order) {
       const toml::node& v = *t->get(k);
+      // A value that is no coefficient, or a key of the format (of another kind: the file's own
+      // kind's keys were taken as top-level keys by lift_misplaced_keys) whose value does not
+      // evaluate: likely a method key written after the header. The message says so (with the
+      // expression's own error, in case a constant was meant).
+      const std::vector<std::string> kinds = kinds_with_key(k);
+      const auto misplaced = [&](const std::string& detail) {
+        throw BadInput(where(v) + ": key '" + k + "' is inside the table [constants] " +
+                       kTomlTables + ", but " +
+                       (kinds.empty() ? std::string("a constant is a number or a string holding "
+                                                    "an expression")
+                                      : "'" + k + "' is a method-file key (of kind " + join(kinds) +
+                                            "), not a constant") +
+                       detail +
+                       ": write the method's keys before the [constants] header, or move the "
+                       "[constants] table to the end of the file");
+      };
+      if (!v.is_number() && !v.is_string()) misplaced("");
+      if (!kinds.empty() && v.is_string()) try {
+          (void)evaluate_coefficient(v.as_string()->get(), constants_);
+        } catch (const BadInput& e) {
+          misplaced(" (as a constant: " + std::string(e.what()) + ")");
+        }
       bool ok = !k.empty() && (std::isalpha(static_cast<unsigned char>(k[0])) || k[0] == '_');
       for (char ch : k) ok = ok && (std::isalnum(static_cast<unsigned char>(ch)) || ch == '_');
       if (!ok || k == "sqrt" || k == "cbrt")
@@ -271,6 +323,11 @@ class Reader {
   std::string origin_;
   CoefficientConstants constants_;
   std::string prefix_;  // "explicit." in a section's reader
+
+ public:
+  // Top-level keys found inside a table (lift_misplaced_keys), by the table's name: messages
+  // about them say so.
+  std::map<std::string, std::string> lifted_;
 };
 
 Vec to_vec(const std::vector<long double>& v) {
@@ -447,6 +504,19 @@ void read_rosenbrock(const Reader& r, MethodDefinition& m) {
         !d.empty())
       throw BadInput(r.where("embedded_order") + ": key 'embedded_order': " + who + d);
   }
+  // The W-conditions (an arbitrary matrix in place of J; core/method_analysis.hpp), up to the
+  // claim, which cannot exceed the classical order.
+  t.w_order = r.integer("w_order", false, 0, 1, kMaxWOrder);
+  if (t.w_order > m.order)
+    r.fail(*r.get("w_order"), "w_order",
+           "W-order " + std::to_string(t.w_order) + " claimed above the order " +
+               std::to_string(m.order) + " (the W-conditions include the classical ones)");
+  if (t.w_order > 0)
+    if (const auto v =
+            first_violated_condition(rosenbrock_w_conditions(t, t.b, t.w_order), t.w_order))
+      throw BadInput(r.where("w_order") + ": key 'w_order': " + who + "W-order " +
+                     std::to_string(t.w_order) + " claimed but the W-condition of tree " + v->name +
+                     " (order " + std::to_string(v->order) + ") has residual " + num(v->residual));
 }
 
 std::vector<double> to_doubles(const std::vector<long double>& v) {
@@ -496,9 +566,15 @@ const toml::table& imex_section(const Reader& r, const std::string& name) {
   const std::vector<std::string> known = {"A", "b", "b_embedded", "c"};
   for (const auto& [k, v] : *t) {
     const std::string key(k.str());
-    if (std::find(known.begin(), known.end(), key) == known.end())
+    if (std::find(known.begin(), known.end(), key) == known.end()) {
+      if (!kinds_with_key(key).empty())
+        throw BadInput(r.where(v) + ": key '" + key + "' is inside the table [" + name + "] " +
+                       kTomlTables + ", but it is not a key of the " + name +
+                       " table (A, b, b_embedded, c) nor a top-level key of kind 'imex_ark': " +
+                       "write the top-level keys before the first [table] header");
       throw BadInput(r.where(v) + ": unknown key '" + name + "." + key + "' in section [" + name +
                      "]" + did_you_mean(key, known) + "; known: " + join(known));
+    }
   }
   return *t;
 }
@@ -644,6 +720,58 @@ std::string default_class(const MethodDefinition& m) {
   return "";
 }
 
+// A file that starts with its [constants] table (define γ, then use it) has, by TOML's rule,
+// every key after the header inside that table; likewise a key written after an imex_ark
+// method's [explicit] or [implicit] section. The file's top-level keys of its kind found in such
+// a table, where they cannot mean anything else (a constant cannot take a key's name; a section
+// has only A, b, b_embedded and c), are taken as the top-level keys they are. A key both there
+// and at the top level is an error naming both lines. The kind itself is looked for at the top
+// level first, then in those tables.
+std::map<std::string, std::string> lift_misplaced_keys(toml::table& root,
+                                                       const std::string& origin) {
+  std::map<std::string, std::string> lifted;
+  std::vector<std::string> tables = {"constants", "explicit", "implicit"};
+  const toml::node* kind_node = root.get("kind");
+  for (const auto& name : tables)
+    if (const toml::table* t = root[name].as_table(); !kind_node && t) kind_node = t->get("kind");
+  const std::string kind_text =
+      kind_node && kind_node->is_string() ? kind_node->as_string()->get() : std::string();
+  if (kind_text != "imex_ark") tables = {"constants"};  // the sections are imex_ark's only
+  std::vector<std::string> keys = {"name", "kind", "order", "description", "reference", "class"};
+  for (std::size_t i = 0; i < kMethodKindNames.size(); ++i)
+    if (kind_text == kMethodKindNames[i]) keys = top_level_keys(static_cast<MethodKind>(i));
+  const auto line = [](const toml::node& n) {
+    return n.source().begin ? std::to_string(n.source().begin.line) : std::string("?");
+  };
+  for (const auto& name : tables) {
+    toml::table* t = root[name].as_table();
+    if (!t) continue;
+    const std::vector<std::string> own =
+        name == "constants" ? std::vector<std::string>{}
+                            : std::vector<std::string>{"A", "b", "b_embedded", "c"};
+    std::vector<std::string> lift;
+    for (const auto& [k, v] : *t) {
+      const std::string key(k.str());
+      if (std::find(keys.begin(), keys.end(), key) == keys.end() ||
+          std::find(own.begin(), own.end(), key) != own.end())
+        continue;
+      if (const toml::node* top = root.get(key))
+        throw BadInput(origin + ":" + line(v) + ": key '" + key + "' is inside the table [" + name +
+                       "] " + kTomlTables + " and also at the top level (line " + line(*top) +
+                       "); '" + key + "' is a method-file key" +
+                       (name == "constants" ? ", not a name for a constant" : "") +
+                       ": keep one of them");
+      lift.push_back(key);
+    }
+    for (const auto& key : lift) {
+      t->get(key)->visit([&](auto& node) { root.insert(key, std::move(node)); });
+      t->erase(key);
+      lifted[key] = name;
+    }
+  }
+  return lifted;
+}
+
 void check_keys(const toml::table& root, const std::string& origin, MethodKind kind) {
   std::vector<std::string> known = kCommonKeys;
   for (auto& k : kind_keys(kind)) known.push_back(k);
@@ -749,7 +877,9 @@ MethodDefinition parse_method_file(const std::string& text, const std::string& o
     throw BadInput(origin + ":" + std::to_string(b.line) + ":" + std::to_string(b.column) + ": " +
                    std::string(err.description()));
   }
+  const std::map<std::string, std::string> lifted = lift_misplaced_keys(root, origin);
   Reader r(root, origin);
+  r.lifted_ = lifted;
   MethodDefinition m;
   m.source = origin;
   const std::string kind = r.text("kind", true);

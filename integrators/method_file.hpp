@@ -18,6 +18,10 @@
 // Coefficients are TOML numbers or strings holding an exact expression: rationals "1/3",
 // sqrt(...), + - * / ^ and parentheses, and names defined in an optional [constants] table
 // (evaluated in order, each may use the earlier ones), evaluated in long double.
+// [constants] may come first: TOML then puts the keys after it into the table, and the file's
+// top-level keys of its kind found there (they cannot name constants) are read as top-level
+// keys; likewise an imex_ark file's top-level keys after [explicit] or [implicit]. Any other
+// key in the wrong table is BadInput naming the table and what to move.
 //
 // Kinds and their keys:
 //   explicit_rk  A strictly lower triangular.
@@ -30,7 +34,8 @@
 //   rosenbrock   gamma (the diagonal γ), alpha and gamma_offdiag (strictly lower), b,
 //                optional b_embedded/embedded_order — the form of Hairer & Wanner II, §IV.7,
 //                (7.4); or convention = "transformed" with a, c_transformed, m, m_embedded
-//                (HW II (7.24)).
+//                (HW II (7.24)); optional w_order: the claimed W-order (the order for an
+//                arbitrary matrix in place of J, <= order; core/method_analysis.hpp).
 //   splitting    kick, drift (kick/drift coefficients, run as v += h kick_j a; x += h drift_j v),
 //                or composition = [γ...] (a composition of velocity Verlet steps);
 //                velocity_independent = true|false (default true).

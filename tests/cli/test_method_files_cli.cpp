@@ -134,6 +134,45 @@ TEST(MethodFilesCli, WorkPrecisionRefusesAMethodFileAsItsOwnReference) {
   fs::remove_all(dir);
 }
 
+// A Rosenbrock file with its [constants] first (ROS2 of Verwer et al. 1999, γ = 1 + 1/√2)
+// analysed by path: it loads, and its W-order 2 (by hand: bᵀα1 = 1/2, bᵀΓ1 = γ − γ = 0) is
+// printed with its claim. The same file with a key of another kind after the header exits 2
+// with one message naming the table, and nothing is written.
+TEST(MethodFilesCli, ConstantsFirstRosenbrockByPathAndMisplacedKey) {
+  const fs::path dir = fresh_dir("methods", "constants_first");
+  fs::create_directories(dir);
+  const std::string text = R"toml([constants]
+g = "1 + 1/sqrt(2)"
+
+name = "my_ros2"
+kind = "rosenbrock"
+order = 2
+w_order = 2
+description = "ROS2, constants first"
+gamma = "g"
+alpha = [[0, 0], [1, 0]]
+gamma_offdiag = [[0, 0], ["-2*g", 0]]
+b = ["1/2", "1/2"]
+)toml";
+  const fs::path file = dir / "ros2.toml";
+  std::ofstream(file) << text;
+  const auto ok = run_cli("analyze " + shell_quote(file.string()) + " --out " +
+                          shell_quote((dir / "out").string()));
+  EXPECT_EQ(ok.code, 0) << ok.err;
+  EXPECT_NE(ok.out.find("| my_ros2 | rosenbrock | 2 | 2 |"), std::string::npos) << ok.out;
+
+  const fs::path bad = dir / "bad.toml";
+  std::ofstream(bad) << text << "fsal = true\n";
+  const auto r = run_cli("analyze " + shell_quote(bad.string()) + " --out " +
+                         shell_quote((dir / "out_bad").string()));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find(bad.string() + ":13: key 'fsal' is inside the table [constants]"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out_bad" / "analyze.csv"));
+}
+
 TEST(MethodFilesCli, SearchPathInListAndDescribe) {
   const fs::path dir = fresh_dir("methods", "search");
   write_heun3(dir, "heun3.toml");

@@ -6,6 +6,7 @@
 #include <Eigen/LU>
 #include <cmath>
 #include <complex>
+#include <map>
 #include <numbers>
 #include <optional>
 #include <string>
@@ -359,6 +360,168 @@ TEST(MethodAnalysis, RosenbrockRos3p) {
   EXPECT_FALSE(m.l_stable);
   EXPECT_NEAR(m.r_infinity, std::sqrt(3.0) - 1, 1e-12);
   EXPECT_EQ(m.ssp_coefficient, -1.0);
+}
+
+// ROS34PW2 of Rang & Angermann (BIT 45, 2005, Table 4.2; the 16-digit values also in PETSc's
+// TSROSWRA34PW2): 4 stages, order 3, a W-method of order 3 (the authors' design goal).
+RosenbrockTableau ros34pw2() {
+  RosenbrockTableau r;
+  r.name = "ros34pw2";
+  r.order = 3;
+  const double g = 4.3586652150845900e-01;
+  r.gamma = g;
+  r.alpha = Mat{{0, 0, 0, 0},
+                {8.7173304301691801e-01, 0, 0, 0},
+                {8.4457060015369423e-01, -1.1299064236484185e-01, 0, 0},
+                {0, 0, 1, 0}};
+  r.gamma_lower = Mat{{0, 0, 0, 0},
+                      {-8.7173304301691801e-01, 0, 0, 0},
+                      {-9.0338057013044082e-01, 5.4180672388095326e-02, 0, 0},
+                      {2.4212380706095346e-01, -1.2232505839045147e+00, 5.4526025533510214e-01, 0}};
+  r.b = Vec{{2.4212380706095346e-01, -1.2232505839045147e+00, 1.5452602553351020e+00,
+             4.3586652150845900e-01}};
+  r.b_embedded = Vec{{3.7810903145819369e-01, -9.6042292212423178e-02, 5.0000000000000000e-01,
+                      2.1793326075422950e-01}};
+  r.embedded_order = 2;
+  return r;
+}
+
+RosenbrockTableau ros3p_written() {  // Lang & Verwer (2001), as in RosenbrockRos3p
+  RosenbrockTableau r;
+  r.name = "ros3p";
+  r.order = 3;
+  const double g = 0.5 + std::sqrt(3.0) / 6.0;
+  r.gamma = g;
+  r.alpha = Mat{{0, 0, 0}, {1, 0, 0}, {1, 0, 0}};
+  r.gamma_lower = Mat{{0, 0, 0}, {-1, 0, 0}, {-g, 0.5 - 2 * g, 0}};
+  r.b = Vec{{2.0 / 3, 0, 1.0 / 3}};
+  r.b_embedded = Vec{{1.0 / 3, 1.0 / 3, 1.0 / 3}};
+  r.embedded_order = 2;
+  return r;
+}
+
+// The W-conditions (an arbitrary matrix W in place of J; Steihaug & Wolfbrandt 1979) up to
+// order 3, written out by hand from the W-method's B-series (Γ with its diagonal γ, 1 the vector
+// of ones): bᵀ1 = 1; bᵀα1 = 1/2, bᵀΓ1 = 0; bᵀ(α1)² = 1/3, bᵀαα1 = 1/6, bᵀαΓ1 = 0, bᵀΓα1 = 0,
+// bᵀΓΓ1 = 0. The trees: 1, 2, 5 of orders 1..3, and 13 of order 4 (counted by hand: [t^3];
+// [t,[t]] and [t,W[t]]; [[t^2]] and W[[t^2]]; the 2³ colourings of the chain of three one-son
+// vertices).
+TEST(MethodAnalysis, WConditionsByHand) {
+  std::vector<int> count(kMaxWOrder + 1, 0);
+  for (const WTree& t : w_trees()) ++count[static_cast<std::size_t>(t.order)];
+  EXPECT_EQ(count[1], 1);
+  EXPECT_EQ(count[2], 2);
+  EXPECT_EQ(count[3], 5);
+  EXPECT_EQ(count[4], 13);
+  for (const RosenbrockTableau& r : {ros34pw2(), ros3p_written()}) {
+    const Index s = r.stages();
+    const Mat al = r.alpha, ga = r.gamma_full();
+    const Vec one = Vec::Ones(s), c = al * one;
+    const std::map<std::string, double> expected = {{"t", r.b.sum() - 1.0},
+                                                    {"[t]", r.b.dot(c) - 0.5},
+                                                    {"W[t]", r.b.dot(ga * one)},
+                                                    {"[t^2]", r.b.dot(c.cwiseProduct(c)) - 1.0 / 3},
+                                                    {"[[t]]", r.b.dot(al * c) - 1.0 / 6},
+                                                    {"[W[t]]", r.b.dot(al * ga * one)},
+                                                    {"W[[t]]", r.b.dot(ga * c)},
+                                                    {"W[W[t]]", r.b.dot(ga * ga * one)}};
+    const auto conditions = rosenbrock_w_conditions(r, r.b, 3);
+    ASSERT_EQ(conditions.size(), expected.size());
+    for (const OrderCondition& k : conditions) {
+      ASSERT_TRUE(expected.count(k.name)) << k.name;
+      EXPECT_NEAR(k.residual, expected.at(k.name), 1e-14) << r.name << " " << k.name;
+    }
+  }
+  // ROS34PW2: W-order 3 (Rang & Angermann 2005), classical order 3.
+  const MethodAnalysis pw2 = analyze_rosenbrock(ros34pw2());
+  EXPECT_EQ(pw2.order, 3);
+  EXPECT_EQ(pw2.w_order, 3);
+  EXPECT_EQ(pw2.embedded_order, 2);
+  EXPECT_EQ(pw2.embedded_w_order, 2);
+  // ROS3P: bᵀα1 = (2/3)·0 + 0·1 + (1/3)·1 = 1/3, not 1/2: W-order 1 (order 3 only with the exact
+  // Jacobian, where bᵀΓ1 = 1/6 makes up bᵀβ1 = 1/2).
+  const MethodAnalysis r3 = analyze_rosenbrock(ros3p_written());
+  EXPECT_EQ(r3.order, 3);
+  EXPECT_EQ(r3.w_order, 1);
+  // ROS2 (Verwer et al. 1999): bᵀα1 = 1/2 and bᵀΓ1 = γ(b1 + b2) + b2·γ21 = γ − γ = 0, so W-order
+  // 2 = its classical order (the W-order cannot exceed it).
+  RosenbrockTableau ros2;
+  ros2.name = "ros2";
+  ros2.order = 2;
+  ros2.gamma = 1 + 1 / std::sqrt(2.0);
+  ros2.alpha = Mat{{0, 0}, {1, 0}};
+  ros2.gamma_lower = Mat{{0, 0}, {-2 * ros2.gamma, 0}};
+  ros2.b = Vec{{0.5, 0.5}};
+  const MethodAnalysis m2 = analyze_rosenbrock(ros2);
+  EXPECT_EQ(m2.order, 2);
+  EXPECT_EQ(m2.w_order, 2);
+  EXPECT_EQ(m2.embedded_w_order, 0);
+  // Other kinds have none.
+  EXPECT_EQ(analyze_runge_kutta(rk4(), "explicit_rk").w_order, -1);
+}
+
+// The embedded formula's stability function R̂ = P̂/Q̂, against direct evaluations of
+// R̂(z) = 1 + z b̂ᵀ(I − zM)⁻¹1 (M = A for Runge–Kutta, α + Γ for Rosenbrock; Hairer & Wanner II,
+// IV.7) with Eigen: |R̂(∞)| as 1 − b̂ᵀM⁻¹1 where M is invertible (rodas4), else R̂ at z = −1e9
+// (esdirk43, whose A has a zero first row); A-stability against samples of |R̂(iy)|; the axis
+// limits of an explicit pair by evaluation just inside and outside.
+TEST(MethodAnalysis, EmbeddedFormulaStability) {
+  using cd = std::complex<double>;
+  const auto r_hat = [](const Mat& m, const Vec& w, cd z) {
+    const Index s = w.size();
+    const Eigen::MatrixXcd lhs = Eigen::MatrixXcd::Identity(s, s) - z * m.cast<cd>();
+    const Eigen::VectorXcd k = lhs.partialPivLu().solve(Eigen::VectorXcd::Ones(s));
+    return 1.0 + z * w.cast<cd>().dot(k);
+  };
+  const auto max_on_imaginary_axis = [&](const Mat& m, const Vec& w) {
+    double worst = 0;
+    for (int k = 0; k <= 4000; ++k)
+      worst =
+          std::max(worst, std::abs(r_hat(m, w, cd(0.0, std::pow(10.0, -3.0 + 9.0 * k / 4000)))));
+    return worst;
+  };
+  {
+    const auto integ = testing_support::make("rodas4");
+    const RosenbrockTableau& r = *integ->rosenbrock_tableau();
+    const Mat m = r.alpha + r.gamma_full();
+    const double r_inf = 1.0 - r.b_embedded.dot(m.fullPivLu().solve(Vec::Ones(r.stages())));
+    const MethodAnalysis a = analyze_rosenbrock(r);
+    ASSERT_TRUE(a.embedded_stability);
+    EXPECT_NEAR(a.embedded_stability->r_infinity, std::abs(r_inf), 1e-12);
+    EXPECT_EQ(a.embedded_stability->a_stable, max_on_imaginary_axis(m, r.b_embedded) <= 1 + 1e-12);
+    EXPECT_EQ(a.embedded_stability->l_stable,
+              a.embedded_stability->a_stable && std::abs(r_inf) <= 1e-12);
+  }
+  {
+    const auto integ = testing_support::make("esdirk43");
+    const ButcherTableau& t = *integ->butcher_tableau();
+    const double r_inf = std::abs(r_hat(t.a, t.b_embedded, cd(-1e9, 0.0)));
+    const MethodAnalysis a = analyze_runge_kutta(t, "dirk");
+    ASSERT_TRUE(a.embedded_stability);
+    EXPECT_NEAR(a.embedded_stability->r_infinity, r_inf, 1e-7);
+    EXPECT_EQ(a.embedded_stability->a_stable,
+              max_on_imaginary_axis(t.a, t.b_embedded) <= 1 + 1e-12);
+  }
+  {
+    const auto integ = testing_support::make("dopri5");
+    const ButcherTableau& t = *integ->butcher_tableau();
+    const MethodAnalysis a = analyze_runge_kutta(t, "explicit_rk");
+    ASSERT_TRUE(a.embedded_stability);
+    const auto& e = *a.embedded_stability;
+    EXPECT_TRUE(std::isinf(e.r_infinity));
+    EXPECT_FALSE(e.a_stable);
+    ASSERT_FALSE(e.real_axis_unbounded);
+    EXPECT_LE(std::abs(r_hat(t.a, t.b_embedded, cd(-e.real_axis_limit * (1 - 1e-6), 0))), 1.0);
+    EXPECT_GT(std::abs(r_hat(t.a, t.b_embedded, cd(-e.real_axis_limit * (1 + 1e-6), 0))), 1.0);
+    if (e.imag_axis_limit > 0) {
+      EXPECT_LE(std::abs(r_hat(t.a, t.b_embedded, cd(0, e.imag_axis_limit * (1 - 1e-6)))), 1.0);
+      EXPECT_GT(std::abs(r_hat(t.a, t.b_embedded, cd(0, e.imag_axis_limit * (1 + 1e-6)))), 1.0);
+    }
+    // The main formula's limits differ from the embedded one's (different weights).
+    EXPECT_NE(a.real_axis_limit, e.real_axis_limit);
+  }
+  // No embedded weights: no embedded figures.
+  EXPECT_FALSE(analyze_runge_kutta(rk4(), "explicit_rk").embedded_stability);
 }
 
 // ROS3P's embedded weights give the same stability function as its own (Lang & Verwer 2001

@@ -175,7 +175,7 @@ TEST(AnalyzeStudy, WritesTheAnalysisOfRk4Ssprk3Dopri5) {
   // Conditions: one row per rooted tree up to order 8 (1 + 1 + 2 + 4 + 9 + 20 + 48 + 115).
   const Csv cond = read_csv(dir / "analyze_conditions.csv");
   EXPECT_EQ(cond.header, (std::vector<std::string>{"integrator", "order", "tree", "residual",
-                                                   "error_coefficient"}));
+                                                   "error_coefficient", "set"}));
   ASSERT_EQ(cond.of("rk4").size(), 200u);
   double worst5 = 0;
   for (const auto& r : cond.of("rk4"))
@@ -199,9 +199,15 @@ TEST(AnalyzeStudy, WritesTheAnalysisOfRk4Ssprk3Dopri5) {
       EXPECT_NEAR(num(r, "phase_error"), std::arg(R) - nu, 1e-12) << nu;
     }
   }
-  // The terminal summary names every method with its order and limits.
-  EXPECT_NE(out.str().find("| rk4 | explicit_rk | 4 | 1 |"), std::string::npos) << out.str();
+  // The terminal summary names every method with its order (no W-order: not a Rosenbrock
+  // method) and limits.
+  EXPECT_NE(out.str().find("| rk4 | explicit_rk | 4 | - | 1 |"), std::string::npos) << out.str();
   EXPECT_NE(out.str().find("2.785293563405282"), std::string::npos) << out.str();
+  // ssprk3's SSP coefficient 1 (Shu & Osher 1988) comes from a bisection: printed with its
+  // relative tolerance, which the CSV gives in its own column (none for rk4's exact 0).
+  EXPECT_NE(out.str().find("| 1 (bisection, relative +-1e-12) |"), std::string::npos) << out.str();
+  EXPECT_EQ(ssprk3.at("ssp_relative_tolerance"), "1e-12");
+  EXPECT_EQ(rk4.at("ssp_relative_tolerance"), "");
   if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
     EXPECT_TRUE(fs::exists(dir / "analyze.png"));
   }
@@ -236,6 +242,70 @@ TEST(AnalyzeStudy, MethodsWithoutCoefficientsGetARow) {
   const Table d = analyze_dispersion_table(r);
   ASSERT_FALSE(d.rows.empty());
   for (const auto& row : d.rows) EXPECT_EQ(row[0], "heun");
+}
+
+// `analyze ros3p,rodas4,esdirk43`: the summary prints the W-order of the Rosenbrock methods and
+// the embedded formula's |R(∞)| and A-/L-stability beside the main formula's. Checked against
+// independent computations: ros3p's W-order 1 by hand (bᵀα1 = (2/3)·0 + (1/3)·1 = 1/3, not the
+// 1/2 of the W-condition of [t]); the embedded |R̂(∞)| of rodas4 as |1 − b̂ᵀ(α + Γ)⁻¹1| and of
+// esdirk43 as |R̂(−1e9)|, R̂(z) = 1 + z b̂ᵀ(I − zM)⁻¹1 evaluated with Eigen (Hairer & Wanner II,
+// IV.7); the esdirk43 row of a method without W-order shows "-".
+TEST(AnalyzeStudy, WOrderAndEmbeddedStabilityInTheSummary) {
+  const fs::path dir = fresh("worder");
+  StudyTarget target;
+  target.integrators = {"ros3p", "rodas4", "esdirk43"};
+  std::ostringstream out;
+  StudyContext ctx;
+  ctx.out = &out;
+  run_study("analyze", target, Params{}, dir, ctx);
+  const std::string text = out.str();
+  EXPECT_NE(text.find("| W-order |"), std::string::npos) << text;
+  EXPECT_NE(text.find("| embedded abs R(inf) | embedded A/L-stable |"), std::string::npos) << text;
+  const Csv csv = read_csv(dir / "analyze.csv");
+  const auto ros3p = csv.row("ros3p"), rodas4 = csv.row("rodas4"), esdirk = csv.row("esdirk43");
+  EXPECT_EQ(ros3p.at("order"), "3");
+  EXPECT_EQ(ros3p.at("w_order"), "1");
+  EXPECT_EQ(esdirk.at("w_order"), "");
+  EXPECT_NE(text.find("| ros3p | rosenbrock | 3 | 1 |"), std::string::npos) << text;
+
+  using cd = std::complex<double>;
+  const auto r_hat = [](const Mat& m, const Vec& w, cd z) {
+    const Eigen::Index s = w.size();
+    const Eigen::MatrixXcd lhs = Eigen::MatrixXcd::Identity(s, s) - z * m.cast<cd>();
+    const Eigen::VectorXcd k = lhs.partialPivLu().solve(Eigen::VectorXcd::Ones(s));
+    return 1.0 + z * w.cast<cd>().dot(k);
+  };
+  {
+    const auto integ = integrator_registry().create("rodas4", Params{});
+    const RosenbrockTableau& r = *integ->rosenbrock_tableau();
+    const Mat m = r.alpha + r.gamma_full();
+    const double r_inf =
+        std::abs(1.0 - r.b_embedded.dot(m.fullPivLu().solve(Vec::Ones(r.stages()))));
+    EXPECT_NEAR(num(rodas4, "embedded_r_infinity"), r_inf, 1e-12);
+    EXPECT_NE(text.find("| " + format_full(num(rodas4, "embedded_r_infinity")) + " |"),
+              std::string::npos)
+        << text;
+  }
+  {
+    const auto integ = integrator_registry().create("esdirk43", Params{});
+    const ButcherTableau& t = *integ->butcher_tableau();
+    EXPECT_NEAR(num(esdirk, "embedded_r_infinity"), std::abs(r_hat(t.a, t.b_embedded, cd(-1e9, 0))),
+                1e-7);
+    // The main formula: stiffly accurate and L-stable (Kennedy & Carpenter 2003), R(∞) = 0.
+    EXPECT_EQ(esdirk.at("r_infinity"), "0");
+    for (const char* c : {"embedded_a_stable", "embedded_l_stable"})
+      EXPECT_TRUE(esdirk.at(c) == "yes" || esdirk.at(c) == "no") << c;
+  }
+  // The conditions file carries the W-conditions, marked as such.
+  const Csv cond = read_csv(dir / "analyze_conditions.csv");
+  bool w_tree = false;
+  for (const auto& row : cond.rows)
+    if (row.at("integrator") == "ros3p" && row.at("set") == "W" && row.at("tree") == "[t]") {
+      w_tree = true;
+      EXPECT_NEAR(std::stod(row.at("residual")), 1.0 / 3 - 0.5, 1e-15);
+    }
+  EXPECT_TRUE(w_tree);
+  fs::remove_all(dir);
 }
 
 // Rosenbrock and kick/drift methods are read through their own coefficients: rodas4 (Hairer &

@@ -20,6 +20,7 @@
 #include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/explicit/tableaux.hpp"
 #include "integrators/imex/imex_ark.hpp"
+#include "integrators/implicit/linearly_implicit.hpp"
 #include "models/problems/kepler.hpp"
 
 namespace stiffbench {
@@ -345,10 +346,40 @@ TEST(Audit, BuiltInMethodsPass) {
   EXPECT_EQ(find_row(r, "dopri5", "fsal")->measured, "yes");
   EXPECT_EQ(find_row(r, "rk4", "f_per_step", "kepler(e=0.5)")->measured, "4");
   EXPECT_EQ(find_row(r, "dopri5", "f_per_step", "cloth(n=8)")->measured, "6");
+  // ROS2 claims W-order 2: by hand bᵀα1 = 1/2 and bᵀΓ1 = γ(b1 + b2) + b2·γ21 = γ − γ = 0 (the
+  // order-2 W-conditions), and order 2 is its classical order, which bounds the W-order.
+  EXPECT_EQ(find_row(r, "rosenbrock2", "tableau_order")->measured, "2");
+  EXPECT_EQ(find_row(r, "rosenbrock2", "w_order")->status, "ok");
+  EXPECT_EQ(find_row(r, "rosenbrock2", "w_order")->measured, "2");
   EXPECT_TRUE(std::filesystem::exists(dir / "audit.csv"));
   EXPECT_TRUE(std::filesystem::exists(dir / "audit.md"));
   EXPECT_TRUE(std::filesystem::exists(dir / "audit.json"));
   std::filesystem::remove_all(dir);
+}
+
+// Rosenbrock methods get their order, embedded order and (when claimed) W-order checked by the
+// conditions of core/method_analysis.hpp (rosenbrock2's, claimed W-order 2, in BuiltInMethodsPass).
+// ROS3P's tableau under a claim of W-order 3 fails: by hand bᵀα1 = (2/3)·0 + (1/3)·1 = 1/3, not
+// 1/2, and bᵀΓ1 = (2/3)γ + (1/3)(1/2 − 2γ) = 1/6, not 0, so both order-2 W-conditions fail (the
+// reason names the first in w_trees()' order, W[t], by 1/6) and the W-order is 1 (Lang &
+// Verwer's method has order 3 with the exact Jacobian only); its classical order 3 passes.
+TEST(Audit, RosenbrockWOrderClaimIsChecked) {
+  RosenbrockTableau w3 = ros3p_tableau();
+  w3.name = "test_ros3p_w3";
+  w3.w_order = 3;
+  StudyObjects objects;
+  objects.integrators = {[w3] {
+    return std::make_unique<Rosenbrock>(w3, "ros3p claiming W-order 3", ImplicitOptions{});
+  }};
+  const AuditResult r = audit_study({}, objects.integrators, scratch("rosenbrock"));
+  const AuditRow* w = find_row(r, "test_ros3p_w3", "w_order");
+  ASSERT_NE(w, nullptr);
+  EXPECT_EQ(w->status, "fail");
+  EXPECT_EQ(w->measured, "1");
+  EXPECT_NE(w->reason.find("W-condition of tree W[t] (order 2) fails by 0.167"), std::string::npos)
+      << w->reason;
+  EXPECT_EQ(find_row(r, "test_ros3p_w3", "tableau_order")->status, "ok");
+  EXPECT_EQ(find_row(r, "test_ros3p_w3", "embedded_order")->measured, "2");
 }
 
 int cli(std::vector<std::string> args) {

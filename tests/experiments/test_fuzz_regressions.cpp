@@ -38,6 +38,9 @@ TEST(FuzzRegressions, SpecFile) {
   EXPECT_GT(replay("spec_file", stiffbench::fuzz::spec_file_one), 3);
 }
 TEST(FuzzRegressions, Csv) { EXPECT_GT(replay("csv", stiffbench::fuzz::csv_one), 3); }
+TEST(FuzzRegressions, MethodFile) {
+  EXPECT_GT(replay("method_file", stiffbench::fuzz::method_file_one), 3);
+}
 
 // The targets' own checks work: an invariant violation is reported, not swallowed.
 TEST(FuzzRegressions, TargetsReportBrokenInvariants) {

@@ -175,6 +175,113 @@ g = "1 - 1/sqrt(2)"
             nullptr);
 }
 
+// A file that defines its constants first: by TOML's rule every key after the [constants] header
+// lands in that table; the format takes the file's top-level keys found there as what they are
+// (a constant cannot take their names). The tableau is the same, bit for bit, as the one of the
+// file with [constants] last, and messages still name the key's own line.
+TEST(MethodFile, ConstantsFirstFileLoads) {
+  const std::string keys = R"toml(name = "my_sdirk2"
+kind = "dirk"
+order = 2
+description = "two-stage SDIRK"
+A = [["g", 0], ["1 - g", "g"]]
+b = ["1 - g", "g"]
+)toml";
+  const std::string constants = "[constants]\ng = \"1 - 1/sqrt(2)\"\n";
+  const MethodDefinition first = parse_method_file(constants + keys, "first.toml");
+  const MethodDefinition last = parse_method_file(keys + constants, "last.toml");
+  EXPECT_EQ(first.name, "my_sdirk2");
+  EXPECT_EQ(first.kind, MethodKind::dirk);
+  EXPECT_EQ(first.order, 2);
+  EXPECT_EQ(first.tableau.a, last.tableau.a);
+  EXPECT_EQ(first.tableau.b, last.tableau.b);
+  // g = 1 − 1/√2 (Alexander's SDIRK2): a_11 = g, b = (1 − g, g).
+  EXPECT_NEAR(first.tableau.a(0, 0), 1.0 - 1.0 / std::sqrt(2.0), 1e-15);
+  // `order` is on line 5 of the constants-first file; order 3 is refused there.
+  const std::string msg = bad_input([&] {
+    parse_method_file(constants + replaced(keys, "order = 2", "order = 3"), "first.toml");
+  });
+  EXPECT_NE(msg.find("first.toml:5: key 'order'"), std::string::npos) << msg;
+}
+
+// A key inside a table where it cannot belong names the table and says what to move.
+TEST(MethodFile, MisplacedKeyNamesTheTable) {
+  // A (a key of the Runge–Kutta kinds) after [constants] in a Rosenbrock file (line 3).
+  const std::string ros = R"toml(name = "r"
+kind = "rosenbrock"
+order = 1
+description = "d"
+gamma = 1
+alpha = [[0]]
+gamma_offdiag = [[0]]
+b = [1]
+)toml";
+  std::string msg =
+      bad_input([&] { parse_method_file(ros + "[constants]\ng = 2\nA = [[1]]\n", "r.toml"); });
+  EXPECT_NE(msg.find("r.toml:11: key 'A' is inside the table [constants] (TOML puts every key "
+                     "after a [table] header into that table"),
+            std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("'A' is a method-file key (of kind explicit_rk, dirk, irk), not a constant"),
+            std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("write the method's keys before the [constants] header, or move the "
+                     "[constants] table to the end of the file"),
+            std::string::npos)
+      << msg;
+  // A value that is no coefficient.
+  msg = bad_input([&] { parse_method_file(ros + "[constants]\nrows = [1, 2]\n", "r.toml"); });
+  EXPECT_NE(msg.find("r.toml:10: key 'rows' is inside the table [constants]"), std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("a constant is a number or a string holding an expression"), std::string::npos)
+      << msg;
+  // The method's key both at the top level and inside [constants]: both lines named.
+  msg = bad_input([&] { parse_method_file(ros + "[constants]\nb = [1]\n", "r.toml"); });
+  EXPECT_NE(msg.find("r.toml:10: key 'b' is inside the table [constants]"), std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("and also at the top level (line 8)"), std::string::npos) << msg;
+  // A constant named after one of the kind's keys is read as that key, and the message says so.
+  const std::string dirk =
+      "name = \"d\"\nkind = \"dirk\"\norder = 1\ndescription = \"d\"\nA = [[1]]\nb = [1]\n";
+  msg = bad_input([&] { parse_method_file(dirk + "[constants]\nc = \"1/2\"\n", "d.toml"); });
+  EXPECT_NE(msg.find("d.toml:8: key 'c': expected a list of coefficients (written inside the "
+                     "table [constants], read as the method's top-level key: the format's keys "
+                     "cannot name constants)"),
+            std::string::npos)
+      << msg;
+  // A key of another kind whose string is no expression: named as misplaced, with the
+  // expression's own error in case a constant was meant.
+  msg =
+      bad_input([&] { parse_method_file(dirk + "[constants]\nsolver = \"radau5\"\n", "d.toml"); });
+  EXPECT_NE(msg.find("d.toml:8: key 'solver' is inside the table [constants]"), std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("'solver' is a method-file key (of kind irk), not a constant (as a "
+                     "constant: "),
+            std::string::npos)
+      << msg;
+  // An imex_ark file: a key after [implicit] that is no key of that table nor of the kind.
+  const std::string imex = R"toml(name = "ie"
+kind = "imex_ark"
+order = 1
+description = "d"
+[explicit]
+A = [[0, 0], [1, 0]]
+b = [1, 0]
+[implicit]
+A = [[0, 0], [0, 1]]
+b = [0, 1]
+)toml";
+  msg = bad_input([&] { parse_method_file(imex + "fsal = true\n", "ie.toml"); });
+  EXPECT_NE(msg.find("ie.toml:11: key 'fsal' is inside the table [implicit]"), std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("write the top-level keys before the first [table] header"), std::string::npos)
+      << msg;
+  // The kind's own top-level keys written after [implicit] are read as such.
+  const MethodDefinition m =
+      parse_method_file(replaced(imex, "order = 1\n", "") + "order = 1\n", "ie.toml");
+  EXPECT_EQ(m.order, 1);
+}
+
 TEST(MethodFile, OverclaimedOrderNamesFileLineAndCondition) {
   const std::string msg = bad_input([] { parse_method_file(with_order(4), "heun3.toml"); });
   EXPECT_NE(msg.find("heun3.toml:3:"), std::string::npos) << msg;  // line of `order`
@@ -259,11 +366,38 @@ b = ["1/2", "1/2"]
   EXPECT_EQ(m.rosenbrock.b, ref.b);
   EXPECT_EQ(m.class_text, "Rosenbrock");
   EXPECT_FALSE(m.adaptive());
-  const std::string msg = bad_input([&] { parse_method_file("order = 3\n" + text, "ros2.toml"); });
+  std::string msg = bad_input([&] { parse_method_file("order = 3\n" + text, "ros2.toml"); });
   EXPECT_NE(msg.find("ros2.toml:1: key 'order'"), std::string::npos) << msg;
   // ROS2 is of order 2 exactly: a condition of order 3 fails.
   EXPECT_NE(msg.find("order 3 claimed but the condition of tree"), std::string::npos) << msg;
   EXPECT_NE(msg.find("(order 3)"), std::string::npos) << msg;
+  // ROS2 keeps order 2 for any W (by hand: bᵀα1 = 1/2, bᵀΓ1 = γ − γ = 0): w_order = 2 holds; a
+  // W-order above the classical order is refused.
+  EXPECT_EQ(parse_method_file("order = 2\nw_order = 2\n" + text, "ros2.toml").rosenbrock.w_order,
+            2);
+  msg = bad_input([&] { parse_method_file("order = 2\nw_order = 3\n" + text, "ros2.toml"); });
+  EXPECT_NE(msg.find("ros2.toml:2: key 'w_order': W-order 3 claimed above the order 2"),
+            std::string::npos)
+      << msg;
+  // ROS3P's coefficients: bᵀΓ1 = (2/3)γ + (1/3)(1/2 − 2γ) = 1/6 against 0 (and bᵀα1 = 1/3
+  // against 1/2), so W-order 2 fails; the first condition in w_trees()' order is W[t]'s.
+  const std::string ros3p = R"toml(name = "my_ros3p"
+kind = "rosenbrock"
+order = 3
+w_order = 2
+description = "ROS3P"
+gamma = "g"
+alpha = [[0, 0, 0], [1, 0, 0], [1, 0, 0]]
+gamma_offdiag = [[0, 0, 0], [-1, 0, 0], ["-g", "1/2 - 2*g", 0]]
+b = ["2/3", 0, "1/3"]
+[constants]
+g = "1/2 + sqrt(3)/6"
+)toml";
+  msg = bad_input([&] { parse_method_file(ros3p, "ros3p.toml"); });
+  EXPECT_NE(msg.find("ros3p.toml:4: key 'w_order': Rosenbrock method 'my_ros3p': W-order 2 "
+                     "claimed but the W-condition of tree W[t] (order 2) has residual 0.166667"),
+            std::string::npos)
+      << msg;
 }
 
 // Velocity Verlet as kick/drift coefficients, and yoshida4 as a composition γ = (c, 1 - 2c, c),
