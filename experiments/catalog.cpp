@@ -377,10 +377,6 @@ std::string register_method_file(const std::string& given, const std::string& ba
   const std::string text = read_text(path);
   const std::string canonical = fs::weakly_canonical(p, ec).string();
   MethodDefinition m = parse_method_file(text, path);
-  for (const auto& [key, value] : {std::pair<const char*, const std::string*>{"name", &m.name},
-                                   {"description", &m.description},
-                                   {"reference", &m.reference}})
-    require_printable(*value, path, key);
   auto& files = loaded_method_files();
   if (const auto it = files.find(m.name); it != files.end()) {
     // The same file (or one with the same text) again: registered once.

@@ -217,7 +217,13 @@ void write_file_atomic(const std::filesystem::path& path, const std::string& con
     fs::remove(tmp, ignore);
     throw std::runtime_error("error writing " + path.string() + ": " + std::strerror(error));
   }
-  fs::rename(tmp, path);
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    std::error_code ignore;
+    fs::remove(tmp, ignore);
+    throw std::runtime_error("cannot write " + path.string() + ": " + ec.message());
+  }
 }
 
 namespace {

@@ -163,7 +163,15 @@ class Reader {
       return fallback;
     }
     if (!n->is_string()) fail(*n, key, "expected a string");
-    return n->as_string()->get();
+    const std::string& v = n->as_string()->get();
+    // Text fields are printed (list, describe, tables): a control character could act on the
+    // terminal there.
+    for (std::size_t i = 0; i < v.size(); ++i)
+      if (const auto c = static_cast<unsigned char>(v[i]); c < 0x20 || c == 0x7f)
+        fail(*n, key,
+             "holds a control character (code " + std::to_string(c) + " at character " +
+                 std::to_string(i + 1) + "); text fields take printable characters");
+    return v;
   }
 
   int integer(const std::string& key, bool required, int fallback, int lo, int hi) const {
