@@ -1335,6 +1335,55 @@ std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, 
   return reason;
 }
 
+// The fit over the window of `best_len` >= 3 consecutive agreeing levels from `best_a`, and the
+// reason when it is off the expected slope or finer levels do not follow it.
+void fit_over_window(const FitLevels& lv, std::size_t best_a, std::size_t best_len,
+                     const std::string& ladder, OrderFit& fit) {
+  const std::size_t n = lv.rs.size();
+  const auto [slope, se] = slope_and_se(lv, best_a, best_len);
+  fit.fitted = slope;
+  fit.fitted_se = se;
+  fit.h_max = lv.rs[best_a]->h;
+  fit.h_min = lv.rs[best_a + best_len - 1]->h;
+  fit.levels_used = static_cast<int>(best_len);
+  // Levels finer than the window, above the floors, that do not agree with it: named even when
+  // the fit is close to the expected slope (e.g. a solver tolerance that sets the error at fine
+  // h must not disappear behind a clean fit over the coarse levels).
+  const std::string finer = lv.pair_orders(best_a + best_len, n);
+  if (!finer.empty())
+    fit.reason = "levels finer than the window (h < " + format_short(fit.h_min) +
+                 ") are above the floors but do not follow it (pairwise orders " + finer +
+                 "): a solver tolerance, order reduction or the reference sets their error, "
+                 "or they are still pre-asymptotic";
+  if (std::abs(slope - fit.expected_slope) > kOrderTolerance) {
+    // The finest pair above the floors within kOrderTolerance of the classical order, beyond
+    // a window that is not: the window is the pre-asymptotic range (e.g. symplectic Euler on
+    // the cloth: 2.16 2.04 2.01 2.00 1.99, then 1.00 where the first-order term takes over in
+    // the max-norm), and the asymptotic order is the classical one. Otherwise the window's
+    // reason, followed by the finer levels' note.
+    double q_finest = std::numeric_limits<double>::quiet_NaN();
+    std::size_t b_finest = 0;
+    for (std::size_t b = best_a + best_len; b < n; ++b)
+      if (lv.usable[b] && lv.usable[b - 1]) {
+        q_finest = lv.pair_order(b);
+        b_finest = b;
+      }
+    if (!finer.empty() && std::abs(q_finest - fit.expected_slope) <= kOrderTolerance)
+      fit.reason = "pre-asymptotic window: the finest pair above the floors (h = " +
+                   format_short(lv.rs[b_finest - 1]->h) + " to " +
+                   format_short(lv.rs[b_finest]->h) + ") gives " + format_fixed(q_finest, 2) +
+                   ", the classical order, after " + format_fixed(slope, 2) +
+                   " over the window (pairwise orders " + lv.pair_orders(1, n) + "): " +
+                   (floor_ends_ladder(lv, b_finest)
+                        ? floor_end_advice(lv, b_finest, fit.expected_slope)
+                        : "add levels below h = " + format_short(lv.rs[b_finest]->h) +
+                              " to fit the asymptotic range");
+    else
+      fit.reason = off_fit_reason(lv, best_a, best_len, slope, fit.expected_slope, ladder) +
+                   (finer.empty() ? "" : "; " + fit.reason);
+  }
+}
+
 }  // namespace
 
 OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& integrator,
@@ -1368,48 +1417,7 @@ OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& i
   }
   const auto [best_a, best_len] = asymptotic_window(lv);
   if (best_len >= 3) {
-    const auto [slope, se] = slope_and_se(lv, best_a, best_len);
-    fit.fitted = slope;
-    fit.fitted_se = se;
-    fit.h_max = lv.rs[best_a]->h;
-    fit.h_min = lv.rs[best_a + best_len - 1]->h;
-    fit.levels_used = static_cast<int>(best_len);
-    // Levels finer than the window, above the floors, that do not agree with it: named even when
-    // the fit is close to the expected slope (e.g. a solver tolerance that sets the error at fine
-    // h must not disappear behind a clean fit over the coarse levels).
-    const std::string finer = lv.pair_orders(best_a + best_len, n);
-    if (!finer.empty())
-      fit.reason = "levels finer than the window (h < " + format_short(fit.h_min) +
-                   ") are above the floors but do not follow it (pairwise orders " + finer +
-                   "): a solver tolerance, order reduction or the reference sets their error, "
-                   "or they are still pre-asymptotic";
-    if (std::abs(slope - fit.expected_slope) > kOrderTolerance) {
-      // The finest pair above the floors within kOrderTolerance of the classical order, beyond
-      // a window that is not: the window is the pre-asymptotic range (e.g. symplectic Euler on
-      // the cloth: 2.16 2.04 2.01 2.00 1.99, then 1.00 where the first-order term takes over in
-      // the max-norm), and the asymptotic order is the classical one. Otherwise the window's
-      // reason, followed by the finer levels' note.
-      double q_finest = std::numeric_limits<double>::quiet_NaN();
-      std::size_t b_finest = 0;
-      for (std::size_t b = best_a + best_len; b < n; ++b)
-        if (lv.usable[b] && lv.usable[b - 1]) {
-          q_finest = lv.pair_order(b);
-          b_finest = b;
-        }
-      if (!finer.empty() && std::abs(q_finest - fit.expected_slope) <= kOrderTolerance)
-        fit.reason = "pre-asymptotic window: the finest pair above the floors (h = " +
-                     format_short(lv.rs[b_finest - 1]->h) + " to " +
-                     format_short(lv.rs[b_finest]->h) + ") gives " + format_fixed(q_finest, 2) +
-                     ", the classical order, after " + format_fixed(slope, 2) +
-                     " over the window (pairwise orders " + lv.pair_orders(1, n) + "): " +
-                     (floor_ends_ladder(lv, b_finest)
-                          ? floor_end_advice(lv, b_finest, fit.expected_slope)
-                          : "add levels below h = " + format_short(lv.rs[b_finest]->h) +
-                                " to fit the asymptotic range");
-      else
-        fit.reason = off_fit_reason(lv, best_a, best_len, slope, fit.expected_slope, ladder) +
-                     (finer.empty() ? "" : "; " + fit.reason);
-    }
+    fit_over_window(lv, best_a, best_len, ladder, fit);
     return fit;
   }
   const std::string k = std::to_string(n_usable);
