@@ -15,6 +15,7 @@
 #include "experiments/catalog.hpp"
 #include "experiments/cli.hpp"
 #include "experiments/commands.hpp"
+#include "experiments/output.hpp"
 #include "experiments/plotting.hpp"
 #include "experiments/study.hpp"
 #include "experiments/sweep.hpp"
@@ -95,6 +96,24 @@ int interrupted_exit(int sig) {
 
 void set_command_exit_code(int code) { g_command_exit_code = code; }
 
+namespace {
+
+// Every argument may end up in a JSON record (paths, names, the command line), which holds UTF-8
+// only: a byte sequence that is not UTF-8 is refused before anything runs (one message on
+// stderr), not found when the record is written after the computation.
+bool arguments_are_utf8(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i)
+    if (!valid_utf8(argv[i])) {
+      std::cerr << "stiffbench: argument " << i << " ('" << printable(argv[i])
+                << "') is not valid UTF-8: paths and names are recorded in the JSON files, "
+                   "which hold UTF-8 text; rename the file or folder\n";
+      return false;
+    }
+  return true;
+}
+
+}  // namespace
+
 int cli_main(int argc, char** argv) {
   set_command_line(argc, argv);
   g_command_exit_code = 0;
@@ -155,6 +174,7 @@ int cli_main(int argc, char** argv) {
       return 2;
     }
   }
+  if (!arguments_are_utf8(argc, argv)) return 2;
   // SIGINT/SIGTERM: the runs stop at their next poll, and the exit code is 128 + signal.
   const InterruptHandlers handlers;
   // Subcommands registered by add_*_command run inside parse() (their callbacks), so one try

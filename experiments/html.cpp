@@ -48,6 +48,16 @@ std::string safe_url(std::string_view url) {
   return std::string(url);
 }
 
+// An address the browser would fetch from another host: with a scheme, or scheme-relative
+// ("//host/...").
+bool is_remote(std::string_view url) {
+  url = trim(url);
+  if (url.substr(0, 2) == "//") return true;
+  const std::size_t colon = url.find(':');
+  const std::size_t stop = url.find_first_of("/?#");
+  return colon != std::string_view::npos && (stop == std::string_view::npos || colon < stop);
+}
+
 std::string render_inline(std::string_view s);
 
 // [text](url) starting at s[i] == '['; on success sets text, url and the index after ')'.
@@ -129,10 +139,15 @@ std::string render_inline(std::string_view s) {
       code_span(s, i, out);
     } else if (c == '!' && i + 1 < s.size() && s[i + 1] == '[' &&
                parse_link(s, i + 1, text, url, end)) {
+      // The page is self-contained: it loads no image from elsewhere. A remote image becomes a
+      // link to it (followed only when clicked); a relative one (beside the page) is shown.
       const std::string src = safe_url(url);
-      out += src.empty()
-                 ? html_escape(text)
-                 : "<img src=\"" + html_escape(src) + "\" alt=\"" + html_escape(text) + "\">";
+      if (src.empty())
+        out += html_escape(text);
+      else if (is_remote(src))
+        out += "<a href=\"" + html_escape(src) + "\">" + html_escape(text) + " (remote image)</a>";
+      else
+        out += "<img src=\"" + html_escape(src) + "\" alt=\"" + html_escape(text) + "\">";
       i = end;
     } else if (c == '[' && parse_link(s, i, text, url, end)) {
       const std::string href = safe_url(url);

@@ -33,7 +33,8 @@ std::string html_escape(std::string_view text);
 // fenced code blocks (```), and inline code spans, **strong**, *emphasis*, [links](url),
 // ![images](src) and backslash escapes. Underscores are literal (t_end, e_{k+1}). Everything
 // else is escaped text; a link or image address with a scheme other than http, https or
-// mailto is dropped (the text stays).
+// mailto is dropped (the text stays). An image with a remote address (a scheme, or "//host")
+// becomes a link to it: the page loads nothing from outside by itself.
 std::string markdown_to_html(std::string_view markdown);
 
 using HtmlMetadata = std::vector<std::pair<std::string, std::string>>;

@@ -65,8 +65,13 @@ inline constexpr std::uintmax_t kMaxInputFileBytes = 4u << 20;
 // kMaxInputFileBytes; a symlink to a regular file is followed.
 std::string read_input_file(const std::filesystem::path& path, const std::string& what);
 
-// `text` with each control character (below 0x20, 0x7f) written as \n, \t, \r or \xNN, to show
-// a bad value in a message without letting it act on the terminal.
+// Whether `text` is well-formed UTF-8 (RFC 3629: no overlong forms, no surrogates, at most
+// U+10FFFF). Every name and path a run records goes into its JSON, which holds UTF-8 only.
+bool valid_utf8(std::string_view text);
+
+// `text` with each control character (below 0x20, 0x7f) written as \n, \t, \r or \xNN (and,
+// when `text` is not valid UTF-8, every byte >= 0x80 as \xNN), to show a bad value in a message
+// without letting it act on the terminal.
 std::string printable(const std::string& text);
 // BadInput "WHERE: key 'KEY': holds a control character (code N at character I) ..." when `text`
 // holds a byte below 0x20 or 0x7f (DEL) — other than newline and tab where `multiline` — so a

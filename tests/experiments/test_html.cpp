@@ -64,6 +64,10 @@ TEST(Html, MarkdownHeadingsParagraphsAndInlineElements) {
   // Only http, https, mailto and relative addresses become links; the text stays.
   EXPECT_EQ(markdown_to_html("[x](javascript:alert(1)) [y](https://a.org/?q=\"1\")"),
             "<p>x) <a href=\"https://a.org/?q=&quot;1&quot;\">y</a></p>\n");
+  // A remote image is not loaded by the self-contained page: it becomes a link to the image.
+  EXPECT_EQ(markdown_to_html("![p](https://a.org/p.png) ![q](//b.org/q.png)"),
+            "<p><a href=\"https://a.org/p.png\">p (remote image)</a> "
+            "<a href=\"//b.org/q.png\">q (remote image)</a></p>\n");
   EXPECT_EQ(markdown_to_html("<script>alert('x')</script>"),
             "<p>&lt;script&gt;alert(&#39;x&#39;)&lt;/script&gt;</p>\n");
 }
