@@ -599,6 +599,17 @@ std::string disagreement_markdown(const ProfileResult& r) {
   return md.str();
 }
 
+// The units that did not end ok, as a Markdown list (profile.md and profile.html).
+std::string not_ok_markdown(const ProfileResult& r) {
+  std::ostringstream md;
+  if (r.not_ok.empty()) md << "None: every problem x method unit ended ok.\n";
+  for (const auto& u : r.not_ok)
+    md << "- " << u.problem << ", " << u.method << ": " << u.status
+       << (u.message.empty() ? "" : " (" + u.message + ")")
+       << "; its failed runs count as unsolved\n";
+  return md.str();
+}
+
 std::string profile_markdown(const ProfileResult& r) {
   std::ostringstream md;
   md << "# Performance and data profiles: suite " << r.suite.name << "\n\n";
@@ -617,12 +628,7 @@ std::string profile_markdown(const ProfileResult& r) {
       md << "![profiles](" << plot_stem(r, i, c) << ".png)\n\n";
     }
   md << "## Wall time against counters\n\n" << disagreement_markdown(r);
-  md << "\n## Units that did not end ok\n\n";
-  if (r.not_ok.empty()) md << "None: every problem x method unit ended ok.\n";
-  for (const auto& u : r.not_ok)
-    md << "- " << u.problem << ", " << u.method << ": " << u.status
-       << (u.message.empty() ? "" : " (" + u.message + ")")
-       << "; its failed runs count as unsolved\n";
+  md << "\n## Units that did not end ok\n\n" << not_ok_markdown(r);
   return md.str();
 }
 
@@ -649,6 +655,12 @@ void write_profile_html(const ProfileResult& r, const fs::path& dir, const nlohm
   agree.title = "Wall time against counters";
   agree.markdown = disagreement_markdown(r);
   sections.push_back(std::move(agree));
+  HtmlSection not_ok;
+  not_ok.id = "units-not-ok";
+  not_ok.title = "Units that did not end ok";
+  not_ok.markdown = not_ok_markdown(r);
+  not_ok.links = {{"profile_status.csv", "profile_status.csv"}};
+  sections.push_back(std::move(not_ok));
   HtmlMetadata md;
   for (const auto& [k, v] : html_metadata(meta))
     if (k != "shared_settings" && k != "problem_settings" && k != "spec") md.emplace_back(k, v);
