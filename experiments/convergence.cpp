@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <ostream>
 #include <sstream>
@@ -362,7 +363,7 @@ std::string cache_key(const ConvergenceSpec& spec, const OdeSystem& sys, const R
   const Vec y0 = sys.initial_state();
   for (Index i = 0; i < y0.size(); ++i) y0_hash = fnv1a64(g17(y0[i]) + ",", y0_hash);
   nlohmann::json key;
-  key["cache_format"] = 2;  // 2: with the system's fingerprint
+  key["cache_format"] = 3;  // 2: with the system's fingerprint; 3: with its content's hash
   key["stiffbench_version"] = STIFFBENCH_VERSION;
   key["git_revision"] = git_revision();
   key["model"] = spec.model;
@@ -381,19 +382,42 @@ std::string cache_key(const ConvergenceSpec& spec, const OdeSystem& sys, const R
   return key.dump();
 }
 
-// The cached values when `path` holds exactly this key and one complete row per time.
+// A cache file: line 1 "# key: KEY", line 2 "# readable description", line 3 "# content: N
+// rows, fnv1a64 HASH" (of every line below it, each with its newline), then the column header
+// and one row per time.
+std::string content_line(const std::string& data, std::size_t rows) {
+  return "# content: " + std::to_string(rows) + " rows, fnv1a64 " + hex16(fnv1a64(data));
+}
+
+// The cached values when `path` holds exactly this key, its data match the recorded hash and row
+// count (a truncated or edited file does not), and there is one complete row per time;
+// otherwise why not, in `why`.
 std::optional<std::vector<Vec>> read_cache(const std::filesystem::path& path,
                                            const std::string& key_line,
-                                           const std::vector<double>& times, Index dim) {
-  std::ifstream f(path);
+                                           const std::vector<double>& times, Index dim,
+                                           std::string& why) {
+  std::ifstream f(path, std::ios::binary);
   if (!f) return std::nullopt;
-  std::string line;
-  if (!std::getline(f, line) || line != key_line) return std::nullopt;
-  while (std::getline(f, line) && !line.empty() && line[0] == '#') {
+  const std::string text{std::istreambuf_iterator<char>(f), {}};
+  std::istringstream in(text);
+  std::string line, readable, content;
+  why = "does not match this reference";
+  if (!std::getline(in, line) || line != key_line) return std::nullopt;
+  if (!std::getline(in, readable) || !std::getline(in, content) ||
+      content.rfind("# content: ", 0) != 0) {
+    why = "records no content hash";
+    return std::nullopt;
   }
-  if (line.rfind("t,", 0) != 0) return std::nullopt;  // the column header
+  const auto data_start = static_cast<std::size_t>(in.tellg());
+  const std::string data = data_start <= text.size() ? text.substr(data_start) : "";
+  if (content != content_line(data, times.size())) {
+    why = "does not hold what it recorded (" + content.substr(2) + "): truncated or edited";
+    return std::nullopt;
+  }
+  why = "does not match this reference";
+  if (!std::getline(in, line) || line.rfind("t,", 0) != 0) return std::nullopt;  // the header
   std::vector<Vec> out;
-  while (std::getline(f, line)) {
+  while (std::getline(in, line)) {
     if (line.empty()) continue;
     std::vector<double> v;
     const char* p = line.c_str();
@@ -422,16 +446,17 @@ std::optional<std::vector<Vec>> read_cache(const std::filesystem::path& path,
 void write_cache(const std::filesystem::path& path, const std::string& key_line,
                  const std::string& readable, const std::vector<double>& times,
                  const std::vector<Vec>& values) {
-  std::ostringstream os;
-  os << key_line << "\n# " << readable << "\nt";
-  for (Index i = 0; i < values.front().size(); ++i) os << ",y" << i;
-  os << "\n";
+  std::ostringstream data;
+  data << "t";
+  for (Index i = 0; i < values.front().size(); ++i) data << ",y" << i;
+  data << "\n";
   for (std::size_t k = 0; k < times.size(); ++k) {
-    os << g17(times[k]);
-    for (Index i = 0; i < values[k].size(); ++i) os << "," << g17(values[k][i]);
-    os << "\n";
+    data << g17(times[k]);
+    for (Index i = 0; i < values[k].size(); ++i) data << "," << g17(values[k][i]);
+    data << "\n";
   }
-  write_file_atomic(path, os.str());
+  write_file_atomic(path, key_line + "\n# " + readable + "\n" +
+                              content_line(data.str(), times.size()) + "\n" + data.str());
 }
 
 struct ReferenceValues {
@@ -458,13 +483,13 @@ ReferenceValues reference_values(const ConvergenceSpec& spec, const OdeSystem& s
     path =
         std::filesystem::path(spec.cache_dir) / "reference" / (hex16(fnv1a64(key_line)) + ".csv");
     res.cache = path.string();
-    if (auto cached = read_cache(path, key_line, sorted, sys.dimension())) {
+    std::string why;
+    if (auto cached = read_cache(path, key_line, sorted, sys.dimension(), why)) {
       values = std::move(*cached);
       res.from_cache = true;
       if (progress) *progress << "reference: cached " << path.string() << "\n";
     } else if (progress && std::filesystem::exists(path)) {
-      *progress << "reference: " << path.string()
-                << " does not match this reference; recomputing\n";
+      *progress << "reference: " << path.string() << " " << why << "; recomputing\n";
     }
   }
   if (!res.from_cache) {

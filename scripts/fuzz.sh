@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Fuzzing (issue 14): builds the libFuzzer targets of fuzz/ with Debian's clang (only the
-# sources they need: core/params.cpp, the spec-file parser, the CSV readers, the number
+# Fuzzing: builds the libFuzzer targets of fuzz/ with Debian's clang (only the sources they
+# need: core/params.cpp, the spec-file parser and its input checks, the CSV readers, the number
 # formats) and runs each for FUZZ_SECONDS (default 30) on a copy of its seed corpus
 # fuzz/corpus/TARGET. A crash leaves its input in BUILD/fuzz/crash-TARGET-*; copy it to
 # fuzz/regressions/TARGET/ (tests/experiments/test_fuzz_regressions.cpp replays every file
@@ -17,8 +17,8 @@ cxx="${FUZZ_CXX:-clang++}"
 flags=(-std=c++20 -O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
   -DTOML_HEADER_ONLY=0 -DTOML_SHARED_LIB=1 -I"$root" -isystem /usr/include/eigen3)
 # The shared sources, compiled once (about a minute on 2 cores); then one small main each.
-srcs=(core/params.cpp experiments/spec_file.cpp experiments/format.cpp experiments/csv.cpp
-  fuzz/targets.cpp)
+srcs=(core/params.cpp experiments/spec_file.cpp experiments/format.cpp
+  experiments/input_checks.cpp experiments/csv.cpp fuzz/targets.cpp)
 objs=()
 for s in "${srcs[@]}"; do
   o="$out/$(echo "$s" | tr '/' '_').o"

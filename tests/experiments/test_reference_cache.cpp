@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -13,6 +14,7 @@
 #include "core/driver.hpp"
 #include "experiments/commands.hpp"
 #include "experiments/convergence.hpp"
+#include "experiments/output.hpp"
 #include "tests/cli_support.hpp"
 #include "tests/test_support.hpp"
 
@@ -68,9 +70,11 @@ ConvergenceSpec vdp_spec(const fs::path& dir) {
 }
 
 // First run computes and writes DIR/reference/<hash>.csv; the second run reads it. Proof that
-// the values really come from the file: a perturbed state written into it (key line kept)
-// shifts the second run's errors by that perturbation.
-TEST(ReferenceCache, WrittenOnceThenReused) {
+// the values really come from the file: a perturbed state written into it with a matching
+// content line shifts the second run's errors by that perturbation. A file that does not hold
+// what its content line records (one digit edited, cut inside its last number, rows missing) is
+// never used: it is recomputed and rewritten.
+TEST(ReferenceCache, WrittenOnceThenReusedAndVerified) {
   const fs::path dir = fresh_dir("reuse");
   ConvergenceSpec spec = vdp_spec(dir);
   const auto first = run_convergence(spec, nullptr);
@@ -82,15 +86,20 @@ TEST(ReferenceCache, WrittenOnceThenReused) {
   EXPECT_EQ(first.reference_description, "cvode_bdf adaptive, rtol = 1e-12, atol = 1e-14");
 
   // Header: the key (with model, parameters, reference, rtol, atol, t0 and times), a readable
-  // line, the columns and one row at t_end.
+  // line, the content line (row count and the FNV-1a hash of the lines below it), the columns
+  // and one row at t_end.
   const auto lines = lines_of(file);
-  ASSERT_EQ(lines.size(), 4u);
+  ASSERT_EQ(lines.size(), 5u);
   for (const char* part : {"\"model\":\"van_der_pol\"", "\"mu\":\"1\"", "\"form\":\"mu\"",
                            "\"reference\":\"cvode_bdf\"", "\"rtol\":\"1e-12\"",
                            "\"atol\":\"1e-14\"", "\"t0\":\"0\"", "\"times\":[\"1\"]"})
     EXPECT_NE(lines[0].find(part), std::string::npos) << part << " in " << lines[0];
-  EXPECT_EQ(lines[2], "t,y0,y1");
-  EXPECT_EQ(lines[3].rfind("1,", 0), 0u);
+  const auto content = [](const std::string& data) {
+    return "# content: 1 rows, fnv1a64 " + hex16(fnv1a64(data));
+  };
+  EXPECT_EQ(lines[2], content(lines[3] + "\n" + lines[4] + "\n"));
+  EXPECT_EQ(lines[3], "t,y0,y1");
+  EXPECT_EQ(lines[4].rfind("1,", 0), 0u);
 
   const auto mtime = fs::last_write_time(file);
   const auto second = run_convergence(spec, nullptr);
@@ -101,21 +110,21 @@ TEST(ReferenceCache, WrittenOnceThenReused) {
   for (std::size_t i = 0; i < first.rows.size(); ++i)
     EXPECT_EQ(second.rows[i].error, first.rows[i].error);  // bit-identical reference
 
-  // Shift y0(t_end) in the file by 1e-3: rk4's errors (< 1e-5) become 1e-3 to within 1e-5.
-  std::stringstream row(lines[3]);
+  // Shift y0(t_end) in the file by 1e-3 and record the new content: rk4's errors (< 1e-5)
+  // become 1e-3 to within 1e-5.
+  std::stringstream row(lines[4]);
   std::string t, y0, y1;
   std::getline(row, t, ',');
   std::getline(row, y0, ',');
   std::getline(row, y1, ',');
   char shifted[40];
   std::snprintf(shifted, sizeof shifted, "%.17g", std::stod(y0) + 1e-3);
-  {
-    std::ofstream f(file, std::ios::trunc);
-    f << lines[0] << "\n"
-      << lines[1] << "\n"
-      << lines[2] << "\n"
-      << t << "," << shifted << "," << y1 << "\n";
-  }
+  const std::string shifted_data = lines[3] + "\n" + t + "," + shifted + "," + y1 + "\n";
+  const auto write = [&](const std::string& content_line, const std::string& data) {
+    std::ofstream f(file, std::ios::trunc | std::ios::binary);
+    f << lines[0] << "\n" << lines[1] << "\n" << content_line << "\n" << data;
+  };
+  write(content(shifted_data), shifted_data);
   const auto tampered = run_convergence(spec, nullptr);
   EXPECT_TRUE(tampered.reference_from_cache);
   for (const auto& r : tampered.rows)
@@ -123,15 +132,22 @@ TEST(ReferenceCache, WrittenOnceThenReused) {
       EXPECT_NEAR(r.error, 1e-3, 1e-5);
     }
 
-  // A truncated file (no data row) does not match: recomputed and rewritten.
-  {
-    std::ofstream f(file, std::ios::trunc);
-    f << lines[0] << "\n" << lines[1] << "\n" << lines[2] << "\n";
+  // The same edit without its content line, the file cut inside its last number, and the row
+  // gone: each is detected, recomputed (the progress says why) and rewritten.
+  const std::string original = lines[3] + "\n" + lines[4] + "\n";
+  for (const std::string& data :
+       {shifted_data, original.substr(0, original.size() - 4), lines[3] + "\n"}) {
+    write(lines[2], data);
+    std::ostringstream progress;
+    const auto rewritten = run_convergence(spec, &progress);
+    EXPECT_FALSE(rewritten.reference_from_cache) << data;
+    EXPECT_NE(progress.str().find("truncated or edited; recomputing"), std::string::npos)
+        << progress.str();
+    const auto now = lines_of(file);  // line 1 also says how long the computation took
+    ASSERT_EQ(now.size(), lines.size());
+    for (std::size_t k : {0, 2, 3, 4}) EXPECT_EQ(now[k], lines[k]) << k;
+    EXPECT_EQ(rewritten.rows.front().error, first.rows.front().error);
   }
-  const auto rewritten = run_convergence(spec, nullptr);
-  EXPECT_FALSE(rewritten.reference_from_cache);
-  EXPECT_EQ(lines_of(file).size(), 4u);
-  EXPECT_EQ(rewritten.rows.front().error, first.rows.front().error);
   fs::remove_all(dir);
 }
 
