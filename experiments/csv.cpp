@@ -81,7 +81,8 @@ CsvContent parse_run_csv(const std::string& text) {
       const long expected = std::stol(f[1]);
       if (unit < 0 || expected < 1) throw std::invalid_argument("unit or unit_rows out of range");
       auto& [want, rows] = partial[unit];
-      want = expected;
+      if (!rows.lines.empty() && want != expected) want = -1;  // rows disagree: not a unit
+      if (rows.lines.empty()) want = expected;
       rows.lines.push_back(line + "\n");
       if (status_col < f.size() && f[status_col] != "ok") rows.ok = false;
     } catch (const std::exception&) {
@@ -89,7 +90,12 @@ CsvContent parse_run_csv(const std::string& text) {
     }
   }
   for (auto& [unit, er] : partial) {
-    if (static_cast<long>(er.second.lines.size()) == er.first)
+    // Complete: exactly unit_rows rows, all distinct (a duplicated row standing in for a
+    // missing one is not a complete unit).
+    std::vector<std::string> sorted = er.second.lines;
+    std::sort(sorted.begin(), sorted.end());
+    const bool distinct = std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end();
+    if (distinct && static_cast<long>(er.second.lines.size()) == er.first)
       c.units[unit] = std::move(er.second);
     else
       c.dropped_rows += static_cast<long>(er.second.lines.size());

@@ -22,8 +22,9 @@ struct UnitRows {
   bool ok = true;                  // every row's unit_status is ok
 };
 
-// A run CSV: the header line and the complete units (all `unit_rows` rows present); a torn last
-// line (no newline), lines with the wrong number of fields and incomplete units are dropped.
+// A run CSV: the header line and the complete units (exactly `unit_rows` distinct rows, all
+// giving the same `unit_rows`); a torn last line (no newline), lines with the wrong number of
+// fields, incomplete units and units with a duplicated row are dropped.
 struct CsvContent {
   std::string header;
   std::map<long, UnitRows> units;

@@ -469,7 +469,17 @@ std::map<long, UnitRows> kept_units(const RunOptions& opt, const SpecFile& spec,
       throw BadInput("--resume: " + csv.string() + " has different columns");
     done = std::move(c.units);
     if (c.dropped_rows > 0)
-      err << "resume: dropped " << c.dropped_rows << " row(s) of incomplete units\n";
+      err << "resume: dropped " << c.dropped_rows
+          << " row(s) of incomplete units or units with a duplicated row\n";
+    // Rows of a unit this spec and shard do not have are not kept either.
+    for (auto it = done.begin(); it != done.end();) {
+      if (it->first < ex.units() && it->first % opt.shard_count == opt.shard_index) {
+        ++it;
+        continue;
+      }
+      err << "resume: dropped unit " << it->first << " (not a unit of this spec and shard)\n";
+      it = done.erase(it);
+    }
   }
   return done;
 }

@@ -256,6 +256,35 @@ TEST(Sweep, MethodFilesResumeShardAndMergeLikeNamedMethods) {
       << refused.err;
 }
 
+// A resumed run keeps only units that hold exactly their distinct rows under unit indices this
+// spec and shard have: unit 0 with one row replaced by a copy of another (a duplicate standing in
+// for a missing row) is run again, and the four rows of a unit 99 the spec does not have are
+// dropped; the result equals the uninterrupted run.
+TEST(Sweep, ResumeRecomputesUnitsWithDuplicatedOrForeignRows) {
+  const fs::path base = fresh_dir("resume_dup");
+  const Outcome full = run("run " + kSweep + " --out " + (base / "full").string());
+  ASSERT_EQ(full.code, 0) << full.err;
+  const std::string csv = slurp(base / "full/convergence.csv");
+  std::vector<std::string> lines;
+  std::istringstream in(csv);
+  for (std::string l; std::getline(in, l);) lines.push_back(l + "\n");
+  ASSERT_EQ(lines.size(), 1u + 12 * 4);
+  ASSERT_EQ(lines[1].rfind("0,4,", 0), 0u);
+  ASSERT_EQ(lines[5].rfind("1,4,", 0), 0u);
+  std::string edited;
+  for (std::size_t i = 0; i < lines.size(); ++i) edited += i == 2 ? lines[1] : lines[i];
+  for (std::size_t i = 5; i < 9; ++i) edited += "99" + lines[i].substr(1);  // a complete unit
+  fs::create_directories(base / "part");
+  fs::copy_file(base / "full/run.json", base / "part/run.json");
+  std::ofstream(base / "part/convergence.csv") << edited;
+  const Outcome resumed = run("run " + kSweep + " --out " + (base / "part").string() + " --resume");
+  ASSERT_EQ(resumed.code, 0) << resumed.err;
+  EXPECT_NE(resumed.out.find("resume: 11 of 12 unit(s) already done"), std::string::npos)
+      << resumed.out;
+  EXPECT_NE(resumed.err.find("dropped unit 99"), std::string::npos) << resumed.err;
+  EXPECT_EQ(without_wall_time(slurp(base / "part/convergence.csv")), without_wall_time(csv));
+}
+
 TEST(Sweep, ExpansionOrderAndRowTags) {
   // Dimensions: top-level keys by name (h), then parameters by name (params.n), the last one
   // fastest; units: point x integrator, integrators in spec order. h also names a study column
