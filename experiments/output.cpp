@@ -10,10 +10,12 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <ostream>
 #include <sstream>
@@ -561,6 +563,63 @@ nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json&
     }
   }
   return j;
+}
+
+FolderClaim::FolderClaim(const std::filesystem::path& dir, std::ostream* note,
+                         const std::string& flag)
+    : lock_(dir / ".stiffbench.lock") {
+  namespace fs = std::filesystem;
+  const auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char date[32];
+  std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  const std::string text = "pid " + std::to_string(static_cast<long>(::getpid())) + "\nstarted " +
+                           date + "\ncommand " +
+                           (g_command_line_set ? printable(g_command_line) : "(library)") + "\n";
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    const int fd =
+        ::open(lock_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+    if (fd >= 0) {
+      const ssize_t n = ::write(fd, text.data(), text.size());
+      ::close(fd);
+      if (n == static_cast<ssize_t>(text.size())) return;
+      std::error_code ignore;
+      fs::remove(lock_, ignore);
+      throw std::runtime_error("cannot write " + lock_.string());
+    }
+    if (errno != EEXIST)
+      throw BadInput(flag + " " + dir.string() + ": cannot claim the folder (" + lock_.string() +
+                     ": " + std::strerror(errno) + ")");
+    // Held: by a live process (refused), or left by one that is gone (taken over).
+    std::ifstream in(lock_, std::ios::binary);
+    std::string held{std::istreambuf_iterator<char>(in), {}};
+    long pid = 0;
+    if (held.rfind("pid ", 0) == 0) pid = std::strtol(held.c_str() + 4, nullptr, 10);
+    if (pid == static_cast<long>(::getpid())) {  // this process already holds it (a command
+      lock_.clear();                             // running a study in its own folder): nested
+      return;
+    }
+    const bool alive = pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM);
+    std::string who;  // "pid N; started T; command C"
+    std::istringstream lines(held);
+    for (std::string line; std::getline(lines, line);) who += (who.empty() ? "" : "; ") + line;
+    if (alive || attempt > 0)
+      throw BadInput(flag + " " + dir.string() + " is being written by another run (" +
+                     printable(who.substr(0, 300)) + " in " + lock_.string() +
+                     "); wait for it or choose another " + flag);
+    if (note)
+      *note << "note: " << lock_.string() << " was left by a run that is gone (" << printable(who)
+            << "); taking the folder over\n";
+    std::error_code ignore;
+    fs::remove(lock_, ignore);
+  }
+}
+
+FolderClaim::~FolderClaim() {
+  if (lock_.empty()) return;
+  std::error_code ignore;
+  std::filesystem::remove(lock_, ignore);
 }
 
 }  // namespace stiffbench

@@ -114,6 +114,24 @@ class AtomicFileStream {
   bool committed_ = false;
 };
 
+// A claim on an output folder for the length of one command: DIR/.stiffbench.lock, created
+// exclusively, holding the process id, the start time and the command line. A second command
+// writing into DIR meanwhile (another terminal, another job) finds it and is refused with
+// BadInput naming the folder and the other run, so two runs never mix or overwrite each other's
+// files. A lock whose process is gone (a killed run) is taken over, with a note. Released (the
+// file removed) when the claim is destroyed, also on an exception.
+class FolderClaim {
+ public:
+  FolderClaim(const std::filesystem::path& dir, std::ostream* note = nullptr,
+              const std::string& flag = "--out");
+  ~FolderClaim();
+  FolderClaim(const FolderClaim&) = delete;
+  FolderClaim& operator=(const FolderClaim&) = delete;
+
+ private:
+  std::filesystem::path lock_;
+};
+
 // Creates DIR and checks that a file can be written there, before an experiment runs; BadInput
 // naming `flag`, the directory and the reason otherwise (and nothing is left behind).
 void require_output_dir(const std::filesystem::path& dir, const std::string& flag = "--out");

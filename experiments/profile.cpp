@@ -680,6 +680,7 @@ ProfileResult run_profile(const ProfileSuite& suite, const ProfileOptions& opt, 
   opt.validate();
   require_input(!suite.problems.empty(), "profile: suite " + suite.name + " is empty");
   require_output_dir(opt.out_dir);
+  const FolderClaim claim(opt.out_dir, &err);  // no other run writes here until this one is done
   const nlohmann::json spec = profile_spec(suite, opt);
   check_existing_results(opt.out_dir, "profile.json",
                          {"profile.csv", "profile.md", "profile.html", "profile_status.csv"}, spec,

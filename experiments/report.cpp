@@ -134,6 +134,7 @@ nlohmann::json report_spec(const ReportOptions& opt) {
 void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) {
   const std::vector<ReportSection> sections = load_report_suite(opt.suite, opt.quick);
   require_output_dir(opt.out_dir);
+  const FolderClaim claim(opt.out_dir, &err);  // no other run writes here until this one is done
   // Output safety: DIR/report.json records the suite; a folder holding a report of another
   // suite is refused unless --force. Plot formats (--svg) are not part of it, as for the
   // studies. Written before the suite runs, so an interrupted report is identified too.

@@ -184,6 +184,8 @@ void run_study_job(const StudyKind& kind, StudyJob& job_ref, const std::filesyst
   NullStream null;
   std::ostream& err = ctx.err ? *ctx.err : null;
   require_output_dir(dir);
+  // Claimed before the check: no other run writes here between the check and this one's files.
+  const FolderClaim claim(dir, ctx.err);
   check_study_output(dir, kind.stem, with_method_files(job->spec_json()), ctx.force, ctx.err,
                      kind.extra_files);
   job->run(ctx.progress);

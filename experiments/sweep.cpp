@@ -638,6 +638,7 @@ int run_loaded_spec(const SpecFile& loaded, const RunOptions& opt, std::ostream&
 
   const fs::path dir = opt.out_dir;
   require_output_dir(dir);
+  const FolderClaim claim(dir, &err);  // no other run writes here until this one is done
   const fs::path csv = dir / csv_name(kind);
   const std::string hash = spec_hash(spec);
   const std::string header = run_header(study_kind(kind).unit_columns, ex);
@@ -695,6 +696,7 @@ int merge_shards(const std::string& out_dir, const std::vector<std::string>& dir
   }
   const fs::path dir = out_dir;
   require_output_dir(dir);
+  const FolderClaim claim(dir, &err);  // no other run writes here until this one is done
   const std::string name = first.value("csv", "run.csv");
   // Output safety: an --out folder holding a run of a different spec is refused unless --force.
   check_existing_results(dir, "run.json", {name, fs::path(name).replace_extension(".md").string()},

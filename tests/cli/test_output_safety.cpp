@@ -3,6 +3,7 @@
 // leaves every file as it was; the same spec is recomputed and replaced; --force replaces; `run`
 // needs --resume or --force for units of its own spec. Runs the real binary like test_cli.cpp;
 // the library-level check is in tests/experiments/test_output_safety_library.cpp.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -338,4 +339,61 @@ TEST(OutputSafety, AFullDiskLeavesNoIncompleteFileAndSaysSo) {
     EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
   std::system(("umount " + mnt.string()).c_str());
   fs::remove_all(mnt);
+}
+
+// Two commands on one --out a second apart: the first claims the folder
+// (DIR/.stiffbench.lock) before it checks it, so the second, of another spec, is refused with exit
+// 2 naming the folder and the first run while the first is still computing, and the first's
+// files are its own when it ends. A lock left by a process that is gone is taken over.
+TEST(OutputSafety, ConcurrentRunsOnOneFolderExactlyOneWrites) {
+  const fs::path base = stiffbench::testing_support::fresh_dir("safety", "concurrent");
+  const fs::path out = base / "R";
+  fs::create_directories(base);
+  const pid_t first = ::fork();
+  ASSERT_GE(first, 0);
+  if (first == 0) {
+    const std::string o = out.string();
+    // About a second or more in a Release build: 1,500 masses, 20,000 rk4 steps at the finest
+    // level.
+    const char* argv[] = {
+        STIFFBENCH_BIN,  "convergence", "--model", "spring_chain", "--param", "n=1500",
+        "--integrators", "rk4",         "--t-end", "10",           "--h",     "0.002",
+        "--levels",      "3",           "--out",   o.c_str(),      nullptr};
+    const int null = ::open("/dev/null", O_WRONLY);
+    ::dup2(null, 1);
+    ::dup2(null, 2);
+    ::execv(STIFFBENCH_BIN, const_cast<char* const*>(argv));
+    ::_exit(127);
+  }
+  bool claimed = false;
+  for (int i = 0; i < 2000 && !claimed; ++i) {
+    claimed = fs::exists(out / ".stiffbench.lock");
+    if (!claimed) ::usleep(5000);
+  }
+  ASSERT_TRUE(claimed) << "the first run never claimed " << out;
+  const Outcome second = run(kSmallConvergence + " --out " + out.string());
+  int status = 0;
+  ::waitpid(first, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_EQ(second.code, 2) << second.err;
+  // Either refusal is right: the claim while the first computes, or the record of another spec
+  // when the first was already done (a loaded machine); never a second writer.
+  EXPECT_TRUE(second.err.find("is being written by another run (pid " + std::to_string(first)) !=
+                  std::string::npos ||
+              second.err.find("holds results of a different spec") != std::string::npos)
+      << second.err;
+  EXPECT_NE(slurp(out / "convergence.json").find("spring_chain"), std::string::npos);
+  EXPECT_FALSE(fs::exists(out / ".stiffbench.lock"));
+
+  // A lock of a process that is gone (a killed run): taken over, with a note.
+  const pid_t gone = ::fork();
+  if (gone == 0) ::_exit(0);
+  ::waitpid(gone, &status, 0);
+  std::ofstream(out / ".stiffbench.lock") << "pid " << gone << "\nstarted earlier\ncommand x\n";
+  const Outcome over = run(kSmallConvergence + " --out " + out.string() + " --force");
+  EXPECT_EQ(over.code, 0) << over.err;
+  EXPECT_NE(over.err.find("was left by a run that is gone"), std::string::npos) << over.err;
+  EXPECT_FALSE(fs::exists(out / ".stiffbench.lock"));
+  fs::remove_all(base);
 }
