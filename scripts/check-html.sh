@@ -6,6 +6,7 @@
 #    loads, unhandled rejections, console.error) and no "CONSOLE" line in Chromium's log,
 #  - every section of REPORT.md (its "## " headings) is a section of the page with that heading,
 #    and every plot of REPORT.md (its "![" images) is an inline <svg> in a figure of the page,
+#  - nothing is loaded from outside the page (no img/script/iframe/link… with a remote address),
 #  - the sort self-test passed (the page opened with #selftest sorts every numeric column both
 #    ways and writes data-selftest="ok: N columns"),
 # and writes REPORT_DIR/report.png (a 1280x4000 screenshot). Then a negative control: the same
@@ -55,9 +56,21 @@ class Dom(html.parser.HTMLParser):
     def __init__(self):
         super().__init__(convert_charrefs=True)
         self.root, self.stack, self.sections, self.plots, self.h2 = {}, [], [], 0, None
+        self.remote = []
     def handle_starttag(self, tag, attrs):
         a = dict(attrs)
         if tag == "html": self.root = a
+        # Addresses the browser fetches by itself when the page opens: a remote one would make
+        # the "self-contained" page load from the network.
+        loads = {"img": ["src", "srcset"], "script": ["src"], "iframe": ["src"], "embed": ["src"],
+                 "source": ["src", "srcset"], "video": ["src", "poster"], "audio": ["src"],
+                 "object": ["data"], "input": ["src"]}.get(tag, [])
+        if tag == "link" and set((a.get("rel") or "").split()) & {"stylesheet", "icon", "preload", "prefetch"}:
+            loads = ["href"]
+        for attr in loads:
+            v = (a.get(attr) or "").strip().lower()
+            if v.startswith("//") or (":" in v.split("/")[0] and not v.startswith("data:")):
+                self.remote.append(f"<{tag} {attr}={a.get(attr)}>")
         ptag, pattrs = self.stack[-1] if self.stack else (None, {})
         pclass = (pattrs.get("class") or "").split()
         if tag == "svg" and ptag == "figure" and "plot" in pclass: self.plots += 1
@@ -85,6 +98,8 @@ if not selftest.startswith("ok"): failures.append("sort self-test: " + selftest)
 if dom.sections != want_sections:
     missing = [s for s in want_sections if s not in dom.sections]
     failures.append(f"sections: {len(dom.sections)} in the page, {len(want_sections)} in REPORT.md; missing {missing}")
+if dom.remote:
+    failures.append("loads from outside the page (remote addresses): " + ", ".join(dom.remote[:5]))
 if dom.plots != want_plots:
     failures.append(f"plots: {dom.plots} inline SVG in the page, {want_plots} in REPORT.md")
 # A blank 1280x4000 page is about 23 kB as PNG; report --quick gives about 690 kB.
@@ -119,3 +134,17 @@ if ! grep -q "stiffbenchDeliberateError" "$work/broken.err"; then
 fi
 echo "check-html: negative control ok: a page with a deliberate error fails the check:"
 sed 's/^/  | /' "$work/broken.err" | cut -c1-200
+
+# Second negative control: the page with an image from another host must fail as loading from
+# outside (the page is self-contained; a remote image in a note is written as a link instead).
+sed 's|</body>|<img src="https://stiffbench.invalid/x.png" alt="remote"></body>|' "$dir/$page_name" >"$broken"
+if check_page "$broken" "$work/remote.png" 2>"$work/remote.err"; then
+  echo "check-html: the negative control (a page with a remote image) passed the check" >&2
+  exit 1
+fi
+if ! grep -q "loads from outside the page" "$work/remote.err"; then
+  cat "$work/remote.err" >&2
+  echo "check-html: the remote-image control failed, but not on its remote image" >&2
+  exit 1
+fi
+echo "check-html: negative control ok: a page with a remote image fails the check"

@@ -209,3 +209,24 @@ TEST(ReportSuite, BadSuitesAreRefusedBeforeAnythingRuns) {
   EXPECT_FALSE(fs::exists(dir / "out"));  // nothing written
   fs::remove_all(dir);
 }
+
+// The self-contained page loads nothing from outside: an image with a remote address in a
+// section's note is written as a link to it (no <img> with that address; a relative image would
+// stay an image). scripts/check-html.sh checks the same in Chromium on the CI's report.
+TEST(ReportSuite, ARemoteImageInANoteIsALinkNotALoad) {
+  const fs::path dir = fresh_dir("suite", "remote_image");
+  fs::create_directories(dir / "suite");
+  std::ofstream(dir / "suite" / "01_osc.toml")
+      << "kind = \"convergence\"\nmodel = \"harmonic_oscillator\"\nintegrators = [\"rk4\"]\n"
+         "t_end = 1.0\nh = 0.1\nlevels = 3\n"
+         "note = \"See ![logo](https://example.org/logo.png) and ![rel](osc/convergence.png).\"\n";
+  const auto r = run_cli("report " + shell_quote((dir / "suite").string()) + " --html --out " +
+                         shell_quote((dir / "out").string()));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string page = stiffbench::testing_support::slurp(dir / "out" / "report.html");
+  EXPECT_EQ(page.find("src=\"https://example.org"), std::string::npos);
+  EXPECT_NE(page.find("<a href=\"https://example.org/logo.png\">logo (remote image)</a>"),
+            std::string::npos);
+  EXPECT_NE(page.find("<img src=\"osc/convergence.png\""), std::string::npos);
+  fs::remove_all(dir);
+}
