@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <string>
 
 namespace stiffbench {
 
@@ -107,6 +108,21 @@ long fixed_step_count(double t0, double t_end, double h, long max_steps) {
   return static_cast<long>(n);
 }
 
+namespace {
+
+// A system of a program's own may say anything: a run needs at least one unknown and an initial
+// state of the system's dimension (a mismatch would read or write past the integrator's vectors).
+void check_state_size(const OdeSystem& sys, Index y0_size) {
+  require_input(sys.dimension() > 0, "system '" + sys.name() + "': dimension " +
+                                         std::to_string(sys.dimension()) +
+                                         ": a system needs at least one unknown");
+  require_input(y0_size == sys.dimension(),
+                "system '" + sys.name() + "': the initial state has " + std::to_string(y0_size) +
+                    " entries, the dimension is " + std::to_string(sys.dimension()));
+}
+
+}  // namespace
+
 RunResult run_fixed_step(const OdeSystem& sys, Integrator& integ, const FixedStepOptions& opt,
                          const Observer& observer) {
   const Vec y0 = sys.initial_state();
@@ -116,6 +132,7 @@ RunResult run_fixed_step(const OdeSystem& sys, Integrator& integ, const FixedSte
 RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0, CVecRef y0,
                               const FixedStepOptions& opt, const Observer& observer) {
   const long n = fixed_step_count(t0, opt.t_end, opt.h, opt.max_steps);
+  check_state_size(sys, y0.size());
   check_compatible(integ.info(), sys);
 
   RunResult r;
@@ -200,6 +217,7 @@ RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOp
   check_compatible(integ.info(), sys);
   RunResult r;
   r.y = sys.initial_state();
+  check_state_size(sys, r.y.size());
   r.t = t0;
   // The output stops: opt.times (then t_end), or `outputs` equal intervals computed one at a time,
   // so a large --outputs costs no memory.

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "core/driver.hpp"
 #include "experiments/catalog.hpp"
@@ -81,6 +82,44 @@ TEST(Driver, NonFiniteStateIsUnstable) {
   const RunResult r = run_fixed_step(sys, *eu, opt);
   EXPECT_EQ(r.stats.status, Status::unstable);
   EXPECT_EQ(r.stats.steps, 4);  // the step from t = 0.3 evaluates f at t > 0.25
+}
+
+// A program's own system whose initial state does not have its dimension, or of dimension 0, is
+// refused before anything is sized (it would otherwise read or write past the vectors).
+class WrongSizeSystem final : public OdeSystem {
+ public:
+  WrongSizeSystem(Index dim, Index y0_size) : dim_(dim), y0_size_(y0_size) {}
+  std::string name() const override { return "wrong_size"; }
+  Index dimension() const override { return dim_; }
+  Vec initial_state() const override { return Vec::Ones(y0_size_); }
+
+ protected:
+  void eval_rhs(double, CVecRef y, VecRef dydt) const override { dydt = -y; }
+
+ private:
+  Index dim_, y0_size_;
+};
+
+TEST(Driver, AStateOfAnotherSizeOrNoUnknownIsBadInput) {
+  auto rk = make("rk4");
+  FixedStepOptions opt;
+  opt.t_end = 1.0;
+  opt.h = 0.1;
+  for (const auto& [dim, size] : {std::pair<Index, Index>{3, 2}, {2, 3}, {0, 0}}) {
+    const WrongSizeSystem sys(dim, size);
+    try {
+      run_fixed_step(sys, *rk, opt);
+      ADD_FAILURE() << "dimension " << dim << ", initial state " << size << ": no BadInput";
+    } catch (const BadInput& e) {
+      EXPECT_NE(std::string(e.what()).find("system 'wrong_size'"), std::string::npos) << e.what();
+    }
+  }
+  auto dopri = make("dopri5");
+  AdaptiveOptions aopt;
+  aopt.t_end = 1.0;
+  EXPECT_THROW(run_adaptive(WrongSizeSystem(3, 2), *dopri, aopt), BadInput);
+  // The right size runs.
+  EXPECT_EQ(run_fixed_step(WrongSizeSystem(2, 2), *rk, opt).stats.status, Status::ok);
 }
 
 TEST(Driver, BadStepOrEndTimeIsBadInput) {
