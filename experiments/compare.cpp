@@ -550,31 +550,14 @@ Table compare_table(const CompareResult& r) {
            "time_new_runs", "time_ratio",  "time_verdict"},
           {}};
   for (const auto& f : r.files)
-    if (f.presence != FileComparison::Presence::both)
-      t.rows.push_back(
-          {f.file,
-           "",
-           f.presence == FileComparison::Presence::old_only ? "file_only_old" : "file_only_new",
-           "file " + presence_text(f.presence),
-           "",
-           "",
-           "",
-           "",
-           "",
-           "",
-           "",
-           "",
-           "",
-           "",
-           "",
-           "",
-           "",
-           "",
-           "",
-           "",
-           "",
-           "",
-           ""});
+    if (f.presence != FileComparison::Presence::both) {
+      // A file on one side only: its name, kind and note; the row and ratio columns stay empty.
+      std::vector<std::string> v(t.columns.size());
+      v[0] = f.file;
+      v[2] = f.presence == FileComparison::Presence::old_only ? "file_only_old" : "file_only_new";
+      v[3] = "file " + presence_text(f.presence);
+      t.rows.push_back(std::move(v));
+    }
   for (const auto& row : r.rows) {
     std::vector<std::string> v = {
         row.file,

@@ -283,6 +283,33 @@ TEST(Profile, TinySuiteEndToEndAndReused) {
   fs::remove_all(out);
 }
 
+// The built-in method M's file as SUITE/my/my_M.toml (beside the specs, not among them), under
+// the name my_M: the same coefficients as M under another name.
+void write_renamed_method(const fs::path& suite, const std::string& m) {
+  std::string text;
+  for (const auto& [file, body] : embedded_method_files())
+    if (file == m + ".toml") text = std::string(body);
+  const std::string key = "name = \"" + m + "\"";
+  ASSERT_NE(text.find(key), std::string::npos) << m;
+  text.replace(text.find(key), key.size(), "name = \"my_" + m + "\"");
+  fs::create_directories(suite / "my");
+  std::ofstream(suite / "my" / ("my_" + m + ".toml")) << text;
+}
+
+// Both specs of tiny_suite with their integrator list replaced by `list`.
+void set_suite_integrators(const fs::path& suite, const std::string& list) {
+  for (const char* f : {"01_oscillator.toml", "02_decay.toml"}) {
+    std::ifstream in(suite / f);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    std::string text = ss.str();
+    const std::string old = "integrators = [\"dopri5\", \"bs3\"]";
+    ASSERT_NE(text.find(old), std::string::npos);
+    text.replace(text.find(old), old.size(), "integrators = " + list);
+    std::ofstream(suite / f) << text;
+  }
+}
+
 // A user's method given to the suite by the path of its method file: its rows carry the name
 // inside the file, and the profile must find them under that name. The file below is dopri5's
 // tableau under another name, so (independent check: the same coefficients give the same runs)
@@ -290,24 +317,8 @@ TEST(Profile, TinySuiteEndToEndAndReused) {
 // none and scored the method as solving nothing (rho = 0) with no error.
 TEST(Profile, AMethodFileGivenByPathIsProfiledUnderItsName) {
   const fs::path suite = tiny_suite("method_file");
-  std::string dopri5;
-  for (const auto& [file, text] : embedded_method_files())
-    if (file == "dopri5.toml") dopri5 = std::string(text);
-  const std::string key = "name = \"dopri5\"";
-  ASSERT_NE(dopri5.find(key), std::string::npos);
-  dopri5.replace(dopri5.find(key), key.size(), "name = \"my_dopri5\"");
-  fs::create_directories(suite / "my");  // beside the specs, not among them
-  std::ofstream(suite / "my" / "my_dopri5.toml") << dopri5;
-  for (const char* f : {"01_oscillator.toml", "02_decay.toml"}) {
-    std::ifstream in(suite / f);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    std::string text = ss.str();
-    const std::string list = "integrators = [\"dopri5\", \"bs3\"]";
-    ASSERT_NE(text.find(list), std::string::npos);
-    text.replace(text.find(list), list.size(), "integrators = [\"dopri5\", \"my/my_dopri5.toml\"]");
-    std::ofstream(suite / f) << text;
-  }
+  write_renamed_method(suite, "dopri5");
+  set_suite_integrators(suite, "[\"dopri5\", \"my/my_dopri5.toml\"]");
   const fs::path out = fs::temp_directory_path() / ("profile_mf_" + std::to_string(getpid()));
   fs::remove_all(out);
   std::string o, e;
@@ -337,27 +348,8 @@ TEST(Profile, AMethodFileGivenByPathIsProfiledUnderItsName) {
 // problem; an edited file makes the next run refuse, naming the file, and --force reruns.
 TEST(Profile, AMethodFileSuiteIsReusedUntilAFileChanges) {
   const fs::path suite = tiny_suite("reuse_files");
-  fs::create_directories(suite / "my");
-  for (const char* m : {"dopri5", "bs3"}) {
-    std::string text;
-    for (const auto& [file, body] : embedded_method_files())
-      if (file == std::string(m) + ".toml") text = std::string(body);
-    const std::string key = "name = \"" + std::string(m) + "\"";
-    ASSERT_NE(text.find(key), std::string::npos) << m;
-    text.replace(text.find(key), key.size(), "name = \"my_" + std::string(m) + "\"");
-    std::ofstream(suite / "my" / ("my_" + std::string(m) + ".toml")) << text;
-  }
-  for (const char* f : {"01_oscillator.toml", "02_decay.toml"}) {
-    std::ifstream in(suite / f);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    std::string text = ss.str();
-    const std::string list = "integrators = [\"dopri5\", \"bs3\"]";
-    ASSERT_NE(text.find(list), std::string::npos);
-    text.replace(text.find(list), list.size(),
-                 "integrators = [\"my/my_dopri5.toml\", \"my/my_bs3.toml\"]");
-    std::ofstream(suite / f) << text;
-  }
+  for (const char* m : {"dopri5", "bs3"}) write_renamed_method(suite, m);
+  set_suite_integrators(suite, "[\"my/my_dopri5.toml\", \"my/my_bs3.toml\"]");
   const fs::path out = fs::temp_directory_path() / ("profile_reuse_" + std::to_string(getpid()));
   fs::remove_all(out);
   const auto profile = [&](std::vector<std::string> extra, std::string* o, std::string* e) {
