@@ -87,6 +87,10 @@ void record_timeout(RunResult& r, const std::string& what, double t_goal) {
 
 long fault_count() { return g_faults.load(); }
 
+void count_row_timeout() {
+  if (!t_timeouts_expected) ++g_faults;
+}
+
 ExpectedTimeouts::ExpectedTimeouts() : previous_(t_timeouts_expected) {
   t_timeouts_expected = true;
 }

@@ -75,6 +75,9 @@ RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOp
 // evaluation and each step). This counts the runs that ended with error or timeout in this
 // process; the command line exits with kExitRowsFailed (3) when it is not zero.
 long fault_count();
+// A row that stopped at its wall-clock limit outside run_* (one method's region or analysis,
+// whose rows make no run): counted like a run that ended with status timeout.
+void count_row_timeout();
 
 // Timeouts on this thread while an ExpectedTimeouts lives are an outcome the caller planned for
 // (`recommend` gives each setting a share of its budget and reports a setting cut short as

@@ -1,5 +1,7 @@
 #include "core/linear_stability.hpp"
 
+#include "core/run_control.hpp"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
@@ -570,6 +572,16 @@ RationalForm runge_kutta_rational_form(const Mat& a, const Vec& b) {
   return r;
 }
 
+double rational_modulus(const RationalForm& r, std::complex<double> z) {
+  auto horner = [z](const Polynomial& c) {
+    cd v = 0.0;
+    for (auto it = c.rbegin(); it != c.rend(); ++it) v = v * z + *it;
+    return v;
+  };
+  const double m = std::abs(horner(r.p) / horner(r.q));
+  return std::isfinite(m) ? m : kInf;
+}
+
 Polynomial imaginary_axis_polynomial(const RationalForm& r) {
   std::vector<ld> f, bound;
   ray_polynomial(r, cd(0.0, 1.0), f, bound);
@@ -687,17 +699,24 @@ std::vector<std::vector<std::complex<double>>> region_boundary(const LinearStabi
   }
   if (!s.amplification || n < 2) return lines;
 
-  // Marching squares on φ(z) = amplification(z) − 1 (poles and NaN count as +1: outside).
+  // Marching squares on φ(z) = |R(z)| − 1 (poles and NaN count as +1: outside). One-step
+  // methods evaluate their rational form R = P/Q (formed once: two Horner sums per point, where
+  // the amplification solves an s×s system); the others their amplification.
   const double dx = (re_max - re_min) / n, dy = (im_max - im_min) / n;
   auto at = [&](int i, int j) { return cd(re_min + i * dx, im_min + j * dy); };
+  const std::function<double(cd)> modulus =
+      s.rational ? std::function<double(cd)>([r = *s.rational](cd z) { return rational_modulus(r, z); })
+                 : s.amplification;
   auto phi = [&](cd z) {
-    const double v = s.amplification(z) - 1.0;
+    const double v = modulus(z) - 1.0;
     return std::isfinite(v) ? std::min(v, 1.0) : 1.0;
   };
   std::vector<double> grid(static_cast<std::size_t>((n + 1) * (n + 1)));
   auto g = [&](int i, int j) -> double& { return grid[static_cast<std::size_t>(j * (n + 1) + i)]; };
-  for (int j = 0; j <= n; ++j)
+  for (int j = 0; j <= n; ++j) {
+    poll_run_control();  // a large tableau or grid stops at an interrupt or --max-wall
     for (int i = 0; i <= n; ++i) g(i, j) = phi(at(i, j));
+  }
 
   // Crossing on the edge between two grid nodes, refined by bisection on φ.
   auto crossing = [&](cd za, double fa, cd zb) {
@@ -806,6 +825,7 @@ bool a_stable_on_samples(const LinearStability& s, double r, int n) {
   if (!s.amplification) return false;
   auto ok = [&](cd z) { return s.amplification(z) <= 1.0 + stability_tolerance; };
   for (int j = 0; j < n; ++j) {
+    poll_run_control();
     const double im = -r + 2.0 * r * j / (n - 1);
     if (!ok(cd(0.0, im))) return false;
     for (int i = 0; i < n; ++i)

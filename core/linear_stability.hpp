@@ -116,6 +116,8 @@ double spectral_radius_2x2(double p, double q, double r, double s);
 
 // R = P/Q of a Runge–Kutta stage matrix and weights (Rosenbrock: A = α + Γ).
 RationalForm runge_kutta_rational_form(const Mat& a, const Vec& b);
+// |P(z)/Q(z)| by Horner sums (+∞ at a pole or on overflow).
+double rational_modulus(const RationalForm& r, std::complex<double> z);
 
 // Constructors from coefficients.
 LinearStability tableau_stability(const ButcherTableau& t);
@@ -193,7 +195,8 @@ StepLimit predicted_step_limit(const LinearStability& s,
 
 // The boundary |amplification(z)| = 1 inside a box of the complex plane, as polylines
 // (marching squares on an n×n grid, refined by bisection on each crossed grid edge; for
-// multistep methods the sampled boundary locus clipped to the box).
+// multistep methods the sampled boundary locus clipped to the box). Polls run control once per
+// grid row (throws Interrupted or WallLimitExceeded, core/run_control.hpp).
 std::vector<std::vector<std::complex<double>>> region_boundary(const LinearStability& s,
                                                                double re_min, double re_max,
                                                                double im_min, double im_max,

@@ -1,6 +1,7 @@
 #include "core/method_analysis.hpp"
 
 #include "core/additive_conditions.hpp"
+#include "core/run_control.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -102,6 +103,7 @@ std::vector<OrderCondition> conditions_from(const MatL& multi, const MatL& singl
   for (std::size_t i = 0; i < trees.size(); ++i) {
     const RootedTree& t = trees[i];
     if (t.order > max_order) break;
+    poll_run_control();  // a large tableau stops at an interrupt or --max-wall
     VecL v = VecL::Ones(s);
     if (t.children.size() == 1)
       v = single * phi[static_cast<std::size_t>(t.children[0])];
@@ -362,6 +364,7 @@ std::vector<OrderCondition> rosenbrock_w_conditions(const RosenbrockTableau& t, 
   for (std::size_t i = 0; i < trees.size(); ++i) {
     const WTree& tree = trees[i];
     if (tree.order > max_order) break;
+    poll_run_control();
     VecL v = VecL::Ones(s);
     if (tree.w_root)
       v = gamma * phi[static_cast<std::size_t>(tree.children[0])];

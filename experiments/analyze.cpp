@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <iostream>
 #include <limits>
 #include <memory>
 #include <ostream>
 #include <set>
 #include <sstream>
 
+#include "core/driver.hpp"
+#include "core/run_control.hpp"
 #include "experiments/catalog.hpp"
 
 namespace stiffbench {
@@ -171,7 +174,18 @@ AnalyzeResult run_analyze(const AnalyzeSpec& spec) {
 #pragma omp parallel for schedule(dynamic)
   for (std::size_t k = 0; k < names.size(); ++k) {
     try {
+      const RowClock clock;  // each method is a row for --max-wall
       rows[k] = analyze_object(infos[k], *integs[k], spec.points);
+    } catch (const WallLimitExceeded& e) {
+      AnalyzedMethod m;
+      m.integrator = infos[k].name;
+      m.family = to_string(infos[k].family);
+      m.stopped = true;
+      count_row_timeout();
+      m.analysis.name = infos[k].name;
+      m.analysis.claimed_order = infos[k].order;
+      m.analysis.notes.push_back(std::string("stopped: ") + e.what());
+      rows[k] = {std::move(m)};
     } catch (...) {
       failed[k] = std::current_exception();
     }
@@ -180,7 +194,12 @@ AnalyzeResult run_analyze(const AnalyzeSpec& spec) {
     if (e) std::rethrow_exception(e);
   AnalyzeResult res;
   for (auto& r : rows)
-    for (auto& m : r) res.methods.push_back(std::move(m));
+    for (auto& m : r) {
+      if (m.stopped)
+        std::cerr << "warning: analysis of " << m.integrator
+                  << " stopped: " << m.analysis.notes.back() << "\n";
+      res.methods.push_back(std::move(m));
+    }
   return res;
 }
 
@@ -307,7 +326,7 @@ std::vector<std::string> stability_row(const AnalyzedMethod& m,
                                  columns.begin())] = std::move(value);
   };
   set("integrator", m.integrator);
-  set("kind", kNotCoefficientDefined);
+  set("kind", m.stopped ? "stopped" : kNotCoefficientDefined);
   set("stages", m.analysis.stages ? std::to_string(m.analysis.stages) : "");
   set("claimed_order", m.analysis.claimed_order ? std::to_string(m.analysis.claimed_order) : "");
   set("a_stable", m.a_stable ? yes_no(*m.a_stable) : "");

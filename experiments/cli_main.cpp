@@ -63,16 +63,22 @@ void add_run_limits(CLI::App& app) {
     writes.push_back(k.name);
   }
   for (const auto& name : builds_models) {
-    if (auto* sub = app.get_subcommand(name)) {
+    if (auto* sub = app.get_subcommand(name))
       sub->add_option_function<std::string>(
           "--max-memory", [](const std::string& v) { set_memory_limit(parse_memory_size(v)); },
           "refuse a run whose estimated memory exceeds this (bytes, or with K/M/G/T; default: "
           "the memory available now)");
-      sub->add_option_function<double>(
-          "--max-wall", [](double s) { set_wall_limit(s); },
-          "wall-clock limit of each row in seconds (a run; a stability row's whole bisection): a "
-          "row over it ends with status timeout and the study goes on (default 0: none)");
-    }
+  }
+  // Every command that computes rows: the studies without a model (region, analyze, audit)
+  // too, where a row is one method's analysis.
+  for (const auto& name : writes) {
+    auto* sub = app.get_subcommand(name);
+    if (sub == nullptr || name == "merge") continue;
+    sub->add_option_function<double>(
+        "--max-wall", [](double s) { set_wall_limit(s); },
+        "wall-clock limit of each row in seconds (a run; a stability row's whole bisection; one "
+        "method's region or analysis): a row over it ends with status timeout (region, "
+        "analyze: 'stopped') and the study goes on (default 0: none)");
   }
   for (const auto& name : writes) {
     if (auto* sub = app.get_subcommand(name)) {

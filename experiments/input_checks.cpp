@@ -18,6 +18,12 @@ std::string read_input_file(const std::filesystem::path& path, const std::string
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);  // follows a symlink
   const std::string p = path.string();
+  // The path goes into the run's JSON record and messages: a name that is not UTF-8 (found in a
+  // --methods or suite folder; the command line's own arguments are checked when it starts) is
+  // refused before anything runs, not after the computation.
+  if (!valid_utf8(p))
+    throw BadInput(printable(p) + ": the " + what +
+                   "'s path is not valid UTF-8; rename the file (bytes shown as \\xNN)");
   if (ec || !fs::exists(st)) throw BadInput(p + ": cannot read the " + what + " (no such file)");
   if (fs::is_directory(st)) throw BadInput(p + ": a folder, not a " + what);
   if (!fs::is_regular_file(st))

@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iostream>
 #include <limits>
 #include <map>
 #include <ostream>
 #include <set>
 #include <sstream>
 
+#include "core/driver.hpp"
+#include "core/run_control.hpp"
 #include "experiments/analyze.hpp"
 #include "experiments/catalog.hpp"
 
@@ -169,7 +172,9 @@ RegionResult run_region(const RegionSpec& spec) {
   res.box = spec.box ? *spec.box : fitted_region_box(stab);
   res.methods.resize(names.size());
   const RegionBox b = res.box;
-  // Methods are independent; each evaluates only its own coefficients.
+  std::vector<std::exception_ptr> failed(names.size());
+  // Methods are independent; each evaluates only its own coefficients. Each method is a row
+  // for --max-wall: one over it keeps what it had and says where it stopped.
 #pragma omp parallel for schedule(dynamic)
   for (std::size_t k = 0; k < names.size(); ++k) {
     const LinearStability& s = stab[k];
@@ -178,15 +183,29 @@ RegionResult run_region(const RegionSpec& spec) {
     m.family = family[k];
     m.kind = s.kind;
     m.has_region = static_cast<bool>(s.amplification);
-    if (m.has_region) {
-      m.boundary = region_boundary(s, b.re_min, b.re_max, b.im_min, b.im_max, spec.resolution);
-      m.real_axis = real_axis_limit(s);
-      m.imaginary_axis = imaginary_axis_limit(s);
-      const std::optional<bool> exact = a_stable_exact(s);
-      m.a_stable = exact ? *exact : a_stable_on_samples(s);
+    try {
+      const RowClock clock;
+      if (m.has_region) {
+        m.boundary = region_boundary(s, b.re_min, b.re_max, b.im_min, b.im_max, spec.resolution);
+        m.real_axis = real_axis_limit(s);
+        m.imaginary_axis = imaginary_axis_limit(s);
+        const std::optional<bool> exact = a_stable_exact(s);
+        m.a_stable = exact ? *exact : a_stable_on_samples(s);
+      }
+      m.oscillator = oscillator_limit(s);
+    } catch (const WallLimitExceeded& e) {
+      m.boundary.clear();
+      m.stopped = e.what();
+      count_row_timeout();
+    } catch (...) {
+      failed[k] = std::current_exception();  // an interrupt or an error leaves the loop after it
     }
-    m.oscillator = oscillator_limit(s);
   }
+  for (const auto& e : failed)
+    if (e) std::rethrow_exception(e);
+  for (const auto& m : res.methods)
+    if (!m.stopped.empty())
+      std::cerr << "warning: region of " << m.integrator << " stopped: " << m.stopped << "\n";
   // Methods with the same stability function (heun, midpoint and ralston share R(z) = 1 + z +
   // z²/2) are told apart in the Markdown table, since their curves coincide in the plot.
   std::vector<std::vector<double>> samples(names.size());
@@ -237,6 +256,7 @@ std::string limit_md(const std::optional<AxisLimit>& a, double sign) {
 
 // "exact" when every limit of the row came from polynomial roots, else "sampled".
 std::string limits_how(const RegionMethod& m) {
+  if (!m.stopped.empty()) return "stopped";
   bool exact = m.oscillator.exact;
   if (m.real_axis) exact = exact && m.real_axis->exact;
   if (m.imaginary_axis) exact = exact && m.imaginary_axis->exact;
@@ -259,7 +279,7 @@ Table region_limits_table(const RegionResult& r) {
     t.rows.push_back({m.integrator, m.family, m.kind,
                       m.real_axis ? format_full(signed_limit(*m.real_axis, -1.0)) : "",
                       m.imaginary_axis ? format_full(signed_limit(*m.imaginary_axis, 1.0)) : "",
-                      format_full(signed_limit(m.oscillator, 1.0)),
+                      m.stopped.empty() ? format_full(signed_limit(m.oscillator, 1.0)) : "",
                       m.a_stable ? (*m.a_stable ? "yes" : "no") : "", limits_how(m)});
   }
   return t;
@@ -271,7 +291,8 @@ Table region_limits_markdown_table(const RegionResult& r) {
           {}};
   for (const auto& m : r.methods) {
     t.rows.push_back({m.integrator, kind_md(m), limit_md(m.real_axis, -1.0),
-                      limit_md(m.imaginary_axis, 1.0), limit_md(m.oscillator, 1.0),
+                      limit_md(m.imaginary_axis, 1.0),
+                      m.stopped.empty() ? limit_md(m.oscillator, 1.0) : "-",
                       m.a_stable ? (*m.a_stable ? "yes" : "no") : "-", limits_how(m)});
   }
   return t;
@@ -311,6 +332,10 @@ std::string markdown_report(const RegionResult& r) {
           "step for lie, two of h/2 for strang; the default sub-integrators). The combined "
           "method's amplification is not a function of one h*lambda when the parts do not "
           "commute; `stability` measures its limit on a split model.\n";
+  for (const auto& m : r.methods)
+    if (!m.stopped.empty())
+      os << "\n**" << m.integrator << " stopped** (" << m.stopped
+         << "): no boundary and no limits for it.\n";
   os << "\nFull-precision limits: `region_limits.csv`; metadata: `region.json`.\n";
   return os.str();
 }

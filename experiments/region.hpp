@@ -78,6 +78,9 @@ struct RegionMethod {
   // The first earlier method of the run with the same |R(z)| (to 1e-12 on a fixed set of
   // sample points, so the same region); empty when none.
   std::string same_as;
+  // Empty when complete; otherwise why the method stopped (over --max-wall): its boundary is
+  // then empty and its limits unset.
+  std::string stopped;
 };
 
 struct RegionResult {

@@ -19,8 +19,7 @@ void spec_file_one(std::string_view data);
 // The CSV readers of `plot` and `merge` / `run --resume` (experiments/csv.*).
 void csv_one(std::string_view data);
 // A method file (integrators/method_file.*) with this text. Defined in method_file_target.cpp,
-// which needs the integrator library: replayed by the regression test, not built by
-// scripts/fuzz.sh (whose targets link only the parsers above).
+// which needs the integrator library (scripts/fuzz.sh compiles core/ and integrators/ for it).
 void method_file_one(std::string_view data);
 
 // Throws std::logic_error: a broken invariant found by a target.

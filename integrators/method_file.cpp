@@ -294,7 +294,8 @@ class Reader {
       return x.first.line != y.first.line ? x.first.line < y.first.line
                                           : x.first.column < y.first.column;
     });
-    for (const auto& [pos, k] : order) {
+    for (const auto& entry : order) {
+      const std::string& k = entry.second;  // a named reference: lambdas below capture it
       const toml::node& v = *t->get(k);
       // A value that is no coefficient, or a key of the format (of another kind: the file's own
       // kind's keys were taken as top-level keys by lift_misplaced_keys) whose value does not

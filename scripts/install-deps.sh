@@ -10,7 +10,7 @@ packages=(
   googletest libgtest-dev libgmock-dev libbenchmark-dev
   gnuplot-nox clang-format
   chromium
-  clang libclang-rt-14-dev
+  clang libclang-rt-14-dev libomp-dev
   python3
 )
 

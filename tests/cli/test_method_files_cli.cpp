@@ -202,6 +202,17 @@ TEST(MethodFilesCli, SearchPathInListAndDescribe) {
   EXPECT_NE(bad.err.find((dir / "zz_bad.toml").string() + ":3:"), std::string::npos) << bad.err;
 }
 
+// A method file whose name is not UTF-8, found on the search path: exit 2 before anything runs,
+// the name shown with its bytes escaped (the run's JSON record could not hold it).
+TEST(MethodFilesCli, ANonUtf8FileNameOnTheSearchPathIsBadInput) {
+  const fs::path dir = fresh_dir("methods", "non_utf8");
+  write_heun3(dir, std::string("heun3_\xff.toml"));
+  const auto r = run_cli("--methods " + shell_quote(dir.string()) + " list integrators");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("heun3_\\xff.toml"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("not valid UTF-8"), std::string::npos) << r.err;
+}
+
 TEST(MethodFilesCli, NameClashesAreBadInput) {
   const fs::path dir = fresh_dir("methods", "clash");
   const fs::path rk4 = write_heun3(dir, "rk4.toml", 3, "rk4");

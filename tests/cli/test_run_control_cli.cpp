@@ -193,4 +193,30 @@ TEST(RunControlCli, MaxWallWritesATimeoutRowAndExitsThree) {
   fs::remove_all(d);
 }
 
+// --max-wall on a study without runs: region's rows are methods. radau5's region on a
+// 4000×4000 grid is about 1.6·10⁷ evaluations of R = P/Q (a tenth of a second or more, ten
+// times that under the sanitizers) against a limit of 5 ms: the method is marked stopped (no
+// boundary, no limits), the tables are written, exit 3.
+TEST(RunControlCli, MaxWallStopsOneMethodsRegionAndExitsThree) {
+  const fs::path d = fresh_dir("maxwall_region");
+  const fs::path out = d / "out";
+  Child c = spawn({"region", "--integrators", "radau5", "--resolution", "4000", "--box",
+                   "-8,8,-8,8", "--max-wall", "0.005", "--out", out.string()},
+                  d);
+  ASSERT_GT(c.pid, 0);
+  EXPECT_EQ(wait_exit(c.pid), 3) << slurp(c.err);
+  EXPECT_NE(slurp(c.err).find("region of radau5 stopped"), std::string::npos) << slurp(c.err);
+  const std::string limits = slurp(out / "region_limits.csv");
+  std::istringstream csv(limits);
+  std::string line;
+  std::getline(csv, line);
+  std::vector<std::string> rows;
+  while (std::getline(csv, line)) rows.push_back(line);
+  ASSERT_EQ(rows.size(), 1u) << limits;
+  EXPECT_EQ(rows[0].rfind("radau5,", 0), 0u) << rows[0];
+  EXPECT_NE(rows[0].find(",stopped"), std::string::npos) << rows[0];
+  EXPECT_NE(slurp(out / "region.md").find("radau5 stopped"), std::string::npos);
+  fs::remove_all(d);
+}
+
 }  // namespace

@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "core/linear_stability.hpp"
+#include "core/run_control.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {
@@ -127,6 +128,42 @@ TEST(LinearStability, RegionBoundaryLiesOnUnitModulus) {
   EXPECT_LT(best_imag, 0.05);
   // The rk4 region is one closed curve (chained by the marching squares into few polylines).
   EXPECT_LE(lines.size(), 4u);
+}
+
+// The grid evaluates R = P/Q (Horner) where a rational form exists. Independent check: the same
+// boundary traced on the amplification alone (an s×s complex solve per point, the rational form
+// removed) lies on the same curve, for implicit methods with poles in the box too. (Not for
+// Gauss methods: their boundary is the imaginary axis, where |R| − 1 is round-off of either
+// sign, so the traced segments there are noise in both evaluations.)
+TEST(LinearStability, RegionFromTheRationalFormMatchesTheStageSolve) {
+  for (const std::string name : {"radau5", "esdirk43", "sdirk2", "rk4", "dopri5"}) {
+    const auto with = stability_of(name);
+    ASSERT_TRUE(with.rational.has_value()) << name;
+    auto without = with;
+    without.rational.reset();
+    const auto a = region_boundary(with, -8, 8, -8, 8, 160);
+    const auto b = region_boundary(without, -8, 8, -8, 8, 160);
+    ASSERT_EQ(a.size(), b.size()) << name;
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      ASSERT_EQ(a[k].size(), b[k].size()) << name;
+      for (std::size_t i = 0; i < a[k].size(); ++i)
+        EXPECT_LT(std::abs(a[k][i] - b[k][i]), 1e-9) << name;
+    }
+    // and each point is on |R| = 1 by the stage solve
+    for (const auto& line : a)
+      for (const auto& z : line) EXPECT_NEAR(with.amplification(z), 1.0, 1e-8) << name;
+  }
+}
+
+// A row past its wall-clock limit stops the grid at its next row (core/run_control.hpp): the
+// clock is started with a limit already passed, so nothing here depends on speed.
+TEST(LinearStability, RegionBoundaryStopsWhenTheRowClockExpired) {
+  const auto radau = stability_of("radau5");
+  const RowClock clock(1e-9);
+  while (!RowClock::expired()) {
+  }
+  EXPECT_THROW(region_boundary(radau, -8, 8, -8, 8, 100), WallLimitExceeded);
+  EXPECT_THROW(a_stable_on_samples(radau), WallLimitExceeded);
 }
 
 // Step map of a registered integrator on m x'' + γ x' + k x = 0, measured by stepping from the
