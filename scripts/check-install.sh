@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Checks stiffbench as a package a separate project uses (issue 11):
+# Checks stiffbench as a package a separate project uses:
 #  1. `cmake --install BUILD_DIR` into a fresh temporary prefix;
 #  2. examples/user_system configured against it with find_package (CMAKE_PREFIX_PATH=prefix),
 #     built (Release) and run in a temporary working folder; both CSVs must exist with data rows

@@ -1,5 +1,5 @@
 // The energy-drift experiment (experiments/energy.hpp): closed forms on the harmonic
-// oscillator, the Kepler numbers of issue 9, the sampler's max-since-last rows, failures and
+// oscillator, the Kepler acceptance numbers, the sampler's max-since-last rows, failures and
 // bad input, the output files (the command line: tests/cli/test_energy_cli.cpp).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -51,7 +51,7 @@ std::string first_line(const std::filesystem::path& p) {
   return line;
 }
 
-// Issue 9's acceptance numbers: Kepler e = 0.5, h = 0.01, 1000 orbits (T = 2π).
+// The acceptance numbers: Kepler e = 0.5, h = 0.01, 1000 orbits (T = 2π).
 // Symplectic methods keep a modified energy exactly up to exponentially small terms, so their
 // energy error is a bounded oscillation reached in the first orbit: growth ≈ 1. rk4 is not
 // symplectic: its error grows linearly (3.0e-6 after 1000 orbits, 3.1e-7 after 100, so growth
