@@ -100,7 +100,7 @@ for csv in convergence/convergence.csv stability/stability.csv energy/energy_sum
 done
 echo "check-install:   user_method: $(tail -n 1 "$log")"
 
-# --- 3. add_subdirectory consumer: the parent keeps its build type, no tests/bench/-Werror
+# --- 3. add_subdirectory consumer: the parent keeps its build type, no tests, benchmarks or -Werror
 consumer="$tmp/consumer"
 mkdir -p "$consumer"
 cat >"$consumer/CMakeLists.txt" <<EOF
