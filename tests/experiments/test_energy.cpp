@@ -240,8 +240,8 @@ TEST(EnergyFailures, BlowUpEndsOneIntegratorOnly) {
   EXPECT_EQ(t.rows.at(1).at(status), "ok");
 }
 
-// energy_summary.csv carries each run's counters after the columns of before (a contract:
-// docs/design.md). An explicit method solves no equations, so its five solver counters are 0;
+// energy_summary.csv carries each run's counters after the original columns (a contract:
+// docs/formats.md). An explicit method solves no equations, so its five solver counters are 0;
 // backward Euler solves one nonlinear system per step, so it makes at least one Newton
 // iteration per step and at least one matrix set-up, and each iteration solves one linear
 // system (the counters are the run's SolveStats, printed as they are).
