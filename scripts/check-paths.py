@@ -5,7 +5,8 @@ Usage: scripts/check-paths.py [--layout] [ROOT]        (ROOT: the repository, de
 
 Without --layout: every repository path cited in a comment of a *.cpp, *.hpp, *.inc, *.cmake,
 CMakeLists.txt, *.sh or *.py file, and anywhere in a Markdown file (text, code blocks and
-relative links), must name a file or folder of the tree. Each missing one is printed as
+relative links), must name a file or folder of the tree, and a Markdown link's #anchor must name
+a heading of the file it points to. Each missing one is printed as
 FILE:LINE: PATH and the exit code is 1.
 
 What counts as a repository path (the allow rule for generated and user paths):
@@ -196,6 +197,21 @@ def path_regex(tops):
 LINK = re.compile(r"\]\(([^)\s]+)\)")
 
 
+def heading_anchors(path, cache={}):
+    """GitHub's anchors of a Markdown file's headings (outside code blocks)."""
+    if path not in cache:
+        anchors, fenced = set(), False
+        with open(path, encoding="utf-8") as fh:
+            for line in fh:
+                if line.startswith("```"):
+                    fenced = not fenced
+                m = None if fenced else re.match(r"#{1,6}\s+(.*?)\s*#*\s*$", line)
+                if m:
+                    anchors.add(re.sub(r"[^\w\- ]", "", m.group(1).lower()).replace(" ", "-"))
+        cache[path] = anchors
+    return cache[path]
+
+
 def resolve(base_dir, prefix, rel):
     p = os.path.normpath(os.path.join(base_dir, prefix + rel)) if prefix else rel
     if p.startswith(".."):
@@ -225,10 +241,15 @@ def check_paths(root, files):
                 cited.append((m.group(0).rstrip(".-"), resolve(base, m.group(1), raw)))
             if f.endswith(".md"):
                 for m in LINK.finditer(chunk):
-                    target = m.group(1).split("#")[0]
-                    if not target or re.match(r"[a-z]+:", target) or target.startswith("/"):
+                    target, _, anchor = m.group(1).partition("#")
+                    if re.match(r"[a-z]+:", target) or target.startswith("/"):
                         continue
-                    cited.append((target, resolve(base, "./", target)))
+                    p = resolve(base, "./", target) if target else f
+                    if target:
+                        cited.append((target, p))
+                    if anchor and p and p.endswith(".md") and p in tree.files and \
+                            anchor not in heading_anchors(os.path.join(root, p)):
+                        missing.append("%s:%d: %s (no such heading)" % (f, line, m.group(1)))
             for shown, p in cited:
                 if p is None:
                     continue
