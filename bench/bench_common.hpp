@@ -93,7 +93,7 @@ std::map<std::string, double>& time_spent();
 // a block of work it times itself (after an untimed warm-up call of its own, so that neither
 // side pays for the other's cache contents), and the per-round ratio time(a) / time(b). A
 // drift of the machine's speed on the scale of seconds (the project's vCPUs: up to 0.6x for
-// minutes, docs/performance.md "Stop 50") changes both sides of a round alike, where the ratio of
+// minutes) changes both sides of a round alike, where the ratio of
 // two rows measured seconds apart takes it whole. Every round's ratio, over all repetitions,
 // is kept under the benchmark's name for the summary (median and bootstrap interval).
 std::map<std::string, std::vector<double>>& paired_ratios();

@@ -1,5 +1,5 @@
 // Implicit solves on `cloth` n = 64 (4,096 points, top edge pinned, no damping), h = 0.01, the
-// workload of issue #10's target table:
+// workload of the summary's target table:
 //   implicit/plain_bw/cloth:64/omp:<t>   the plain Baraff–Witkin step (plain_cloth.hpp), CG at
 //       relative 1e-6: one iteration = the 50 steps from t = 0 to 0.5 (warm start reset at t = 0),
 //       counters s/step, assembly and CG seconds per step, CG iterations per step;

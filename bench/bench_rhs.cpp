@@ -1,11 +1,11 @@
-// Right-hand-side cost per model and size (issue #10, "Benchmarks"): the testbed's
+// Right-hand-side cost per model and size: the testbed's
 // MechanicalSystem::acceleration (the force computation of rhs(), without rhs()'s copy x' = v)
 // on spring_chain, cloth and the SPH scenes; the plain cloth gather (plain_cloth.hpp) on the
 // same cloth; and the SPH neighbour search on its own (models/sph/neighbour_grid.hpp: grid
 // build, and build plus one visit of every neighbour pair within the support radius in cell
 // order — the search a density or force pass does). Each at 1 and 2 OpenMP threads where the
 // thread scaling is asked for. Paired benchmarks (paired_rounds, bench_common.hpp) time
-// issue 29's ratios side by side: a symplectic_euler driver step against the plain cloth
+// the cloth and SPH ratios side by side: a symplectic_euler driver step against the plain cloth
 // gather, the plain 3D SPH gather against the testbed's right-hand side, and the SPH
 // right-hand sides at 1 thread against 2 (paired/sph_threads/..., their speed-ups).
 #include <omp.h>
@@ -121,7 +121,7 @@ void plain_cloth_rhs(benchmark::State& st, long side, int threads) {
   st.counters["threads"] = threads;
 }
 
-// Issue 29's first cloth ratio in interleaved rounds (paired_rounds): a fixed-step driver run of
+// The first cloth ratio in interleaved rounds (paired_rounds): a fixed-step driver run of
 // 20 symplectic_euler steps (after an untimed one-step run), then 4 calls of the plain gather
 // (after an untimed one), on the 512² cloth; the round's ratio is (driver time / 20) / (plain
 // time / 4), the rows' solve/symplectic_euler / rhs/plain_cloth taken side by side.
@@ -272,7 +272,7 @@ void plain_sph_rhs(benchmark::State& st, const std::string& model, long n_param,
   st.counters["threads"] = threads;
 }
 
-// Issue 29's SPH ratio in interleaved rounds (paired_rounds): 2 calls of the plain 3D gather,
+// The SPH ratio in interleaved rounds (paired_rounds): 2 calls of the plain 3D gather,
 // then 2 of the testbed's right-hand side (each after an untimed call), on the same warm state;
 // the round's ratio is plain time / testbed time, which is the testbed's pairs/s over the
 // peer's (the same pairs). The peer is checked against the testbed as in plain_sph_rhs.
@@ -310,7 +310,7 @@ void paired_sph_peer(benchmark::State& st, const std::string& name, const std::s
   st.counters["threads"] = threads;
 }
 
-// Issue 29's SPH 2-thread speed-ups in interleaved rounds (paired_rounds): 2 calls of the
+// The SPH 2-thread speed-ups in interleaved rounds (paired_rounds): 2 calls of the
 // testbed's right-hand side at 1 thread, pinned to the CPU the benchmark's probe found fastest
 // (as the rhs/ rows' 1-thread loop), then 2 at 2 threads, each after an untimed call; the
 // round's ratio t_1 / t_2 is the speed-up. The rhs/ rows at 1 and 2 threads are timed tens of
@@ -448,11 +448,11 @@ void register_rhs_benchmarks(const Config& cfg) {
             [n = n, t](benchmark::State& st) { plain_cloth_rhs(st, n, t); },
             n < 256 ? kMicrosecond : kMillisecond);
   }
-  // Issue 29's cloth ratio side by side: 10 rounds a repetition (about 1.3 s).
+  // The cloth ratio side by side: 10 rounds a repetition (about 1.3 s).
   add("paired/symplectic_euler_vs_plain_gather/cloth:512/omp:2", [](benchmark::State& st) {
     paired_se_plain(st, "paired/symplectic_euler_vs_plain_gather/cloth:512/omp:2", 2);
   })->Iterations(10);
-  // Construction of the largest cloth (issue #10: "512² cloth in well under 0.3 s").
+  // Construction of the largest cloth (target: a 512² cloth in well under 0.3 s).
   add(
       "build/cloth/n:512/omp:1", [](benchmark::State& st) { cloth_build(st, 512); }, kMillisecond);
   // SPH. sph_dam_break_2d: n across the column width a, 2n² fluid particles (n = 45: 4,050, the
@@ -497,7 +497,7 @@ void register_rhs_benchmarks(const Config& cfg) {
           });
       }
   }
-  // The 3D dam break's plain peer (issue #29) and its RHS with a Verlet-list build at every call;
+  // The 3D dam break's plain peer and its RHS with a Verlet-list build at every call;
   // the peer and the testbed side by side, 6 rounds a repetition (about 2.5 s).
   add("paired/plain_sph_3d_vs_testbed/n:46/omp:2", [](benchmark::State& st) {
     paired_sph_peer(st, "paired/plain_sph_3d_vs_testbed/n:46/omp:2", "sph_dam_break_3d", 46, 5, 2);

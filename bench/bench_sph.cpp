@@ -1,5 +1,5 @@
 // Cost of one SPH right-hand-side evaluation (density pass, forces, neighbour-grid rebuild) on
-// the dam-break and drop scenes, reported per particle ("ns_per_particle", the figure issue #8
+// the dam-break and drop scenes, reported per particle ("ns_per_particle", the figure the PySPH
 // compares with PySPH's 0.34-0.41 µs per particle-step on 2 threads). The thread count is
 // OpenMP's (OMP_NUM_THREADS).
 //

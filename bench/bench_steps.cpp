@@ -1,4 +1,4 @@
-// Per-step cost of integrators (issue #10, "Benchmarks"):
+// Per-step cost of integrators:
 //   step/<integrator>/cloth:<n>/omp:<t>   every fixed-step hand-written integrator, one step() per
 //       iteration after an untimed first step (start-up, workspaces), with counters f/step (the
 //       system's f evaluations per step), overhead = step time / (f/step × time of one
@@ -242,7 +242,7 @@ int arkode_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void* user) {
 
 // ERKStep one step at a time (ARK_ONE_STEP) at a fixed step. SUNDIALS 6.4 treats any table
 // whose last node is c_s = 1 as first-same-as-last and reuses the last stage's f as
-// f(t_{n+1}, y_{n+1}) (llnl/sundials issue #311, fixed in a later release), which is wrong for
+// f(t_{n+1}, y_{n+1}) (llnl/sundials#311, fixed in a later release), which is wrong for
 // classic RK4: from the second step on, it takes 3 evaluations a step and the result differs
 // from RK4 by O(h^2) per step (measured on y' = y, h = 0.1: 1.5e-6 after two steps). So the
 // table below has c_4 = 0.999 instead of 1; the cloth is autonomous, so stage times do not enter
@@ -356,7 +356,7 @@ void peer_rk4(benchmark::State& st, long side, double h, int threads) {
   st.counters["threads"] = threads;
 }
 
-// Issue 29's rk4 ratio measured in interleaved rounds (paired_rounds): each round times k rk4
+// The rk4 ratio measured in interleaved rounds (paired_rounds): each round times k rk4
 // steps, then 4k symplectic_euler steps, each side after one untimed step of its own, each
 // method on its own copy of the warm 512² cloth. The round's ratio is (rk4 time / k) /
 // (4 × symplectic_euler time / 4k), the rows' ratio step/rk4 / (4 × step/symplectic_euler) taken

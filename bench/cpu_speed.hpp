@@ -1,7 +1,7 @@
 // How fast each CPU this process may use runs a fixed arithmetic loop, alone and with all of
 // them busy at once. On a virtual machine the vCPUs need not be equal: on the project's 2-vCPU
 // machine one of them (either) at times runs the same loop at 0.6-0.7x the other's rate, and then
-// no code reaches a 2-thread speed-up above 1.7 (docs/performance.md, "Stop 50"). The summary
+// no code reaches a 2-thread speed-up above 1.7. The summary
 // prints the probe taken before and after the benchmarks; the right-hand-side benchmarks probe
 // just before their timing loop (bench_rhs.cpp, time_on_fastest_cpu) and the summary sets each
 // 2-thread speed-up beside what that probe allowed.

@@ -1,4 +1,4 @@
-// stiffbench_bench: the cost benchmarks of issue #10 in one Google Benchmark program, followed by
+// stiffbench_bench: the cost benchmarks in one Google Benchmark program, followed by
 // a summary of ratios, each of two measurements from this same run (summary.cpp).
 //
 //   stiffbench_bench [--quick] [Google Benchmark flags]

@@ -1,4 +1,4 @@
-// Plain implementations the benchmark compares the testbed with (issue #10, "Targets"): a cloth
+// Plain implementations the benchmark compares the testbed with: a cloth
 // right-hand side and a Baraff–Witkin step written directly over arrays, with no framework
 // between them and the arithmetic. Both read their geometry (points, masses, pins, springs,
 // gravity) from the same MassSpringNetwork the testbed integrates, and use the testbed's state

@@ -1,4 +1,4 @@
-// The plain 3D SPH peer of issue #29: the right-hand side of a weakly compressible SPH fluid
+// The plain 3D SPH peer: the right-hand side of a weakly compressible SPH fluid
 // written directly over arrays, as a straightforward gather with neighbour lists rebuilt from a
 // cell grid at every call. Same kernel and equations as SphFluid (models/sph/sph_fluid.hpp) for
 // the options of the dam-break scenes: Wendland C2 kernel (Wendland 1995) for density and

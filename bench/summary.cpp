@@ -1,4 +1,4 @@
-// The summary printed after the benchmark table: issue #10's target table as ratios of two
+// The summary printed after the benchmark table: the target table as ratios of two
 // measurements from this run, then the per-integrator overheads and allocation counts, the
 // thread scaling of every right-hand side and the side-by-side RK4 figures. A figure whose
 // benchmarks were filtered out or failed prints "n/a" with the reason.
@@ -134,7 +134,7 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
               to_string(MassSpringNetwork::kernel_isa()));
   std::printf("\n");
 
-  // ---- Target table (issue #10, "Targets"; 2 threads).
+  // ---- Target table (2 threads).
   const std::string plain2 = "implicit/plain_bw/cloth:64/omp:2";
   const std::string plain1 = "implicit/plain_bw/cloth:64/omp:1";
   const double plain_step = L.sec(plain2) / 50.0;  // one iteration = 50 steps
@@ -186,8 +186,8 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
   };
   const auto rk_step = [&](int t) { return L.sec(omp("solve/rk4/cloth:512", t)) / 20.0; };
   const auto rhs_ratio = [&](int t) { return se_step(t) / L.sec(omp("rhs/plain_cloth/n:512", t)); };
-  // Issue 29, point 1, from paired rounds (paired_se_plain in bench_rhs.cpp); the rows' ratio,
-  // whose two times are taken seconds apart, stays in the note.
+  // Cloth step against the plain gather, from paired rounds (paired_se_plain in bench_rhs.cpp);
+  // the rows' ratio, whose two times are taken seconds apart, stays in the note.
   const PairedFigure sp_plain = paired("paired/symplectic_euler_vs_plain_gather/cloth:512/omp:2");
   row("cloth 512² symplectic_euler step (driver) / plain gather RHS, paired rounds",
       sp_plain.median, "%.3g", "<= 0.65", sp_plain.median <= 0.65,
@@ -197,8 +197,7 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
           "; plain RHS " + fmt("%.3g", L.sec("rhs/plain_cloth/n:512/omp:2") * 1e3) + " ms" +
           one_thread(rhs_ratio(1), "%.3g") + ")");
   const double springs = L.counter("rhs/cloth/n:512/omp:2", "springs");
-  // Issue 29, "Done when" point 1: >= 4e8 springs/s (its "Why" paragraph mentions 5e8; the
-  // done-when criterion is the target).
+  // Target >= 4e8 springs/s in a symplectic_euler step.
   row("cloth 512² springs/s in a symplectic_euler step", springs / se_step(2), "%.3g", ">= 4e8",
       springs / se_step(2) >= 4e8, "(" + one_thread(springs / se_step(1), "%.3g").substr(2) + ")");
   const auto rk_ratio = [&](int t) { return rk_step(t) / (4.0 * se_step(t)); };
@@ -230,14 +229,14 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
       "(" + one_thread(sph2_us(1), "%.3g").substr(2) + ")");
   const std::string sph3 = "rhs/sph_dam_break_3d/n:46/omp:2";
   const double sph3_ms = L.sec(sph3) * 1e3;
-  // Target 35 ms: issue 29, "Done when" point 2 (the Verlet list reused; a call that rebuilds
+  // Target 35 ms (the Verlet list reused; a call that rebuilds
   // it is rhs_list_build/, shown in the note).
   row("SPH 3D dam break (97,336 particles), one RHS, ms", sph3_ms, "%.3g", "<= 35", sph3_ms <= 35.0,
       "(" + one_thread(L.sec("rhs/sph_dam_break_3d/n:46/omp:1") * 1e3, "%.3g").substr(2) +
           "; with a list build: " +
           fmt("%.3g", L.sec("rhs_list_build/sph_dam_break_3d/n:46/omp:2") * 1e3) + " ms" +
           one_thread(L.sec("rhs_list_build/sph_dam_break_3d/n:46/omp:1") * 1e3, "%.3g") + ")");
-  // Issue 29, point 2: the testbed's pairs/s over the plain 3D gather's (bench/plain_sph.hpp),
+  // The testbed's pairs/s over the plain 3D gather's (bench/plain_sph.hpp),
   // the same pairs (fluid pairs within h) and state, so the ratio of their times.
   const auto sph3_vs_peer = [&](int t) {
     return L.sec(omp("peer/plain_sph_3d/n:46", t)) / L.sec(omp("rhs/sph_dam_break_3d/n:46", t));
@@ -251,7 +250,7 @@ void print_summary(const Results& results, const Config& cfg, double wall_second
           "; plain: " + fmt("%.3g", L.sec("peer/plain_sph_3d/n:46/omp:2") * 1e3) + " ms, " +
           fmt("%.3g", L.counter("peer/plain_sph_3d/n:46/omp:2", "pairs/s")) + " pairs/s" +
           one_thread(sph3_vs_peer(1), "%.3g") + ")");
-  // Issue 29, point 2: the SPH right-hand sides' 2-thread speed-ups, largest size of each.
+  // The SPH right-hand sides' 2-thread speed-ups, largest size of each.
   // From paired rounds (paired_sph_threads in bench_rhs.cpp) when they ran, else from the rows;
   // the rows' speed-up stays in the note.
   for (const char* sph_rhs : {"rhs/sph_dam_break_2d/n:224", "rhs/sph_dam_break_3d/n:46"}) {

@@ -1,4 +1,4 @@
-# Precompiled headers for the library's own targets (issue 29, "Build"): the system headers
+# Precompiled headers for the library's own targets: the system headers
 # nearly every translation unit parses (Eigen's Core and SparseCore, the standard library, and in
 # the experiments and CLI libraries nlohmann/json and CLI11) are parsed once per target instead of
 # once per file. PRIVATE only: nothing reaches the exported targets of the installed package, and

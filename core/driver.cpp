@@ -144,8 +144,8 @@ RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0
   r.h = (opt.t_end - t0) / static_cast<double>(n);
   // The copy and ‖y0‖∞ over OpenMP threads for large states (a cloth 512² state is 12.6 MB).
   // With this and the benchmark's untimed first run, a 20-step symplectic_euler run's steps take
-  // 0.15-0.22 ms more each than direct step() calls, 0.25-0.8 ms before both (2 threads;
-  // docs/performance.md, stop 48).
+  // 0.15-0.22 ms more each than direct step() calls (2 threads; bench/bench_steps.cpp, the
+  // solve/ and step/ rows of scripts/bench.sh).
   copy_state(y0, r.y);
   r.t = t0;
   const double bound = opt.blowup_factor * std::max(1.0, max_norm(y0));

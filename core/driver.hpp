@@ -65,7 +65,7 @@ struct AdaptiveOptions {
 RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOptions& opt,
                        const Observer& observer = {});
 
-// Faults inside a run (issue 14): an exception other than BadInput thrown by the model or the
+// Faults inside a run: an exception other than BadInput thrown by the model or the
 // integrator during run_fixed_step* or run_adaptive (library references included: their
 // callbacks pass it across the C library) ends that run with Status::error and the exception's
 // message (the state is the last one reached) instead of ending the study. NaN or Inf in the

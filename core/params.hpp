@@ -23,7 +23,7 @@ enum class ParamType { real, integer, boolean, text };
 // The valid range of a numeric parameter, checked by resolve_params before any model or
 // integrator is built, and shown by `describe`. A default-constructed Bounds is "not declared":
 // then only finiteness is checked (parameters of models registered from outside the library);
-// every built-in numeric parameter declares one (tests/experiments/test_bad_input_catalogue).
+// every built-in numeric parameter declares one (tests/experiments/test_bad_input_catalogue.cpp).
 class Bounds {
  public:
   Bounds() = default;

@@ -1,4 +1,4 @@
-// Stopping a run from outside (issue 14): a wall-clock limit per row (`--max-wall S`) and an
+// Stopping a run from outside: a wall-clock limit per row (`--max-wall S`) and an
 // interrupt request (SIGINT/SIGTERM in the command line).
 //
 // Both are polled at every f evaluation (OdeSystem counts evaluations at the system boundary,

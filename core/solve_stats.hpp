@@ -51,7 +51,7 @@ struct SolveStats {
   // this order: newton_iters, newton_conv_failures, error_test_failures (rejected steps),
   // linear_setups (matrix assemblies / factorizations), linear_iters (Krylov iterations),
   // fe_evals and fi_evals (calls of the split's explicit and implicit parts). The names are the
-  // columns' names (a contract, docs/design.md).
+  // columns' names (a contract, docs/formats.md).
   static std::vector<std::string> counter_names();
   std::vector<std::string> counter_values() const;
 

@@ -63,7 +63,7 @@ struct Setup {
 Setup make_setup(const std::string& model, const std::vector<std::string>& integrators,
                  const Params& user);
 
-// ---- Sizes and memory (issue 14) -------------------------------------------------------------
+// ---- Sizes and memory -------------------------------------------------------------------------
 // A run is checked before anything is allocated: the model's ModelSize (from its parameters)
 // plus what the integrators add is compared with a size limit (kMaxDimension: Eigen's sparse
 // matrices index with int) and with the memory limit: --max-memory, else the memory the machine
@@ -99,7 +99,7 @@ double memory_limit(std::string* source = nullptr);
 // "1.5 GiB" for messages.
 std::string format_bytes(double bytes);
 
-// ---- Methods as files (issue 25; integrators/method_file.hpp) ----------------------------------
+// ---- Methods as files (integrators/method_file.hpp) ---------------------------------------------
 // Wherever an integrator name is taken (--integrators, solve --integrator, spec files, sweeps), a
 // token that ends in ".toml" or contains '/' is the path of a method file: it is loaded, checked,
 // registered process-wide under the file's `name` and replaced by that name before anything

@@ -1,7 +1,7 @@
 // The model and integrator catalogues as Markdown tables, for the manual's generated sections
 // (docs/models.md, docs/integrators.md) and `stiffbench list models|integrators --format
-// markdown`. A test (tests/test_generated_docs.cpp) regenerates them and fails when the copy
-// checked into docs/ differs.
+// markdown`. A test (tests/experiments/test_generated_docs.cpp) regenerates them and fails when
+// the copy checked into docs/ differs.
 #pragma once
 
 #include <ostream>

@@ -252,7 +252,7 @@ Table energy_table(const EnergyResult& r) {
   return t;
 }
 
-// The columns of before issue 24 first, then the run's counters (docs/design.md).
+// The original contract columns first, then the run's counters (docs/formats.md).
 Table energy_summary_table(const EnergyResult& r) {
   Table t{{"model", "integrator", "h", "t_end", "max_rel_error", "final_rel_error", "drift_rate",
            "growth", "status", "steps", "f_evals", "jac_evals", "lin_solves"},

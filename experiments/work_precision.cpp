@@ -487,8 +487,8 @@ WorkPrecisionRow run_work_precision_setting(const OdeSystem& sys, const std::str
   return work_precision_row(c, points.front(), stream);
 }
 
-// The CSV contract: the columns of before issue 24 first, then the solver counters and the
-// timing spread (docs/design.md, output files).
+// The CSV contract: the original contract columns first, then the solver counters and the
+// timing spread (docs/formats.md, output files).
 Table work_precision_table(const WorkPrecisionResult& res) {
   Table t{{"model", "integrator", "setting", "error", "f_evals", "jac_evals", "lin_solves", "steps",
            "wall_s", "status", "mescd"},

@@ -1,4 +1,4 @@
-// The fuzzed entry points (issue 14): each takes arbitrary bytes, feeds them to one parser of
+// The fuzzed entry points: each takes arbitrary bytes, feeds them to one parser of
 // user input and returns normally when the parser either accepts the input or refuses it with
 // BadInput. Anything else (another exception, a crash, a sanitizer report, a broken invariant
 // checked here) is a defect. The libFuzzer mains (fuzz_*.cpp) call these; so does

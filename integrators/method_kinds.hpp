@@ -1,4 +1,4 @@
-// The kinds of method file (docs/design.md, "Methods as files"), in MethodKind's order: one list
+// The kinds of method file (docs/method-files.md), in MethodKind's order: one list
 // for the method-file reader (integrators/method_file.cpp) and for readers of other TOML files
 // (the spec parser) that must tell a method file apart. Header-only, so that the spec parser,
 // which the fuzz targets build on their own (scripts/fuzz.sh), needs no integrator code.

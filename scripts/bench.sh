@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Builds and runs the cost benchmarks of issue #10 (bench/, target stiffbench_bench; README,
+# Builds and runs the cost benchmarks (bench/, target stiffbench_bench; README,
 # "Performance"). Usage:
 #   scripts/bench.sh [--full] [--build DIR] [stiffbench_bench / Google Benchmark flags ...]
 # Installs the Debian packages the benchmark needs (idempotent: apt is skipped when all are

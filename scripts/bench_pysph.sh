@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The 2D dam break in PySPH and in stiffbench at matched particle counts over the same simulated
-# time (issue #10, "Benchmarks"): prints each one's cost per particle per right-hand-side
+# time: prints each one's cost per particle per right-hand-side
 # evaluation and their ratio. Usage:
 #   scripts/bench_pysph.sh [--t-end T] [--threads N] [--build DIR]
 # Defaults: T = 0.1 s of simulated time, N = 2 OpenMP threads, build folder build-bench.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Build times (issue 29): prints
+# Build times: prints
 #  1. the clean Release build of the libraries and the CLI (the target `stiffbench`, which
 #     depends on every library; tests and benchmarks apart) in a fresh build folder, ccache off
 #     (CCACHE_DISABLE=1): wall and user+sys CPU seconds;

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Determinism (issue 14), on a built tree:
+# Determinism, on a built tree:
 #  1. the same command twice gives byte-identical CSVs apart from the timing columns (wall_s,
 #     wall_s_*, and repeats, whose count follows the measured times): a convergence study, a
 #     work-precision study and a spec sweep;

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Checks stiffbench as a package a separate project uses (issue 11):
+# Checks stiffbench as a package a separate project uses:
 #  1. `cmake --install BUILD_DIR` into a fresh temporary prefix;
 #  2. examples/user_system configured against it with find_package (CMAKE_PREFIX_PATH=prefix),
 #     built (Release) and run in a temporary working folder; both CSVs must exist with data rows
@@ -100,7 +100,7 @@ for csv in convergence/convergence.csv stability/stability.csv energy/energy_sum
 done
 echo "check-install:   user_method: $(tail -n 1 "$log")"
 
-# --- 3. add_subdirectory consumer: the parent keeps its build type, no tests/bench/-Werror
+# --- 3. add_subdirectory consumer: the parent keeps its build type, no tests, benchmarks or -Werror
 consumer="$tmp/consumer"
 mkdir -p "$consumer"
 cat >"$consumer/CMakeLists.txt" <<EOF

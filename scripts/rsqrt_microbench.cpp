@@ -1,4 +1,4 @@
-// The divider lever of issue 29 (docs/performance.md, "Divider-free square roots"): one
+// The divider lever (docs/performance.md, "Mass-spring right-hand side"): one
 // √ and one division per lane (what an SPH pair and a spring cost the divider) against two
 // divider-light forms of the same r = √(r²) and c/r, over 4,096 independent values in L1:
 //   exact     vsqrtpd + vdivpd (ymm), what the kernels compute;

@@ -52,7 +52,7 @@ fi
 echo "profile stiff --quick took $(( $(date +%s) - start )) s"
 "$root/scripts/check-html.sh" "$root/build/profile-quick" profile.html profile.md
 
-# --- Determinism and fuzzing (issue 14): the same command twice and 1 vs 2 threads give
+# --- Determinism and fuzzing: the same command twice and 1 vs 2 threads give
 # identical CSVs (about 20 s); the libFuzzer targets of fuzz/ built with clang (about a minute
 # and a half) and run 30 s each on their seed corpus.
 echo "== Determinism"
@@ -63,7 +63,7 @@ start=$(date +%s)
 echo "fuzzing took $(( $(date +%s) - start )) s"
 # --- end of the determinism and fuzzing block
 
-# --- Slurm smoke test (scripts/slurm-smoke.sh, issue 11): a 4-task job array of
+# --- Slurm smoke test (scripts/slurm-smoke.sh): a 4-task job array of
 # experiments/specs/sweep_spring_chain.toml on a single-node Slurm started on localhost, merged
 # and compared with the unsharded run (about 10 s). Without root (it installs packages and
 # starts daemons) the same comparison with the 4 shards run locally.
@@ -89,7 +89,7 @@ if [ "${STIFFBENCH_SKIP_SANITIZE:-0}" != "1" ]; then
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG"
   (cd "$root/build-sanitize" && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --output-on-failure -j "$jobs")
-  # The whole main job under the sanitizers (issue 14): every experiment kind, the library
+  # The whole main job under the sanitizers: every experiment kind, the library
   # references and the plots of `report --quick`, with LeakSanitizer reporting any leak at exit
   # (ASan's exit code 23 then fails this step; UBSan aborts on the first finding).
   echo "== Leak check: report --quick under ASan + UBSan"

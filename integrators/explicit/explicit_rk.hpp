@@ -20,7 +20,7 @@
 // stage position may be formed in place from the previous one (X_i = X_j + h (r_i - r_j) v +
 // h² Σ_k ((A²)_ik - (A²)_jk) A_k) where that reads no more vectors: rk4's X_3 = X_2 + (h²/4) A_1.
 // For rk4 without damping that is 18 vector streams a step instead of the first-order form's 30,
-// and one write fewer to a buffer it has not read (docs/performance.md, "Stop 49", "Stop 51").
+// and one write fewer to a buffer it has not read.
 // Each of these passes runs inside the evaluation before it (MechanicalSystem::
 // acceleration_in_ranges): on each range of dofs as soon as the system has finished it, while
 // that range's accelerations and stage values are still in cache (MassSpringNetwork: each of its
@@ -46,7 +46,7 @@ class ExplicitRungeKutta final : public Integrator {
   static constexpr Index kParallelEntries = 50000;
   // A chained step (header) runs its two sweeps on two threads from this many dofs: the
   // network's own parallel threshold (2048 points in 3D), so a cloth whose evaluation used two
-  // threads before the chain still does (not measured below it: docs/performance.md, "Stop 54").
+  // threads before the chain still does (a gain below it is not measured).
   static constexpr Index kParallelChainDofs = 6144;
 
   ExplicitRungeKutta(ButcherTableau tableau, std::string description);

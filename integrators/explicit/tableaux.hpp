@@ -7,7 +7,7 @@
 //   embedded pairs      bs3, dopri5, cash_karp, rkf45: b propagates the solution, b_embedded
 //                       gives the error estimate y - ŷ; run fixed-step or adaptively by
 //                       integrators/adaptive/embedded_rk.hpp
-// Their order conditions are checked for both weight rows in tests/test_adaptive.cpp.
+// Their order conditions are checked for both weight rows in tests/integrators/test_adaptive.cpp.
 #pragma once
 
 #include <vector>

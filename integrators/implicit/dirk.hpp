@@ -21,7 +21,8 @@
 //             order 2, embedded order 3, L-stable
 //   esdirk43  ESDIRK4(3)6L[2]SA, the implicit tableau of the ARK4(3)6L[2]SA pair of Kennedy &
 //             Carpenter (2003): γ = 1/4, order 4 (L-stable), embedded order 3 (A-stable)
-// The order conditions of both rows and R(∞) = 0 are checked in tests/test_esdirk_gauss.cpp.
+// The order conditions of both rows and R(∞) = 0 are checked in
+// tests/integrators/test_esdirk_gauss.cpp.
 //
 // f evaluations: stage 1 of a step is f(t, y). Because the method is stiffly accurate, k_s
 // (recovered from the last stage equation, see above) is f(t + h, y⁺) up to the Newton
@@ -40,7 +41,7 @@
 // component's by 1 - hγλ (Shampine's filter, as in Hairer–Wanner IV.8 for radau5). The embedded
 // rows are not L-stable: on y' = λy the raw estimate is (R(hλ) - R̂(hλ)) y, and TR-BDF2's R̂ grows
 // like -(√2/3) hλ (the raw estimate of a stiff component ∝ |hλ|, the filtered one bounded),
-// esdirk43's R̂(∞) = -0.15 (values from the tableaux, tests/test_esdirk_gauss.cpp).
+// esdirk43's R̂(∞) = -0.15 (values from the tableaux, tests/integrators/test_esdirk_gauss.cpp).
 // The shared controller (integrators/adaptive/controller.hpp) runs with k = p̂ + 1. A Newton or
 // linear-solver failure rejects the trial and retries with h/2 (counted in error_test_failures;
 // Newton failures also in newton_conv_failures). The Newton tolerance of a trial (in

@@ -1058,7 +1058,7 @@ void read_ark_pair(const Params& p, Settings& s) {
 // error, in the WRMS norm of the weights 1/(rtol |y| + atol), is below nonlin_conv_coef; ARKODE's
 // defaults (0.1, 3 iterations) leave a stage error near 0.1 rtol. A fixed-step run that is to
 // agree with another implementation of the same tables to round-off needs the iteration
-// converged: rtol=1e-12 atol=1e-14 nonlin_conv_coef=1e-3 max_nonlin_iters=20 (docs/design.md).
+// converged: rtol=1e-12 atol=1e-14 nonlin_conv_coef=1e-3 max_nonlin_iters=20 (docs/splits.md).
 std::vector<ParamSpec> nonlin_specs() {
   return {{"nonlin_conv_coef", ParamType::real, "0.1",
            "Newton stops when its error estimate (WRMS norm with the rtol/atol weights) is below "

@@ -44,7 +44,7 @@
 //
 // Analytic Jacobians (matrix solvers and SPGMR's products) live in one sparse pattern fixed at
 // reset(): the pattern of J plus the whole diagonal (explicit zeros where J has none; without
-// them SUNDIALS 6's SUNMatScaleAddI rebuilds the sparse matrix quadratically, issue #10). Each
+// them SUNDIALS 6's SUNMatScaleAddI rebuilds the sparse matrix quadratically). Each
 // Jacobian callback writes values in place through index maps computed once. On a
 // MechanicalSystem with force Jacobians the values come from force_jacobians(t, x, v, K, D)
 // (J = [[0, I], [K, D]]; K and D kept between calls, one evaluation counted per call); other

@@ -32,7 +32,7 @@
 // velocity Verlet. The initial state should be consistent (g(x_0) = 0, G(x_0) v_0 = 0); the first
 // step makes the state consistent otherwise. Unlike the unconstrained Verlet family, a step
 // allocates (Eigen's sparse products and factorisations of the m × m systems); the allocation
-// test (tests/test_allocations.cpp) runs on unconstrained models, which rattle refuses.
+// test (tests/integrators/test_allocations.cpp) runs on unconstrained models, which rattle refuses.
 #pragma once
 
 #include <memory>

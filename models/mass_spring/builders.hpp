@@ -26,7 +26,7 @@
 //   (i, j)-(i+1, j+1), each feeling F = -β_d A (v̄·n)|v̄·n| n (network.hpp). Starts at rest.
 //   Defaults: 16 × 16, s = 0.1, m = 0.01, k = 12 / 1 / 0.5 (structural / shear / bend), top
 //   edge pinned, g = 1, perturbation 0.003 (3% of s): a soft nondimensional cloth, chosen so
-//   that the convergence study (T = 1, h = 1e-3 … 6.25e-5) is in the asymptotic range
+//   that the reference convergence study (T = 1, h = 1e-3 … 6.25e-5) is in the asymptotic range
 //   of all of euler, heun, rk4, symplectic_euler and velocity_verlet. Measured at the initial
 //   state: ω_max = 71.78 (Lanczos; cheap bound 103.9), so h ω_max = 0.072 at h = 1e-3, and
 //   explicit Euler's growth exp(T h ω²/2) is 13 at h = 1e-3, 1.38 at 1.25e-4 and 1.17 at

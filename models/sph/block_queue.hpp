@@ -6,10 +6,10 @@
 // Why not OpenMP's schedule(dynamic): it gives consecutive blocks to alternating threads, so a
 // pass reads neighbour data (positions, densities, pressures) that the other core wrote in the
 // previous pass, and every such cache line moves between the cores. With equal cores the SPH
-// passes ran 20-25% slower that way than with schedule(static) (docs/performance.md, "Stop
-// 50"). Why not schedule(static): the two vCPUs of the development machine at times differ by
-// up to 1.7x in speed, and equal static shares then wait for the slower one. Here the split
-// follows the cores' speeds and moves only at the segments' tails.
+// passes ran 20-25% slower that way than with schedule(static) (2 threads,
+// bench/bench_sph.cpp). Why not schedule(static): the two vCPUs of the development machine at
+// times differ by up to 1.7x in speed, and equal static shares then wait for the slower one.
+// Here the split follows the cores' speeds and moves only at the segments' tails.
 //
 // The order in which the blocks are processed never affects the results when, as in the SPH
 // passes, each block's outputs depend only on the pass's inputs.

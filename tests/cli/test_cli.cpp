@@ -113,7 +113,7 @@ TEST(Cli, HelpExitsZero) {
   EXPECT_NE(o.out.find("convergence"), std::string::npos);
 }
 
-TEST(Cli, ListIntegratorsShowsAllThirteenWithFamilyAndOrder) {
+TEST(Cli, ListIntegratorsShowsTheClassicalMethodsWithFamilyAndOrder) {
   const Outcome o = run("list integrators");
   ASSERT_EQ(o.code, 0);
   for (const char* row :
@@ -205,7 +205,7 @@ TEST(Cli, ConvergenceWritesContractFiles) {
   std::ifstream f(dir / "convergence.csv");
   std::string header;
   std::getline(f, header);
-  // The contract columns first; the solver counters and the floors after them (issue 24).
+  // The contract columns first; the solver counters and the floors after them.
   EXPECT_EQ(header,
             "model,integrator,order,h,steps,error,observed_order,f_evals,jac_evals,lin_solves,wall_"
             "s,status,newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_"
@@ -250,7 +250,7 @@ std::string join_cells(const std::vector<std::string>& cells) {
   return line;
 }
 
-// Implicit rows of convergence.csv carry their Jacobian and linear-solve counts (issue #3).
+// Implicit rows of convergence.csv carry their Jacobian and linear-solve counts.
 TEST(Cli, ConvergenceRowsOfImplicitMethodsCountJacobiansAndSolves) {
   const auto dir = std::filesystem::temp_directory_path() /
                    (std::string("sb_conv_implicit") + "_" + std::to_string(::getpid()));
@@ -277,7 +277,7 @@ TEST(Cli, ConvergenceRowsOfImplicitMethodsCountJacobiansAndSolves) {
   std::filesystem::remove_all(dir);
 }
 
-// Issue #5's work-precision run on HIRES with the default ladders (h from (t_end - t0)/16000,
+// A work-precision run on HIRES with the default ladders (h from (t_end - t0)/16000,
 // rtol from 1e-5): within every method, sorted by f evaluations, the error at t_end falls.
 // (--repeats only changes the wall-time column, so 1 repeat checks the same numbers.)
 TEST(Cli, WorkPrecisionOnHiresErrorFallsAsWorkRises) {
@@ -292,7 +292,7 @@ TEST(Cli, WorkPrecisionOnHiresErrorFallsAsWorkRises) {
   ASSERT_EQ(o.code, 0) << o.err;
   const auto table = read_csv(dir / "work_precision.csv");
   ASSERT_FALSE(table.empty());
-  // The columns of before issue 24, then the solver counters and the timing spread.
+  // The original contract columns, then the solver counters and the timing spread.
   EXPECT_EQ(join_cells(table.front()),
             "model,integrator,setting,error,f_evals,jac_evals,lin_solves,steps,wall_s,status,mescd,"
             "newton_iters,newton_conv_failures,error_test_failures,linear_setups,linear_iters,fe_"
@@ -369,7 +369,7 @@ TEST(Cli, WorkPrecisionFlagsRowsAtTheReferenceFloorAndPlotRedrawsThem) {
   std::filesystem::remove_all(dir);
 }
 
-// Issue #8: the five SPH scenes are listed, and describe prints every parameter and the
+// The five SPH scenes are listed, and describe prints every parameter and the
 // suggested step.
 TEST(Cli, ListsAndDescribesTheSphScenes) {
   const Outcome l = run("list models");
@@ -386,7 +386,7 @@ TEST(Cli, ListsAndDescribesTheSphScenes) {
     EXPECT_NE(d.out.find(key), std::string::npos) << key;
 }
 
-// Issue 13, "done when" 3: solve on the cavity writes VTK image data frames (one .vti per frame in
+// Solve on the cavity writes VTK image data frames (one .vti per frame in
 // frames.pvd, no trajectory), observables.csv and centreline.csv (y, u: n rows).
 TEST(Cli, SolveCavityWritesImageDataFramesAndCentreline) {
   const auto dir =
@@ -414,7 +414,7 @@ TEST(Cli, SolveCavityWritesImageDataFramesAndCentreline) {
   std::filesystem::remove_all(dir);
 }
 
-// Issue #8, "done when" 2: solve without --h runs at the suggested step, says so, and writes
+// Solve without --h runs at the suggested step, says so, and writes
 // 21 VTK frames (+ CSV copies) and observables.csv with the front, which starts at a = 0.146.
 TEST(Cli, SolveDamBreakWritesFramesAtTheSuggestedStep) {
   const auto dir = std::filesystem::temp_directory_path() /
@@ -449,7 +449,7 @@ TEST(Cli, SolveDamBreakWritesFramesAtTheSuggestedStep) {
   std::filesystem::remove_all(dir);
 }
 
-// Issue #8, "done when" 3, on a smaller drop (12 particles across, so that the sanitizer build
+// Convergence on a smaller drop (12 particles across, so that the sanitizer build
 // stays quick): without --h the study starts at the suggested step, and the last observed orders
 // of heun, rk4 and velocity Verlet are within 0.3 of 2, 4, 2 (measured at the default 20 across:
 // 2.08, 3.96, 2.03).
@@ -492,7 +492,7 @@ TEST(Cli, CvodeOnSphRunsMatrixFree) {
   EXPECT_GT(std::stol(line.substr(line.find('=') + 1)), 0) << line;
 }
 
-// Issue #9, "done when" 2 (regions): the region command writes region.csv in the contract with
+// The region command writes region.csv in the contract with
 // the limits table on stdout (rk4's imaginary-axis limit 2√2 = 2.8284, docs/reference-values.md);
 // an integrator without stability data is bad input naming it.
 TEST(Cli, RegionWritesContractFiles) {
@@ -519,7 +519,7 @@ TEST(Cli, RegionWritesContractFiles) {
   std::filesystem::remove_all(dir);
 }
 
-// Issue #9, adaptive references: the first run computes the cvode_bdf reference and writes
+// Adaptive references: the first run computes the cvode_bdf reference and writes
 // OUT/reference/<hash>.csv, the second says it reuses it; a tolerance with a fixed-step reference
 // and a decreasing --times are bad input naming the flag; --log-outputs writes one row per time.
 TEST(Cli, AdaptiveReferenceCacheAndOutputTimes) {
@@ -566,7 +566,7 @@ TEST(Cli, AdaptiveReferenceCacheAndOutputTimes) {
 
 }  // namespace
 
-// Issue #9, stability limits: the Done-when command writes the stability.csv contract with
+// Stability limits: the command writes the stability.csv contract with
 // ratios near 1 (symplectic Euler: 2/ω_max, docs/reference-values.md) and Euler marked
 // unstable_for_all_h; a malformed --sweep and an unwritable --out are bad input before any run.
 TEST(Cli, StabilityWritesContractFiles) {

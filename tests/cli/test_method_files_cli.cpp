@@ -1,4 +1,4 @@
-// Method files on the command line (issue 25): a path wherever an integrator name is taken
+// Method files on the command line: a path wherever an integrator name is taken
 // (--integrators, solve --integrator, spec files), the search path (--methods DIR,
 // STIFFBENCH_METHOD_PATH) in `list` and `describe`, and bad files (exit 2, one message naming
 // the file). gtest_discover_tests runs every test in its own process, so the registrations of one

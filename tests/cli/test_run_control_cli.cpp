@@ -185,7 +185,7 @@ TEST(RunControlCli, MaxWallWritesATimeoutRowAndExitsThree) {
   while (std::getline(csv, line)) rows.push_back(line);
   ASSERT_EQ(rows.size(), 3u);
   EXPECT_NE(rows[0].find(",ok"), std::string::npos) << rows[0];
-  // 3·10⁵ rk4 steps reach the round-off floor: a real result with status floor (issue 24).
+  // 3·10⁵ rk4 steps reach the round-off floor: a real result with status floor.
   EXPECT_TRUE(rows[1].find(",ok") != std::string::npos ||
               rows[1].find(",floor") != std::string::npos)
       << rows[1];

@@ -8,7 +8,7 @@
 // outside the range must be refused as BadInput naming the key; zero and -1 inside the range
 // must either be refused the same way or give a run whose numbers are honest (status ok means a
 // finite state), never another exception. (2) The command
-// line, on the real binary: tests/cli/test_bad_input_catalogue.cpp.
+// line, on the real binary: tests/cli/test_bad_input_cli.cpp.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 

@@ -1,4 +1,4 @@
-// `stiffbench budget` (issue 27): the grid of configurations, the strain measure against an
+// `stiffbench budget`: the grid of configurations, the strain measure against an
 // independent computation, the equal-total families of XPBD (Macklin et al. 2019), the best
 // configuration at the frame budget, the output files and bad input. Small cloths, few frames;
 // no assertion depends on how long anything took.

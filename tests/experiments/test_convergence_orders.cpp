@@ -1,4 +1,4 @@
-// Issue 24, "Asymptotic orders" and "Per-method ladders": the floor check of convergence and
+// Asymptotic orders and per-method ladders: the floor check of convergence and
 // local-error rows, the order fit over the asymptotic window (NAME_orders.csv) and the
 // per-method ladder's probe.
 #include <gtest/gtest.h>
@@ -118,7 +118,7 @@ TEST(OrderFit, AHigherOrderThanClassicalIsNamed) {
 // away). Theory: the pairwise orders are 1 + log2((h/2 + h0)/(h + h0)), rising monotonically
 // from 0.03 at h = 0.1 to 0.88 at h = 3.9e-4, i.e. towards 1. The fit window (the longest run
 // agreeing within 0.2) is the nearly flat coarse end, far below 1; the reason must call this
-// pre-asymptotic, not a steady order reduction (it did until stop 45).
+// pre-asymptotic, not a steady order reduction.
 TEST(OrderFit, AnApproachTowardsTheClassicalOrderIsNotAnOrderReduction) {
   const double h0 = 0.002;
   std::vector<double> e;
@@ -192,7 +192,7 @@ TEST(OrderFit, EqualPairwiseOrdersBelowTheClassicalOneAreASteadyReduction) {
 // shows this). Theory: the pairwise orders are exactly 2 down to h = 3.9e-4, then log2(2.5) =
 // 1.32 across the crossover h = 3.125e-4, then exactly 1. The window is the order-2 run, but the
 // finest pair gives the classical order: the reason must say the window is pre-asymptotic, not
-// that the method is more accurate than its order (it did until stop 45).
+// that the method is more accurate than its order.
 TEST(OrderFit, TheClassicalOrderAtTheFinestPairMakesTheWindowPreAsymptotic) {
   std::vector<double> e;
   for (int k = 0; k < 11; ++k) {
@@ -226,7 +226,7 @@ TEST(OrderFit, TooFewLevelsAboveTheFloorNamesTheFix) {
 }
 
 // A solver defect is not a floor: errors h^4 plus a Newton-tolerance term N·1e-12 (N = 100·2^k
-// steps, the defect issue 24 describes) rise when h halves from h = 0.1/16 on. The round-off
+// steps, a loose stage solve) rise when h halves from h = 0.1/16 on. The round-off
 // floor N·u is 10⁴ times smaller, so those rows stay ok; the fit over the levels where the
 // pairwise orders agree (h = 0.1 to 0.1/8: 4.00, 4.00, 3.95) is 4, and its reason names the finer
 // levels that leave it (pairwise orders 3.0, -0.08, -0.96).
@@ -288,7 +288,7 @@ TEST(OrderFit, Rk4OnTheOscillatorReachesTheRoundoffFloor) {
 }
 
 // The columns: convergence.csv and local_error.csv keep their contract columns and add the
-// solver counters and the two floors; NAME_orders.csv has exactly the issue's columns; the JSON
+// solver counters and the two floors; NAME_orders.csv has exactly its contract columns; the JSON
 // records the reference check of a numerical reference, which the cache keeps under its own key.
 // The orders table carries the order the coefficients achieve beside the claimed one: rk4 meets
 // Kutta's eight conditions up to order 4 and fails the order-5 tall tree (bᵀA⁴1 = 0 ≠ 1/120),

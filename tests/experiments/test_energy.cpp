@@ -1,5 +1,5 @@
 // The energy-drift experiment (experiments/energy.hpp): closed forms on the harmonic
-// oscillator, the Kepler numbers of issue 9, the sampler's max-since-last rows, failures and
+// oscillator, the Kepler acceptance numbers, the sampler's max-since-last rows, failures and
 // bad input, the output files (the command line: tests/cli/test_energy_cli.cpp).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -51,7 +51,7 @@ std::string first_line(const std::filesystem::path& p) {
   return line;
 }
 
-// Issue 9's acceptance numbers: Kepler e = 0.5, h = 0.01, 1000 orbits (T = 2π).
+// The acceptance numbers: Kepler e = 0.5, h = 0.01, 1000 orbits (T = 2π).
 // Symplectic methods keep a modified energy exactly up to exponentially small terms, so their
 // energy error is a bounded oscillation reached in the first orbit: growth ≈ 1. rk4 is not
 // symplectic: its error grows linearly (3.0e-6 after 1000 orbits, 3.1e-7 after 100, so growth
@@ -240,8 +240,8 @@ TEST(EnergyFailures, BlowUpEndsOneIntegratorOnly) {
   EXPECT_EQ(t.rows.at(1).at(status), "ok");
 }
 
-// energy_summary.csv carries each run's counters after the columns of before (a contract:
-// docs/design.md). An explicit method solves no equations, so its five solver counters are 0;
+// energy_summary.csv carries each run's counters after the original columns (a contract:
+// docs/formats.md). An explicit method solves no equations, so its five solver counters are 0;
 // backward Euler solves one nonlinear system per step, so it makes at least one Newton
 // iteration per step and at least one matrix set-up, and each iteration solves one linear
 // system (the counters are the run's SolveStats, printed as they are).

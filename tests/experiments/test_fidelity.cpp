@@ -78,7 +78,7 @@ TEST(Fidelity, AnalyticCurvesMatchTheClosedForms) {
     EXPECT_NEAR(p.r.phase, std::arg(mu), 1e-10) << p.integrator << " nu " << p.r.nu;
   }
   for (const auto& n : names) EXPECT_EQ(count[n], s.curve_points) << n;
-  // The issue's statements in their own form.
+  // The required statements in their own form.
   for (const auto& p : r.curve) {
     const double nu = p.r.nu;
     if (p.integrator == "backward_euler") {
@@ -168,7 +168,7 @@ TEST(Fidelity, ModesOfTheSpringChainAreItsKnownFrequencies) {
 }
 
 TEST(Fidelity, ClothModesAgreeWithTheCurveWithinFivePercent) {
-  // Issue 27's check on a small cloth (the command runs it on n = 16): each linear mode of a
+  // The mode check on a small cloth (the command runs it on n = 16): each linear mode of a
   // linear method evolves on its own, so the measured damping ratio and frequency of every
   // mode match the analytic curve at ν = hω_k up to the run's nonlinearity (amplitude 1e-7).
   // The defaults load the cloth (gravity, a random perturbation): the model's rest state

@@ -1,5 +1,5 @@
 // Replays the fuzz targets (fuzz/targets.hpp) on their seed corpus and on every input a fuzz
-// run ever found (fuzz/regressions/TARGET/, issue 14) in the normal build, so a fixed crash
+// run ever found (fuzz/regressions/TARGET/) in the normal build, so a fixed crash
 // stays fixed without clang. Each input must be accepted or refused with BadInput; the targets
 // throw std::logic_error on a broken invariant, which fails here.
 #include <gtest/gtest.h>

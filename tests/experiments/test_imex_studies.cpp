@@ -1,4 +1,4 @@
-// Issue 26, "Done when" 1 and 4: the studies on split models.
+// The studies on split models.
 //  - convergence on Kaps' problem (eps = 1e-6, stiff: h/eps >= 3e3 on the whole ladder) with the
 //    IMEX methods: each fitted order is within 0.15 of the classical one, or the study names an
 //    order reduction to the fitted value. Which applies is derived from the tables: a globally

@@ -1,4 +1,4 @@
-// The library face of issue 11: typed parameters, a model registered from outside the library
+// The library face: typed parameters, a model registered from outside the library
 // and run through the CLI entry point cli_main() and the study functions, `describe` of
 // experiments and variable-order methods, and what the run metadata records. gtest_discover_tests
 // runs every test in its own process, so the process-wide registries and command line start

@@ -1,4 +1,4 @@
-// `stiffbench profile` (issue 28): performance and data profiles from hand-made cost tables whose
+// `stiffbench profile`: performance and data profiles from hand-made cost tables whose
 // values are derived by hand below, the cost table from work-precision rows, the suite checks
 // (no per-problem tuning, bad input refused before anything runs) and a tiny suite end to end
 // through the command line. No assertion depends on how long anything took.

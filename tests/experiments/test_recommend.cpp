@@ -1,4 +1,4 @@
-// `stiffbench recommend` (issue 28): the answer is the cheapest row of its own table that meets
+// `stiffbench recommend`: the answer is the cheapest row of its own table that meets
 // the tolerance, the Pareto flags agree with an independent recomputation from the table, bad
 // input is refused before anything runs, and a user's own system gets a recommendation. Small
 // problems and small budgets; no assertion depends on how long anything took (the recomputation

@@ -195,7 +195,7 @@ TEST(ReferenceCache, KeyFollowsTheReferenceSpec) {
   EXPECT_TRUE(run_convergence(s, nullptr).reference_from_cache);
   std::size_t n = 0;
   for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir / "reference")) ++n;
-  // Six references, each beside its check run (10 times tighter, its own key: issue 24's floor
+  // Six references, each beside its check run (10 times tighter, its own key: the floor
   // check of the reference's accuracy).
   EXPECT_EQ(n, 12u);
   fs::remove_all(dir);

@@ -77,7 +77,7 @@ TEST(RegionExperiment, LimitsMatchPublishedValues) {
   EXPECT_EQ(t.rows[3][6], "yes");
 }
 
-// Issue 24: the imaginary-axis limits of the embedded pairs from the roots of |P(iy)|² − 1
+// The imaginary-axis limits of the embedded pairs from the roots of |P(iy)|² − 1
 // (exact rational arithmetic, Python fractions, on the published tableaux): cash_karp
 // |P(iy)|² − 1 = +y⁶/3600 + ..., rkf45 +5y⁶/936 + ... (both 0: unstable next to 0; the sampled
 // search reported 0.1386 and 0.0849), dopri5 −y⁶/1800 + y⁸/1600 − y¹⁰/14400 + y¹²/360000, whose

@@ -1,4 +1,4 @@
-// Faults inside a run (issue 14): a model that throws or returns NaN mid-run, and an integrator
+// Faults inside a run: a model that throws or returns NaN mid-run, and an integrator
 // whose linear solver refuses its matrix, each end their own row with its own status and
 // message, while the other rows of the study complete; the command line exits with 3 when a row
 // ended with status error.

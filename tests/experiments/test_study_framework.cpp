@@ -103,7 +103,7 @@ bool names_key(const std::string& text, const std::string& key) {
 
 }  // namespace
 
-// Issue 23's measure of "declared once": every option key of six or more characters of a
+// The measure of "declared once": every option key of six or more characters of a
 // built-in study is named (as an identifier or as the whole of a string literal; comments and
 // prose in messages do not count) in at most two C++ files under experiments/: its declaration
 // and at most one use. Before the framework, norm_growth was in five files.

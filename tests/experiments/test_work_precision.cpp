@@ -1,4 +1,4 @@
-// Work-precision's timing with spread (issue 24): the bootstrap interval of the median, the
+// Work-precision's timing with spread: the bootstrap interval of the median, the
 // shuffled run order, the counter and timing columns, and the check that repeats reproduce the
 // first run. No assertion here depends on how long anything took.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// No heap allocation inside a step of any hand-written integrator after the first (issue #10):
+// No heap allocation inside a step of any hand-written integrator after the first:
 // malloc, calloc, realloc and operator new (which calls malloc) are replaced in this test binary
 // by versions that count while a CountAllocations scope is alive. glibc's __libc_* entry points
 // do the work. Not built with the sanitizers, which replace the same functions (tests/CMakeLists).
@@ -140,7 +140,7 @@ long sparse_lu_step_allocations(const OdeSystem& sys, const std::string& name) {
 }
 
 // radau5 and gauss6 on their sparse path (linear_solver=sparse_lu) on the cloth 32² (6144
-// unknowns), issue #29; before SparseRefactorLu (Eigen's SparseLU) 82 a step each.
+// unknowns); before SparseRefactorLu (Eigen's SparseLU) 82 a step each.
 TEST(Allocations, NoneInsideSparseImplicitSteps) {
   const int threads = omp_get_max_threads();
   omp_set_num_threads(2);

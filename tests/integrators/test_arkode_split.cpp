@@ -22,7 +22,7 @@ using testing_support::LinearSplit;
 using testing_support::make;
 
 // The settings under which ARKODE's Newton iteration converges far below the comparison's 1e-9
-// (docs/design.md, arkode_imex at a fixed step).
+// (docs/splits.md, arkode_imex at a fixed step).
 const std::vector<std::string> kTight = {"rtol=1e-12", "atol=1e-14", "nonlin_conv_coef=1e-3",
                                          "max_nonlin_iters=20"};
 

@@ -1,4 +1,4 @@
-// Issue 26, "Done when" 2: the hand-written ARK4(3)6L[2]SA (method file ark436l2sa, run by
+// The hand-written ARK4(3)6L[2]SA (method file ark436l2sa, run by
 // ImexArkIntegrator) and ARKODE's ARKStep with the same tables (arkode_imex tables=ark436l2sa) at
 // the same fixed step give the same trajectory. Both solve the same stage equations with Newton
 // iterations converged far below 1e-9 (ours to round-off; ARKODE's with the documented tight

@@ -397,7 +397,7 @@ TEST(BaraffWitkin, AllLinearSolversAgreeOnFreeCloth) {
 namespace stiffbench {
 namespace {
 
-// Regression (review of issue #8): jacobian=auto resolves to matrix-free GMRES for a large model
+// Regression: jacobian=auto resolves to matrix-free GMRES for a large model
 // without a Jacobian (a 12-across SPH drop: 452 unknowns, above the 200 of the dense limit), and
 // it must do so again when the same integrator is reset for a second run (studies reuse one
 // integrator across step sizes). The first version stored the resolved solver back into its

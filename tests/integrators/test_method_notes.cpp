@@ -1,5 +1,5 @@
 // Every built-in integrator carries its method class and literature reference, and `list` /
-// `describe` print them (issue 12, Done-when 3).
+// `describe` print them.
 #include <gtest/gtest.h>
 
 #include <sstream>

@@ -30,7 +30,7 @@ double final_error(const OdeSystem& sys, Integrator& integ, double t_end, double
   return (r.y - exact).cwiseAbs().maxCoeff();
 }
 
-// (a) Issue 24: on Kepler e = 0.5 the stage Newton used to stop after one update (residual below
+// (a) On Kepler e = 0.5 the stage Newton used to stop after one update (residual below
 // 1e-12), and those errors added up over thousands of steps: esdirk43 went 3.65e-12 -> 7.52e-10
 // when h halved from 1.25e-3 to 6.25e-4 (t_end = 2.5), sdirk3 1.24e-8 -> 5.76e-8 from 6.25e-4 to
 // 3.125e-4 (t_end = 5). Now each halving divides the error by about 2^p (theory: global order

@@ -31,7 +31,7 @@ std::vector<std::string> references() {
 class ReferenceTest : public ::testing::TestWithParam<std::string> {};
 
 // Adaptive mode at rtol = 1e-8, atol = 1e-10: the global error of a well-behaved code stays
-// within a modest multiple of the local tolerance; the issue's bound is 100×
+// within a modest multiple of the local tolerance; the required bound is 100×
 // (atol + rtol·max|y|) on problems with exact solutions. The global error grows with the
 // interval (gsl_rk2imp reaches 1.03e-6 on the oscillator at t = 5, measured), so the check
 // is at t = 2: |λ|t ≈ 6 for the Dahlquist problem, a third of an oscillator period.
@@ -131,7 +131,7 @@ TEST(ReferenceFixedStep, AdaptiveOnlyMethodsAreRefusedInStepStudies) {
 // The same CVODE run with dense, band, KLU (sparse) and SPGMR (matrix-free) linear solvers:
 // the linear solver changes only how Newton's systems are solved, so at rtol = 1e-10 the
 // solutions agree to ~1e-8 (the tolerance-driven step sequences differ slightly).
-// On the mass-spring cloth when that model is registered (issue #4), otherwise on HIRES.
+// On the mass-spring cloth when that model is registered, otherwise on HIRES.
 // `velocity` (flexible GMRES preconditioned by the velocity-form solve) joins them on the cloth.
 TEST(ReferenceLinearSolvers, CvodeDenseBandKluSpgmrAgreeOnCloth) {
   const bool cloth = model_registry().find("cloth") != nullptr;
@@ -259,7 +259,7 @@ long library_stat(const std::string& report, const std::string& label) {
   return eq == std::string::npos ? -1 : std::stol(report.substr(eq + 1));
 }
 
-// The SUNDIALS counters map into SolveStats (issue 24): on HIRES (stiff) each solver counter
+// The SUNDIALS counters map into SolveStats: on HIRES (stiff) each solver counter
 // equals the library's own figure as its PrintAllStats table prints it (read independently of
 // the CVodeGet*/ARKStepGet* calls the mapping makes). By construction of a modified Newton
 // iteration with a direct (dense) solver: at least one Newton iteration per step, one linear

@@ -1,5 +1,5 @@
-// The additive split of fluid_2d (split=diffusion: f_E = P[-(u·∇)u + g], f_I = P[νLu + νb];
-// issue 26) and of prothero_robinson (f_E = φ'(t), f_I = λ(y - φ(t))): the parts add up to f,
+// The additive split of fluid_2d (split=diffusion: f_E = P[-(u·∇)u + g], f_I = P[νLu + νb])
+// and of prothero_robinson (f_E = φ'(t), f_I = λ(y - φ(t))): the parts add up to f,
 // split=none leaves f bitwise unchanged, f_I on the Taylor–Green field is the 5-point stencil's
 // eigenvalue times the field, the explicit part's spectrum estimate against dense eigenvalues,
 // and an IMEX run stable far beyond the explicit diffusion limit with the Taylor–Green energy

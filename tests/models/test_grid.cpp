@@ -324,7 +324,7 @@ double cavity_u_min(int n, double* t_steady, double* y_min) {
 // 64 x 64 -0.2123 at y = 0.459 (+0.7%; steady by this criterion at t = 19, 3100 rk4 steps,
 // 6.8 s of CPU), 32 x 32 -0.2069 (-1.9%), 16 x 16 -0.187 (the last two from runs to t = 30): the
 // differences shrink 3.6-fold per halving of Δx (second order). The default suite runs 32 x 32
-// (about 0.5 s); the 64 x 64 case of the issue is the disabled test below (run it with
+// (about 0.5 s); the 64 x 64 case is the disabled test below (run it with
 // --gtest_also_run_disabled_tests --gtest_filter='*Cavity*').
 TEST(Fluid2d, CavityRe100CentrelineMinimumMatchesGhia32) {
   double t_steady = 0, y_min = 0;

@@ -616,7 +616,7 @@ TEST(MassSpringCube, CentreOfMassFallsFreely) {
 // ---------------------------------------------------------------------------------------------
 // Constraints.
 
-// Done-when 3 of the issue: 10,000 velocity Verlet steps of the constrained pendulum chain keep
+// 10,000 velocity Verlet steps of the constrained pendulum chain keep
 // max|C| below 1e-10 (the projection stops at 1e-13 L), and velocities are tangent.
 TEST(MassSpringConstraints, ResidualAfterTenThousandVerletSteps) {
   auto sys = model("pendulum_chain", {"constrained=true"});

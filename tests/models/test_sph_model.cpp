@@ -410,7 +410,7 @@ TEST(SphModel, TankSettlesHydrostatic) {
   EXPECT_NEAR(R, 0.9534, 1e-4);  // an independent Python lattice sum gave 0.95341
 
   // Interior particles (a support radius from the walls and from the free surface): least-
-  // squares line p = A + B y through their pressures: slope within 5% of ρ0 g (the issue's
+  // squares line p = A + B y through their pressures: slope within 5% of ρ0 g (the required
   // criterion; measured 1.034 ρ0 g = 0.986 ρ0 g/R: the lattice gradient deficiency R = 0.953 of
   // the Wendland C2 kernel at support 2.5 Δx steepens the settled profile), and within 5% of
   // ρ0 g/R; the pressure's zero within Δx of H; rms scatter about ρ0 g (H - y)/R below 15% of
@@ -440,7 +440,7 @@ TEST(SphModel, TankSettlesHydrostatic) {
 
   // Probes (Shepard-averaged pressure at depths H/4, H/2, 3H/4 on the centre line): within 5% of
   // ρ0 g (H - y)/R plus the pressure of Δx/2 of water (the uncertainty of H). Against
-  // ρ0 g (H - y) itself they are +9.2%, +11.6%, +8.2%: NOT within the 5% (see the
+  // ρ0 g (H - y) itself they are +9.2%, +11.6%, +8.2%: NOT within the required 5% (see the
   // slope above; the pressure also reaches zero 1.6 mm above the top layer's H).
   for (const auto& probe : f.scene().probes) {
     const double expect = rho0 * g * (H - probe[1]) / R;

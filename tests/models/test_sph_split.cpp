@@ -1,5 +1,5 @@
-// The SPH fluid's additive split (split=viscosity, models/sph/sph_fluid.hpp; issue 26) and its
-// angular momentum (issue 27): the parts add up to f; split=none and the full f of a split model
+// The SPH fluid's additive split (split=viscosity, models/sph/sph_fluid.hpp) and its
+// angular momentum: the parts add up to f; split=none and the full f of a split model
 // are the unsplit right-hand side bit for bit; the parts are bitwise independent of the thread
 // count; a_I is linear in v for Müller's viscosity (positively homogeneous only for Monaghan's);
 // an IMEX run stable at a step where rk4 blows up; angular momentum conserved by the symplectic

@@ -1,4 +1,4 @@
-// Additive splits f = f_E + f_I of the models (OdeSystem::imex_split; issue 26): for every split
+// Additive splits f = f_E + f_I of the models (OdeSystem::imex_split): for every split
 // model and split value the parts add up to f, J_I is the Jacobian of f_I, the counters count
 // each part; the kaps and advection_diffusion exact solutions; the explicit parts' spectrum
 // estimates against dense eigenvalues; split=none leaves the mass-spring right-hand side bitwise

@@ -411,7 +411,7 @@ std::vector<Index> all_components(Index n) {
 // and every linear multistep method (bdf2, and its sdirk2 start) preserves linear invariants,
 // because y_{n+1} - y_n is a combination of f values, each of which sums to zero. Newton's
 // iterates keep it too (1ᵀJ = 0, so 1ᵀ(I - hγJ)⁻¹ = 1ᵀ). What remains is round-off: about
-// 1e-16 per step over the ~250 steps here; the bound is 1e-10, checked at every step.
+// 1e-16 per step over the ~250 steps here; the required bound is 1e-10, checked at every step.
 TEST(StiffProblemsInvariants, RobertsonMassKeptByImplicitIntegrators) {
   auto sys = model("robertson");
   for (const std::string integ : {"sdirk3", "bdf2", "backward_euler"}) {
