@@ -113,7 +113,7 @@ struct KickDriftCoefficients {
 
 // Rosenbrock method in the form of Hairer & Wanner II, §IV.7, (7.4): stage coefficients α
 // (strictly lower), Γ = γI + γ_ij (strictly lower), weights b and optional embedded weights b̂
-// (integrators/implicit/linearly_implicit.hpp runs it; order_defect is implemented there).
+// (integrators/implicit/rosenbrock.hpp runs it; order_defect is implemented there).
 struct RosenbrockTableau {
   std::string name;
   int order = 0;
@@ -130,7 +130,7 @@ struct RosenbrockTableau {
   Index stages() const { return b.size(); }
   Mat gamma_full() const;  // Γ = gamma_lower + γ I
   // Largest |Σ w_i Φ_i(τ) - 1/γ(τ)| over the rooted trees τ with exactly p vertices (the
-  // conditions of HW II §IV.7, see linearly_implicit.hpp). Defined for 1 <= p <= 6.
+  // conditions of HW II §IV.7, see integrators/implicit/rosenbrock.hpp). Defined for 1 <= p <= 6.
   double order_defect(const Vec& weights, int p) const;
 };
 

@@ -23,8 +23,8 @@
 #include "integrators/imex/imex_ark.hpp"
 #include "integrators/implicit/dirk.hpp"
 #include "integrators/implicit/gauss.hpp"
-#include "integrators/implicit/implicit_core.hpp"
 #include "integrators/implicit/radau5.hpp"
+#include "integrators/solvers/newton.hpp"
 #include "integrators/symplectic/composition.hpp"
 
 namespace stiffbench {

@@ -67,7 +67,7 @@
 #include "core/integrator.hpp"
 #include "core/registry_types.hpp"
 #include "core/tableau.hpp"
-#include "integrators/implicit/linearly_implicit.hpp"
+#include "integrators/implicit/rosenbrock.hpp"
 #include "integrators/method_kinds.hpp"
 #include "integrators/symplectic/kick_drift.hpp"
 

@@ -48,7 +48,7 @@
 #include "core/integrator.hpp"
 #include "core/tableau.hpp"
 #include "integrators/adaptive/controller.hpp"
-#include "integrators/implicit/implicit_core.hpp"
+#include "integrators/solvers/newton.hpp"
 
 namespace stiffbench {
 

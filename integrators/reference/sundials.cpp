@@ -27,9 +27,9 @@
 
 #include "core/run_control.hpp"
 #include "core/split_views.hpp"
-#include "integrators/implicit/velocity_form.hpp"
 #include "integrators/method_entry.hpp"
 #include "integrators/reference/callback_guard.hpp"
+#include "integrators/solvers/velocity_form.hpp"
 
 namespace stiffbench {
 

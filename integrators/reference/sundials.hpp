@@ -66,7 +66,7 @@ std::string sundials_library_version();
 // arkode_dirk, arkode_imex): a dense matrix up to kSundialsAutoDenseMax unknowns; above, KLU
 // when the run uses the model's analytic sparse Jacobian (has_jacobian() and jacobian != dq) —
 // for a MechanicalSystem with force Jacobians `velocity` instead: flexible GMRES right-
-// preconditioned by the testbed's velocity-form solve of I - γJ (integrators/implicit/
+// preconditioned by the testbed's velocity-form solve of I - γJ (integrators/solvers/
 // velocity_form.hpp; KLU on the 2n first-order matrix of cloth 64² took 47 s to t = 0.5) —
 // else matrix-free SPGMR (no n² matrix, no n difference quotients per Jacobian).
 // The dense limit is 100: SUNDIALS' own dense LU (2n³/3 flops per setup, no BLAS) is the

@@ -20,7 +20,7 @@
 #include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/explicit/tableaux.hpp"
 #include "integrators/imex/imex_ark.hpp"
-#include "integrators/implicit/linearly_implicit.hpp"
+#include "integrators/implicit/rosenbrock.hpp"
 #include "models/problems/kepler.hpp"
 
 namespace stiffbench {

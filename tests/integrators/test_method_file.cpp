@@ -11,7 +11,7 @@
 #include "core/types.hpp"
 #include "integrators/coefficient_expr.hpp"
 #include "integrators/implicit/dirk.hpp"
-#include "integrators/implicit/linearly_implicit.hpp"
+#include "integrators/implicit/rosenbrock.hpp"
 #include "integrators/method_file.hpp"
 #include "integrators/symplectic/composition.hpp"
 #include "tests/test_support.hpp"

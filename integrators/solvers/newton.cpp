@@ -1,4 +1,4 @@
-#include "integrators/implicit/implicit_core.hpp"
+#include "integrators/solvers/newton.hpp"
 
 #include <algorithm>
 #include <cmath>
