@@ -115,6 +115,23 @@ std::string describe_newton_failure(const NewtonAttempt& a, double tol);
 std::vector<ParamSpec> implicit_param_specs(bool with_newton);
 ImplicitOptions read_implicit_options(const Params& p, bool with_newton);
 
+// The keys every Newton-based method reads alike: newton_tol (> 0) and newton_max_iter (>= 1)
+// when with_iteration, then jacobian and linear_solver. read_implicit_options, gauss's and
+// radau5's readers all take them from here (their ParamSpecs differ only in help texts, the
+// default newton_max_iter and the values they allow).
+struct NewtonOptions {
+  double tol = 1e-15;
+  int max_iter = 10;
+  JacobianSource jacobian = JacobianSource::automatic;
+  LinearSolverKind linear = LinearSolverKind::automatic;
+};
+NewtonOptions read_newton_options(const Params& p, bool with_iteration = true);
+
+// ImplicitCore's options for a method that runs its own (transformed) Newton iteration and uses
+// the core for the Jacobian of the first-order form only, J itself also for mechanical systems
+// (gauss, radau5).
+ImplicitOptions first_order_core_options(JacobianSource jacobian, LinearSolverKind linear);
+
 // nonzeros / n² of the model's Jacobian pattern, or 1 without one (LinearSolverOptions::
 // pattern_density). Evaluated only where automatic_is_dense depends on it (dense_small < n <=
 // dense_max): the default pattern costs one Jacobian evaluation (not counted).
