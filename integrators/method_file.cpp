@@ -11,9 +11,9 @@
 
 #include <toml++/toml.h>
 
-#include "core/additive_conditions.hpp"
-#include "core/method_analysis.hpp"
 #include "core/params.hpp"
+#include "core/theory/additive_conditions.hpp"
+#include "core/theory/method_analysis.hpp"
 #include "core/types.hpp"
 #include "integrators/adaptive/controller.hpp"
 #include "integrators/adaptive/embedded_rk.hpp"
@@ -436,7 +436,7 @@ void read_runge_kutta(const Reader& r, MethodDefinition& m) {
 }
 
 // The first condition a claim of `order` violates (lowest order first, up to order 8), as a
-// message; empty when every condition holds (core/method_analysis.hpp).
+// message; empty when every condition holds (core/theory/method_analysis.hpp).
 std::string violated_claim(const std::vector<OrderCondition>& conditions, int order,
                            const std::string& what) {
   const auto v = first_violated_condition(conditions, std::min(order, 8));
@@ -512,8 +512,8 @@ void read_rosenbrock(const Reader& r, MethodDefinition& m) {
         !d.empty())
       throw BadInput(r.where("embedded_order") + ": key 'embedded_order': " + who + d);
   }
-  // The W-conditions (an arbitrary matrix in place of J; core/method_analysis.hpp), up to the
-  // claim, which cannot exceed the classical order.
+  // The W-conditions (an arbitrary matrix in place of J; core/theory/method_analysis.hpp), up to
+  // the claim, which cannot exceed the classical order.
   t.w_order = r.integer("w_order", false, 0, 1, kMaxWOrder);
   if (t.w_order > m.order)
     r.fail(*r.get("w_order"), "w_order",
@@ -552,7 +552,7 @@ void read_splitting(const Reader& r, MethodDefinition& m) {
     c.order = m.order;
   }
   m.splitting.velocity_independent = r.boolean("velocity_independent", true);
-  // The conditions of the free Lie algebra up to degree 8 (core/method_analysis.hpp,
+  // The conditions of the free Lie algebra up to degree 8 (core/theory/method_analysis.hpp,
   // analyze_kick_drift: for x'' = a(x), without the terms that vanish there).
   if (const std::string d = violated_claim(analyze_kick_drift(c).conditions, m.order, "order");
       !d.empty())

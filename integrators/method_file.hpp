@@ -35,7 +35,7 @@
 //                optional b_embedded/embedded_order — the form of Hairer & Wanner II, §IV.7,
 //                (7.4); or convention = "transformed" with a, c_transformed, m, m_embedded
 //                (HW II (7.24)); optional w_order: the claimed W-order (the order for an
-//                arbitrary matrix in place of J, <= order; core/method_analysis.hpp).
+//                arbitrary matrix in place of J, <= order; core/theory/method_analysis.hpp).
 //   splitting    kick, drift (kick/drift coefficients, run as v += h kick_j a; x += h drift_j v),
 //                or composition = [γ...] (a composition of velocity Verlet steps);
 //                velocity_independent = true|false (default true).
@@ -50,7 +50,7 @@
 //                in neither, with embedded_order (fixed or adaptive steps); stage_order: a claim
 //                about the implicit table (C(q)). Checked: each table's own order conditions
 //                up to `order` (rooted trees up to 8), then the coupling conditions of the pair
-//                up to min(order, 4) (bi-coloured trees, core/additive_conditions.hpp), the
+//                up to min(order, 4) (bi-coloured trees, core/theory/additive_conditions.hpp), the
 //                first violated one named ("coupling condition bE·AI·c = 1/6 (order 3) has
 //                residual ..."); likewise the embedded rows up to embedded_order.
 //
@@ -66,7 +66,7 @@
 
 #include "core/integrator.hpp"
 #include "core/registry_types.hpp"
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 #include "integrators/implicit/rosenbrock.hpp"
 #include "integrators/method_kinds.hpp"
 #include "integrators/symplectic/kick_drift.hpp"

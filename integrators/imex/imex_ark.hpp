@@ -46,7 +46,7 @@
 #include <memory>
 
 #include "core/integrator.hpp"
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 #include "integrators/adaptive/controller.hpp"
 #include "integrators/solvers/newton.hpp"
 
@@ -54,7 +54,7 @@ namespace stiffbench {
 
 class ImexArkIntegrator final : public Integrator {
  public:
-  // The tables are validated by the method-file reader (core/additive_conditions.hpp).
+  // The tables are validated by the method-file reader (core/theory/additive_conditions.hpp).
   ImexArkIntegrator(AdditiveTableau tableau, std::string description, ImplicitOptions opt,
                     ControllerOptions control = {}, bool error_filter = false);
 

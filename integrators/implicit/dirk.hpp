@@ -55,7 +55,7 @@
 #include <vector>
 
 #include "core/integrator.hpp"
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 #include "integrators/adaptive/controller.hpp"
 #include "integrators/solvers/newton.hpp"
 

@@ -63,7 +63,7 @@
 #include <vector>
 
 #include "core/integrator.hpp"
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 #include "integrators/implicit/radau5.hpp"
 #include "integrators/solvers/newton.hpp"
 

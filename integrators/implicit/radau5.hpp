@@ -70,7 +70,7 @@
 #include <string>
 
 #include "core/integrator.hpp"
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 #include "integrators/adaptive/controller.hpp"
 #include "integrators/solvers/newton.hpp"
 #include "integrators/solvers/sparse_refactor_lu.hpp"

@@ -81,7 +81,7 @@ class SemiImplicitEuler final : public Integrator {
   Vec f_, dy_, ft_, rhs_;
 };
 
-// struct RosenbrockTableau (α, Γ, b, b̂ as above) is declared in core/tableau.hpp.
+// struct RosenbrockTableau (α, Γ, b, b̂ as above) is declared in core/theory/tableau.hpp.
 
 // The coefficients the integrator runs on (see above): a = αΓ⁻¹, c = diag(1/γ) - Γ⁻¹ (strictly
 // lower), m = bᵀΓ⁻¹, m̂ = b̂ᵀΓ⁻¹, α_i and γ_i.

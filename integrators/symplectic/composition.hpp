@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 
 namespace stiffbench {
 

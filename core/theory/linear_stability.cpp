@@ -1,4 +1,4 @@
-#include "core/linear_stability.hpp"
+#include "core/theory/linear_stability.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>

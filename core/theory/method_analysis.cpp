@@ -1,6 +1,6 @@
-#include "core/method_analysis.hpp"
+#include "core/theory/method_analysis.hpp"
 
-#include "core/additive_conditions.hpp"
+#include "core/theory/additive_conditions.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
