@@ -49,7 +49,7 @@ void register_explicit_integrators(IntegratorRegistry& reg) {
 void register_symplectic_integrators(IntegratorRegistry& reg) {
   // Kick/drift methods and compositions of velocity Verlet from their files (kick_drift.hpp,
   // composition.hpp).
-  add_methods(reg, MethodKind::splitting);
+  add_methods(reg, MethodKind::kick_drift);
   add_class(reg, PositionVerlet(), {},
             [](const Params&) { return std::make_unique<PositionVerlet>(); });
   add_class(reg, Leapfrog(), {}, [](const Params&) { return std::make_unique<Leapfrog>(); });
