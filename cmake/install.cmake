@@ -26,9 +26,10 @@ install(TARGETS stiffbench RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(FILES ${STIFFBENCH_PLOT_SCRIPTS} DESTINATION ${CMAKE_INSTALL_DATADIR}/stiffbench/plots)
 
 set(_sb_incdir ${CMAKE_INSTALL_INCLUDEDIR}/stiffbench)
+# integrators/reference/sundials/ is internal (its headers include SUNDIALS'): not installed.
 foreach(_layer core models integrators experiments)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${_layer}/ DESTINATION ${_sb_incdir}/${_layer}
-          FILES_MATCHING PATTERN "*.hpp")
+          FILES_MATCHING PATTERN "*.hpp" REGEX "/reference/sundials(/|$)" EXCLUDE)
 endforeach()
 install(FILES ${PROJECT_SOURCE_DIR}/include/stiffbench/stiffbench.hpp DESTINATION ${_sb_incdir})
 install(FILES ${PROJECT_BINARY_DIR}/generated/experiments/build_info.hpp

@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "core/linear_stability.hpp"
 #include "core/ode_system.hpp"
 #include "core/solve_stats.hpp"
+#include "core/theory/linear_stability.hpp"
 
 namespace stiffbench {
 
@@ -120,8 +120,8 @@ class Integrator {
   virtual bool supports_adaptive() const { return false; }
   virtual Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats);
 
-  // The method's linear stability (core/linear_stability.hpp) from its coefficients, with the
-  // parameters it was created with; empty where it has none (variable-order library methods).
+  // The method's linear stability (core/theory/linear_stability.hpp) from its coefficients, with
+  // the parameters it was created with; empty where it has none (variable-order library methods).
   virtual std::optional<LinearStability> linear_stability() const { return std::nullopt; }
 
   // For methods that advance f_E of an additive split explicitly (IMEX Runge–Kutta, operator

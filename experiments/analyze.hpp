@@ -1,5 +1,5 @@
 // What a method's coefficients say about it (`stiffbench analyze`), without running it: the
-// analysis of core/method_analysis.hpp for each integrator, written as tables and a plot.
+// analysis of core/theory/method_analysis.hpp for each integrator, written as tables and a plot.
 //
 // Each integrator is created from the registry with its defaults and its coefficients taken
 // from the integrator itself: a Butcher tableau (kind explicit_rk when A is strictly lower
@@ -32,8 +32,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/linear_stability.hpp"
-#include "core/method_analysis.hpp"
+#include "core/theory/linear_stability.hpp"
+#include "core/theory/method_analysis.hpp"
 #include "experiments/output.hpp"
 #include "experiments/plotting.hpp"
 #include "experiments/study.hpp"

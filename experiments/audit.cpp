@@ -10,9 +10,9 @@
 #include <set>
 #include <sstream>
 
-#include "core/additive_conditions.hpp"
 #include "core/driver.hpp"
-#include "core/method_analysis.hpp"
+#include "core/theory/additive_conditions.hpp"
+#include "core/theory/method_analysis.hpp"
 #include "experiments/catalog.hpp"
 #include "integrators/implicit/dirk.hpp"
 
@@ -671,7 +671,7 @@ AuditRow order_row(const std::string& name, const std::string& check, const Butc
 }
 
 // The same for an additive pair: the conditions of both tables and the coupling ones
-// (core/additive_conditions.hpp) with the weights wE, wI, checked to order 6.
+// (core/theory/additive_conditions.hpp) with the weights wE, wI, checked to order 6.
 AuditRow additive_order_row(const std::string& name, const std::string& check,
                             const AdditiveTableau& t, const Vec& wE, const Vec& wI, int claimed) {
   constexpr int kMax = 6;
@@ -711,7 +711,7 @@ void additive_checks(std::vector<AuditRow>& rows, const std::string& name, const
 }
 
 // A claimed order against the achieved one of a set of conditions (Rosenbrock: the classical
-// conditions of core/method_analysis.hpp to order 8, or the W-conditions to kMaxWOrder): the
+// conditions of core/theory/method_analysis.hpp to order 8, or the W-conditions to kMaxWOrder): the
 // claim must be the order, no more and no less.
 AuditRow conditions_row(const std::string& name, const std::string& check, const std::string& label,
                         const std::vector<OrderCondition>& conditions, int measured, int max_order,

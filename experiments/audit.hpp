@@ -30,7 +30,7 @@
 //     coefficients;
 //   tableau_order, embedded_order, w_order (Rosenbrock methods): the claimed order and embedded
 //     order are exactly those of the Rosenbrock order conditions (rooted trees to order 8,
-//     core/method_analysis.hpp), a claimed W-order exactly that of the W-conditions (an
+//     core/theory/method_analysis.hpp), a claimed W-order exactly that of the W-conditions (an
 //     arbitrary matrix in place of J, to order 6; no claim: skip, with the W-order that holds).
 // A check that does not apply is a row with status `skip` and the reason (a method that needs a
 // spring network, constraints or a grid fluid on a system without one; variable-order library
@@ -46,7 +46,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/ode_system.hpp"
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 #include "experiments/output.hpp"
 #include "experiments/study.hpp"
 

@@ -3,11 +3,11 @@
 // runs.
 //
 // Undamped oscillator x'' = −ω²x at ν = hω. One step maps the mode by the step map's dominant
-// eigenvalue μ = A e^{iθ} (core/linear_stability.hpp: LinearStability::mechanical_multiplier;
-// R(iν) for one-step methods, the largest root of ρ(ζ) − iνσ(ζ) for multistep ones, the 2×2
-// kick/drift matrix's eigenvalue for splittings); the exact flow has μ = e^{iν}. Reported per ν
-// (Hilber, Hughes & Taylor 1977, definitions in OscillatorResponse): amplification A, damping
-// ratio ξ̄ = −ln A/θ, period error ν/θ − 1 and frequency error θ/ν − 1.
+// eigenvalue μ = A e^{iθ} (core/theory/linear_stability.hpp:
+// LinearStability::mechanical_multiplier; R(iν) for one-step methods, the largest root of ρ(ζ) −
+// iνσ(ζ) for multistep ones, the 2×2 kick/drift matrix's eigenvalue for splittings); the exact flow
+// has μ = e^{iν}. Reported per ν (Hilber, Hughes & Taylor 1977, definitions in OscillatorResponse):
+// amplification A, damping ratio ξ̄ = −ln A/θ, period error ν/θ − 1 and frequency error θ/ν − 1.
 //
 //   analytic  from the coefficients, for every method with stability data, on a log grid of ν
 //             from nu_min to nu_max;
@@ -55,8 +55,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/linear_stability.hpp"
 #include "core/params.hpp"
+#include "core/theory/linear_stability.hpp"
 #include "experiments/output.hpp"
 #include "experiments/study.hpp"
 

@@ -1,6 +1,6 @@
 // Linear stability regions (`stiffbench region`): the boundary |R(z)| = 1 of each integrator in
 // the complex plane z = hλ, and its stability limits as numbers, all computed from the method's
-// coefficients (core/linear_stability.hpp), never from a run.
+// coefficients (core/theory/linear_stability.hpp), never from a run.
 //
 //   Runge–Kutta (explicit and DIRK) and Rosenbrock: the contour |R(z)| = 1 of
 //     R(z) = 1 + z bᵀ(I − zA)⁻¹1, traced by marching squares on a resolution × resolution grid
@@ -18,7 +18,7 @@
 // Euler, heun, cash_karp and rkf45; inf when stable on the whole axis), the oscillator limit on
 // hω (inf: unconditionally stable), and A-stability (exact for R = P/Q, a_stable_exact; BDF2 on
 // samples of the left half-plane, a_stable_on_samples). The limits are exact for every method with
-// R = P/Q (the roots of |P|² − |Q|² along the axis, core/linear_stability.hpp) and for the
+// R = P/Q (the roots of |P|² − |Q|² along the axis, core/theory/linear_stability.hpp) and for the
 // splittings' oscillator limit (their half-trace polynomial); BDF2's are from the sampled search.
 // Column `limits` says which (exact | sampled).
 //
@@ -37,7 +37,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/linear_stability.hpp"
+#include "core/theory/linear_stability.hpp"
 #include "experiments/output.hpp"
 #include "experiments/plotting.hpp"
 #include "experiments/study.hpp"

@@ -12,7 +12,7 @@
 #include <sstream>
 
 #include "core/driver.hpp"
-#include "core/linear_stability.hpp"
+#include "core/theory/linear_stability.hpp"
 #include "experiments/catalog.hpp"
 #include "experiments/progress.hpp"
 

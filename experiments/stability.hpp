@@ -56,11 +56,11 @@
 // model's stiffness() estimate ρ placed on the ray of `ray` (auto: the imaginary axis ±iρ for
 // mechanical systems, −ρ for first-order ones), else the eigenvalues of a finite-difference
 // Jacobian (dimension <= dense_limit) — scaled into the method's region
-// (predicted_step_limit of core/linear_stability.hpp; mechanical systems through the oscillator
-// test, which is what kick/drift methods need). Empty where the method has no stability data.
-// The limits are exact (polynomial roots of |P|² − |Q|² for R = P/Q, the half-trace of a
-// splitting; core/linear_stability.hpp) except for multistep methods and splittings on damped
-// modes (sampled). A prediction of 0 means unstable for every h > 0: an undamped (imaginary)
+// (predicted_step_limit of core/theory/linear_stability.hpp; mechanical systems through the
+// oscillator test, which is what kick/drift methods need). Empty where the method has no stability
+// data. The limits are exact (polynomial roots of |P|² − |Q|² for R = P/Q, the half-trace of a
+// splitting; core/theory/linear_stability.hpp) except for multistep methods and splittings on
+// damped modes (sampled). A prediction of 0 means unstable for every h > 0: an undamped (imaginary)
 // eigenvalue and a method whose imaginary-axis limit is 0 (euler, heun, cash_karp, rkf45).
 // A spectrum with a non-finite value (an overflowing stiffness() estimate, a Jacobian with inf
 // or NaN entries) is no spectrum: no prediction (the row's no_prediction says why), never

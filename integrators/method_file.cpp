@@ -11,9 +11,9 @@
 
 #include <toml++/toml.h>
 
-#include "core/additive_conditions.hpp"
-#include "core/method_analysis.hpp"
 #include "core/params.hpp"
+#include "core/theory/additive_conditions.hpp"
+#include "core/theory/method_analysis.hpp"
 #include "core/types.hpp"
 #include "integrators/adaptive/controller.hpp"
 #include "integrators/adaptive/embedded_rk.hpp"
@@ -23,8 +23,8 @@
 #include "integrators/imex/imex_ark.hpp"
 #include "integrators/implicit/dirk.hpp"
 #include "integrators/implicit/gauss.hpp"
-#include "integrators/implicit/implicit_core.hpp"
 #include "integrators/implicit/radau5.hpp"
+#include "integrators/solvers/newton.hpp"
 #include "integrators/symplectic/composition.hpp"
 
 namespace stiffbench {
@@ -47,7 +47,7 @@ bool MethodDefinition::adaptive() const {
       return solver == "radau5";
     case MethodKind::rosenbrock:
       return rosenbrock.b_embedded.size() != 0;
-    case MethodKind::splitting:
+    case MethodKind::kick_drift:
       return false;
     case MethodKind::imex_ark:
       return additive.has_embedded();
@@ -78,7 +78,7 @@ std::vector<std::string> kind_keys(MethodKind k) {
       return {"convention", "gamma",          "alpha", "gamma_offdiag", "b",
               "b_embedded", "embedded_order", "a",     "c_transformed", "m",
               "m_embedded", "w_order"};
-    case MethodKind::splitting:
+    case MethodKind::kick_drift:
       return {"kick", "drift", "composition", "velocity_independent"};
     case MethodKind::imex_ark:
       return {"stage_order", "c", "embedded_order", "explicit", "implicit"};
@@ -437,7 +437,7 @@ void read_runge_kutta(const Reader& r, MethodDefinition& m) {
 }
 
 // The first condition a claim of `order` violates (lowest order first, up to order 8), as a
-// message; empty when every condition holds (core/method_analysis.hpp).
+// message; empty when every condition holds (core/theory/method_analysis.hpp).
 std::string violated_claim(const std::vector<OrderCondition>& conditions, int order,
                            const std::string& what) {
   const auto v = first_violated_condition(conditions, std::min(order, 8));
@@ -513,8 +513,8 @@ void read_rosenbrock(const Reader& r, MethodDefinition& m) {
         !d.empty())
       throw BadInput(r.where("embedded_order") + ": key 'embedded_order': " + who + d);
   }
-  // The W-conditions (an arbitrary matrix in place of J; core/method_analysis.hpp), up to the
-  // claim, which cannot exceed the classical order.
+  // The W-conditions (an arbitrary matrix in place of J; core/theory/method_analysis.hpp), up to
+  // the claim, which cannot exceed the classical order.
   t.w_order = r.integer("w_order", false, 0, 1, kMaxWOrder);
   if (t.w_order > m.order)
     r.fail(*r.get("w_order"), "w_order",
@@ -532,7 +532,7 @@ std::vector<double> to_doubles(const std::vector<long double>& v) {
   return std::vector<double>(v.begin(), v.end());
 }
 
-void read_splitting(const Reader& r, MethodDefinition& m) {
+void read_kick_drift(const Reader& r, MethodDefinition& m) {
   const bool composition = r.has("composition");
   if (composition && (r.has("kick") || r.has("drift")))
     r.fail(*r.get("composition"), "composition",
@@ -553,11 +553,11 @@ void read_splitting(const Reader& r, MethodDefinition& m) {
     c.order = m.order;
   }
   m.splitting.velocity_independent = r.boolean("velocity_independent", true);
-  // The conditions of the free Lie algebra up to degree 8 (core/method_analysis.hpp,
+  // The conditions of the free Lie algebra up to degree 8 (core/theory/method_analysis.hpp,
   // analyze_kick_drift: for x'' = a(x), without the terms that vanish there).
   if (const std::string d = violated_claim(analyze_kick_drift(c).conditions, m.order, "order");
       !d.empty())
-    throw BadInput(r.where("order") + ": key 'order': splitting '" + m.name + "': " + d +
+    throw BadInput(r.where("order") + ": key 'order': kick/drift method '" + m.name + "': " + d +
                    (m.order >= 1 && c.order_defect(1) > 1e-12
                         ? " (the kicks and the drifts must each sum to 1)"
                         : ""));
@@ -721,7 +721,7 @@ std::string default_class(const MethodDefinition& m) {
       return m.solver == "radau5" ? "Radau IIA (RADAU5)" : "implicit RK";
     case MethodKind::rosenbrock:
       return m.rosenbrock.b_embedded.size() != 0 ? "Rosenbrock (embedded pair)" : "Rosenbrock";
-    case MethodKind::splitting:
+    case MethodKind::kick_drift:
       return "splitting";
     case MethodKind::imex_ark:
       return m.additive.has_embedded() ? "IMEX additive RK (embedded pair)" : "IMEX additive RK";
@@ -743,8 +743,8 @@ std::map<std::string, std::string> lift_misplaced_keys(toml::table& root,
   const toml::node* kind_node = root.get("kind");
   for (const auto& name : tables)
     if (const toml::table* t = root[name].as_table(); !kind_node && t) kind_node = t->get("kind");
-  const std::string kind_text =
-      kind_node && kind_node->is_string() ? kind_node->as_string()->get() : std::string();
+  const std::string kind_text(current_method_kind(
+      kind_node && kind_node->is_string() ? kind_node->as_string()->get() : std::string()));
   if (kind_text != "imex_ark") tables = {"constants"};  // the sections are imex_ark's only
   std::vector<std::string> keys = {"name", "kind", "order", "description", "reference", "class"};
   for (std::size_t i = 0; i < kMethodKindNames.size(); ++i)
@@ -851,7 +851,7 @@ std::unique_ptr<Integrator> build(const MethodDefinition& m, const Params& p) {
                                             read_controller_options(p));
       return std::make_unique<Rosenbrock>(m.rosenbrock, m.description,
                                           read_implicit_options(p, false));
-    case MethodKind::splitting:
+    case MethodKind::kick_drift:
       return std::make_unique<KickDriftIntegrator>(m.splitting.kick_drift,
                                                    m.splitting.velocity_independent, m.description);
     case MethodKind::imex_ark:
@@ -891,7 +891,8 @@ MethodDefinition parse_method_file(const std::string& text, const std::string& o
   r.lifted_ = lifted;
   MethodDefinition m;
   m.source = origin;
-  const std::string kind = r.text("kind", true);
+  // kick_drift's old name "splitting" still reads, for one version.
+  const std::string kind(current_method_kind(r.text("kind", true)));
   const auto it =
       std::find_if(kKinds.begin(), kKinds.end(), [&](const auto& k) { return k.first == kind; });
   if (it == kKinds.end()) {
@@ -924,8 +925,8 @@ MethodDefinition parse_method_file(const std::string& text, const std::string& o
     case MethodKind::rosenbrock:
       read_rosenbrock(r, m);
       break;
-    case MethodKind::splitting:
-      read_splitting(r, m);
+    case MethodKind::kick_drift:
+      read_kick_drift(r, m);
       break;
     case MethodKind::imex_ark:
       read_imex_ark(r, m);
@@ -964,7 +965,7 @@ std::vector<ParamSpec> method_param_specs(const MethodDefinition& m) {
       for (ParamSpec& s : implicit_param_specs(false)) specs.push_back(std::move(s));
       return specs;
     }
-    case MethodKind::splitting:
+    case MethodKind::kick_drift:
       return {};
     case MethodKind::imex_ark:
       return m.adaptive() ? esdirk_param_specs(false) : implicit_param_specs(true);

@@ -2,8 +2,9 @@
 // repository, compiled into the library; a user's own anywhere). The format:
 //
 //   name = "heun3"                    # [a-z0-9_]+, unique among the registered integrators
-//   kind = "explicit_rk"              # explicit_rk | dirk | irk | rosenbrock | splitting |
-//   imex_ark order = 3                         # claimed; every order condition up to it must hold
+//   kind = "explicit_rk"              # explicit_rk | dirk | irk | rosenbrock | kick_drift |
+//                                     # imex_ark (kick_drift's old name "splitting" still reads)
+//   order = 3                         # claimed; every order condition up to it must hold
 //   stage_order = 1                   # optional claim (C(q))
 //   description = "..."               # what `list integrators` prints
 //   reference = "..."                 # authors, venue, year
@@ -35,8 +36,8 @@
 //                optional b_embedded/embedded_order — the form of Hairer & Wanner II, §IV.7,
 //                (7.4); or convention = "transformed" with a, c_transformed, m, m_embedded
 //                (HW II (7.24)); optional w_order: the claimed W-order (the order for an
-//                arbitrary matrix in place of J, <= order; core/method_analysis.hpp).
-//   splitting    kick, drift (kick/drift coefficients, run as v += h kick_j a; x += h drift_j v),
+//                arbitrary matrix in place of J, <= order; core/theory/method_analysis.hpp).
+//   kick_drift   kick, drift (kick/drift coefficients, run as v += h kick_j a; x += h drift_j v),
 //                or composition = [γ...] (a composition of velocity Verlet steps);
 //                velocity_independent = true|false (default true).
 //   imex_ark     an additive (implicit-explicit) Runge-Kutta method (integrators/imex/imex_ark.hpp)
@@ -50,7 +51,7 @@
 //                in neither, with embedded_order (fixed or adaptive steps); stage_order: a claim
 //                about the implicit table (C(q)). Checked: each table's own order conditions
 //                up to `order` (rooted trees up to 8), then the coupling conditions of the pair
-//                up to min(order, 4) (bi-coloured trees, core/additive_conditions.hpp), the
+//                up to min(order, 4) (bi-coloured trees, core/theory/additive_conditions.hpp), the
 //                first violated one named ("coupling condition bE·AI·c = 1/6 (order 3) has
 //                residual ..."); likewise the embedded rows up to embedded_order.
 //
@@ -66,14 +67,22 @@
 
 #include "core/integrator.hpp"
 #include "core/registry_types.hpp"
-#include "core/tableau.hpp"
-#include "integrators/implicit/linearly_implicit.hpp"
+#include "core/theory/tableau.hpp"
+#include "integrators/implicit/rosenbrock.hpp"
 #include "integrators/method_kinds.hpp"
 #include "integrators/symplectic/kick_drift.hpp"
 
 namespace stiffbench {
 
-enum class MethodKind { explicit_rk, dirk, irk, rosenbrock, splitting, imex_ark };
+enum class MethodKind {
+  explicit_rk,
+  dirk,
+  irk,
+  rosenbrock,
+  kick_drift,
+  imex_ark,
+  splitting = kick_drift  // the old name of kick_drift, kept for one version
+};
 std::string to_string(MethodKind k);
 
 struct MethodDefinition {
@@ -85,7 +94,7 @@ struct MethodDefinition {
   std::string solver;                   // irk: "" (ImplicitRungeKutta) or "radau5"
   ButcherTableau tableau;               // explicit_rk, dirk, irk (validated, c completed)
   RosenbrockTableau rosenbrock;         // rosenbrock
-  KickDriftScheme splitting{{}, true};  // splitting
+  KickDriftScheme splitting{{}, true};  // kick_drift
   AdditiveTableau additive;             // imex_ark (validated, c completed)
   // Fixed and adaptive steps (embedded weights), or fixed only.
   bool adaptive() const;

@@ -7,8 +7,9 @@
 #include "integrators/graphics/projective_dynamics.hpp"
 #include "integrators/graphics/xpbd.hpp"
 #include "integrators/implicit/baraff_witkin.hpp"
+#include "integrators/implicit/bdf2.hpp"
 #include "integrators/implicit/dirk.hpp"
-#include "integrators/implicit/linearly_implicit.hpp"
+#include "integrators/implicit/rosenbrock.hpp"
 #include "integrators/method_entry.hpp"
 #include "integrators/method_file.hpp"
 #include "integrators/reference/gsl.hpp"
@@ -48,7 +49,7 @@ void register_explicit_integrators(IntegratorRegistry& reg) {
 void register_symplectic_integrators(IntegratorRegistry& reg) {
   // Kick/drift methods and compositions of velocity Verlet from their files (kick_drift.hpp,
   // composition.hpp).
-  add_methods(reg, MethodKind::splitting);
+  add_methods(reg, MethodKind::kick_drift);
   add_class(reg, PositionVerlet(), {},
             [](const Params&) { return std::make_unique<PositionVerlet>(); });
   add_class(reg, Leapfrog(), {}, [](const Params&) { return std::make_unique<Leapfrog>(); });
@@ -69,7 +70,7 @@ void register_implicit_integrators(IntegratorRegistry& reg) {
   add_class(reg, SemiImplicitEuler({}), linear_specs, [](const Params& p) {
     return std::make_unique<SemiImplicitEuler>(read_implicit_options(p, false));
   });
-  // Rosenbrock methods from their files (linearly_implicit.hpp); the pairs with an embedded
+  // Rosenbrock methods from their files (rosenbrock.hpp); the pairs with an embedded
   // estimate run fixed-step with --h or adaptively with rtol/atol.
   add_methods(reg, MethodKind::rosenbrock);
   // Fully implicit RK from their files: Gauss-Legendre collocation (ImplicitRungeKutta, fixed

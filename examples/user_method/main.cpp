@@ -154,7 +154,7 @@ int main(int argc, char** argv) {
   // an L-stable SDIRK for f_I, explicit for f_E) at h = 0.1, where h w2 = 5 is beyond rk4's
   // imaginary-axis limit 2.83: stable, the stiff spring damped, and the slow one at t = 1 within
   // the method's second-order error of cos 1 (h² = 0.01 bounds it; a run at h/2 is 4 times
-  // closer). Its tables meet the additive order conditions (core/additive_conditions.hpp) to
+  // closer). Its tables meet the additive order conditions (core/theory/additive_conditions.hpp) to
   // order 2 and not 3.
   StiffSprings springs;
   const Vec y0 = springs.initial_state();

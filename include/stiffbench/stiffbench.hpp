@@ -9,9 +9,11 @@
 //                                           with the optional additive split f = f_E + f_I
 //   core/split_views.hpp                    explicit_part_view / implicit_part_view: one part
 //                                           of a split as an OdeSystem of its own
-//   core/tableau.hpp, core/additive_conditions.hpp
+//   core/theory/tableau.hpp, core/theory/additive_conditions.hpp
 //                                           Butcher and additive (IMEX) tables; the additive
-//                                           Runge-Kutta order conditions
+//                                           Runge-Kutta order conditions (the old paths
+//                                           core/tableau.hpp, core/additive_conditions.hpp
+//                                           forward there for one version)
 //   core/integrator.hpp, core/solve_stats.hpp, core/driver.hpp
 //                                           the integrator face, counters, fixed-step and
 //                                           adaptive drivers
@@ -42,7 +44,6 @@
 // public but may change between versions.
 #pragma once
 
-#include "core/additive_conditions.hpp"
 #include "core/driver.hpp"
 #include "core/integrator.hpp"
 #include "core/ode_system.hpp"
@@ -52,7 +53,8 @@
 #include "core/run_control.hpp"
 #include "core/solve_stats.hpp"
 #include "core/split_views.hpp"
-#include "core/tableau.hpp"
+#include "core/theory/additive_conditions.hpp"
+#include "core/theory/tableau.hpp"
 #include "core/types.hpp"
 #include "experiments/analyze.hpp"
 #include "experiments/audit.hpp"

@@ -23,7 +23,7 @@
 #pragma once
 
 #include "core/integrator.hpp"
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 #include "integrators/adaptive/controller.hpp"
 
 namespace stiffbench {

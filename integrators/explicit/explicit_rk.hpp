@@ -26,17 +26,17 @@
 // that range's accelerations and stage values are still in cache (MassSpringNetwork: each of its
 // partitions of points). The per-entry arithmetic is the same wherever a pass runs, so the bits
 // do not depend on the system's ranges (the test compares with passes after whole evaluations).
-// A system that offers an AccelerationChain (core/ode_system.hpp; MassSpringNetwork's partitions)
-// gets the whole step as a wavefront over its blocks instead (explicit_rk.cpp, chained_stages),
-// when every row after the first has terms and OpenMP has at most 2 threads: each block's stage
-// values are formed right after its stage is evaluated, and only about s + 1 blocks' vectors are
-// in use at a time, so they stay in cache. The same bits (the tests compare).
+// A system that offers an AccelerationChain (core/fused_evaluation.hpp; MassSpringNetwork's
+// partitions) gets the whole step as a wavefront over its blocks instead (explicit_rk.cpp,
+// chained_stages), when every row after the first has terms and OpenMP has at most 2 threads: each
+// block's stage values are formed right after its stage is evaluated, and only about s + 1 blocks'
+// vectors are in use at a time, so they stay in cache. The same bits (the tests compare).
 #pragma once
 
 #include <vector>
 
 #include "core/integrator.hpp"
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 
 namespace stiffbench {
 

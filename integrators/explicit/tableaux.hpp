@@ -12,7 +12,7 @@
 
 #include <vector>
 
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 
 namespace stiffbench {
 

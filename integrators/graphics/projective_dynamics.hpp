@@ -14,7 +14,7 @@
 //   global: (M̃ + h² L) x = M̃ s + h² J d, L = Σ k (e_j - e_i)(e_j - e_i)ᵀ (the spring graph's
 //           weighted Laplacian on free points), one scalar system per coordinate;
 // starting from x = s. The matrix M̃ + h² L is constant: it is factorised (sparse LDLᵀ with AMD
-// ordering, integrators/implicit/linear_solver.hpp) once per (system, h) and reused by every
+// ordering, integrators/solvers/linear_solver.hpp) once per (system, h) and reused by every
 // iteration of every step. Pinned points have infinite mass: they are not unknowns, and springs
 // to them move their positions to the right-hand side. Each iteration does not increase the
 // objective (block coordinate descent, Liu et al. §4), and the fixed point is the backward-Euler
@@ -34,7 +34,7 @@
 #include "core/integrator.hpp"
 #include "core/params.hpp"
 #include "core/springs.hpp"
-#include "integrators/implicit/linear_solver.hpp"
+#include "integrators/solvers/linear_solver.hpp"
 
 namespace stiffbench {
 

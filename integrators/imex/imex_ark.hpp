@@ -46,15 +46,15 @@
 #include <memory>
 
 #include "core/integrator.hpp"
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 #include "integrators/adaptive/controller.hpp"
-#include "integrators/implicit/implicit_core.hpp"
+#include "integrators/solvers/newton.hpp"
 
 namespace stiffbench {
 
 class ImexArkIntegrator final : public Integrator {
  public:
-  // The tables are validated by the method-file reader (core/additive_conditions.hpp).
+  // The tables are validated by the method-file reader (core/theory/additive_conditions.hpp).
   ImexArkIntegrator(AdditiveTableau tableau, std::string description, ImplicitOptions opt,
                     ControllerOptions control = {}, bool error_filter = false);
 

@@ -2,7 +2,7 @@
 //   (M - h D_f - h² K_f) Δv = h (f + h K_f v),   v⁺ = v + Δv,   x⁺ = x + h v⁺,
 // with forces f = M a, K_f = M K = ∂f/∂x, D_f = M D = ∂f/∂v, all at (t, x, v) — one
 // linearisation of backward Euler, so order 1. It is linearly implicit Euler (I - hJ) k = h f
-// solved in velocity form, and uses the same solver (integrators/implicit/velocity_form.hpp): the
+// solved in velocity form, and uses the same solver (integrators/solvers/velocity_form.hpp): the
 // matrix has the dofs' dimension, pinned dofs are eliminated (filtered) so it stays symmetric for
 // symmetric force Jacobians (mass-spring networks without dashpots), and `auto` takes ldlt up to
 // 2000 dofs and cg with a Jacobi preconditioner above.
@@ -14,8 +14,8 @@
 #pragma once
 
 #include "core/integrator.hpp"
-#include "integrators/implicit/implicit_core.hpp"
-#include "integrators/implicit/velocity_form.hpp"
+#include "integrators/solvers/newton.hpp"
+#include "integrators/solvers/velocity_form.hpp"
 
 namespace stiffbench {
 

@@ -1,7 +1,8 @@
-// Diagonally implicit Runge–Kutta methods as tableau data read by one generic stepper, and
-// BDF2. Stage i solves z_i = y + h Σ_{j<i} a_ij k_j + h a_ii f(t + c_i h, z_i) by Newton
-// (ImplicitCore) and sets k_i = (z_i - ψ_i)/(h a_ii) from the converged iterate; a_ii = 0
-// stages are explicit. y⁺ = y + h Σ b_i k_i.
+// Diagonally implicit Runge–Kutta methods as tableau data read by one generic stepper (BDF2,
+// which starts with one of its steps, is in bdf2.hpp). Stage i solves
+// z_i = y + h Σ_{j<i} a_ij k_j + h a_ii f(t + c_i h, z_i) by Newton (ImplicitCore) and sets
+// k_i = (z_i - ψ_i)/(h a_ii) from the converged iterate; a_ii = 0 stages are explicit.
+// y⁺ = y + h Σ b_i k_i.
 //
 // The tableaux are method files (methods/NAME.toml, kind = "dirk": coefficients as exact
 // expressions, description, kind, reference, order; Hairer & Wanner, Solving ODEs II,
@@ -50,19 +51,14 @@
 // controller allows in every component (else the estimate measures Newton noise and the steps
 // collapse), and loose tolerances do not pay for Newton iterations to round-off. Fixed-step
 // mode uses newton_tol (default 1e-15: to round-off) with ImplicitCore's contraction-aware test.
-//
-// bdf2: y_{n+1} - 4/3 y_n + 1/3 y_{n-1} = 2/3 h f(t_{n+1}, y_{n+1}), order 2, L-stable
-//   (A-stable with R(∞) = 0). Start-up: the first step (and any step after h changes or after
-//   y was changed from outside, e.g. by a constraint projection) is one sdirk2 step, whose
-//   O(h³) local error keeps global order 2. Predictor: linear extrapolation 2y_n - y_{n-1}.
 #pragma once
 
 #include <vector>
 
 #include "core/integrator.hpp"
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 #include "integrators/adaptive/controller.hpp"
-#include "integrators/implicit/implicit_core.hpp"
+#include "integrators/solvers/newton.hpp"
 
 namespace stiffbench {
 
@@ -73,7 +69,8 @@ const std::vector<ButcherTableau>& implicit_tableaux();
 const ButcherTableau& implicit_tableau(const std::string& name);
 const std::vector<ButcherTableau>& esdirk_tableaux();
 
-// One DIRK step with a shared ImplicitCore (used by DirkIntegrator and by BDF2's start-up).
+// One DIRK step with a shared ImplicitCore (used by DirkIntegrator and by BDF2's start-up,
+// bdf2.hpp).
 class DirkStepper {
  public:
   explicit DirkStepper(ButcherTableau tableau) : tableau_(std::move(tableau)) {}
@@ -139,23 +136,5 @@ double adaptive_newton_tolerance(CVecRef y, const ControllerOptions& control);
 // false: imex_ark.hpp says why); and the reader of the last.
 std::vector<ParamSpec> esdirk_param_specs(bool filter_by_default = true);
 bool read_error_filter(const Params& p);
-
-class Bdf2Integrator final : public Integrator {
- public:
-  explicit Bdf2Integrator(ImplicitOptions opt);
-  void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
-  void restart(const OdeSystem& sys, double t, CVecRef y) override;
-  Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
-  std::optional<LinearStability> linear_stability() const override {
-    return multistep_stability({1.0 / 3.0, -4.0 / 3.0, 1.0}, {0.0, 0.0, 2.0 / 3.0});
-  }
-
- private:
-  ImplicitCore core_;
-  DirkStepper startup_;
-  Vec y_prev_, y_last_, psi_, z_, fz_;
-  double h_last_ = 0.0;
-  bool started_ = false;
-};
 
 }  // namespace stiffbench

@@ -164,31 +164,14 @@ std::vector<ParamSpec> gauss_param_specs() {
 }
 
 GaussOptions read_gauss_options(const Params& p) {
+  const NewtonOptions n = read_newton_options(p);
   GaussOptions o;
-  o.newton_tol = p.real("newton_tol");
-  require_input(o.newton_tol > 0, "parameter 'newton_tol' must be > 0");
-  o.newton_max_iter = static_cast<int>(p.integer("newton_max_iter"));
-  require_input(o.newton_max_iter >= 1, "parameter 'newton_max_iter' must be >= 1");
-  const std::string& j = p.text("jacobian");
-  o.jacobian = j == "analytic"     ? JacobianSource::analytic
-               : j == "fd_dense"   ? JacobianSource::fd_dense
-               : j == "fd_colored" ? JacobianSource::fd_colored
-                                   : JacobianSource::automatic;
-  o.linear = parse_linear_solver(p.text("linear_solver"));
+  o.newton_tol = n.tol;
+  o.newton_max_iter = n.max_iter;
+  o.jacobian = n.jacobian;
+  o.linear = n.linear;
   return o;
 }
-
-namespace {
-
-ImplicitOptions core_options(const GaussOptions& o) {
-  ImplicitOptions io;
-  io.jacobian = o.jacobian;
-  io.linear.kind = o.linear;
-  io.form = SystemForm::first_order;  // J itself, also for mechanical systems
-  return io;
-}
-
-}  // namespace
 
 namespace {
 
@@ -213,7 +196,7 @@ ImplicitRungeKutta::ImplicitRungeKutta(ButcherTableau tableau, std::string descr
       k_(irk_constants(tableau_)),
       s_(tableau_.stages()),
       opt_(opt),
-      core_(core_options(opt)) {
+      core_(first_order_core_options(opt.jacobian, opt.linear)) {
   const Vec& c = tableau_.c;
   interpolate_ = true;
   for (int i = 0; i < s_; ++i) {

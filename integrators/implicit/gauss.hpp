@@ -42,8 +42,8 @@
 // polynomial), continued to the new nodes: Z_i = q(1 + c_i h/h_prev) - q(1). When a node is 0
 // (Lobatto), q interpolates the s stage values (c_j, Z_j^prev) only and Z_i = q(1 + c_i h/h_prev)
 // - Σ_j d_j Z_j^prev. When the nodes are not distinct, zero. θ_k = ‖ΔW_k‖/‖ΔW_{k-1}‖, RMS norm
-// scaled by 1 + |y_n,i|, and the stopping test of every implicit method (integrators/implicit/
-// implicit_core.hpp): converged when θ_k/(1 - θ_k) ‖ΔW_k‖ ≤ newton_tol, or ‖ΔW_k‖ at round-off
+// scaled by 1 + |y_n,i|, and the stopping test of every implicit method (integrators/solvers/
+// newton.hpp): converged when θ_k/(1 - θ_k) ‖ΔW_k‖ ≤ newton_tol, or ‖ΔW_k‖ at round-off
 // (4ε; 100ε once contraction has stopped); diverging when θ_k ≥ 1 above that; too slow when
 // θ_k^(newton_max_iter - k)/(1 - θ_k) ‖ΔW_k‖ > newton_tol. The default newton_tol = 1e-15
 // iterates to round-off, so that the step is the (for Gauss: symplectic) map itself and the
@@ -63,9 +63,9 @@
 #include <vector>
 
 #include "core/integrator.hpp"
-#include "core/tableau.hpp"
-#include "integrators/implicit/implicit_core.hpp"
+#include "core/theory/tableau.hpp"
 #include "integrators/implicit/radau5.hpp"
+#include "integrators/solvers/newton.hpp"
 
 namespace stiffbench {
 

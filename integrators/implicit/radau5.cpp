@@ -236,33 +236,16 @@ std::vector<ParamSpec> radau5_param_specs() {
 Radau5Options read_radau5_options(const Params& p) {
   Radau5Options o;
   o.control = read_controller_options(p);
-  o.newton_tol = p.real("newton_tol");
-  require_input(o.newton_tol > 0, "parameter 'newton_tol' must be > 0");
-  o.newton_max_iter = static_cast<int>(p.integer("newton_max_iter"));
-  require_input(o.newton_max_iter >= 1, "parameter 'newton_max_iter' must be >= 1");
+  const NewtonOptions n = read_newton_options(p);
+  o.newton_tol = n.tol;
+  o.newton_max_iter = n.max_iter;
   o.frozen = p.text("newton") == "frozen";
-  const std::string& j = p.text("jacobian");
-  o.jacobian = j == "analytic"     ? JacobianSource::analytic
-               : j == "fd_dense"   ? JacobianSource::fd_dense
-               : j == "fd_colored" ? JacobianSource::fd_colored
-                                   : JacobianSource::automatic;
-  o.linear = parse_linear_solver(p.text("linear_solver"));
+  o.jacobian = n.jacobian;
+  o.linear = n.linear;
   return o;
 }
 
 // --- the integrator ------------------------------------------------------------------------
-
-namespace {
-
-ImplicitOptions core_options(const Radau5Options& o) {
-  ImplicitOptions io;
-  io.jacobian = o.jacobian;
-  io.linear.kind = o.linear;
-  io.form = SystemForm::first_order;  // J itself, also for mechanical systems
-  return io;
-}
-
-}  // namespace
 
 namespace {
 
@@ -292,7 +275,7 @@ Radau5::Radau5(ButcherTableau tableau, Radau5Options opt)
       k_(radau5_constants(tableau_)),
       zero_node_(tableau_.c[0] == 0.0 || tableau_.c[1] == 0.0),
       opt_(opt),
-      core_(core_options(opt)),
+      core_(first_order_core_options(opt.jacobian, opt.linear)),
       ctrl_(opt.control, 4) {}
 
 Radau5::Radau5(Radau5Options opt) : Radau5(radau5_tableau(), opt) {}

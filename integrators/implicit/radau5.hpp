@@ -36,7 +36,7 @@
 //               the trial is retried with h/2 (a rejected step and a Newton failure), with a fresh
 //               J when the failed one was from an earlier step (newton=frozen).
 //   fixed step: scale 1 + |y_n,i| and the stopping test of every implicit method
-//               (integrators/implicit/implicit_core.hpp): converged when θ_k/(1 - θ_k) ‖ΔW_k‖ ≤
+//               (integrators/solvers/newton.hpp): converged when θ_k/(1 - θ_k) ‖ΔW_k‖ ≤
 //               newton_tol (default 1e-15: round-off) or the update is at round-off; diverging,
 //               too slow or iteration limit otherwise. A failed step is retried with a fresh J
 //               and refactorised matrices: J from an earlier step (newton=frozen) is
@@ -70,10 +70,10 @@
 #include <string>
 
 #include "core/integrator.hpp"
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 #include "integrators/adaptive/controller.hpp"
-#include "integrators/implicit/implicit_core.hpp"
-#include "integrators/implicit/sparse_refactor_lu.hpp"
+#include "integrators/solvers/newton.hpp"
+#include "integrators/solvers/sparse_refactor_lu.hpp"
 
 namespace stiffbench {
 

@@ -1,6 +1,6 @@
 // SUNDIALS references (CVODE 6.4, ARKODE 5.4), run on the testbed's own OdeSystem. This folder
-// is the only one that includes SUNDIALS headers (here only in sundials.cpp), so a port to
-// SUNDIALS 7 touches one file.
+// is the only one that includes SUNDIALS headers (here only in sundials/, not in this header),
+// so a port to SUNDIALS 7 touches that folder only.
 //
 //   cvode_bdf, cvode_adams   CVODE, variable order/step; adaptive only. Parameters: rtol, atol,
 //                            linear_solver = auto | dense | band | klu | spgmr (klu uses the
@@ -27,12 +27,15 @@
 // and step-for-step comparisons: rtol=1e-12 atol=1e-14 nonlin_conv_coef=1e-3
 // max_nonlin_iters=20).
 //
-// Structure (all in sundials.cpp): three front-ends, CvodeIntegrator (cvode_bdf, cvode_adams),
-// ArkodeIntegrator (arkode_erk, arkode_dirk, arkode_imex) and MriIntegrator (arkode_mri), implement
-// the library calls of one SundialsFrontEnd (the Integrator face: reset, fixed steps, adaptive runs
-// to exact stops, restarts, error messages, counters); both run on a shared SundialsAdapter, the
-// library's user data: the C callbacks (f, IMEX parts, analytic Jacobian, J v, the velocity-form
+// Structure (integrators/reference/sundials/): three front-ends, CvodeIntegrator (cvode.cpp:
+// cvode_bdf, cvode_adams), ArkodeIntegrator (arkode.cpp: arkode_erk, arkode_dirk, arkode_imex) and
+// MriIntegrator (mri.cpp: arkode_mri), implement the library calls of one SundialsFrontEnd
+// (front_end.*: the Integrator face: reset, fixed steps, adaptive runs to exact stops, restarts,
+// error messages, counters); all run on a shared SundialsAdapter (adapter.*), the library's user
+// data: the C callbacks (f, IMEX parts, analytic Jacobian, J v, the velocity-form
 // preconditioner) with their exception guard, and the linear solver with its Jacobian pattern.
+// tables.* holds the ARKODE tables by name (ARK pairs, MRI coupling tables) and register.cpp the
+// registry entries with their parameters.
 //
 // State vectors are wrapped, not copied: N_VMake_Serial on the driver's y. Library errors
 // become Status::solver_error with the library's flag name and message (also on stderr).
@@ -66,7 +69,7 @@ std::string sundials_library_version();
 // arkode_dirk, arkode_imex): a dense matrix up to kSundialsAutoDenseMax unknowns; above, KLU
 // when the run uses the model's analytic sparse Jacobian (has_jacobian() and jacobian != dq) —
 // for a MechanicalSystem with force Jacobians `velocity` instead: flexible GMRES right-
-// preconditioned by the testbed's velocity-form solve of I - γJ (integrators/implicit/
+// preconditioned by the testbed's velocity-form solve of I - γJ (integrators/solvers/
 // velocity_form.hpp; KLU on the 2n first-order matrix of cloth 64² took 47 s to t = 0.5) —
 // else matrix-free SPGMR (no n² matrix, no n difference quotients per Jacobian).
 // The dense limit is 100: SUNDIALS' own dense LU (2n³/3 flops per setup, no BLAS) is the

@@ -27,7 +27,7 @@
 // Numer. Anal. 5 (1968) 506-517). linear_stability() is empty (the composition's R is not a
 // function of one hλ when the parts do not commute); explicit_part_stability() is the explicit
 // sub-integrator's linear_stability() over one step h: R(z) for lie, R(z/2)² for strang (two
-// half steps; `substepped` in core/linear_stability.hpp), so its limits are twice the
+// half steps; `substepped` in core/theory/linear_stability.hpp), so its limits are twice the
 // sub-integrator's.
 #pragma once
 

@@ -37,7 +37,7 @@ const std::vector<CompositionMethod>& composition_methods() {
   static const std::vector<CompositionMethod> all = [] {
     std::vector<CompositionMethod> out;
     for (const MethodDefinition& m : built_in_methods()) {
-      if (m.kind != MethodKind::splitting || m.order <= 2) continue;
+      if (m.kind != MethodKind::kick_drift || m.order <= 2) continue;
       const KickDriftCoefficients& c = m.splitting.kick_drift;
       out.push_back({m.name, m.order, verlet_substeps(c), c});
     }

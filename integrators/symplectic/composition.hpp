@@ -1,5 +1,5 @@
 // Symplectic compositions of velocity Verlet, as coefficient tables on one class. The built-in
-// ones are method files (methods/NAME.toml, kind = "splitting", with composition = [γ...] or
+// ones are method files (methods/NAME.toml, kind = "kick_drift", with composition = [γ...] or
 // kick and drift), compiled into the library and parsed by built_in_methods()
 // (integrators/method_file.hpp).
 //
@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 
 namespace stiffbench {
 

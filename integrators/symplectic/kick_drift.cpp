@@ -17,7 +17,7 @@ const std::vector<KickDriftCoefficients>& kick_drift_coefficients() {
   static const std::vector<KickDriftCoefficients> all = [] {
     std::vector<KickDriftCoefficients> out;
     for (const MethodDefinition& m : built_in_methods())
-      if (m.kind == MethodKind::splitting && m.order <= 2) out.push_back(m.splitting.kick_drift);
+      if (m.kind == MethodKind::kick_drift && m.order <= 2) out.push_back(m.splitting.kick_drift);
     return out;
   }();
   return all;

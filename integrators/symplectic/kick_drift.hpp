@@ -1,7 +1,7 @@
 // Kick/drift methods: symplectic splittings of mechanical systems y = [x; v] (of the flow into
 // kicks and drifts; not the operator splitting of Family::operator_splitting), as coefficient
-// data (core/tableau.hpp KickDriftCoefficients; the built-in ones are method files,
-// methods/NAME.toml with kind = "splitting") read by one stepper, KickDriftIntegrator:
+// data (core/theory/tableau.hpp KickDriftCoefficients; the built-in ones are method files,
+// methods/NAME.toml with kind = "kick_drift") read by one stepper, KickDriftIntegrator:
 //   for j = 1..s:  v ← v + h·kick_j·a(t_j, x, v);   x ← x + h·drift_j·v.
 // When a stage's kick is followed only by zero drifts, the acceleration it evaluates is the
 // one at the end of the step; for velocity-independent forces the next step reuses it
@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "core/integrator.hpp"
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 
 namespace stiffbench {
 

@@ -90,7 +90,7 @@ void write_specs(const fs::path& dir) {
       "description = \"d\"\nA = [[0]]\n"
       "b = [\"1e400\"]\n");
   put("huge_kick.toml",
-      "name = \"huge_kick\"\nkind = \"splitting\"\norder = 1\n"
+      "name = \"huge_kick\"\nkind = \"kick_drift\"\norder = 1\n"
       "description = \"d\"\n"
       "velocity_independent = false\nkick = [\"1e400\"]\ndrift = [1]\n");
   put("huge_gamma.toml",

@@ -1,4 +1,4 @@
-// Linear stability from coefficients (core/linear_stability.hpp): axis limits against their
+// Linear stability from coefficients (core/theory/linear_stability.hpp): axis limits against their
 // closed forms, A-stability, region boundaries, and — as an independent check of every
 // method's stability data — the spectral radius of the step map measured by stepping the
 // registered integrator on a 1-DOF oscillator.
@@ -8,8 +8,8 @@
 #include <complex>
 #include <numbers>
 
-#include "core/linear_stability.hpp"
 #include "core/run_control.hpp"
+#include "core/theory/linear_stability.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {

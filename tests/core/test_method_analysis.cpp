@@ -1,5 +1,5 @@
-// Method analysis from coefficients (core/method_analysis.hpp). Every figure is checked against
-// an independent computation or a published value; each test says which. The tableaux are
+// Method analysis from coefficients (core/theory/method_analysis.hpp). Every figure is checked
+// against an independent computation or a published value; each test says which. The tableaux are
 // written here (not taken from the registry), so the test checks the analysis, not the tables.
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 #include <optional>
 #include <string>
 
-#include "core/method_analysis.hpp"
+#include "core/theory/method_analysis.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {

@@ -1,6 +1,6 @@
 // `stiffbench analyze` (experiments/analyze.hpp): the files it writes carry the figures of the
-// method analysis (core/method_analysis.hpp), checked here against independent computations —
-// closed forms, published values, and exact rational arithmetic done outside stiffbench (Python's
+// method analysis (core/theory/method_analysis.hpp), checked here against independent computations
+// — closed forms, published values, and exact rational arithmetic done outside stiffbench (Python's
 // fractions module on the rooted trees, noted at each figure); methods without coefficients get
 // a row instead of a failure; bad names are refused before anything runs.
 #include <gtest/gtest.h>

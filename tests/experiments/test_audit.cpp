@@ -20,7 +20,7 @@
 #include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/explicit/tableaux.hpp"
 #include "integrators/imex/imex_ark.hpp"
-#include "integrators/implicit/linearly_implicit.hpp"
+#include "integrators/implicit/rosenbrock.hpp"
 #include "models/problems/kepler.hpp"
 
 namespace stiffbench {
@@ -358,11 +358,12 @@ TEST(Audit, BuiltInMethodsPass) {
 }
 
 // Rosenbrock methods get their order, embedded order and (when claimed) W-order checked by the
-// conditions of core/method_analysis.hpp (rosenbrock2's, claimed W-order 2, in BuiltInMethodsPass).
-// ROS3P's tableau under a claim of W-order 3 fails: by hand bᵀα1 = (2/3)·0 + (1/3)·1 = 1/3, not
-// 1/2, and bᵀΓ1 = (2/3)γ + (1/3)(1/2 − 2γ) = 1/6, not 0, so both order-2 W-conditions fail (the
-// reason names the first in w_trees()' order, W[t], by 1/6) and the W-order is 1 (Lang &
-// Verwer's method has order 3 with the exact Jacobian only); its classical order 3 passes.
+// conditions of core/theory/method_analysis.hpp (rosenbrock2's, claimed W-order 2, in
+// BuiltInMethodsPass). ROS3P's tableau under a claim of W-order 3 fails: by hand bᵀα1 = (2/3)·0 +
+// (1/3)·1 = 1/3, not 1/2, and bᵀΓ1 = (2/3)γ + (1/3)(1/2 − 2γ) = 1/6, not 0, so both order-2
+// W-conditions fail (the reason names the first in w_trees()' order, W[t], by 1/6) and the W-order
+// is 1 (Lang & Verwer's method has order 3 with the exact Jacobian only); its classical order 3
+// passes.
 TEST(Audit, RosenbrockWOrderClaimIsChecked) {
   RosenbrockTableau w3 = ros3p_tableau();
   w3.name = "test_ros3p_w3";

@@ -28,7 +28,7 @@
 #include <string>
 #include <vector>
 
-#include "core/linear_stability.hpp"
+#include "core/theory/linear_stability.hpp"
 #include "experiments/convergence.hpp"
 #include "experiments/stability.hpp"
 #include "tests/test_support.hpp"

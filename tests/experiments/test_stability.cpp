@@ -11,9 +11,9 @@
 #include <string>
 
 #include "core/integrator.hpp"
-#include "core/linear_stability.hpp"
 #include "core/ode_system.hpp"
-#include "core/tableau.hpp"
+#include "core/theory/linear_stability.hpp"
+#include "core/theory/tableau.hpp"
 #include "core/types.hpp"
 #include "experiments/stability.hpp"
 

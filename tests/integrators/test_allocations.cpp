@@ -180,7 +180,7 @@ TEST(Allocations, NoneInsideAdaptiveSteps) {
                           name == "trbdf2" || name == "esdirk43";
     const OdeSystem& sys = implicit ? *chain : *kepler;
     // ros3p's error estimate vanishes on a linear autonomous model like this chain
-    // (linearly_implicit.hpp), so only h_max keeps its steps small enough to count.
+    // (rosenbrock.hpp), so only h_max keeps its steps small enough to count.
     auto integ = integrator_registry().create(
         name, Params::from_assignments({"rtol=1e-8", name == "ros3p" ? "h_max=0.05" : "h0=0"}));
     Vec y = sys.initial_state();

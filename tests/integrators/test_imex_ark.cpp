@@ -1,5 +1,5 @@
 // Additive (IMEX) Runge–Kutta methods of kind imex_ark (integrators/imex/imex_ark.hpp) and the
-// coupling order conditions (core/additive_conditions.hpp). Expected values come from theory
+// coupling order conditions (core/theory/additive_conditions.hpp). Expected values come from theory
 // (order conditions of bi-coloured trees, the count of distinct conditions, classical orders,
 // evaluation counts derived in the header), from an independent source (ARKODE's tables) or from
 // the exact solution of the test system below.
@@ -12,8 +12,8 @@
 #include <arkode/arkode_butcher_dirk.h>
 #include <arkode/arkode_butcher_erk.h>
 
-#include "core/additive_conditions.hpp"
 #include "core/driver.hpp"
+#include "core/theory/additive_conditions.hpp"
 #include "integrators/embedded_methods.hpp"
 #include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/imex/imex_ark.hpp"

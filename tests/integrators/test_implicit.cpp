@@ -7,7 +7,7 @@
 #include "core/driver.hpp"
 #include "experiments/catalog.hpp"
 #include "integrators/implicit/dirk.hpp"
-#include "integrators/implicit/implicit_core.hpp"
+#include "integrators/solvers/newton.hpp"
 #include "models/problems/dahlquist.hpp"
 #include "tests/test_support.hpp"
 

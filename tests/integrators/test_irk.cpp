@@ -12,9 +12,9 @@
 
 #include "core/driver.hpp"
 #include "integrators/implicit/gauss.hpp"
-#include "integrators/implicit/implicit_core.hpp"
-#include "integrators/implicit/linear_solver.hpp"
 #include "integrators/implicit/radau5.hpp"
+#include "integrators/solvers/linear_solver.hpp"
+#include "integrators/solvers/newton.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {

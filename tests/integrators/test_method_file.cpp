@@ -11,8 +11,9 @@
 #include "core/types.hpp"
 #include "integrators/coefficient_expr.hpp"
 #include "integrators/implicit/dirk.hpp"
-#include "integrators/implicit/linearly_implicit.hpp"
+#include "integrators/implicit/rosenbrock.hpp"
 #include "integrators/method_file.hpp"
+#include "integrators/method_kinds.hpp"
 #include "integrators/symplectic/composition.hpp"
 #include "tests/test_support.hpp"
 
@@ -402,9 +403,9 @@ g = "1/2 + sqrt(3)/6"
 
 // Velocity Verlet as kick/drift coefficients, and yoshida4 as a composition γ = (c, 1 - 2c, c),
 // c = 1/(2 - 2^(1/3)) (Yoshida 1990), equal to the built-in kick/drift form.
-TEST(MethodFile, SplittingFiles) {
+TEST(MethodFile, KickDriftFiles) {
   const MethodDefinition v = parse_method_file(R"toml(name = "vv"
-kind = "splitting"
+kind = "kick_drift"
 order = 2
 description = "velocity Verlet"
 kick = ["1/2", "1/2"]
@@ -414,7 +415,7 @@ drift = [1, 0]
   EXPECT_EQ(v.splitting.kick_drift.kick, (std::vector<double>{0.5, 0.5}));
   EXPECT_TRUE(v.splitting.velocity_independent);
   const MethodDefinition y = parse_method_file(R"toml(name = "y4"
-kind = "splitting"
+kind = "kick_drift"
 order = 4
 description = "triple jump"
 composition = ["1/(2 - cbrt(2))", "1 - 2/(2 - cbrt(2))", "1/(2 - cbrt(2))"]
@@ -432,11 +433,45 @@ composition = ["1/(2 - cbrt(2))", "1 - 2/(2 - cbrt(2))", "1/(2 - cbrt(2))"]
   // Kicks that do not sum to 1.
   const std::string msg = bad_input([] {
     parse_method_file(
-        "name = \"x\"\nkind = \"splitting\"\norder = 1\ndescription = \"x\"\n"
+        "name = \"x\"\nkind = \"kick_drift\"\norder = 1\ndescription = \"x\"\n"
         "kick = [\"1/2\", \"1/4\"]\ndrift = [1, 0]\n",
         "x.toml");
   });
   EXPECT_NE(msg.find("x.toml:3: key 'order'"), std::string::npos) << msg;
+}
+
+// kind = "splitting", the old name of kick_drift, still reads for one version: the same method,
+// with the same coefficients and the same steps.
+TEST(MethodFile, OldKickDriftKindNameReadsTheSame) {
+  const std::string body =
+      "order = 4\ndescription = \"triple jump\"\n"
+      "composition = [\"1/(2 - cbrt(2))\", \"1 - 2/(2 - cbrt(2))\", \"1/(2 - cbrt(2))\"]\n";
+  const MethodDefinition now =
+      parse_method_file("name = \"y4\"\nkind = \"kick_drift\"\n" + body, "now.toml");
+  const MethodDefinition old =
+      parse_method_file("name = \"y4\"\nkind = \"splitting\"\n" + body, "old.toml");
+  EXPECT_EQ(now.kind, MethodKind::kick_drift);
+  EXPECT_EQ(old.kind, MethodKind::kick_drift);
+  EXPECT_EQ(to_string(old.kind), "kick_drift");
+  EXPECT_EQ(old.splitting.kick_drift.kick, now.splitting.kick_drift.kick);
+  EXPECT_EQ(old.splitting.kick_drift.drift, now.splitting.kick_drift.drift);
+  EXPECT_EQ(old.splitting.velocity_independent, now.splitting.velocity_independent);
+  EXPECT_EQ(old.class_text, now.class_text);
+  EXPECT_TRUE(is_method_kind("splitting"));
+  EXPECT_TRUE(is_method_kind("kick_drift"));
+
+  auto sys = testing_support::model("kepler", {"e=0.5"});
+  Vec y_now = sys->initial_state(), y_old = y_now;
+  SolveStats s_now, s_old;
+  auto a = make_integrator(now);
+  auto b = make_integrator(old);
+  a->reset(*sys, 0.0, y_now);
+  b->reset(*sys, 0.0, y_old);
+  for (int k = 0; k < 10; ++k) {
+    ASSERT_EQ(a->step(*sys, 0.1 * k, y_now, 0.1, s_now), Status::ok);
+    ASSERT_EQ(b->step(*sys, 0.1 * k, y_old, 0.1, s_old), Status::ok);
+  }
+  EXPECT_EQ(y_old, y_now);  // bit for bit
 }
 
 // Fixed-step runs of `a` and `b` on Kepler (e = 0.5, t = 1, h = 0.05): the largest difference of

@@ -24,8 +24,8 @@
 #include "integrators/explicit/tableaux.hpp"
 #include "integrators/implicit/dirk.hpp"
 #include "integrators/implicit/gauss.hpp"
-#include "integrators/implicit/linearly_implicit.hpp"
 #include "integrators/implicit/radau5.hpp"
+#include "integrators/implicit/rosenbrock.hpp"
 #include "integrators/method_file.hpp"
 #include "integrators/symplectic/composition.hpp"
 #include "integrators/symplectic/kick_drift.hpp"
@@ -168,7 +168,7 @@ int evaluations_of(const RawFile& r) {
 
 std::string family_of(const std::string& kind) {
   if (kind == "explicit_rk") return to_string(Family::explicit_rk);
-  if (kind == "splitting") return to_string(Family::symplectic);
+  if (kind == "kick_drift") return to_string(Family::symplectic);
   if (kind == "imex_ark") return to_string(Family::imex);
   return to_string(Family::implicit);
 }

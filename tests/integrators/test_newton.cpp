@@ -1,4 +1,4 @@
-// Newton's stopping test and its failures (integrators/implicit/implicit_core.hpp): the
+// Newton's stopping test and its failures (integrators/solvers/newton.hpp): the
 // contraction-aware rule keeps the Newton error below the truncation error down to round-off,
 // accepts after one update only at round-off, and names the reason of a failure.
 #include <gtest/gtest.h>
@@ -10,7 +10,7 @@
 #include "core/driver.hpp"
 #include "core/ode_system.hpp"
 #include "integrators/implicit/dirk.hpp"
-#include "integrators/implicit/implicit_core.hpp"
+#include "integrators/solvers/newton.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "core/driver.hpp"
-#include "core/linear_stability.hpp"
+#include "core/theory/linear_stability.hpp"
 #include "core/types.hpp"
 #include "tests/integrators/split_test_system.hpp"
 #include "tests/test_support.hpp"

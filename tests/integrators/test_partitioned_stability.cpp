@@ -8,7 +8,7 @@
 #include <cmath>
 #include <complex>
 
-#include "core/linear_stability.hpp"
+#include "core/theory/linear_stability.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {

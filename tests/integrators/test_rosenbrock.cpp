@@ -1,5 +1,5 @@
 // Rosenbrock methods with an embedded error estimate (ros3p, rodas4; integrators/implicit/
-// linearly_implicit.hpp): their coefficients against the order conditions and the published
+// rosenbrock.hpp): their coefficients against the order conditions and the published
 // values, stability at infinity, evaluation counts derived in the header, fixed-step orders,
 // tolerance proportionality and the HIRES reference solution of the IVP test set.
 #include <gtest/gtest.h>
@@ -16,7 +16,7 @@
 
 #include "core/driver.hpp"
 #include "experiments/convergence.hpp"
-#include "integrators/implicit/linearly_implicit.hpp"
+#include "integrators/implicit/rosenbrock.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {
@@ -164,7 +164,7 @@ TEST(RosenbrockTableaux, StabilityAtInfinity) {
 
 // --- fixed step ----------------------------------------------------------------------------
 
-// f evaluations per fixed step (linearly_implicit.hpp): one per distinct stage argument (ROS3P's
+// f evaluations per fixed step (rosenbrock.hpp): one per distinct stage argument (ROS3P's
 // stages 2 and 3 share theirs: 2; RODAS4: 6), two more for ∂f/∂t on a non-autonomous model;
 // HIRES and Prothero–Robinson have analytic Jacobians (one per step, counted by the system).
 TEST(RosenbrockFixedStep, EvaluationCounts) {
@@ -196,7 +196,7 @@ double error_vs_exact(const OdeSystem& sys, const RunResult& r) {
 }
 
 // One step of each method through the integrator (transformed form, integrators/implicit/
-// linearly_implicit.cpp) equals the step computed here independently in the original form of
+// rosenbrock.cpp) equals the step computed here independently in the original form of
 // HW II (7.4) with a dense LU and Jacobian products,
 //   (I - hγJ) k_i = h f(y + Σ_{j<i} α_ij k_j) + hJ Σ_{j<i} γ_ij k_j,  y⁺ = y + Σ b_i k_i,
 // on HIRES (autonomous, analytic J) from its initial state, for a small and a large step. The
@@ -305,7 +305,7 @@ TEST(RosenbrockFixedStep, ProtheroRobinsonStiffOrderReduction) {
 
 // Prothero–Robinson with λ = -1 (non-stiff, non-autonomous, exact solution sin t): the classical
 // orders 3 and 4, which hold only if the stages' γ_i h² f_t terms are right and f_t is accurate
-// enough (linearly_implicit.hpp: a forward-difference f_t stalls rodas4 at ~7e-12 on this ladder).
+// enough (rosenbrock.hpp: a forward-difference f_t stalls rodas4 at ~7e-12 on this ladder).
 // Measured: ros3p 2.99 (h = 0.025 → 0.00625, errors 1.1e-6 → 1.8e-8), rodas4 4.00 (h = 0.05 →
 // 0.00625, errors 2.8e-9 → 6.8e-13).
 TEST(RosenbrockFixedStep, ClassicalOrderOnNonAutonomousProblem) {
@@ -393,7 +393,7 @@ TEST(RosenbrockAdaptive, Rodas4HiresMatchesPublishedReference) {
   EXPECT_EQ(r.stats.lin_solves, 6 * (a + rej));
 }
 
-// ROS3P's error estimate is blind to linear autonomous problems (linearly_implicit.hpp): on
+// ROS3P's error estimate is blind to linear autonomous problems (rosenbrock.hpp): on
 // y' = Jy with the exact J, k_i = (I - hγJ)⁻¹ hJ (y + Σ_j β_ij k_j) with β = α + Γ strictly lower,
 // and β_21 = 0 gives k_2 = k_1; with b - b̂ = (⅓, -⅓, 0) the estimate (k_1 - k_2)/3 is zero, i.e.
 // (b - b̂)ᵀBᵏ1 = 0 for every k and R̂ ≡ R. RODAS4's estimate is not (its R̂ differs from R at

@@ -1,4 +1,4 @@
-// SparseRefactorLu (integrators/implicit/sparse_refactor_lu.hpp): solutions checked against an
+// SparseRefactorLu (integrators/solvers/sparse_refactor_lu.hpp): solutions checked against an
 // independent computation, Eigen's dense PartialPivLU of the same matrix; the refactorisation
 // path (same pattern, new values) and its fall-back to a new pivoting factorisation.
 #include <gtest/gtest.h>
@@ -7,7 +7,7 @@
 #include <complex>
 #include <random>
 
-#include "integrators/implicit/sparse_refactor_lu.hpp"
+#include "integrators/solvers/sparse_refactor_lu.hpp"
 
 namespace stiffbench {
 namespace {

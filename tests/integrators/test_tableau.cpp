@@ -250,8 +250,8 @@ TEST(TableauValidation, EachDefectIsRefusedByName) {
   EXPECT_TRUE(contains(m, "not finite")) << m;
 }
 
-// Claims are checked up to order 8 (the rooted trees of core/method_analysis.hpp): gauss6 is of
-// order 2s = 6 exactly (Hairer & Wanner II, IV.5), so a claim of 8 fails at an order-7 tree, and
+// Claims are checked up to order 8 (the rooted trees of core/theory/method_analysis.hpp): gauss6 is
+// of order 2s = 6 exactly (Hairer & Wanner II, IV.5), so a claim of 8 fails at an order-7 tree, and
 // a claim above 8 is checked up to 8.
 TEST(TableauValidation, OrdersAreCheckedToEight) {
   ButcherTableau t = gauss_tableau(3);

@@ -1,12 +1,12 @@
 // The velocity-form solves of the implicit methods on mechanical systems
-// (integrators/implicit/velocity_form.hpp) against the first-order form they replace.
+// (integrators/solvers/velocity_form.hpp) against the first-order form they replace.
 #include <gtest/gtest.h>
 
 #include <Eigen/LU>
 
 #include "core/driver.hpp"
 #include "integrators/implicit/dirk.hpp"
-#include "integrators/implicit/velocity_form.hpp"
+#include "integrators/solvers/velocity_form.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {

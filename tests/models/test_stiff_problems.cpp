@@ -467,8 +467,8 @@ TEST(StiffProblemsInvariants, KeptBySdirk3) {
 // With runs at n, 2n, 4n steps, (y_n - y_2n)/(y_2n - y_4n) → 2³ = 8 in the asymptotic range;
 // docs/reference-values.md accepts an observed order within 0.2 of theory (ratio in [6.96, 9.19]).
 // Each case's step sizes were chosen in the asymptotic range (measured ratios in the comments).
-// Newton tolerances are tightened where its error floor (about N·tol, implicit_core.hpp) would
-// otherwise reach the differences.
+// Newton tolerances are tightened where its error floor (about N·tol,
+// integrators/solvers/newton.hpp) would otherwise reach the differences.
 
 struct Ladder {
   Vec coarse, mid, fine;

@@ -1,4 +1,4 @@
-#include "integrators/implicit/implicit_core.hpp"
+#include "integrators/solvers/newton.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -87,17 +87,13 @@ std::vector<ParamSpec> implicit_param_specs(bool with_newton) {
   return specs;
 }
 
-ImplicitOptions read_implicit_options(const Params& p, bool with_newton) {
-  ImplicitOptions o;
-  if (with_newton) {
-    const std::string& n = p.text("newton");
-    o.newton = n == "full"     ? NewtonMode::full
-               : n == "frozen" ? NewtonMode::frozen
-                               : NewtonMode::modified;
-    o.newton_tol = p.real("newton_tol");
-    require_input(o.newton_tol > 0, "parameter 'newton_tol' must be > 0");
-    o.newton_max_iter = static_cast<int>(p.integer("newton_max_iter"));
-    require_input(o.newton_max_iter >= 1, "parameter 'newton_max_iter' must be >= 1");
+NewtonOptions read_newton_options(const Params& p, bool with_iteration) {
+  NewtonOptions o;
+  if (with_iteration) {
+    o.tol = p.real("newton_tol");
+    require_input(o.tol > 0, "parameter 'newton_tol' must be > 0");
+    o.max_iter = static_cast<int>(p.integer("newton_max_iter"));
+    require_input(o.max_iter >= 1, "parameter 'newton_max_iter' must be >= 1");
   }
   const std::string& j = p.text("jacobian");
   o.jacobian = j == "analytic"      ? JacobianSource::analytic
@@ -105,7 +101,33 @@ ImplicitOptions read_implicit_options(const Params& p, bool with_newton) {
                : j == "fd_colored"  ? JacobianSource::fd_colored
                : j == "matrix_free" ? JacobianSource::matrix_free
                                     : JacobianSource::automatic;
-  o.linear.kind = parse_linear_solver(p.text("linear_solver"));
+  o.linear = parse_linear_solver(p.text("linear_solver"));
+  return o;
+}
+
+ImplicitOptions first_order_core_options(JacobianSource jacobian, LinearSolverKind linear) {
+  ImplicitOptions io;
+  io.jacobian = jacobian;
+  io.linear.kind = linear;
+  io.form = SystemForm::first_order;
+  return io;
+}
+
+ImplicitOptions read_implicit_options(const Params& p, bool with_newton) {
+  ImplicitOptions o;
+  if (with_newton) {
+    const std::string& n = p.text("newton");
+    o.newton = n == "full"     ? NewtonMode::full
+               : n == "frozen" ? NewtonMode::frozen
+                               : NewtonMode::modified;
+  }
+  const NewtonOptions n = read_newton_options(p, with_newton);
+  if (with_newton) {
+    o.newton_tol = n.tol;
+    o.newton_max_iter = n.max_iter;
+  }
+  o.jacobian = n.jacobian;
+  o.linear.kind = n.linear;
   const std::string& pc = p.text("preconditioner");
   o.preconditioner_given = pc != "auto";
   o.linear.preconditioner = pc == "none"    ? PreconditionerKind::none

@@ -1,7 +1,7 @@
-#include "core/method_analysis.hpp"
+#include "core/theory/method_analysis.hpp"
 
-#include "core/additive_conditions.hpp"
 #include "core/run_control.hpp"
+#include "core/theory/additive_conditions.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -31,7 +31,8 @@ constexpr double kInternalCap = 100.0;
 constexpr int kSeriesDegree = 20;
 
 // Bracket name of a tree from its children (non-decreasing indices, so equal ones are adjacent).
-std::string tree_name(const std::vector<RootedTree>& trees, const std::vector<int>& children) {
+template <class Tree>
+std::string tree_name(const std::vector<Tree>& trees, const std::vector<int>& children) {
   if (children.empty()) return "t";
   std::string out = "[";
   for (std::size_t i = 0; i < children.size();) {
@@ -45,46 +46,61 @@ std::string tree_name(const std::vector<RootedTree>& trees, const std::vector<in
   return out + "]";
 }
 
+// The one enumerator of the rooted trees (RootedTree) and the bi-coloured trees of W-methods
+// (WTree): visit(children) for every non-decreasing list of indices into trees[0, before) whose
+// orders sum to `sum` (each multiset of earlier trees once), in lexicographic order. These are
+// the subtrees of the trees of order sum + 1 with an ordinary root; visit may append to trees.
+template <class Tree, class Visit>
+void for_each_subtree_multiset(const std::vector<Tree>& trees, int before, int sum, Visit visit) {
+  std::vector<int> pick;
+  std::function<void(int, int)> rec = [&](int remaining, int min_index) {
+    if (remaining == 0) {
+      visit(pick);
+      return;
+    }
+    for (int i = min_index; i < before; ++i) {
+      const int o = trees[static_cast<std::size_t>(i)].order;
+      if (o > remaining) continue;
+      pick.push_back(i);
+      rec(remaining - o, i);
+      pick.pop_back();
+    }
+  };
+  rec(sum, 0);
+}
+
+// The tree of order n with an ordinary root over `children`: γ(t) = n Π γ(u) and
+// σ(t) = Π_u σ(u)^m m! over the distinct subtrees u of multiplicity m, and its bracket name.
+template <class Tree>
+Tree tree_over(const std::vector<Tree>& trees, int n, const std::vector<int>& children) {
+  Tree t;
+  t.order = n;
+  t.children = children;
+  t.density = n;
+  t.symmetry = 1.0;
+  for (std::size_t i = 0; i < children.size();) {
+    std::size_t j = i;
+    while (j < children.size() && children[j] == children[i]) ++j;
+    const Tree& u = trees[static_cast<std::size_t>(children[i])];
+    for (std::size_t k = i; k < j; ++k) {
+      t.density *= u.density;
+      t.symmetry *= u.symmetry * static_cast<double>(k - i + 1);
+    }
+    i = j;
+  }
+  t.name = tree_name(trees, children);
+  return t;
+}
+
 // All rooted trees with at most kMaxOrder vertices, order by order: a tree of order n is a root
 // plus a non-decreasing list of earlier trees whose orders sum to n − 1 (each multiset once).
-// γ(t) = |t| Π γ(u) and σ(t) = Π_u σ(u)^m m! over the distinct subtrees u of multiplicity m.
 std::vector<RootedTree> build_rooted_trees() {
   std::vector<RootedTree> trees;
   trees.push_back({1, {}, 1.0, 1.0, "t"});
-  for (int n = 2; n <= kMaxOrder; ++n) {
-    const int before = static_cast<int>(trees.size());
-    std::vector<int> pick;
-    std::function<void(int, int)> rec = [&](int remaining, int min_index) {
-      if (remaining == 0) {
-        RootedTree t;
-        t.order = n;
-        t.children = pick;
-        t.density = n;
-        t.symmetry = 1.0;
-        for (std::size_t i = 0; i < pick.size();) {
-          std::size_t j = i;
-          while (j < pick.size() && pick[j] == pick[i]) ++j;
-          const RootedTree& u = trees[static_cast<std::size_t>(pick[i])];
-          for (std::size_t k = i; k < j; ++k) {
-            t.density *= u.density;
-            t.symmetry *= u.symmetry * static_cast<double>(k - i + 1);
-          }
-          i = j;
-        }
-        t.name = tree_name(trees, pick);
-        trees.push_back(std::move(t));
-        return;
-      }
-      for (int i = min_index; i < before; ++i) {
-        const int o = trees[static_cast<std::size_t>(i)].order;
-        if (o > remaining) continue;
-        pick.push_back(i);
-        rec(remaining - o, i);
-        pick.pop_back();
-      }
-    };
-    rec(n - 1, 0);
-  }
+  for (int n = 2; n <= kMaxOrder; ++n)
+    for_each_subtree_multiset(
+        trees, static_cast<int>(trees.size()), n - 1,
+        [&](const std::vector<int>& children) { trees.push_back(tree_over(trees, n, children)); });
   return trees;
 }
 
@@ -280,40 +296,11 @@ std::vector<WTree> build_w_trees() {
       if (u.order != n - 1) continue;
       trees.push_back({n, true, {i}, true, n * u.density, u.symmetry, "W[" + u.name + "]"});
     }
-    std::vector<int> pick;
-    std::function<void(int, int)> rec = [&](int remaining, int min_index) {
-      if (remaining == 0) {
-        WTree t;
-        t.order = n;
-        t.children = pick;
-        t.density = n;
-        t.symmetry = 1.0;
-        std::string name = "[";
-        for (std::size_t i = 0; i < pick.size();) {
-          std::size_t j = i;
-          while (j < pick.size() && pick[j] == pick[i]) ++j;
-          const WTree& u = trees[static_cast<std::size_t>(pick[i])];
-          t.has_w = t.has_w || u.has_w;
-          for (std::size_t k = i; k < j; ++k) {
-            t.density *= u.density;
-            t.symmetry *= u.symmetry * static_cast<double>(k - i + 1);
-          }
-          name += (i > 0 ? "," : "") + u.name + (j - i > 1 ? "^" + std::to_string(j - i) : "");
-          i = j;
-        }
-        t.name = name + "]";
-        trees.push_back(std::move(t));
-        return;
-      }
-      for (int i = min_index; i < before; ++i) {
-        const int o = trees[static_cast<std::size_t>(i)].order;
-        if (o > remaining) continue;
-        pick.push_back(i);
-        rec(remaining - o, i);
-        pick.pop_back();
-      }
-    };
-    rec(n - 1, 0);
+    for_each_subtree_multiset(trees, before, n - 1, [&](const std::vector<int>& children) {
+      WTree t = tree_over(trees, n, children);
+      for (int c : children) t.has_w = t.has_w || trees[static_cast<std::size_t>(c)].has_w;
+      trees.push_back(std::move(t));
+    });
   }
   return trees;
 }

@@ -1,4 +1,4 @@
-#include "core/additive_conditions.hpp"
+#include "core/theory/additive_conditions.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "integrators/implicit/velocity_form.hpp"
+#include "integrators/solvers/velocity_form.hpp"
 
 #include <algorithm>
 #include <stdexcept>

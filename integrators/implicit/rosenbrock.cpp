@@ -1,4 +1,4 @@
-#include "integrators/implicit/linearly_implicit.hpp"
+#include "integrators/implicit/rosenbrock.hpp"
 
 #include <Eigen/LU>
 #include <algorithm>

@@ -1,4 +1,4 @@
-#include "core/tableau.hpp"
+#include "core/theory/tableau.hpp"
 
 #include <Eigen/LU>
 #include <algorithm>
@@ -6,7 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "core/method_analysis.hpp"
+#include "core/theory/method_analysis.hpp"
 
 namespace stiffbench {
 

@@ -1,4 +1,4 @@
-#include "integrators/implicit/sparse_refactor_lu.hpp"
+#include "integrators/solvers/sparse_refactor_lu.hpp"
 
 #include <Eigen/OrderingMethods>
 #include <algorithm>

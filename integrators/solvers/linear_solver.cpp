@@ -1,4 +1,4 @@
-#include "integrators/implicit/linear_solver.hpp"
+#include "integrators/solvers/linear_solver.hpp"
 
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/LU>

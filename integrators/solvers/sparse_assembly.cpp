@@ -1,4 +1,4 @@
-#include "integrators/implicit/sparse_assembly.hpp"
+#include "integrators/solvers/sparse_assembly.hpp"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "core/linear_stability.hpp"
+#include "core/theory/linear_stability.hpp"
 
 #include "core/run_control.hpp"
 
