@@ -22,41 +22,70 @@ int grid_int(const Params& p, const std::string& key, const std::string& model, 
 }
 
 void add_heat(ModelRegistry& reg) {
-  reg.add({{"heat_2d",
-            "heat equation u' = nu Laplace(u) on an n x n grid (5-point stencil), a sine mode; "
-            "stiffness knob nu/dx^2",
-            false, true,
-            "exact solution exp(lambda t) u0 of the semi-discrete system (lambda the stencil's "
-            "eigenvalue of the mode)"},
-           {{"n", P::integer, "32", "grid points per direction (unknowns n^2)", B::in(3, 4096)},
-            {"nu", P::real, "1", "diffusivity nu", B::positive()},
-            {"boundary",
-             P::text,
-             "periodic",
-             "periodic (cell centres, dx = 1/n) or dirichlet (u = 0, interior nodes, dx = "
-             "1/(n+1))",
-             {"periodic", "dirichlet"}},
-            {"kx", P::integer, "1", "mode number along x", B::in(1, 4096)},
-            {"ky", P::integer, "1", "mode number along y", B::in(1, 4096)}},
-           [](const Params& p) {
-             const int n = grid_int(p, "n", "heat_2d", 3, 4096);
-             const auto b = p.text("boundary") == "dirichlet" ? Heat2d::Boundary::dirichlet
-                                                              : Heat2d::Boundary::periodic;
-             return std::make_unique<Heat2d>(n, p.real("nu"), b,
-                                             grid_int(p, "kx", "heat_2d", 1, 4096),
-                                             grid_int(p, "ky", "heat_2d", 1, 4096));
-           }});
+  reg.add(
+      {.info =
+           {.name = "heat_2d",
+            .description =
+                "heat equation u' = nu Laplace(u) on an n x n grid (5-point stencil), a sine mode; "
+                "stiffness knob nu/dx^2",
+            .exact = true,
+            .source =
+                "exact solution exp(lambda t) u0 of the semi-discrete system (lambda the stencil's "
+                "eigenvalue of the mode)",
+            // Sizes from the parameters alone (ModelSize, checked before anything is built).
+            // heat_2d: n^2 unknowns, the 5-point Jacobian (5 n^2 nonzeros, 12 bytes each) kept by
+            // the model, plus a few state-sized vectors.
+            .size =
+                [](const Params& p) {
+                  const double n = std::max(static_cast<double>(p.integer("n")), 0.0);
+                  return ModelSize{n * n, 12.0 * 5.0 * n * n + 32.0 * n * n, 5.0 * n * n,
+                                   "n=" + std::to_string(p.integer("n"))};
+                }},
+       .params = {{"n", P::integer, "32", "grid points per direction (unknowns n^2)",
+                   B::in(3, 4096)},
+                  {"nu", P::real, "1", "diffusivity nu", B::positive()},
+                  {"boundary",
+                   P::text,
+                   "periodic",
+                   "periodic (cell centres, dx = 1/n) or dirichlet (u = 0, interior nodes, dx = "
+                   "1/(n+1))",
+                   {"periodic", "dirichlet"}},
+                  {"kx", P::integer, "1", "mode number along x", B::in(1, 4096)},
+                  {"ky", P::integer, "1", "mode number along y", B::in(1, 4096)}},
+       .make = [](const Params& p) {
+         const int n = grid_int(p, "n", "heat_2d", 3, 4096);
+         const auto b = p.text("boundary") == "dirichlet" ? Heat2d::Boundary::dirichlet
+                                                          : Heat2d::Boundary::periodic;
+         return std::make_unique<Heat2d>(n, p.real("nu"), b, grid_int(p, "kx", "heat_2d", 1, 4096),
+                                         grid_int(p, "ky", "heat_2d", 1, 4096));
+       }});
 }
 
 void add_fluid(ModelRegistry& reg) {
-  reg.add({{"fluid_2d",
-            "incompressible Navier-Stokes on a MAC grid, u' = P[-(u.grad)u + nu Laplace(u) + g] "
-            "(pressure projection); scenes taylor_green (periodic) and cavity (lid-driven); "
-            "observables kinetic_energy, max_divergence; split=diffusion: advection explicit, "
-            "diffusion implicit",
-            false, false,
-            "Taylor-Green: kinetic energy decays as exp(-16 pi^2 t/Re) (Taylor & Green 1937); "
-            "cavity: Ghia, Ghia & Shin 1982 centreline profiles"},
+  reg.add(
+      {.info =
+           {.name = "fluid_2d",
+            .description =
+                "incompressible Navier-Stokes on a MAC grid, u' = P[-(u.grad)u + nu Laplace(u) + "
+                "g] "
+                "(pressure projection); scenes taylor_green (periodic) and cavity (lid-driven); "
+                "observables kinetic_energy, max_divergence; split=diffusion: advection explicit, "
+                "diffusion implicit",
+            .source =
+                "Taylor-Green: kinetic energy decays as exp(-16 pi^2 t/Re) (Taylor & Green 1937); "
+                "cavity: Ghia, Ghia & Shin 1982 centreline profiles",
+            // fluid_2d: about 2 n^2 face velocities; the pressure Laplacian on n^2 cells and its
+            // sparse Cholesky factor (nested-dissection fill of a 2D grid, about n^2 (6 + 2 log2 n)
+            // entries of 12 bytes), work vectors; f has no analytic Jacobian.
+            .size =
+                [](const Params& p) {
+                  const double n = std::max(static_cast<double>(p.integer("n")), 1.0);
+                  const double cells = n * n;
+                  const double factor = cells * (6.0 + 2.0 * std::log2(n)) + 5.0 * cells;
+                  return ModelSize{2.0 * cells + 2.0 * n, 12.0 * factor + 96.0 * cells, 0.0,
+                                   "n=" + std::to_string(p.integer("n"))};
+                }},
+       .params =
            {{"scene",
              P::text,
              "taylor_green",
@@ -86,22 +115,22 @@ void add_fluid(ModelRegistry& reg) {
              "P[-(u.grad)u + g] explicit, f_I = P[nu Laplace(u) + nu b] implicit, no analytic "
              "J_I)",
              {"none", "diffusion"}}},
-           [](const Params& p) {
-             Fluid2dOptions o;
-             o.scene = p.text("scene") == "cavity" ? Fluid2dOptions::Scene::cavity
-                                                   : Fluid2dOptions::Scene::taylor_green;
-             o.n = grid_int(p, "n", "fluid_2d", 4, 2048);
-             o.re = p.real("re");
-             o.lid = p.real("lid");
-             o.gravity = p.real("gravity");
-             o.solver = p.text("solver") == "cg" ? Fluid2dOptions::Solver::cg
-                                                 : Fluid2dOptions::Solver::cholesky;
-             o.advection = p.text("advection") == "cubic" ? Fluid2dOptions::Advection::cubic
-                                                          : Fluid2dOptions::Advection::linear;
-             o.split = p.text("split") == "diffusion" ? Fluid2dOptions::Split::diffusion
-                                                      : Fluid2dOptions::Split::none;
-             return std::make_unique<Fluid2d>(o);
-           }});
+       .make = [](const Params& p) {
+         Fluid2dOptions o;
+         o.scene = p.text("scene") == "cavity" ? Fluid2dOptions::Scene::cavity
+                                               : Fluid2dOptions::Scene::taylor_green;
+         o.n = grid_int(p, "n", "fluid_2d", 4, 2048);
+         o.re = p.real("re");
+         o.lid = p.real("lid");
+         o.gravity = p.real("gravity");
+         o.solver = p.text("solver") == "cg" ? Fluid2dOptions::Solver::cg
+                                             : Fluid2dOptions::Solver::cholesky;
+         o.advection = p.text("advection") == "cubic" ? Fluid2dOptions::Advection::cubic
+                                                      : Fluid2dOptions::Advection::linear;
+         o.split = p.text("split") == "diffusion" ? Fluid2dOptions::Split::diffusion
+                                                  : Fluid2dOptions::Split::none;
+         return std::make_unique<Fluid2d>(o);
+       }});
 }
 
 }  // namespace
@@ -109,24 +138,6 @@ void add_fluid(ModelRegistry& reg) {
 void register_grid_models(ModelRegistry& reg) {
   add_heat(reg);
   add_fluid(reg);
-  // Sizes from the parameters alone (ModelSize, checked before anything is built).
-  // heat_2d: n^2 unknowns, the 5-point Jacobian (5 n^2 nonzeros, 12 bytes each) kept by the
-  // model, plus a few state-sized vectors.
-  reg.find_mutable("heat_2d")->info.size = [](const Params& p) {
-    const double n = std::max(static_cast<double>(p.integer("n")), 0.0);
-    return ModelSize{n * n, 12.0 * 5.0 * n * n + 32.0 * n * n, 5.0 * n * n,
-                     "n=" + std::to_string(p.integer("n"))};
-  };
-  // fluid_2d: about 2 n^2 face velocities; the pressure Laplacian on n^2 cells and its sparse
-  // Cholesky factor (nested-dissection fill of a 2D grid, about n^2 (6 + 2 log2 n) entries of
-  // 12 bytes), work vectors; f has no analytic Jacobian.
-  reg.find_mutable("fluid_2d")->info.size = [](const Params& p) {
-    const double n = std::max(static_cast<double>(p.integer("n")), 1.0);
-    const double cells = n * n;
-    const double factor = cells * (6.0 + 2.0 * std::log2(n)) + 5.0 * cells;
-    return ModelSize{2.0 * cells + 2.0 * n, 12.0 * factor + 96.0 * cells, 0.0,
-                     "n=" + std::to_string(p.integer("n"))};
-  };
 }
 
 }  // namespace stiffbench
