@@ -42,4 +42,45 @@ double count(const Params& p, const std::string& key) {
   return std::max(static_cast<double>(p.integer(key)), 0.0);
 }
 
+ParamSpec mass_spec(double mass, const char* each) {
+  return {"mass", ParamType::real, str(mass), std::string("mass of each ") + each,
+          Bounds::positive()};
+}
+
+ParamSpec gravity_spec(double gravity, const char* axis) {
+  return {"gravity", ParamType::real, str(gravity),
+          std::string("gravitational acceleration (along -") + axis + ")", Bounds::non_negative()};
+}
+
+ParamSpec seed_spec(unsigned long seed) {
+  return {"seed", ParamType::integer, str(static_cast<long>(seed)),
+          "seed of the random perturbation", Bounds::non_negative()};
+}
+
+ParamSpec point_damping_spec(const char* key, double point_damping) {
+  return {key, ParamType::real, str(point_damping),
+          std::string("point damping coefficient (force -") + key + " v)", Bounds::non_negative()};
+}
+
+ParamSpec dashpot_spec(double dashpot) {
+  return {"dashpot", ParamType::real, str(dashpot), "dashpot coefficient of every spring",
+          Bounds::non_negative()};
+}
+
+ParamSpec compressed_dd_spec(bool compressed_dd_only) {
+  return {"compressed_dd", ParamType::boolean, str(compressed_dd_only),
+          "Jacobian keeps only k d d^T for compressed springs (inexact, definite)"};
+}
+
+ParamSpec parallel_threshold_spec(long parallel_threshold) {
+  return {"parallel_threshold", ParamType::integer, str(parallel_threshold),
+          "points from which the right-hand side runs in parallel with OpenMP (results do not "
+          "depend on it)",
+          Bounds::at_least(1)};
+}
+
+ParamSpec split_spec(std::string help, std::vector<std::string> choices) {
+  return {"split", ParamType::text, "none", std::move(help), std::move(choices)};
+}
+
 }  // namespace stiffbench::spring_params

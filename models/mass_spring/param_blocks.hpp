@@ -37,8 +37,16 @@ ModelSize lattice_size(double points, int dim, double springs_per_point, std::st
 // Integer parameter `key`, at least 0, as a double.
 double count(const Params& p, const std::string& key);
 
-inline constexpr const char* kParallelThresholdHelp =
-    "points from which the right-hand side runs in parallel with OpenMP (results do not "
-    "depend on it)";
+// The parameters several models share, with their keys, help texts and bounds; the model gives
+// its default (its options struct's).
+ParamSpec mass_spec(double mass, const char* each);        // "mass of each point" (each = "point")
+ParamSpec gravity_spec(double gravity, const char* axis);  // along -axis
+ParamSpec seed_spec(unsigned long seed);                   // of the random perturbation
+ParamSpec point_damping_spec(const char* key, double point_damping);  // force -key v
+ParamSpec dashpot_spec(double dashpot);                               // of every spring
+ParamSpec compressed_dd_spec(bool compressed_dd_only);
+ParamSpec parallel_threshold_spec(long parallel_threshold);
+// `split`, default none, with the model's own help text and choices.
+ParamSpec split_spec(std::string help, std::vector<std::string> choices);
 
 }  // namespace stiffbench::spring_params
