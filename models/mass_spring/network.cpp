@@ -167,15 +167,11 @@ void MassSpringNetwork::check_triangles() const {
   }
 }
 
-// Springs of the right-hand side in structure-of-arrays order, grouped by partition of the
-// points (see the header comment and RhsSprings); within each group, the runs first, then the
-// loose springs in the network's order.
-void MassSpringNetwork::pack_rhs_springs() {
-  const Index np = num_points();
-  // The partition count depends on the size only (not on the threads or on the parallel
-  // threshold), so the serial and the parallel path sum in the same order.
-  const Index parts = np >= 64 * kRhsPartitions ? kRhsPartitions : 1;
-  // part_of(p) inverts p0 = np·q/parts: the first q with np·(q+1)/parts > p.
+namespace {
+
+// part[p]: the partition q of point p, the first q with np·(q+1)/parts > p (inverting
+// p0 = np·q/parts).
+std::vector<std::int32_t> point_partitions(Index np, Index parts) {
   const auto owner = [&](Index p) {
     Index q = (p * parts) / np;
     while (q + 1 < parts && np * (q + 1) / parts <= p) ++q;
@@ -185,6 +181,108 @@ void MassSpringNetwork::pack_rhs_springs() {
   std::vector<std::int32_t> part(static_cast<std::size_t>(np));
   for (Index p = 0; p < np; ++p)
     part[static_cast<std::size_t>(p)] = static_cast<std::int32_t>(owner(p));
+  return part;
+}
+
+// The distinct (k, L) pairs (by bits), appended to k and rest as they are first met; (k, L)
+// returns the pair's index: a short linear search while there are few, then a hash.
+class SpringKinds {
+ public:
+  SpringKinds(std::vector<double>& k, std::vector<double>& rest) : k_(k), rest_(rest) {}
+
+  std::int32_t operator()(double k, double rest) {
+    const std::pair<std::uint64_t, std::uint64_t> key{std::bit_cast<std::uint64_t>(k),
+                                                      std::bit_cast<std::uint64_t>(rest)};
+    if (kinds_.empty()) {
+      for (std::size_t t = 0; t < k_.size(); ++t)
+        if (std::bit_cast<std::uint64_t>(k_[t]) == key.first &&
+            std::bit_cast<std::uint64_t>(rest_[t]) == key.second)
+          return static_cast<std::int32_t>(t);
+      if (k_.size() == 16)  // from now on, a hash table
+        for (std::size_t t = 0; t < k_.size(); ++t)
+          kinds_.emplace(std::pair{std::bit_cast<std::uint64_t>(k_[t]),
+                                   std::bit_cast<std::uint64_t>(rest_[t])},
+                         static_cast<std::int32_t>(t));
+    } else if (const auto it = kinds_.find(key); it != kinds_.end()) {
+      return it->second;
+    }
+    const auto t = static_cast<std::int32_t>(k_.size());
+    k_.push_back(k);
+    rest_.push_back(rest);
+    if (!kinds_.empty()) kinds_.emplace(key, t);
+    return t;
+  }
+
+ private:
+  struct KeyHash {
+    std::size_t operator()(const std::pair<std::uint64_t, std::uint64_t>& key) const {
+      return std::hash<std::uint64_t>()(key.first * 0x9E3779B97F4A7C15ULL ^ key.second);
+    }
+  };
+  std::vector<double>& k_;
+  std::vector<double>& rest_;
+  std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, std::int32_t, KeyHash> kinds_;
+};
+
+// The springs m of a group listed by key(e) = (j - i, (k, L) pair, part, i) without its i, then
+// by i, which puts each run's springs together (a stable sort by (key, i)): one bucket per key,
+// in key order, each in the network's order and sorted by i only when it is not already (a
+// lattice lists its springs by first end).
+template <class Key>
+std::vector<std::int32_t> run_order(const std::vector<std::int32_t>& m,
+                                    const std::vector<Spring>& springs, const Key& key) {
+  std::map<std::tuple<Index, std::int32_t, std::uint8_t>, std::vector<std::int32_t>> buckets;
+  for (const std::int32_t e : m) {
+    const auto [off, kd, imp, i0] = key(e);
+    buckets[{off, kd, imp}].push_back(e);
+  }
+  std::vector<std::int32_t> sorted;
+  sorted.reserve(m.size());
+  for (auto& [bucket_key, members_of_key] : buckets) {
+    const auto first_end = [&](std::int32_t a, std::int32_t b) {
+      return springs[static_cast<std::size_t>(a)].i < springs[static_cast<std::size_t>(b)].i;
+    };
+    if (!std::is_sorted(members_of_key.begin(), members_of_key.end(), first_end))
+      std::stable_sort(members_of_key.begin(), members_of_key.end(), first_end);
+    sorted.insert(sorted.end(), members_of_key.begin(), members_of_key.end());
+  }
+  return sorted;
+}
+
+// Per partition q of the np points, [a, b) at 2q, 2q + 1: its longest run of points p with
+// touched_by[p] < 0 (no spring between partitions touches them).
+std::vector<Index> untouched_ranges(const std::vector<Index>& touched_by, Index np, Index parts) {
+  std::vector<Index> ranges(2 * static_cast<std::size_t>(parts), 0);
+  for (Index q = 0; q < parts; ++q) {
+    const Index p0 = np * q / parts, p1 = np * (q + 1) / parts;
+    Index best_a = p0, best_b = p0;
+    for (Index a = p0; a < p1;) {
+      if (touched_by[static_cast<std::size_t>(a)] >= 0) {
+        ++a;
+        continue;
+      }
+      Index b = a;
+      while (b < p1 && touched_by[static_cast<std::size_t>(b)] < 0) ++b;
+      if (b - a > best_b - best_a) best_a = a, best_b = b;
+      a = b;
+    }
+    ranges[2 * static_cast<std::size_t>(q)] = best_a;
+    ranges[2 * static_cast<std::size_t>(q) + 1] = best_b;
+  }
+  return ranges;
+}
+
+}  // namespace
+
+// Springs of the right-hand side in structure-of-arrays order, grouped by partition of the
+// points (see the header comment and RhsSprings); within each group, the runs first, then the
+// loose springs in the network's order.
+void MassSpringNetwork::pack_rhs_springs() {
+  const Index np = num_points();
+  // The partition count depends on the size only (not on the threads or on the parallel
+  // threshold), so the serial and the parallel path sum in the same order.
+  const Index parts = np >= 64 * kRhsPartitions ? kRhsPartitions : 1;
+  const std::vector<std::int32_t> part = point_partitions(np, parts);
   // Group of a spring: its partition q (both ends in q); parts + lo/2 for a spring between lo
   // and lo + 1 with lo even, parts + ne + lo/2 with lo odd; parts + ne + no for all others.
   rhs_parts_ = parts;
@@ -200,39 +298,11 @@ void MassSpringNetwork::pack_rhs_springs() {
     return parts + (lo % 2 == 0 ? lo / 2 : even_groups_ + lo / 2);
   };
 
-  // The distinct (k, L) pairs (by bits): a short linear search while there are few, then a hash.
   RhsSprings& rs = rhs_springs_;
   const std::size_t ns = springs_.size();
   require_input(dofs() <= std::numeric_limits<std::int32_t>::max(),
                 name_ + ": more than 2^31 - 1 coordinates (the springs store 32-bit offsets)");
-  struct KeyHash {
-    std::size_t operator()(const std::pair<std::uint64_t, std::uint64_t>& key) const {
-      return std::hash<std::uint64_t>()(key.first * 0x9E3779B97F4A7C15ULL ^ key.second);
-    }
-  };
-  std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, std::int32_t, KeyHash> kinds;
-  const auto kind_of = [&](double k, double rest) {
-    const std::pair<std::uint64_t, std::uint64_t> key{std::bit_cast<std::uint64_t>(k),
-                                                      std::bit_cast<std::uint64_t>(rest)};
-    if (kinds.empty()) {
-      for (std::size_t t = 0; t < rs.k.size(); ++t)
-        if (std::bit_cast<std::uint64_t>(rs.k[t]) == key.first &&
-            std::bit_cast<std::uint64_t>(rs.rest[t]) == key.second)
-          return static_cast<std::int32_t>(t);
-      if (rs.k.size() == 16)  // from now on, a hash table
-        for (std::size_t t = 0; t < rs.k.size(); ++t)
-          kinds.emplace(std::pair{std::bit_cast<std::uint64_t>(rs.k[t]),
-                                  std::bit_cast<std::uint64_t>(rs.rest[t])},
-                        static_cast<std::int32_t>(t));
-    } else if (const auto it = kinds.find(key); it != kinds.end()) {
-      return it->second;
-    }
-    const auto t = static_cast<std::int32_t>(rs.k.size());
-    rs.k.push_back(k);
-    rs.rest.push_back(rest);
-    if (!kinds.empty()) kinds.emplace(key, t);
-    return t;
-  };
+  SpringKinds kind_of(rs.k, rs.rest);
   // Each spring's (k, L) pair and part, and the springs of each group in the network's order.
   std::vector<std::int32_t> kind(ns);
   std::vector<std::uint8_t> implicit(ns, 0);
@@ -266,31 +336,14 @@ void MassSpringNetwork::pack_rhs_springs() {
     ++slot;
   };
   for (const std::vector<std::int32_t>& m : members) {
-    // Runs: springs of one (j - i, (k, L) pair, part) whose first ends are consecutive points.
-    // Listing the springs by that key and then by i puts them together (a stable sort by
-    // (key, i)): one bucket per key, in key order, each in the network's order and sorted by i
-    // only when it is not already (a lattice lists its springs by first end). Runs shorter than
-    // kMinRun stay loose.
+    // Runs: springs of one (j - i, (k, L) pair, part) whose first ends are consecutive points,
+    // together in `sorted` (run_order). Runs shorter than kMinRun stay loose.
     const auto key = [&](std::int32_t e) {
       const Spring& sp = springs_[static_cast<std::size_t>(e)];
       return std::tuple{sp.j - sp.i, kind[static_cast<std::size_t>(e)],
                         implicit[static_cast<std::size_t>(e)], sp.i};
     };
-    std::map<std::tuple<Index, std::int32_t, std::uint8_t>, std::vector<std::int32_t>> buckets;
-    for (const std::int32_t e : m) {
-      const auto [off, kd, imp, i0] = key(e);
-      buckets[{off, kd, imp}].push_back(e);
-    }
-    std::vector<std::int32_t> sorted;
-    sorted.reserve(m.size());
-    for (auto& [bucket_key, members_of_key] : buckets) {
-      const auto first_end = [&](std::int32_t a, std::int32_t b) {
-        return springs_[static_cast<std::size_t>(a)].i < springs_[static_cast<std::size_t>(b)].i;
-      };
-      if (!std::is_sorted(members_of_key.begin(), members_of_key.end(), first_end))
-        std::stable_sort(members_of_key.begin(), members_of_key.end(), first_end);
-      sorted.insert(sorted.end(), members_of_key.begin(), members_of_key.end());
-    }
+    const std::vector<std::int32_t> sorted = run_order(m, springs_, key);
     for (std::size_t a = 0; a < sorted.size();) {
       std::size_t b = a + 1;
       const auto [off, kd, imp, i0] = key(sorted[a]);
@@ -333,23 +386,7 @@ void MassSpringNetwork::pack_rhs_springs() {
         touched_by[u] = grp;
       }
     }
-  late_clear_.assign(2 * static_cast<std::size_t>(parts), 0);
-  for (Index q = 0; q < parts; ++q) {
-    const Index p0 = np * q / parts, p1 = np * (q + 1) / parts;
-    Index best_a = p0, best_b = p0;
-    for (Index a = p0; a < p1;) {
-      if (touched_by[static_cast<std::size_t>(a)] >= 0) {
-        ++a;
-        continue;
-      }
-      Index b = a;
-      while (b < p1 && touched_by[static_cast<std::size_t>(b)] < 0) ++b;
-      if (b - a > best_b - best_a) best_a = a, best_b = b;
-      a = b;
-    }
-    late_clear_[2 * static_cast<std::size_t>(q)] = best_a;
-    late_clear_[2 * static_cast<std::size_t>(q) + 1] = best_b;
-  }
+  late_clear_ = untouched_ranges(touched_by, np, parts);
 }
 
 const SpringNetworkView* MassSpringNetwork::spring_network() const {
