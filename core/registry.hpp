@@ -48,12 +48,6 @@ class Registry {
     return nullptr;
   }
 
-  Entry* find_mutable(const std::string& name) {
-    for (auto& e : entries_)
-      if (e.info.name == name) return &e;
-    return nullptr;
-  }
-
   // BadInput naming the unknown name and listing the known ones.
   const Entry& at(const std::string& name) const {
     if (const Entry* e = find(name)) return *e;

@@ -24,6 +24,9 @@ struct ModelSize {
 };
 using ModelSizeEstimate = std::function<ModelSize(const Params&)>;
 
+// A model's entry is complete when it is registered (nothing patches it afterwards); it is built
+// with designated initialisers, e.g. {.name = "cloth", .description = ..., .mechanical = true,
+// .source = ..., .size = ..., .rest_state = ...}, the flags false unless given.
 struct ModelInfo {
   std::string name;
   std::string description;

@@ -1,4 +1,5 @@
 #include "models/grid/heat_2d.hpp"
+#include "models/grid/grid_entry.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -125,6 +126,48 @@ void Heat2d::eval_jacobian(double, CVecRef, SparseMat& jac) const {
   }
   jac.resize(dimension(), dimension());
   jac.setFromTriplets(t.begin(), t.end());
+}
+
+ModelRegistry::Entry heat_2d_entry() {
+  using P = ParamType;
+  using B = Bounds;
+  return {
+      .info =
+          {.name = "heat_2d",
+           .description =
+               "heat equation u' = nu Laplace(u) on an n x n grid (5-point stencil), a sine mode; "
+               "stiffness knob nu/dx^2",
+           .exact = true,
+           .source =
+               "exact solution exp(lambda t) u0 of the semi-discrete system (lambda the stencil's "
+               "eigenvalue of the mode)",
+           // Sizes from the parameters alone (ModelSize, checked before anything is built).
+           // heat_2d: n^2 unknowns, the 5-point Jacobian (5 n^2 nonzeros, 12 bytes each) kept by
+           // the model, plus a few state-sized vectors.
+           .size =
+               [](const Params& p) {
+                 const double n = std::max(static_cast<double>(p.integer("n")), 0.0);
+                 return ModelSize{n * n, 12.0 * 5.0 * n * n + 32.0 * n * n, 5.0 * n * n,
+                                  "n=" + std::to_string(p.integer("n"))};
+               }},
+      .params = {{"n", P::integer, "32", "grid points per direction (unknowns n^2)",
+                  B::in(3, 4096)},
+                 {"nu", P::real, "1", "diffusivity nu", B::positive()},
+                 {"boundary",
+                  P::text,
+                  "periodic",
+                  "periodic (cell centres, dx = 1/n) or dirichlet (u = 0, interior nodes, dx = "
+                  "1/(n+1))",
+                  {"periodic", "dirichlet"}},
+                 {"kx", P::integer, "1", "mode number along x", B::in(1, 4096)},
+                 {"ky", P::integer, "1", "mode number along y", B::in(1, 4096)}},
+      .make = [](const Params& p) {
+        const int n = grid_int(p, "n", "heat_2d", 3, 4096);
+        const auto b = p.text("boundary") == "dirichlet" ? Heat2d::Boundary::dirichlet
+                                                         : Heat2d::Boundary::periodic;
+        return std::make_unique<Heat2d>(n, p.real("nu"), b, grid_int(p, "kx", "heat_2d", 1, 4096),
+                                        grid_int(p, "ky", "heat_2d", 1, 4096));
+      }};
 }
 
 }  // namespace stiffbench

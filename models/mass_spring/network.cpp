@@ -1,10 +1,7 @@
 #include "models/mass_spring/network.hpp"
 
 #include "models/detail/with_dim.hpp"
-
-#if defined(__GNUC__) && defined(__x86_64__)
-#include <immintrin.h>
-#endif
+#include "models/mass_spring/network_parts.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -23,17 +20,8 @@ namespace stiffbench {
 
 namespace {
 
-// Runs body(p) for p in [0, n), over OpenMP threads when `parallel`. Each p is independent, so
-// the result does not depend on the thread count.
-template <class Body>
-void for_points(Index n, bool parallel, const Body& body) {
-  if (parallel) {
-#pragma omp parallel for schedule(static)
-    for (Index p = 0; p < n; ++p) body(p);
-  } else {
-    for (Index p = 0; p < n; ++p) body(p);
-  }
-}
+using detail::face_drag;
+using detail::for_points;
 
 std::string item(const char* what, std::size_t index) {
   return std::string(what) + " " + std::to_string(index);
@@ -179,15 +167,11 @@ void MassSpringNetwork::check_triangles() const {
   }
 }
 
-// Springs of the right-hand side in structure-of-arrays order, grouped by partition of the
-// points (see the header comment and RhsSprings); within each group, the runs first, then the
-// loose springs in the network's order.
-void MassSpringNetwork::pack_rhs_springs() {
-  const Index np = num_points();
-  // The partition count depends on the size only (not on the threads or on the parallel
-  // threshold), so the serial and the parallel path sum in the same order.
-  const Index parts = np >= 64 * kRhsPartitions ? kRhsPartitions : 1;
-  // part_of(p) inverts p0 = np·q/parts: the first q with np·(q+1)/parts > p.
+namespace {
+
+// part[p]: the partition q of point p, the first q with np·(q+1)/parts > p (inverting
+// p0 = np·q/parts).
+std::vector<std::int32_t> point_partitions(Index np, Index parts) {
   const auto owner = [&](Index p) {
     Index q = (p * parts) / np;
     while (q + 1 < parts && np * (q + 1) / parts <= p) ++q;
@@ -197,6 +181,108 @@ void MassSpringNetwork::pack_rhs_springs() {
   std::vector<std::int32_t> part(static_cast<std::size_t>(np));
   for (Index p = 0; p < np; ++p)
     part[static_cast<std::size_t>(p)] = static_cast<std::int32_t>(owner(p));
+  return part;
+}
+
+// The distinct (k, L) pairs (by bits), appended to k and rest as they are first met; (k, L)
+// returns the pair's index: a short linear search while there are few, then a hash.
+class SpringKinds {
+ public:
+  SpringKinds(std::vector<double>& k, std::vector<double>& rest) : k_(k), rest_(rest) {}
+
+  std::int32_t operator()(double k, double rest) {
+    const std::pair<std::uint64_t, std::uint64_t> key{std::bit_cast<std::uint64_t>(k),
+                                                      std::bit_cast<std::uint64_t>(rest)};
+    if (kinds_.empty()) {
+      for (std::size_t t = 0; t < k_.size(); ++t)
+        if (std::bit_cast<std::uint64_t>(k_[t]) == key.first &&
+            std::bit_cast<std::uint64_t>(rest_[t]) == key.second)
+          return static_cast<std::int32_t>(t);
+      if (k_.size() == 16)  // from now on, a hash table
+        for (std::size_t t = 0; t < k_.size(); ++t)
+          kinds_.emplace(std::pair{std::bit_cast<std::uint64_t>(k_[t]),
+                                   std::bit_cast<std::uint64_t>(rest_[t])},
+                         static_cast<std::int32_t>(t));
+    } else if (const auto it = kinds_.find(key); it != kinds_.end()) {
+      return it->second;
+    }
+    const auto t = static_cast<std::int32_t>(k_.size());
+    k_.push_back(k);
+    rest_.push_back(rest);
+    if (!kinds_.empty()) kinds_.emplace(key, t);
+    return t;
+  }
+
+ private:
+  struct KeyHash {
+    std::size_t operator()(const std::pair<std::uint64_t, std::uint64_t>& key) const {
+      return std::hash<std::uint64_t>()(key.first * 0x9E3779B97F4A7C15ULL ^ key.second);
+    }
+  };
+  std::vector<double>& k_;
+  std::vector<double>& rest_;
+  std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, std::int32_t, KeyHash> kinds_;
+};
+
+// The springs m of a group listed by key(e) = (j - i, (k, L) pair, part, i) without its i, then
+// by i, which puts each run's springs together (a stable sort by (key, i)): one bucket per key,
+// in key order, each in the network's order and sorted by i only when it is not already (a
+// lattice lists its springs by first end).
+template <class Key>
+std::vector<std::int32_t> run_order(const std::vector<std::int32_t>& m,
+                                    const std::vector<Spring>& springs, const Key& key) {
+  std::map<std::tuple<Index, std::int32_t, std::uint8_t>, std::vector<std::int32_t>> buckets;
+  for (const std::int32_t e : m) {
+    const auto [off, kd, imp, i0] = key(e);
+    buckets[{off, kd, imp}].push_back(e);
+  }
+  std::vector<std::int32_t> sorted;
+  sorted.reserve(m.size());
+  for (auto& [bucket_key, members_of_key] : buckets) {
+    const auto first_end = [&](std::int32_t a, std::int32_t b) {
+      return springs[static_cast<std::size_t>(a)].i < springs[static_cast<std::size_t>(b)].i;
+    };
+    if (!std::is_sorted(members_of_key.begin(), members_of_key.end(), first_end))
+      std::stable_sort(members_of_key.begin(), members_of_key.end(), first_end);
+    sorted.insert(sorted.end(), members_of_key.begin(), members_of_key.end());
+  }
+  return sorted;
+}
+
+// Per partition q of the np points, [a, b) at 2q, 2q + 1: its longest run of points p with
+// touched_by[p] < 0 (no spring between partitions touches them).
+std::vector<Index> untouched_ranges(const std::vector<Index>& touched_by, Index np, Index parts) {
+  std::vector<Index> ranges(2 * static_cast<std::size_t>(parts), 0);
+  for (Index q = 0; q < parts; ++q) {
+    const Index p0 = np * q / parts, p1 = np * (q + 1) / parts;
+    Index best_a = p0, best_b = p0;
+    for (Index a = p0; a < p1;) {
+      if (touched_by[static_cast<std::size_t>(a)] >= 0) {
+        ++a;
+        continue;
+      }
+      Index b = a;
+      while (b < p1 && touched_by[static_cast<std::size_t>(b)] < 0) ++b;
+      if (b - a > best_b - best_a) best_a = a, best_b = b;
+      a = b;
+    }
+    ranges[2 * static_cast<std::size_t>(q)] = best_a;
+    ranges[2 * static_cast<std::size_t>(q) + 1] = best_b;
+  }
+  return ranges;
+}
+
+}  // namespace
+
+// Springs of the right-hand side in structure-of-arrays order, grouped by partition of the
+// points (see the header comment and RhsSprings); within each group, the runs first, then the
+// loose springs in the network's order.
+void MassSpringNetwork::pack_rhs_springs() {
+  const Index np = num_points();
+  // The partition count depends on the size only (not on the threads or on the parallel
+  // threshold), so the serial and the parallel path sum in the same order.
+  const Index parts = np >= 64 * kRhsPartitions ? kRhsPartitions : 1;
+  const std::vector<std::int32_t> part = point_partitions(np, parts);
   // Group of a spring: its partition q (both ends in q); parts + lo/2 for a spring between lo
   // and lo + 1 with lo even, parts + ne + lo/2 with lo odd; parts + ne + no for all others.
   rhs_parts_ = parts;
@@ -212,39 +298,11 @@ void MassSpringNetwork::pack_rhs_springs() {
     return parts + (lo % 2 == 0 ? lo / 2 : even_groups_ + lo / 2);
   };
 
-  // The distinct (k, L) pairs (by bits): a short linear search while there are few, then a hash.
   RhsSprings& rs = rhs_springs_;
   const std::size_t ns = springs_.size();
   require_input(dofs() <= std::numeric_limits<std::int32_t>::max(),
                 name_ + ": more than 2^31 - 1 coordinates (the springs store 32-bit offsets)");
-  struct KeyHash {
-    std::size_t operator()(const std::pair<std::uint64_t, std::uint64_t>& key) const {
-      return std::hash<std::uint64_t>()(key.first * 0x9E3779B97F4A7C15ULL ^ key.second);
-    }
-  };
-  std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, std::int32_t, KeyHash> kinds;
-  const auto kind_of = [&](double k, double rest) {
-    const std::pair<std::uint64_t, std::uint64_t> key{std::bit_cast<std::uint64_t>(k),
-                                                      std::bit_cast<std::uint64_t>(rest)};
-    if (kinds.empty()) {
-      for (std::size_t t = 0; t < rs.k.size(); ++t)
-        if (std::bit_cast<std::uint64_t>(rs.k[t]) == key.first &&
-            std::bit_cast<std::uint64_t>(rs.rest[t]) == key.second)
-          return static_cast<std::int32_t>(t);
-      if (rs.k.size() == 16)  // from now on, a hash table
-        for (std::size_t t = 0; t < rs.k.size(); ++t)
-          kinds.emplace(std::pair{std::bit_cast<std::uint64_t>(rs.k[t]),
-                                  std::bit_cast<std::uint64_t>(rs.rest[t])},
-                        static_cast<std::int32_t>(t));
-    } else if (const auto it = kinds.find(key); it != kinds.end()) {
-      return it->second;
-    }
-    const auto t = static_cast<std::int32_t>(rs.k.size());
-    rs.k.push_back(k);
-    rs.rest.push_back(rest);
-    if (!kinds.empty()) kinds.emplace(key, t);
-    return t;
-  };
+  SpringKinds kind_of(rs.k, rs.rest);
   // Each spring's (k, L) pair and part, and the springs of each group in the network's order.
   std::vector<std::int32_t> kind(ns);
   std::vector<std::uint8_t> implicit(ns, 0);
@@ -278,31 +336,14 @@ void MassSpringNetwork::pack_rhs_springs() {
     ++slot;
   };
   for (const std::vector<std::int32_t>& m : members) {
-    // Runs: springs of one (j - i, (k, L) pair, part) whose first ends are consecutive points.
-    // Listing the springs by that key and then by i puts them together (a stable sort by
-    // (key, i)): one bucket per key, in key order, each in the network's order and sorted by i
-    // only when it is not already (a lattice lists its springs by first end). Runs shorter than
-    // kMinRun stay loose.
+    // Runs: springs of one (j - i, (k, L) pair, part) whose first ends are consecutive points,
+    // together in `sorted` (run_order). Runs shorter than kMinRun stay loose.
     const auto key = [&](std::int32_t e) {
       const Spring& sp = springs_[static_cast<std::size_t>(e)];
       return std::tuple{sp.j - sp.i, kind[static_cast<std::size_t>(e)],
                         implicit[static_cast<std::size_t>(e)], sp.i};
     };
-    std::map<std::tuple<Index, std::int32_t, std::uint8_t>, std::vector<std::int32_t>> buckets;
-    for (const std::int32_t e : m) {
-      const auto [off, kd, imp, i0] = key(e);
-      buckets[{off, kd, imp}].push_back(e);
-    }
-    std::vector<std::int32_t> sorted;
-    sorted.reserve(m.size());
-    for (auto& [bucket_key, members_of_key] : buckets) {
-      const auto first_end = [&](std::int32_t a, std::int32_t b) {
-        return springs_[static_cast<std::size_t>(a)].i < springs_[static_cast<std::size_t>(b)].i;
-      };
-      if (!std::is_sorted(members_of_key.begin(), members_of_key.end(), first_end))
-        std::stable_sort(members_of_key.begin(), members_of_key.end(), first_end);
-      sorted.insert(sorted.end(), members_of_key.begin(), members_of_key.end());
-    }
+    const std::vector<std::int32_t> sorted = run_order(m, springs_, key);
     for (std::size_t a = 0; a < sorted.size();) {
       std::size_t b = a + 1;
       const auto [off, kd, imp, i0] = key(sorted[a]);
@@ -345,23 +386,7 @@ void MassSpringNetwork::pack_rhs_springs() {
         touched_by[u] = grp;
       }
     }
-  late_clear_.assign(2 * static_cast<std::size_t>(parts), 0);
-  for (Index q = 0; q < parts; ++q) {
-    const Index p0 = np * q / parts, p1 = np * (q + 1) / parts;
-    Index best_a = p0, best_b = p0;
-    for (Index a = p0; a < p1;) {
-      if (touched_by[static_cast<std::size_t>(a)] >= 0) {
-        ++a;
-        continue;
-      }
-      Index b = a;
-      while (b < p1 && touched_by[static_cast<std::size_t>(b)] < 0) ++b;
-      if (b - a > best_b - best_a) best_a = a, best_b = b;
-      a = b;
-    }
-    late_clear_[2 * static_cast<std::size_t>(q)] = best_a;
-    late_clear_[2 * static_cast<std::size_t>(q) + 1] = best_b;
-  }
+  late_clear_ = untouched_ranges(touched_by, np, parts);
 }
 
 const SpringNetworkView* MassSpringNetwork::spring_network() const {
@@ -504,346 +529,9 @@ MassSpringNetwork::Structure MassSpringNetwork::build_structure(const std::vecto
 
 namespace {
 
-// The spring kernel of the right-hand side (see the header comment): springs [e0, e1) add
-// f_i += c r and f_j -= c r, r = x_j - x_i, c = k (l - L)/l (+ c_d (u·r)/l² with a dashpot).
-// kBlock springs at a time: first their c r in a loop without dependences between springs
-// (`omp simd`: the compiler evaluates several springs per SIMD lane, gathering the end points'
-// coordinates), then the additions in spring order, so the sums run in the same order as a
-// one-spring-at-a-time loop and do not depend on the vector width.
-struct SpringArgs {
-  const std::int32_t* i;  // first end's first coordinate: D × point
-  const std::int32_t* j;  // second end's
-  const std::int32_t* kind;
-  const double* k;
-  const double* rest;
-  const double* damping;         // nullptr without dashpots
-  const std::uint8_t* implicit;  // per spring; nullptr: add every spring
-  std::uint8_t want;             // with `implicit`: add the springs with implicit[e] == want
-  const detail::SpringRun* runs;
-};
-
-constexpr int kBlock = 128;
-
-template <int D, bool Dashpots>
-[[gnu::always_inline]] inline void spring_range_impl(const SpringArgs& s, Index e0, Index e1,
-                                                     const double* x, const double* v, double* f) {
-  alignas(64) double cr[D][kBlock];
-  for (Index b0 = e0; b0 < e1; b0 += kBlock) {
-    const int nb = static_cast<int>(std::min<Index>(kBlock, e1 - b0));
-    const std::int32_t* si = s.i + b0;
-    const std::int32_t* sj = s.j + b0;
-    const std::int32_t* kind = s.kind + b0;
-#pragma omp simd
-    for (int b = 0; b < nb; ++b) {
-      const Index pi = si[b], pj = sj[b];
-      double r[D], l2 = 0.0;
-      for (int c = 0; c < D; ++c) {
-        r[c] = x[pj + c] - x[pi + c];
-        l2 += r[c] * r[c];
-      }
-      const double l = std::sqrt(l2);
-      double coef = s.k[kind[b]] * (l - s.rest[kind[b]]) / l;
-      if constexpr (Dashpots) {
-        double ur = 0.0;
-        for (int c = 0; c < D; ++c) ur += (v[pj + c] - v[pi + c]) * r[c];
-        const double cd = s.damping[b0 + b];
-        coef += cd != 0.0 ? cd * ur / l2 : 0.0;
-      }
-      for (int c = 0; c < D; ++c) cr[c][b] = coef * r[c];
-    }
-    // The additions, in spring order. Consecutive springs with the same first end (a point's
-    // springs are listed together) keep f_i in registers: the same additions in the same order
-    // as through memory, without waiting for each store to reach the next load.
-    Index cur = -1;
-    double fc[D] = {};
-    for (int b = 0; b < nb; ++b) {
-      if (s.implicit && s.implicit[b0 + b] != s.want) continue;
-      const Index pi = si[b];
-      if (pi != cur) {
-        if (cur >= 0)
-          for (int c = 0; c < D; ++c) f[cur + c] = fc[c];
-        cur = pi;
-        for (int c = 0; c < D; ++c) fc[c] = f[cur + c];
-      }
-      double* fj = f + sj[b];
-      for (int c = 0; c < D; ++c) {
-        fc[c] += cr[c][b];
-        fj[c] -= cr[c][b];
-      }
-    }
-    if (cur >= 0)
-      for (int c = 0; c < D; ++c) f[cur + c] = fc[c];
-  }
-}
-
-// A run (detail::SpringRun): the same c r as spring_range_impl, from contiguous coordinates
-// (the compiler vectorises the stride-D loads and stores with permutes), then f_i += c r for
-// the block's springs and f_j -= c r, each a loop over distinct points. Every point's additions
-// run in an order fixed by the packing, whatever the vector width.
-template <int D, bool Dashpots>
-[[gnu::always_inline]] inline void spring_run_impl(const SpringArgs& s,
-                                                   const detail::SpringRun& run, const double* x,
-                                                   const double* v, double* f) {
-  if (s.implicit && run.implicit != s.want) return;
-  const double k = s.k[run.kind], rest = s.rest[run.kind];
-  alignas(64) double cr[D][kBlock];
-  for (Index b0 = 0; b0 < run.n; b0 += kBlock) {
-    const int nb = static_cast<int>(std::min<Index>(kBlock, run.n - b0));
-    const Index oi = run.i + D * b0, oj = run.j + D * b0;
-    const double* xi = x + oi;
-    const double* xj = x + oj;
-#pragma omp simd
-    for (int b = 0; b < nb; ++b) {
-      double r[D], l2 = 0.0;
-      for (int c = 0; c < D; ++c) {
-        r[c] = xj[D * b + c] - xi[D * b + c];
-        l2 += r[c] * r[c];
-      }
-      const double l = std::sqrt(l2);
-      double coef = k * (l - rest) / l;
-      if constexpr (Dashpots) {
-        double ur = 0.0;
-        for (int c = 0; c < D; ++c) ur += (v[oj + D * b + c] - v[oi + D * b + c]) * r[c];
-        const double cd = s.damping[run.first + b0 + b];
-        coef += cd != 0.0 ? cd * ur / l2 : 0.0;
-      }
-      for (int c = 0; c < D; ++c) cr[c][b] = coef * r[c];
-    }
-    double* fi = f + oi;
-#pragma omp simd
-    for (int b = 0; b < nb; ++b)
-      for (int c = 0; c < D; ++c) fi[D * b + c] += cr[c][b];
-    double* fj = f + oj;
-#pragma omp simd
-    for (int b = 0; b < nb; ++b)
-      for (int c = 0; c < D; ++c) fj[D * b + c] -= cr[c][b];
-  }
-}
-
-// Group G of the packing: its runs, then its loose springs.
-template <int D, bool Dashpots>
-[[gnu::always_inline]] inline void spring_group_impl(const SpringArgs& s, Index r0, Index r1,
-                                                     Index e0, Index e1, const double* x,
-                                                     const double* v, double* f) {
-  for (Index r = r0; r < r1; ++r) spring_run_impl<D, Dashpots>(s, s.runs[r], x, v, f);
-  spring_range_impl<D, Dashpots>(s, e0, e1, x, v, f);
-}
-
-template <int D>
-void spring_group_portable(const SpringArgs& s, Index r0, Index r1, Index e0, Index e1,
-                           const double* x, const double* v, double* f) {
-  if (s.damping)
-    spring_group_impl<D, true>(s, r0, r1, e0, e1, x, v, f);
-  else
-    spring_group_impl<D, false>(s, r0, r1, e0, e1, x, v, f);
-}
-
-// A build for AVX2 or better (-march, e.g. STIFFBENCH_NATIVE) uses the portable kernel as is.
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__AVX2__)
-#define STIFFBENCH_SPRING_AVX2_DISPATCH 1
-// The same kernel compiled for AVX2 (4 springs per vector; GCC loads a loose spring's end points
-// lane by lane: its vgatherdpd version measured 25% slower on the project's AMD EPYC), chosen at
-// run time when the processor has it. With -ffp-contract=off (CMakeLists.txt) the compiler fuses
-// no multiply-add, and sqrt and division are correctly rounded, so both versions give the same
-// bits.
-template <int D>
-__attribute__((target("avx2"))) void spring_group_avx2(const SpringArgs& s, Index r0, Index r1,
-                                                       Index e0, Index e1, const double* x,
-                                                       const double* v, double* f) {
-  if (s.damping)
-    spring_group_impl<D, true>(s, r0, r1, e0, e1, x, v, f);
-  else
-    spring_group_impl<D, false>(s, r0, r1, e0, e1, x, v, f);
-}
-#endif
-
-#if defined(__GNUC__) && defined(__x86_64__)
-#define STIFFBENCH_SPRING_AVX512_DISPATCH 1
-// A 3D run in AVX-512 (explicit intrinsics, chosen at run time on processors with AVX-512F, in
-// any build). The compiler's version of spring_run_impl spends most of its time on permutes: it
-// transposes each spring's interleaved (x, y, z) into one vector per coordinate on the way in, and
-// back on the way out. Here eight springs' coordinates are three contiguous 512-bit loads per
-// end; r = x_j - x_i and r² stay interleaved, and only two things are permuted: the squares into
-// one vector per coordinate (two two-source permutes each) for l², and the eight coefficients
-// back into the interleaved order of r (one permute per vector). c r is stored interleaved, so
-// the additions f_i += c r and f_j -= c r are contiguous vector loops over the block. Every
-// operation is spring_run_impl's, in its order (l² = (r_x² + r_y²) + r_z², (u·r) summed from
-// +0.0, the additions of f_i before those of f_j within a block of kBlock springs), and sqrt and
-// division are correctly rounded, so the bits are the portable kernel's
-// (tests/models/test_spring_kernel.cpp compares the builds). The masked forms of sqrt and of the
-// one-source permute (all lanes kept) stand for the plain ones, whose GCC 12 versions trip
-// -Wmaybe-uninitialized inside avx512fintrin.h (GCC bug 105593).
-alignas(64) constexpr std::int64_t kPermIdx[8][8] = {
-    {0, 3, 6, 9, 12, 15, 0, 0},  // x components from the first two vectors
-    {0, 1, 2, 3, 4, 5, 10, 13},  // ... and the third
-    {1, 4, 7, 10, 13, 0, 0, 0},  // y
-    {0, 1, 2, 3, 4, 8, 11, 14},
-    {2, 5, 8, 11, 14, 0, 0, 0},  // z
-    {0, 1, 2, 3, 4, 9, 12, 15},
-    {0, 0, 0, 1, 1, 1, 2, 2},  // coefficients 0..7 spread over interleaved elements 0..7
-    {2, 3, 3, 3, 4, 4, 4, 5},  // ... 8..15
-};
-alignas(64) constexpr std::int64_t kSpreadLast[8] = {5, 5, 6, 6, 6, 7, 7, 7};  // ... 16..23
-
-// Σ_c of interleaved triples q0 q1 q2 (eight springs' (x, y, z)), as ((start + q_x) + q_y) + q_z.
-__attribute__((target("avx512f"))) inline __m512d sum_triples(__m512d q0, __m512d q1, __m512d q2,
-                                                              __m512d start) {
-  __m512i idx[6];
-  for (int row = 0; row < 6; ++row) idx[row] = _mm512_load_si512(kPermIdx[row]);
-  const __m512d qx = _mm512_permutex2var_pd(_mm512_permutex2var_pd(q0, idx[0], q1), idx[1], q2);
-  const __m512d qy = _mm512_permutex2var_pd(_mm512_permutex2var_pd(q0, idx[2], q1), idx[3], q2);
-  const __m512d qz = _mm512_permutex2var_pd(_mm512_permutex2var_pd(q0, idx[4], q1), idx[5], q2);
-  return _mm512_add_pd(_mm512_add_pd(_mm512_add_pd(start, qx), qy), qz);
-}
-
-// One spring of a run, spring_run_impl's operations, into the interleaved cr.
-template <bool Dashpots>
-[[gnu::always_inline]] inline void run_spring_scalar(const double* xi, const double* xj,
-                                                     const double* vi, const double* vj, double k,
-                                                     double rest, double cd, double* cr) {
-  double r[3], l2 = 0.0;
-  for (int c = 0; c < 3; ++c) {
-    r[c] = xj[c] - xi[c];
-    l2 += r[c] * r[c];
-  }
-  const double l = std::sqrt(l2);
-  double coef = k * (l - rest) / l;
-  if constexpr (Dashpots) {
-    double ur = 0.0;
-    for (int c = 0; c < 3; ++c) ur += (vj[c] - vi[c]) * r[c];
-    coef += cd != 0.0 ? cd * ur / l2 : 0.0;
-  }
-  for (int c = 0; c < 3; ++c) cr[c] = coef * r[c];
-}
-
-// dst[t] += c[t] (Minus: -=) for t < n, eight at a time.
-template <bool Minus>
-__attribute__((target("avx512f"))) inline void add_interleaved(double* dst, const double* c,
-                                                               int n) {
-  int t = 0;
-  for (; t + 8 <= n; t += 8) {
-    const __m512d a = _mm512_loadu_pd(dst + t), b = _mm512_load_pd(c + t);
-    _mm512_storeu_pd(dst + t, Minus ? _mm512_sub_pd(a, b) : _mm512_add_pd(a, b));
-  }
-  if (t < n) {
-    const auto m = static_cast<__mmask8>((1u << (n - t)) - 1u);
-    const __m512d a = _mm512_maskz_loadu_pd(m, dst + t), b = _mm512_maskz_load_pd(m, c + t);
-    _mm512_mask_storeu_pd(dst + t, m, Minus ? _mm512_sub_pd(a, b) : _mm512_add_pd(a, b));
-  }
-}
-
-template <bool Dashpots>
-__attribute__((target("avx512f"))) void spring_run_avx512(const SpringArgs& s,
-                                                          const detail::SpringRun& run,
-                                                          const double* x, const double* v,
-                                                          double* f) {
-  if (s.implicit && run.implicit != s.want) return;
-  const double k = s.k[run.kind], rest = s.rest[run.kind];
-  const __m512d vk = _mm512_set1_pd(k), vrest = _mm512_set1_pd(rest), zero = _mm512_setzero_pd();
-  const __m512i spread0 = _mm512_load_si512(kPermIdx[6]), spread1 = _mm512_load_si512(kPermIdx[7]),
-                spread2 = _mm512_load_si512(kSpreadLast);
-  alignas(64) double cr[3 * kBlock];
-  for (Index b0 = 0; b0 < run.n; b0 += kBlock) {
-    const int nb = static_cast<int>(std::min<Index>(kBlock, run.n - b0));
-    const Index oi = run.i + 3 * b0, oj = run.j + 3 * b0;
-    const double* xi = x + oi;
-    const double* xj = x + oj;
-    const double* cd = Dashpots ? s.damping + run.first + b0 : nullptr;
-    int b = 0;
-    for (; b + 8 <= nb; b += 8) {
-      const double* pi = xi + 3 * b;
-      const double* pj = xj + 3 * b;
-      const __m512d r0 = _mm512_sub_pd(_mm512_loadu_pd(pj), _mm512_loadu_pd(pi));
-      const __m512d r1 = _mm512_sub_pd(_mm512_loadu_pd(pj + 8), _mm512_loadu_pd(pi + 8));
-      const __m512d r2 = _mm512_sub_pd(_mm512_loadu_pd(pj + 16), _mm512_loadu_pd(pi + 16));
-      // l² from +0.0 adds nothing to spring_run_impl's sum: r_x² is never -0.0.
-      const __m512d l2 =
-          sum_triples(_mm512_mul_pd(r0, r0), _mm512_mul_pd(r1, r1), _mm512_mul_pd(r2, r2), zero);
-      const __m512d l = _mm512_maskz_sqrt_pd(0xFF, l2);
-      __m512d coef = _mm512_div_pd(_mm512_mul_pd(vk, _mm512_sub_pd(l, vrest)), l);
-      if constexpr (Dashpots) {
-        const double* ui = v + oi + 3 * b;
-        const double* uj = v + oj + 3 * b;
-        const __m512d u0 = _mm512_sub_pd(_mm512_loadu_pd(uj), _mm512_loadu_pd(ui));
-        const __m512d u1 = _mm512_sub_pd(_mm512_loadu_pd(uj + 8), _mm512_loadu_pd(ui + 8));
-        const __m512d u2 = _mm512_sub_pd(_mm512_loadu_pd(uj + 16), _mm512_loadu_pd(ui + 16));
-        const __m512d ur =
-            sum_triples(_mm512_mul_pd(u0, r0), _mm512_mul_pd(u1, r1), _mm512_mul_pd(u2, r2), zero);
-        const __m512d c = _mm512_loadu_pd(cd + b);
-        const __mmask8 has = _mm512_cmp_pd_mask(c, zero, _CMP_NEQ_UQ);
-        coef =
-            _mm512_add_pd(coef, _mm512_maskz_mov_pd(has, _mm512_div_pd(_mm512_mul_pd(c, ur), l2)));
-      }
-      double* out = cr + 3 * b;
-      _mm512_store_pd(out, _mm512_mul_pd(_mm512_maskz_permutexvar_pd(0xFF, spread0, coef), r0));
-      _mm512_store_pd(out + 8, _mm512_mul_pd(_mm512_maskz_permutexvar_pd(0xFF, spread1, coef), r1));
-      _mm512_store_pd(out + 16,
-                      _mm512_mul_pd(_mm512_maskz_permutexvar_pd(0xFF, spread2, coef), r2));
-    }
-    for (; b < nb; ++b)
-      run_spring_scalar<Dashpots>(xi + 3 * b, xj + 3 * b, v + oi + 3 * b, v + oj + 3 * b, k, rest,
-                                  Dashpots ? cd[b] : 0.0, cr + 3 * b);
-    // f_i += c r over the block, then f_j -= c r (each a set of distinct points).
-    add_interleaved<false>(f + oi, cr, 3 * nb);
-    add_interleaved<true>(f + oj, cr, 3 * nb);
-  }
-}
-
-// The runs [r0, r1) of a group in 3D on an AVX-512 processor (its loose springs: spring_group).
-__attribute__((target("avx512f"))) void spring_runs_avx512(const SpringArgs& s, Index r0, Index r1,
-                                                           const double* x, const double* v,
-                                                           double* f) {
-  for (Index r = r0; r < r1; ++r) {
-    if (s.damping)
-      spring_run_avx512<true>(s, s.runs[r], x, v, f);
-    else
-      spring_run_avx512<false>(s, s.runs[r], x, v, f);
-  }
-}
-#endif
-
-// The widest build of the kernel in use (MassSpringNetwork::kernel_isa), at most the processor's
-// and at most the process-wide limit set by MassSpringNetwork::limit_kernel_isa.
-std::atomic<int> g_isa_limit{static_cast<int>(SpringKernelIsa::avx512)};
-
-SpringKernelIsa processor_isa() {
-  static const SpringKernelIsa isa = [] {
-#if defined(STIFFBENCH_SPRING_AVX512_DISPATCH)
-    if (__builtin_cpu_supports("avx512f")) return SpringKernelIsa::avx512;
-#endif
-#if defined(STIFFBENCH_SPRING_AVX2_DISPATCH)
-    if (__builtin_cpu_supports("avx2")) return SpringKernelIsa::avx2;
-#elif defined(__AVX2__)
-    return SpringKernelIsa::avx2;  // the portable build is compiled for AVX2 or better
-#endif
-    return SpringKernelIsa::portable;
-  }();
-  return isa;
-}
-
-SpringKernelIsa kernel_isa_in_use() {
-  return static_cast<SpringKernelIsa>(
-      std::min(static_cast<int>(processor_isa()), g_isa_limit.load(std::memory_order_relaxed)));
-}
-
-template <int D>
-void spring_group(const SpringArgs& s, Index r0, Index r1, Index e0, Index e1, const double* x,
-                  const double* v, double* f, SpringKernelIsa isa) {
-#ifdef STIFFBENCH_SPRING_AVX512_DISPATCH
-  if (D == 3 && isa == SpringKernelIsa::avx512) {
-    spring_runs_avx512(s, r0, r1, x, v, f);
-    r0 = r1;  // the loose springs below
-  }
-#endif
-#ifdef STIFFBENCH_SPRING_AVX2_DISPATCH
-  if (isa != SpringKernelIsa::portable) {
-    spring_group_avx2<D>(s, r0, r1, e0, e1, x, v, f);
-    return;
-  }
-#endif
-  (void)isa;
-  spring_group_portable<D>(s, r0, r1, e0, e1, x, v, f);
-}
+using detail::kernel_isa_in_use;
+using detail::spring_group;
+using detail::SpringArgs;
 
 // Points [p0, p1): force sums into accelerations, a = g + (f - γ v)/m (Springs: f/m only), 0 for
 // pinned points, in a loop the compiler vectorises (the pinned select is a bit mask).
@@ -972,24 +660,6 @@ void MassSpringNetwork::acceleration_impl(const double* x, const double* v, doub
   if (P != Part::implicit_part && drag()) add_drag(x, v, a);
 }
 
-const char* to_string(SpringKernelIsa isa) {
-  switch (isa) {
-    case SpringKernelIsa::portable:
-      return "portable";
-    case SpringKernelIsa::avx2:
-      return "avx2";
-    case SpringKernelIsa::avx512:
-      return "avx512";
-  }
-  return "?";
-}
-
-SpringKernelIsa MassSpringNetwork::kernel_isa() { return kernel_isa_in_use(); }
-
-void MassSpringNetwork::limit_kernel_isa(SpringKernelIsa widest) {
-  g_isa_limit.store(static_cast<int>(widest), std::memory_order_relaxed);
-}
-
 void MassSpringNetwork::eval_acceleration(double, CVecRef x, CVecRef v, VecRef a) const {
   detail::with_dim<1, 3>(dim_, [&](auto dim) {
     acceleration_impl<decltype(dim)::value, Part::all>(x.data(), v.data(), a.data(), nullptr);
@@ -1041,287 +711,6 @@ void MassSpringNetwork::eval_acceleration_implicit_part(double, CVecRef x, CVecR
     acceleration_impl<decltype(dim)::value, Part::implicit_part>(x.data(), v.data(), a.data(),
                                                                  nullptr);
   });
-}
-
-// ---------------------------------------------------------------------------------------------
-// Jacobian blocks.
-//
-// Derivation of the dashpot's position derivative: f_i = c s d with s = u·d, u = v_j - v_i,
-// d = (x_j - x_i)/l. Then ∂f_i/∂d = c (d uᵀ + s I) and ∂d/∂x_j = (I - d dᵀ)/l, so
-//   ∂f_i/∂x_j = (c/l)(d uᵀ + s I)(I - d dᵀ) = (c/l)[d (u - s d)ᵀ + s (I - d dᵀ)] = J_c,
-// and ∂f_i/∂x_i = -J_c because d depends on x_j - x_i only. ∂f_i/∂v_j = c d dᵀ = -∂f_i/∂v_i.
-
-template <int D>
-void MassSpringNetwork::blocks_impl(const Structure& st, double gamma, const double* x,
-                                    const double* v, double* k_values, double* d_values) const {
-  const bool dd_only = opt_.compressed_dd_only;
-  const Index* start = st.adjacency->start.data();
-  const SpringNeighbour* nb = st.adjacency->neighbours.data();
-  const MassPoint* pts = points_.data();
-  const Index* dpos = st.diag_pos.data();
-  const Index* apos = st.adj_pos.data();
-  // Without dashpots each spring's block J_s is symmetric and the same from both ends, so point
-  // p can fill its own column block instead of its row block: K_qp = J_s / m_q (0 for a pinned
-  // q), a contiguous range of the column-major storage. With dashpots (J_c is not symmetric)
-  // point p fills its rows.
-  const bool by_column = !st.dashpots && !d_values;
-  const Index* tpos = st.adj_pos_t.data();
-  const double* inv_mass = inv_mass_.data();
-  if (by_column && k_values) {
-    for_points(num_points(), parallel(), [&](Index p) {
-      const double* xp = x + D * p;
-      for (Index e = start[p]; e < start[p + 1]; ++e)
-        for (int q = 0; q < D * D; ++q) k_values[tpos[e * D * D + q]] = 0.0;
-      double kd[D][D] = {};
-      for (Index e = start[p]; e < start[p + 1]; ++e) {
-        const SpringNeighbour& s = nb[e];
-        const double* xq = x + D * s.other;
-        double dir[D], l2 = 0.0;
-        for (int c = 0; c < D; ++c) {
-          dir[c] = xq[c] - xp[c];
-          l2 += dir[c] * dir[c];
-        }
-        const double l = std::sqrt(l2);
-        for (int c = 0; c < D; ++c) dir[c] /= l;
-        const double across = (dd_only && l < s.rest) ? 0.0 : s.k * (1.0 - s.rest / l);
-        const double along = s.k - across;
-        const double wq = inv_mass[s.other];
-        const Index* pos = tpos + e * D * D;
-        for (int a = 0; a < D; ++a)
-          for (int b = 0; b < D; ++b) {
-            const double j = along * dir[a] * dir[b] + (a == b ? across : 0.0);
-            k_values[pos[a * D + b]] += j * wq;
-            kd[a][b] -= j;
-          }
-      }
-      const Index* pos = dpos + p * D * D;
-      const double wp = inv_mass[p];  // 0 for a pinned point: zero rows
-      for (int a = 0; a < D; ++a)
-        for (int b = 0; b < D; ++b) k_values[pos[a * D + b]] = kd[a][b] * wp;
-    });
-    return;
-  }
-  for_points(num_points(), parallel(), [&](Index p) {
-    const MassPoint& pt = pts[p];
-    // This point's rows: cleared here (in parallel, no pass over the whole matrix), then summed.
-    for (Index e = start[p]; e < start[p + 1]; ++e)
-      for (int q = 0; q < D * D; ++q) {
-        if (k_values) k_values[apos[e * D * D + q]] = 0.0;
-        if (d_values) d_values[apos[e * D * D + q]] = 0.0;
-      }
-    if (pt.pinned) {  // zero rows
-      for (int q = 0; q < D * D; ++q) {
-        if (k_values) k_values[dpos[p * D * D + q]] = 0.0;
-        if (d_values) d_values[dpos[p * D * D + q]] = 0.0;
-      }
-      return;
-    }
-    const double inv_m = 1.0 / pt.mass;
-    const double* xp = x + D * p;
-    const double* vp = v + D * p;
-    double kd[D][D] = {}, dd[D][D] = {};  // diagonal blocks, accumulated
-    for (Index e = start[p]; e < start[p + 1]; ++e) {
-      const SpringNeighbour& s = nb[e];
-      const double* xq = x + D * s.other;
-      double dir[D], l2 = 0.0;
-      for (int c = 0; c < D; ++c) {
-        dir[c] = xq[c] - xp[c];
-        l2 += dir[c] * dir[c];
-      }
-      const double l = std::sqrt(l2);
-      for (int c = 0; c < D; ++c) dir[c] /= l;
-      // J_s = k [d dᵀ + (1 - L/l)(I - d dᵀ)] = k (L/l) d dᵀ + k (1 - L/l) I.
-      const double across = (dd_only && l < s.rest) ? 0.0 : s.k * (1.0 - s.rest / l);
-      const double along = s.k - across;  // coefficient of d dᵀ: k·L/l, or k when dropped
-      double jk[D][D], jd[D][D];
-      for (int a = 0; a < D; ++a)
-        for (int b = 0; b < D; ++b) {
-          jk[a][b] = along * dir[a] * dir[b] + (a == b ? across : 0.0);
-          jd[a][b] = 0.0;
-        }
-      if (s.damping != 0.0) {
-        const double* vq = v + D * s.other;
-        double u[D], sd = 0.0;
-        for (int c = 0; c < D; ++c) {
-          u[c] = vq[c] - vp[c];
-          sd += u[c] * dir[c];
-        }
-        const double cl = s.damping / l;
-        for (int a = 0; a < D; ++a)
-          for (int b = 0; b < D; ++b) {
-            // J_c = (c/l)[d (u - s d)ᵀ + s (I - d dᵀ)];  D_c = c d dᵀ.
-            jk[a][b] += cl * (dir[a] * (u[b] - sd * dir[b]) +
-                              sd * ((a == b ? 1.0 : 0.0) - dir[a] * dir[b]));
-            jd[a][b] = s.damping * dir[a] * dir[b];
-          }
-      }
-      const Index* pos = apos + e * D * D;
-      for (int a = 0; a < D; ++a)
-        for (int b = 0; b < D; ++b) {
-          if (k_values) k_values[pos[a * D + b]] += jk[a][b] * inv_m;
-          if (d_values) d_values[pos[a * D + b]] += jd[a][b] * inv_m;
-          kd[a][b] -= jk[a][b];
-          dd[a][b] -= jd[a][b];
-        }
-    }
-    const Index* pos = dpos + p * D * D;
-    for (int a = 0; a < D; ++a)
-      for (int b = 0; b < D; ++b) {
-        if (k_values) k_values[pos[a * D + b]] = kd[a][b] * inv_m;
-        if (d_values) d_values[pos[a * D + b]] = (dd[a][b] - (a == b ? gamma : 0.0)) * inv_m;
-      }
-  });
-}
-
-void MassSpringNetwork::fill_blocks(const Structure& st, double gamma, bool with_drag, CVecRef x,
-                                    CVecRef v, SparseMat* k, SparseMat* d) const {
-  // A matrix that already has this pattern (same size and number of nonzeros, compressed: a
-  // previous result of this network) keeps its storage; only the values are written. Without
-  // dashpots D = -(γ/m) I is diagonal and gets a diagonal pattern.
-  const auto ensure = [](SparseMat* m, const SparseMat& pattern) {
-    if (!m) return;
-    if (m->rows() != pattern.rows() || m->cols() != pattern.cols() ||
-        m->nonZeros() != pattern.nonZeros() || !m->isCompressed())
-      *m = pattern;
-  };
-  with_drag = with_drag && drag();
-  const bool full_d = st.dashpots || with_drag;  // D on K's pattern
-  ensure(k, st.pattern);
-  ensure(d, full_d ? st.pattern : st.diag_pattern);
-  double* kv = k ? k->valuePtr() : nullptr;
-  double* dv = d && full_d ? d->valuePtr() : nullptr;
-  if (kv || dv)
-    detail::with_dim<1, 3>(dim_, [&](auto dim) {
-      blocks_impl<decltype(dim)::value>(st, gamma, x.data(), v.data(), kv, dv);
-    });
-  if (with_drag) add_drag_blocks(st, x.data(), v.data(), kv, dv);
-  if (d && !full_d) {
-    double* dd = d->valuePtr();
-    for (Index p = 0; p < num_points(); ++p)
-      for (int c = 0; c < dim_; ++c)
-        dd[dim_ * p + c] = -gamma * inv_mass_[static_cast<std::size_t>(p)];
-  }
-}
-
-void MassSpringNetwork::stiffness_block(double, CVecRef x, CVecRef v, SparseMat& k) const {
-  ensure_structure();
-  fill_blocks(structure_, opt_.point_damping, true, x, v, &k, nullptr);
-}
-
-void MassSpringNetwork::damping_block(double, CVecRef x, CVecRef v, SparseMat& d) const {
-  ensure_structure();
-  fill_blocks(structure_, opt_.point_damping, true, x, v, nullptr, &d);
-}
-
-void MassSpringNetwork::force_jacobians(double, CVecRef x, CVecRef v, SparseMat& k,
-                                        SparseMat& d) const {
-  ensure_structure();
-  fill_blocks(structure_, opt_.point_damping, true, x, v, &k, &d);
-}
-
-// ---------------------------------------------------------------------------------------------
-// Air drag (see the header comment for the force and its derivatives).
-
-namespace {
-
-// One triangle's drag at (x, v): N, v̄, u = v̄·N, w = 1/|N|² (0 for a triangle of zero area) and
-// the force F = -β u|u| w N, β = β_d/2.
-struct FaceDrag {
-  double n[3], vbar[3], u, w, f[3];
-};
-
-FaceDrag face_drag(const double* x, const double* v, const Triangle& t, double beta) {
-  FaceDrag r{};
-  const double* xa = x + 3 * t.a;
-  const double* xb = x + 3 * t.b;
-  const double* xc = x + 3 * t.c;
-  const double e1[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
-  const double e2[3] = {xc[0] - xa[0], xc[1] - xa[1], xc[2] - xa[2]};
-  r.n[0] = e1[1] * e2[2] - e1[2] * e2[1];
-  r.n[1] = e1[2] * e2[0] - e1[0] * e2[2];
-  r.n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-  const double n2 = r.n[0] * r.n[0] + r.n[1] * r.n[1] + r.n[2] * r.n[2];
-  r.w = n2 > 0.0 ? 1.0 / n2 : 0.0;
-  r.u = 0.0;
-  for (int c = 0; c < 3; ++c) {
-    r.vbar[c] = (v[3 * t.a + c] + v[3 * t.b + c] + v[3 * t.c + c]) / 3.0;
-    r.u += r.vbar[c] * r.n[c];
-  }
-  const double scale = -beta * r.u * std::abs(r.u) * r.w;
-  for (int c = 0; c < 3; ++c) r.f[c] = scale * r.n[c];
-  return r;
-}
-
-}  // namespace
-
-// The triangles' forces into face_force_, then each free point adds its triangles' shares in
-// ascending triangle order: the additions of one serial pass over the triangles, for any thread
-// count.
-void MassSpringNetwork::add_drag(const double* x, const double* v, double* a) const {
-  const double beta = 0.5 * opt_.air_drag;
-  double* force = face_force_.data();
-  const auto nt = static_cast<Index>(triangles_.size());
-  for_points(nt, parallel(), [&](Index t) {
-    const FaceDrag fd = face_drag(x, v, triangles_[static_cast<std::size_t>(t)], beta);
-    for (int c = 0; c < 3; ++c) force[3 * t + c] = fd.f[c];
-  });
-  const Index* start = point_face_start_.data();
-  const Index* faces = point_faces_.data();
-  for_points(num_points(), parallel(), [&](Index p) {
-    if (pinned_[static_cast<std::size_t>(p)]) return;
-    const double s = inv_mass_[static_cast<std::size_t>(p)] / 3.0;
-    for (Index e = start[p]; e < start[p + 1]; ++e)
-      for (int c = 0; c < 3; ++c) a[3 * p + c] += s * force[3 * faces[e] + c];
-  });
-}
-
-void MassSpringNetwork::add_drag_blocks(const Structure& st, const double* x, const double* v,
-                                        double* k_values, double* d_values) const {
-  const double beta = 0.5 * opt_.air_drag;
-  const auto* outer = st.pattern.outerIndexPtr();
-  for (std::size_t t = 0; t < triangles_.size(); ++t) {
-    const Triangle& tr = triangles_[t];
-    const Index pts[3] = {tr.a, tr.b, tr.c};
-    const FaceDrag fd = face_drag(x, v, tr, beta);
-    const double* n = fd.n;
-    const double au = std::abs(fd.u), uau = fd.u * au, w = fd.w;
-    // ∂F/∂v_q (the same for every q) and G = ∂F/∂N.
-    double dv[3][3], g[3][3];
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) {
-        dv[r][c] = -(2.0 * beta * au * w / 3.0) * n[r] * n[c];
-        g[r][c] = -beta * (2.0 * au * w * n[r] * fd.vbar[c] + (r == c ? uau * w : 0.0) -
-                           2.0 * uau * w * w * n[r] * n[c]);
-      }
-    // S_q = [s_q]× with s_a = e2 - e1 = x_c - x_b, s_b = -e2 = x_a - x_c, s_c = e1 = x_b - x_a.
-    double side[3][3];
-    for (int c = 0; c < 3; ++c) {
-      side[0][c] = x[3 * tr.c + c] - x[3 * tr.b + c];
-      side[1][c] = x[3 * tr.a + c] - x[3 * tr.c + c];
-      side[2][c] = x[3 * tr.b + c] - x[3 * tr.a + c];
-    }
-    for (int qi = 0; qi < 3; ++qi) {
-      const double* sq = side[qi];
-      const double cross[3][3] = {{0.0, -sq[2], sq[1]}, {sq[2], 0.0, -sq[0]}, {-sq[1], sq[0], 0.0}};
-      double kx[3][3];  // ∂F/∂x_q = G S_q
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c)
-          kx[r][c] = g[r][0] * cross[0][c] + g[r][1] * cross[1][c] + g[r][2] * cross[2][c];
-      const Index q = pts[qi];
-      const Index len = outer[3 * q + 1] - outer[3 * q];
-      for (int pi = 0; pi < 3; ++pi) {
-        const Index p = pts[pi];
-        if (pinned_[static_cast<std::size_t>(p)]) continue;  // zero rows
-        const double s = inv_mass_[static_cast<std::size_t>(p)] / 3.0;
-        const Index base = st.face_pos[9 * t + static_cast<std::size_t>(3 * pi + qi)];
-        for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c) {
-            if (k_values) k_values[base + r + c * len] += s * kx[r][c];
-            if (d_values) d_values[base + r + c * len] += s * dv[r][c];
-          }
-      }
-    }
-  }
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -33,14 +33,14 @@
 //   J_c = (c/l) [ d (u - s d)ᵀ + s (I - d dᵀ) ],  u = v_j - v_i, s = u·d     (dashpot, ∂/∂x),
 //   D_c = c d dᵀ                                                              (dashpot, ∂/∂v),
 // the force derivatives are ∂f_i/∂x_j = J_s + J_c = -∂f_i/∂x_i and ∂f_i/∂v_j = D_c =
-// -∂f_i/∂v_i; J_c follows from ∂d/∂x_j = (I - d dᵀ)/l (derived in network.cpp). K = M⁻¹ ∂f/∂x
-// and D = M⁻¹ ∂f/∂v - (γ/m) I. K is returned with one fixed pattern, computed once: a dim×dim
-// block for every point's diagonal and for every ordered pair of points joined by a spring
-// (explicit zeros where a value happens to vanish); D has the same pattern when the network has
-// dashpots or air drag and the diagonal pattern otherwise. A matrix passed in that already has the
-// pattern keeps its storage (values written in place, each point's rows by the thread that owns the
-// point), so implicit solvers evaluate K and D every step without allocating;
-// force_jacobians() fills both in one pass over the springs.
+// -∂f_i/∂v_i; J_c follows from ∂d/∂x_j = (I - d dᵀ)/l (derived in force_jacobians.cpp).
+// K = M⁻¹ ∂f/∂x and D = M⁻¹ ∂f/∂v - (γ/m) I. K is returned with one fixed pattern, computed
+// once: a dim×dim block for every point's diagonal and for every ordered pair of points joined by
+// a spring (explicit zeros where a value happens to vanish); D has the same pattern when the
+// network has dashpots or air drag and the diagonal pattern otherwise. A matrix passed in that
+// already has the pattern keeps its storage (values written in place, each point's rows by the
+// thread that owns the point), so implicit solvers evaluate K and D every step without
+// allocating; force_jacobians() fills both in one pass over the springs.
 // Air drag's blocks, with β = β_d/2, w = 1/|N|², for each pair (p, q) of a triangle's points:
 //   ∂F/∂v_q = -(2β|u|w/3) N Nᵀ,
 //   ∂F/∂x_q = G S_q,  G = ∂F/∂N = -β [2|u| w N v̄ᵀ + u|u| w I - 2 u|u| w² N Nᵀ],
@@ -96,7 +96,7 @@
 // not on the threads, so every point's sum runs in the same order for any thread count: results are
 // bitwise identical for 1 and 2 threads and on the serial path (tested against a
 // one-spring-at-a-time evaluation in tests/models/test_spring_kernel.cpp). K and D are filled
-// per point (network.cpp).
+// per point (force_jacobians.cpp).
 //
 // Constraints: distance constraints C = |x_i - x_j| - L (e.g. the constrained pendulum chain),
 // held by DistanceConstraints (models/mass_spring/distance_constraints.hpp) and enforced by
@@ -207,7 +207,7 @@ class MassSpringNetwork final : public MechanicalSystem {
   bool has_force_jacobians() const override { return true; }
   void stiffness_block(double t, CVecRef x, CVecRef v, SparseMat& k) const override;
   void damping_block(double t, CVecRef x, CVecRef v, SparseMat& d) const override;
-  // K and D in one pass over the springs, in place (see fill_blocks in network.cpp).
+  // K and D in one pass over the springs, in place (see fill_blocks in force_jacobians.cpp).
   void force_jacobians(double t, CVecRef x, CVecRef v, SparseMat& k, SparseMat& d) const override;
   // The pinned points' dofs.
   std::vector<Index> fixed_dofs() const override;

@@ -1,4 +1,5 @@
 #include "models/problems/advection_diffusion.hpp"
+#include "models/problems/problem_entry.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -95,6 +96,47 @@ void AdvectionDiffusion::eval_implicit_part_jacobian(double, CVecRef, SparseMat&
 std::optional<SplitInfo> AdvectionDiffusion::imex_split() const {
   return SplitInfo{"advection", "advection -a u_x (central differences)",
                    "diffusion and reaction ν u_xx - r u"};
+}
+
+ModelRegistry::Entry advection_diffusion_entry() {
+  using P = ParamType;
+  using B = Bounds;
+  return {
+      .info =
+          {.name = "advection_diffusion",
+           .description =
+               "1D periodic u_t + a u_x = ν u_xx - r u on [0,1), central differences on n cells, "
+               "initial sin(2πk x); split=advection: advection explicit, diffusion and reaction "
+               "implicit; end time 1",
+           .exact = true,
+           .source =
+               "method of lines; exact solution of the ODE e^{μt} sin(θj - ωt) from the circulant "
+               "operator's Fourier modes",
+           // advection_diffusion: n unknowns, the tridiagonal Jacobian (3n nonzeros of 12 bytes).
+           .size =
+               [](const Params& p) {
+                 const double n = std::max(static_cast<double>(p.integer("n")), 0.0);
+                 return ModelSize{n, 12.0 * 3.0 * n + 32.0 * n, 3.0 * n,
+                                  "n=" + std::to_string(p.integer("n"))};
+               }},
+      .params = {{"n", P::integer, "256", "cells N (Δx = 1/N)", B::in(3, 10000000)},
+                 {"a", P::real, "1", "advection speed a", B::any()},
+                 {"nu", P::real, "1e-4", "diffusion coefficient ν", B::non_negative()},
+                 {"r", P::real, "0", "reaction (decay) rate r", B::non_negative()},
+                 {"k", P::integer, "1", "wave number of the initial mode sin(2πk x)",
+                  B::in(0, 1e9)},
+                 {"split",
+                  P::text,
+                  "advection",
+                  "additive split f = f_E + f_I: advection (advection explicit; diffusion and "
+                  "reaction implicit)",
+                  {"advection"}}},
+      .make = [](const Params& p) {
+        p.text("split");  // one split (advection): nothing to choose
+        return std::make_unique<AdvectionDiffusion>(static_cast<int>(p.integer("n")), p.real("a"),
+                                                    p.real("nu"), p.real("r"),
+                                                    static_cast<int>(p.integer("k")));
+      }};
 }
 
 }  // namespace stiffbench

@@ -1,4 +1,5 @@
 #include "models/problems/brusselator.hpp"
+#include "models/problems/problem_entry.hpp"
 
 #include <cmath>
 #include <numbers>
@@ -77,6 +78,35 @@ std::vector<Profile> Brusselator::profiles(double, CVecRef y) const {
     p.rows.push_back({i / (n_ + 1.0), y[2 * (i - 1)], y[2 * (i - 1) + 1]});
   p.rows.push_back({1.0, kUBoundary, kVBoundary});
   return {p};
+}
+
+ModelRegistry::Entry brusselator_entry() {
+  using P = ParamType;
+  using B = Bounds;
+  return {
+      .info =
+          {.name = "brusselator",
+           .description =
+               "1D Brusselator with diffusion: u' = 1 + u²v - 4u + α(N+1)² Δu, v' = 3u - u²v + "
+               "α(N+1)² Δv on N interior points, u = 1, v = 3 at both ends, u(0) = 1 + sin(2πx), "
+               "v(0) = 3; unknowns interleaved (banded Jacobian); end time 10",
+           .source =
+               "Hairer, Nørsett & Wanner I §I.16; Hairer & Wanner II §IV.1 (BRUSS, N = 500 in "
+               "§IV.10)",
+           // brusselator: 2n unknowns, the banded Jacobian (8n - 4 nonzeros of 12 bytes).
+           .size =
+               [](const Params& p) {
+                 const double n = std::max(static_cast<double>(p.integer("n")), 0.0);
+                 return ModelSize{2.0 * n, 12.0 * 8.0 * n + 64.0 * n, 8.0 * n,
+                                  "n=" + std::to_string(p.integer("n"))};
+               }},
+      .params = {{"n", P::integer, "32", "interior grid points N (x_i = i/(N+1); 2N unknowns)",
+                  B::in(1, 10000000)},
+                 {"alpha", P::real, "0.02", "diffusion coefficient α (1/50 in the literature)",
+                  B::positive()}},
+      .make = [](const Params& p) {
+        return std::make_unique<Brusselator>(static_cast<int>(p.integer("n")), p.real("alpha"));
+      }};
 }
 
 }  // namespace stiffbench

@@ -1,4 +1,5 @@
 #include "models/problems/e5.hpp"
+#include "models/problems/problem_entry.hpp"
 
 #include <cmath>
 
@@ -49,6 +50,24 @@ std::optional<double> E5::stiffness(double t, CVecRef y) const {
   SparseMat jac;
   eval_jacobian(t, y, jac);  // not counted: an estimate, not a solver's evaluation
   return gershgorin_bound(jac);
+}
+
+ModelRegistry::Entry e5_entry() {
+  using P = ParamType;
+  using B = Bounds;
+  return {
+      .info = {.name = "e5",
+               .description =
+                   "E5 chemical pyrolysis (4 species, badly scaled); literature end time t = 1e13",
+               .source = "Enright, Hull & Lindberg 1975; Hairer & Wanner II §IV.10 (E5)",
+               .size = fixed_problem_size},
+      .params = {{"a", P::real, "7.89e-10", "rate constant A", B::non_negative()},
+                 {"b", P::real, "1.1e7", "rate constant B", B::non_negative()},
+                 {"c", P::real, "1.13e3", "rate constant C", B::non_negative()},
+                 {"m", P::real, "1e6", "factor M of the M·C y2 y3 rate", B::non_negative()}},
+      .make = [](const Params& p) {
+        return std::make_unique<E5>(p.real("a"), p.real("b"), p.real("c"), p.real("m"));
+      }};
 }
 
 }  // namespace stiffbench

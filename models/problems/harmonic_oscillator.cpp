@@ -1,4 +1,5 @@
 #include "models/problems/harmonic_oscillator.hpp"
+#include "models/problems/problem_entry.hpp"
 
 #include <cmath>
 
@@ -73,6 +74,26 @@ std::optional<double> HarmonicOscillator::stiffness(double, CVecRef) const {
   // Largest |eigenvalue| of [[0, 1], [-k/m, -γ/m]].
   const double beta = gamma_ / (2 * m_), w0 = std::sqrt(k_ / m_);
   return beta <= w0 ? w0 : beta + std::sqrt(beta * beta - w0 * w0);
+}
+
+ModelRegistry::Entry harmonic_oscillator_entry() {
+  using P = ParamType;
+  using B = Bounds;
+  return {.info = {.name = "harmonic_oscillator",
+                   .description = "m x'' + γ x' + k x = 0 (undamped by default)",
+                   .mechanical = true,
+                   .exact = true,
+                   .source = "closed-form solution for under-, critically and overdamped cases",
+                   .size = fixed_problem_size},
+          .params = {{"m", P::real, "1", "mass", B::positive()},
+                     {"k", P::real, "1", "spring stiffness", B::positive()},
+                     {"gamma", P::real, "0", "viscous damping coefficient γ", B::non_negative()},
+                     {"x0", P::real, "1", "initial position", B::any()},
+                     {"v0", P::real, "0", "initial velocity", B::any()}},
+          .make = [](const Params& p) {
+            return std::make_unique<HarmonicOscillator>(p.real("m"), p.real("k"), p.real("gamma"),
+                                                        p.real("x0"), p.real("v0"));
+          }};
 }
 
 }  // namespace stiffbench

@@ -1,4 +1,5 @@
 #include "models/problems/hires.hpp"
+#include "models/problems/problem_entry.hpp"
 
 #include <cmath>
 
@@ -65,6 +66,17 @@ std::optional<OdeSystem::PublishedSolution> Hires::published_solution() const {
                                 0.1175651343283149e-2, 0.2386356198831331e-2, 0.6238968252742796e-2,
                                 0.2849998395185769e-2, 0.2850001604814231e-2}},
                            "IVP test set (Mazzia & Magherini), problem hires"};
+}
+
+ModelRegistry::Entry hires_entry() {
+  return {
+      .info = {.name = "hires",
+               .description =
+                   "HIRES plant photomorphogenesis (8 species); literature end time t = 321.8122",
+               .source = "Schäfer 1975; Hairer & Wanner II §IV.10 (HIRES); IVP test set 'hires'",
+               .size = fixed_problem_size},
+      .params = {},
+      .make = [](const Params&) { return std::make_unique<Hires>(); }};
 }
 
 }  // namespace stiffbench

@@ -1,4 +1,5 @@
 #include "models/problems/kaps.hpp"
+#include "models/problems/problem_entry.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -63,6 +64,30 @@ std::optional<double> Kaps::stiffness(double, CVecRef y) const {
   const double half_trace = 0.5 * (a + d), det = a * d - b * c;
   const std::complex<double> root = std::sqrt(std::complex<double>(half_trace * half_trace - det));
   return std::max(std::abs(half_trace + root), std::abs(half_trace - root));
+}
+
+ModelRegistry::Entry kaps_entry() {
+  using P = ParamType;
+  using B = Bounds;
+  return {
+      .info = {.name = "kaps",
+               .description =
+                   "Kaps' problem y1' = -(2 + 1/ε) y1 + y2²/ε, y2' = y1 - y2 - y2², exact "
+                   "(e^{-2t}, e^{-t}) for every ε; split=stiff: the 1/ε terms implicit; end time 1",
+               .exact = true,
+               .source = "Kaps & Rentrop, Numer. Math. 33 (1979); Hairer & Wanner II §IV.15 (order "
+                         "reduction)",
+               .size = fixed_problem_size},
+      .params = {{"eps", P::real, "1e-6", "stiffness parameter ε", B::positive()},
+                 {"split",
+                  P::text,
+                  "stiff",
+                  "additive split f = f_E + f_I: stiff (f_I = the 1/ε terms, f_E the rest)",
+                  {"stiff"}}},
+      .make = [](const Params& p) {
+        p.text("split");  // one split (stiff): nothing to choose
+        return std::make_unique<Kaps>(p.real("eps"));
+      }};
 }
 
 }  // namespace stiffbench

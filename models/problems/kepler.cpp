@@ -1,4 +1,5 @@
 #include "models/problems/kepler.hpp"
+#include "models/problems/problem_entry.hpp"
 
 #include <cmath>
 #include <numbers>
@@ -78,6 +79,24 @@ std::vector<Invariant> Kepler::invariants() const {
 std::optional<double> Kepler::stiffness(double, CVecRef y) const {
   const double r = std::hypot(y[0], y[1]);
   return std::sqrt(2 * gm_ / (r * r * r));
+}
+
+ModelRegistry::Entry kepler_entry() {
+  using P = ParamType;
+  using B = Bounds;
+  return {
+      .info = {.name = "kepler",
+               .description = "planar two-body orbit starting at pericentre (period 2π by default)",
+               .mechanical = true,
+               .exact = true,
+               .source = "exact solution through Kepler's equation (Goldstein §3.8)",
+               .size = fixed_problem_size},
+      .params = {{"e", P::real, "0", "eccentricity", B::in_closed_open(0, 1)},
+                 {"gm", P::real, "1", "gravitational parameter GM", B::positive()},
+                 {"a", P::real, "1", "semi-major axis", B::positive()}},
+      .make = [](const Params& p) {
+        return std::make_unique<Kepler>(p.real("e"), p.real("gm"), p.real("a"));
+      }};
 }
 
 }  // namespace stiffbench

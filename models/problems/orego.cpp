@@ -1,4 +1,5 @@
 #include "models/problems/orego.hpp"
+#include "models/problems/problem_entry.hpp"
 
 #include <cmath>
 
@@ -43,6 +44,24 @@ std::optional<OdeSystem::PublishedSolution> Orego::published_solution() const {
   return PublishedSolution{
       360.0, Vec{{0.1000814870318523e+01, 0.1228178521549917e+04, 0.1320554942846706e+03}},
       "IVP test set (Mazzia & Magherini), problem orego"};
+}
+
+ModelRegistry::Entry orego_entry() {
+  using P = ParamType;
+  using B = Bounds;
+  return {
+      .info = {.name = "orego",
+               .description =
+                   "Oregonator (Belousov–Zhabotinskii reaction); literature end time t = 360",
+               .source =
+                   "Field & Noyes 1974; Hairer & Wanner II §IV.10 (OREGO); IVP test set 'orego'",
+               .size = fixed_problem_size},
+      .params = {{"s", P::real, "77.27", "time-scale ratio s", B::positive()},
+                 {"w", P::real, "0.161", "rate w", B::non_negative()},
+                 {"q", P::real, "8.375e-6", "rate q", B::non_negative()}},
+      .make = [](const Params& p) {
+        return std::make_unique<Orego>(p.real("s"), p.real("w"), p.real("q"));
+      }};
 }
 
 }  // namespace stiffbench

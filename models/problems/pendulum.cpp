@@ -1,4 +1,5 @@
 #include "models/problems/pendulum.hpp"
+#include "models/problems/problem_entry.hpp"
 
 #include <cmath>
 
@@ -27,6 +28,24 @@ std::vector<Invariant> Pendulum::invariants() const {
 
 std::optional<double> Pendulum::stiffness(double, CVecRef y) const {
   return std::sqrt(g_ / length_ * std::abs(std::cos(y[0])));
+}
+
+ModelRegistry::Entry pendulum_entry() {
+  using P = ParamType;
+  using B = Bounds;
+  return {.info = {.name = "pendulum",
+                   .description = "nonlinear pendulum θ'' = -(g/L) sin θ",
+                   .mechanical = true,
+                   .source = "no closed form used; convergence needs --reference",
+                   .size = fixed_problem_size},
+          .params = {{"g", P::real, "1", "gravitational acceleration", B::positive()},
+                     {"length", P::real, "1", "pendulum length L", B::positive()},
+                     {"theta0", P::real, "1", "initial angle (rad)", B::any()},
+                     {"omega0", P::real, "0", "initial angular velocity (rad/s)", B::any()}},
+          .make = [](const Params& p) {
+            return std::make_unique<Pendulum>(p.real("g"), p.real("length"), p.real("theta0"),
+                                              p.real("omega0"));
+          }};
 }
 
 }  // namespace stiffbench

@@ -1,4 +1,5 @@
 #include "models/problems/pollution.hpp"
+#include "models/problems/problem_entry.hpp"
 
 #include <array>
 #include <cmath>
@@ -106,6 +107,16 @@ std::optional<double> Pollution::stiffness(double t, CVecRef y) const {
   SparseMat jac;
   eval_jacobian(t, y, jac);  // not counted: an estimate, not a solver's evaluation
   return gershgorin_bound(jac);
+}
+
+ModelRegistry::Entry pollution_entry() {
+  return {.info = {.name = "pollution",
+                   .description = "POLLU air-pollution chemistry (20 species, 25 reactions); "
+                                  "literature end time t = 60",
+                   .source = "Verwer 1994 (SIAM J. Sci. Comput. 15); IVP test set 'pollu'",
+                   .size = fixed_problem_size},
+          .params = {},
+          .make = [](const Params&) { return std::make_unique<Pollution>(); }};
 }
 
 }  // namespace stiffbench

@@ -1,4 +1,5 @@
 #include "models/problems/prothero_robinson.hpp"
+#include "models/problems/problem_entry.hpp"
 
 #include <cmath>
 
@@ -44,6 +45,27 @@ std::optional<SplitInfo> ProtheroRobinson::imex_split() const {
 
 void ProtheroRobinson::exact(double t, VecRef y) const {
   y[0] = phi(t) + offset_ * std::exp(lambda_ * t);
+}
+
+ModelRegistry::Entry prothero_robinson_entry() {
+  using P = ParamType;
+  using B = Bounds;
+  return {.info = {.name = "prothero_robinson",
+                   .description = "y' = λ(y - φ(t)) + φ'(t): stiffness knob λ, exact y = φ",
+                   .exact = true,
+                   .source = "Prothero & Robinson, Math. Comp. 28 (1974)",
+                   .size = fixed_problem_size},
+          .params = {{"lambda", P::real, "-1e6", "stiffness λ (the Jacobian)", B::any()},
+                     {"phi", P::text, "sin", "φ(t)", {"sin", "cos", "exp"}},
+                     {"y0_offset", P::real, "0",
+                      "y(0) - φ(0); the exact solution adds offset·e^{λt}", B::any()}},
+          .make = [](const Params& p) {
+            const std::string& name = p.text("phi");
+            const auto phi = name == "sin"   ? ProtheroRobinson::Phi::sin
+                             : name == "cos" ? ProtheroRobinson::Phi::cos
+                                             : ProtheroRobinson::Phi::exp;
+            return std::make_unique<ProtheroRobinson>(p.real("lambda"), phi, p.real("y0_offset"));
+          }};
 }
 
 }  // namespace stiffbench

@@ -1,4 +1,5 @@
 #include "models/problems/robertson.hpp"
+#include "models/problems/problem_entry.hpp"
 
 #include <cmath>
 
@@ -54,6 +55,23 @@ std::optional<OdeSystem::PublishedSolution> Robertson::published_solution() cons
   return PublishedSolution{
       1e11, Vec{{0.2083340149701255e-07, 0.8333360770334713e-13, 0.9999999791665050e+00}},
       "IVP test set (Mazzia & Magherini), problem rober"};
+}
+
+ModelRegistry::Entry robertson_entry() {
+  using P = ParamType;
+  using B = Bounds;
+  return {
+      .info = {.name = "robertson",
+               .description =
+                   "Robertson's chemical kinetics (3 species, stiff); literature end time t = 1e11",
+               .source = "Robertson 1966; Hairer & Wanner II §IV.10 (ROBER); IVP test set 'rober'",
+               .size = fixed_problem_size},
+      .params = {{"k1", P::real, "0.04", "rate constant of A → B", B::non_negative()},
+                 {"k2", P::real, "3e7", "rate constant of 2B → B + C", B::non_negative()},
+                 {"k3", P::real, "1e4", "rate constant of B + C → A + C", B::non_negative()}},
+      .make = [](const Params& p) {
+        return std::make_unique<Robertson>(p.real("k1"), p.real("k2"), p.real("k3"));
+      }};
 }
 
 }  // namespace stiffbench

@@ -1,4 +1,5 @@
 #include "models/problems/van_der_pol.hpp"
+#include "models/problems/problem_entry.hpp"
 
 #include <cmath>
 
@@ -37,6 +38,33 @@ std::optional<double> VanDerPol::stiffness(double t, CVecRef y) const {
   SparseMat jac;
   eval_jacobian(t, y, jac);  // not counted: an estimate, not a solver's evaluation
   return gershgorin_bound(jac);
+}
+
+ModelRegistry::Entry van_der_pol_entry() {
+  using P = ParamType;
+  using B = Bounds;
+  return {
+      .info = {.name = "van_der_pol",
+               .description = "van der Pol oscillator, scaled y2' = ((1-y1²)y2 - y1)/ε with ε = "
+                              "1/μ² (default) or "
+                              "classical y2' = μ(1-y1²)y2 - y1; literature end time t = 2 "
+                              "(scaled) or t = 2μ (form=mu)",
+               .source =
+                   "Hairer & Wanner II §IV.10 (VDPOL, ε = 1e-6); IVP test set 'vdpol' (μ = 1000)",
+               .size = fixed_problem_size},
+      .params = {{"form",
+                  P::text,
+                  "scaled",
+                  "scaled (time x = t/μ, ε = 1/μ²) or mu (classical)",
+                  {"scaled", "mu"}},
+                 {"mu", P::real, "1000",
+                  "damping parameter μ; the scaled form uses ε = 1/μ² (1000: ε = 1e-6)",
+                  B::positive()}},
+      .make = [](const Params& p) {
+        const auto form =
+            p.text("form") == "scaled" ? VanDerPol::Form::scaled : VanDerPol::Form::mu;
+        return std::make_unique<VanDerPol>(form, p.real("mu"));
+      }};
 }
 
 }  // namespace stiffbench

@@ -1,4 +1,5 @@
 #include "models/sph/scenes.hpp"
+#include "models/sph/fluid_params.hpp"
 
 #include <cmath>
 
@@ -138,6 +139,157 @@ SphScene make_drop_scene(const DropOptions& o) {
     }
   s.description = "free drop";
   return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Registry entries (listed by models/sph/register.cpp) with their parameters: each scene's own,
+// then the fluid's (fluid_params.hpp).
+
+namespace {
+using namespace sph_params;
+using P = ParamType;
+using B = Bounds;
+}  // namespace
+
+ModelRegistry::Entry sph_dam_break_entry(int dim) {
+  const std::string name = dim == 2 ? "sph_dam_break_2d" : "sph_dam_break_3d";
+  const SceneDefaults d{std::to_string(dim == 2 ? 32 : 12), "0", "9.81"};
+  std::vector<ParamSpec> scene = {
+      {"a", P::real, "0.146", "column width a (m); the column is a x 2a, the tank 4a long",
+       B::positive()},
+      {"n", P::integer, d.n, "particles across the column width a", B::in(2, 2000)},
+      {"wall_height", P::real, "4", "height of the tank walls in units of a", B::at_least(2)}};
+  if (dim == 3)
+    scene.push_back({"depth", P::real, "0", "tank depth (m); 0: a/2", B::non_negative()});
+  return {.info = {.name = name,
+                   .description = describe_dim(
+                       dim,
+                       " SPH dam break: water column a x 2a released in a tank of length 4a; "
+                       "observables front, height_left"),
+                   .mechanical = true,
+                   .source = "Koshizuka & Oka 1996 (surge front Z = front/a vs T = t sqrt(2g/a), "
+                             "Nucl. Sci. Eng. 123); Martin & Moyce 1952",
+                   .size =
+                       [dim](const Params& p) {
+                         // Column a x 2a (x depth) with n particles across a; tank 4a long,
+                         // wall_height·a high.
+                         const double n = std::max(static_cast<double>(p.integer("n")), 0.0);
+                         const double wh = std::max(p.real("wall_height"), 0.0);
+                         const double layers =
+                             std::max(static_cast<double>(p.integer("boundary_layers")), 0.0);
+                         if (dim == 2)
+                           return sph_size(2, 2 * n * n, layers * (4 + 2 * wh) * n + 16, p);
+                         const double depth =
+                             p.real("depth") > 0 ? ratio(p.real("depth"), p.real("a")) : 0.5;
+                         const double nd = depth * n + 1;
+                         return sph_size(
+                             3, 2 * n * n * nd,
+                             layers * (4 * n * nd + 2 * (4 + wh) * n * n + 2 * wh * n * nd), p);
+                       }},
+          .params = fluid_specs(d, scene),
+          .make = [dim, name](const Params& p) {
+            DamBreakOptions o;
+            o.dim = dim;
+            o.a = p.real("a");
+            o.n = int_param(p, "n", name, 2, 2000);
+            o.wall_height_factor = p.real("wall_height");
+            require_input(std::isfinite(o.wall_height_factor) && o.wall_height_factor >= 2,
+                          name + ": parameter 'wall_height' must be >= 2");
+            if (dim == 3) o.depth = p.real("depth");
+            o.layers = int_param(p, "boundary_layers", name, 1, 10);
+            const SphOptions f = read_fluid(p, o.a / o.n, 2.0 * o.a, name, true);
+            return std::make_unique<SphFluid>(name, make_dam_break_scene(o), f);
+          }};
+}
+
+ModelRegistry::Entry sph_tank_entry(int dim) {
+  const std::string name = dim == 2 ? "sph_tank_2d" : "sph_tank_3d";
+  const SceneDefaults d{std::to_string(dim == 2 ? 20 : 10), "0", "9.81"};
+  std::vector<ParamSpec> scene = {
+      {"width", P::real, "0.2", "tank width (m), rounded to a multiple of the spacing",
+       B::positive()},
+      {"height", P::real, "0.1", "fluid height H (m)", B::positive()},
+      {"n", P::integer, d.n, "particles across the fluid height", B::in(2, 2000)}};
+  if (dim == 3)
+    scene.push_back({"depth", P::real, "0", "tank depth (m); 0: the width", B::non_negative()});
+  return {
+      .info = {.name = name,
+               .description = describe_dim(
+                   dim,
+                   " SPH tank: fluid at rest under gravity; pressure probes at depths H/4, "
+                   "H/2, 3H/4"),
+               .mechanical = true,
+               .source = "hydrostatic pressure p = rho0 g (H - y) (docs/reference-values.md)",
+               .size =
+                   [dim](const Params& p) {
+                     // Fluid width x height with n particles across the height, walls 2H high.
+                     const double n = std::max(static_cast<double>(p.integer("n")), 0.0);
+                     const double nw = ratio(p.real("width"), p.real("height")) * n + 1;
+                     const double layers =
+                         std::max(static_cast<double>(p.integer("boundary_layers")), 0.0);
+                     if (dim == 2) return sph_size(2, nw * n, layers * (nw + 4 * n + 16), p);
+                     const double nd =
+                         (p.real("depth") > 0 ? ratio(p.real("depth"), p.real("height")) * n : nw) +
+                         1;
+                     return sph_size(3, nw * n * nd, layers * (nw * nd + 4 * n * (nw + nd) + 64),
+                                     p);
+                   }},
+      .params = fluid_specs(d, scene),
+      .make = [dim, name](const Params& p) {
+        TankOptions o;
+        o.dim = dim;
+        o.width = p.real("width");
+        o.height = p.real("height");
+        o.n = int_param(p, "n", name, 2, 2000);
+        if (dim == 3) o.depth = p.real("depth");
+        o.layers = int_param(p, "boundary_layers", name, 1, 10);
+        const SphOptions f = read_fluid(p, o.height / o.n, o.height, name, true);
+        return std::make_unique<SphFluid>(name, make_tank_scene(o), f);
+      }};
+}
+
+ModelRegistry::Entry sph_drop_entry() {
+  const std::string name = "sph_drop_2d";
+  const SceneDefaults d{"20", "10",          "0",   "linear",      "false", "none",
+                        "0",  "variational", false, "equilibrium", "2.5"};
+  std::vector<ParamSpec> scene = {
+      {"radius", P::real, "0.1", "drop radius R (m)", B::positive()},
+      {"n", P::integer, d.n, "particles across the diameter", B::in(2, 4000)},
+      {"velocity",
+       P::text,
+       "oscillation",
+       "initial velocity about the centre: oscillation A(x, -y), rotation A(-y, x), none",
+       {"oscillation", "rotation", "none"}},
+      {"rate", P::real, "1", "A (1/s)", B::any()},
+      {"drift", P::real, "0", "uniform initial velocity along x (m/s)", B::any()}};
+  return {
+      .info =
+          {.name = name,
+           .description =
+               "2D SPH drop: no gravity, no walls, inviscid by default, oscillating or rotating "
+               "(momentum, angular momentum, energy and convergence tests)",
+           .mechanical = true,
+           .source = "Monaghan's elliptic drop; invariants energy, momentum and angular momentum",
+           .size =
+               [](const Params& p) {
+                 // A disc n particles across: about (pi/4) n^2 particles (no walls).
+                 const double n = std::max(static_cast<double>(p.integer("n")), 0.0);
+                 return sph_size(2, 0.8 * n * n + 8, 0, p);
+               }},
+      .params = fluid_specs(d, scene),
+      .make = [name](const Params& p) {
+        DropOptions o;
+        o.radius = p.real("radius");
+        o.n = int_param(p, "n", name, 2, 4000);
+        const std::string& v = p.text("velocity");
+        o.velocity = v == "rotation"      ? DropOptions::Velocity::rotation
+                     : v == "oscillation" ? DropOptions::Velocity::oscillation
+                                          : DropOptions::Velocity::none;
+        o.rate = p.real("rate");
+        o.drift = p.real("drift");
+        const SphOptions f = read_fluid(p, 2.0 * o.radius / o.n, 2.0 * o.radius, name, false);
+        return std::make_unique<SphFluid>(name, make_drop_scene(o), f);
+      }};
 }
 
 }  // namespace stiffbench

@@ -757,11 +757,12 @@ TEST(MassSpringRegistry, BadParametersNameTheKey) {
 namespace stiffbench {
 namespace {
 
-// Without dashpots K is filled column block by column block (K_qp = J_s/m_q, network.cpp) and D
-// is diagonal: both checked against central finite differences of the accelerations (an
-// independent computation) on a 3D network with unequal masses, a pinned point, point damping
-// and stretched and compressed springs; a second evaluation into the same matrices writes in
-// place (same storage) and gives the same values, and force_jacobians equals the separate calls.
+// Without dashpots K is filled column block by column block (K_qp = J_s/m_q,
+// force_jacobians.cpp) and D is diagonal: both checked against central finite differences of the
+// accelerations (an independent computation) on a 3D network with unequal masses, a pinned
+// point, point damping and stretched and compressed springs; a second evaluation into the same
+// matrices writes in place (same storage) and gives the same values, and force_jacobians equals
+// the separate calls.
 TEST(MassSpringJacobian, InPlaceColumnFillWithUnequalMassesAndPins) {
   std::vector<MassPoint> pts(5);
   const double masses[] = {0.5, 1.7, 3.0, 0.9, 2.2};

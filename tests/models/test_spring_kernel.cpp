@@ -1,4 +1,4 @@
-// The mass-spring right-hand side's spring kernel (models/mass_spring/network.cpp: springs in
+// The mass-spring right-hand side's spring kernel (models/mass_spring/spring_kernel.cpp: springs in
 // structure-of-arrays order, several per SIMD lane, partitions and cross-partition groups),
 // checked against a straightforward evaluation written here, one spring at a time from the
 // formulas of network.hpp (Baraff & Witkin 1998):
