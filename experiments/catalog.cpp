@@ -165,9 +165,18 @@ Setup make_setup(const std::string& model, const std::vector<std::string>& given
   for (const auto& name : integrators) integrator_registry().at(name);
   // Every value is type- and range-checked (resolve_params) before anything is sized or built.
   resolve_params(model_entry.params, user, nullptr, "model '" + model + "'");
-  for (const auto& name : integrators)
-    resolve_params(integrator_registry().at(name).params, user, nullptr,
-                   "integrator '" + name + "'");
+  for (const auto& name : integrators) {
+    try {
+      resolve_params(integrator_registry().at(name).params, user, nullptr,
+                     "integrator '" + name + "'");
+    } catch (const BadInput& e) {
+      if (integrators.size() < 2) throw;
+      throw BadInput(std::string(e.what()) +
+                     "; --param applies to every integrator of the study: to set a parameter "
+                     "for some methods only, give them as variants, e.g. '" +
+                     name + "{key=value}' beside '" + name + "'");
+    }
+  }
   check_run_size(model, integrators, user);
   std::set<std::string> consumed;
   std::string accepted = model_registry().accepted_keys(model);
@@ -290,7 +299,9 @@ RunMemory estimate_run_memory(const std::string& model, const std::vector<std::s
     if (ie.info.family != Family::implicit && ie.info.family != Family::imex &&
         ie.info.family != Family::reference)
       continue;
-    const Params ip = resolve_params(ie.params, user, nullptr, "integrator '" + name + "'");
+    Params ip = resolve_params(ie.params, user, nullptr, "integrator '" + name + "'");
+    if (const std::optional<VariantOf> v = variant_of(name))
+      for (const auto& [key, value] : v->fixed.values()) ip.set(key, value);
     m.jacobian_bytes = std::max(m.jacobian_bytes, kSparseCopies * 12.0 * m.model.jacobian_nonzeros);
     if (uses_dense(ip)) {
       // Jacobian, iteration matrix and LU factor: three n x n doubles (Radau5's complex system
@@ -407,9 +418,119 @@ std::string register_method_file(const std::string& given, const std::string& ba
 
 std::vector<std::string> resolve_integrator_tokens(std::vector<std::string> tokens,
                                                    const std::string& base) {
-  for (std::string& t : tokens)
-    if (is_method_file_token(t)) t = register_method_file(t, base);
+  for (std::string& t : tokens) {
+    if (is_variant_token(t))
+      t = register_variant(t, base);
+    else if (is_method_file_token(t))
+      t = register_method_file(t, base);
+  }
   return tokens;
+}
+
+namespace {
+std::map<std::string, VariantOf>& registered_variants() {
+  static std::map<std::string, VariantOf> variants;
+  return variants;
+}
+
+std::string trimmed_text(const std::string& s) {
+  const auto a = s.find_first_not_of(" \t");
+  if (a == std::string::npos) return {};
+  return s.substr(a, s.find_last_not_of(" \t") - a + 1);
+}
+}  // namespace
+
+bool is_variant_token(const std::string& token) {
+  return token.size() > 2 && token.back() == '}' && token.find('{') != std::string::npos;
+}
+
+std::optional<VariantOf> variant_of(const std::string& name) {
+  const auto& v = registered_variants();
+  if (const auto it = v.find(name); it != v.end()) return it->second;
+  return std::nullopt;
+}
+
+std::string register_variant(const std::string& token, const std::string& base_dir) {
+  const std::string what = "integrator variant '" + token + "'";
+  const auto open = token.find('{');
+  const std::string method = trimmed_text(token.substr(0, open));
+  require_input(!method.empty(), what + ": no method before '{' (write METHOD{key=value,...})");
+  const std::string body = token.substr(open + 1, token.size() - open - 2);
+  require_input(body.find_first_of("{}") == std::string::npos,
+                what + ": braces cannot nest (write METHOD{key=value,...})");
+  Params fixed;
+  std::string label;
+  std::stringstream ss(body);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    item = trimmed_text(item);
+    const auto eq = item.find('=');
+    require_input(eq != std::string::npos && eq > 0,
+                  what + ": '" + item + "' is not key=value (write METHOD{key=value,...})");
+    const std::string key = trimmed_text(item.substr(0, eq));
+    const std::string value = trimmed_text(item.substr(eq + 1));
+    require_input(!value.empty(), what + ": key '" + key + "' has no value");
+    if (key == "label") {
+      require_input(label.empty(), what + ": label given twice");
+      label = value;
+      continue;
+    }
+    require_input(!fixed.contains(key), what + ": key '" + key + "' given twice");
+    fixed.set(key, value);
+  }
+  require_input(!fixed.empty(), what + ": no parameter (write METHOD{key=value,...})");
+  const std::string base_name =
+      is_method_file_token(method) ? register_method_file(method, base_dir) : method;
+  const auto& base = integrator_registry().at(base_name);
+  // Every key must be one the method declares, with a valid value (the same check as --param).
+  std::set<std::string> consumed;
+  resolve_params(base.params, fixed, &consumed, what);
+  for (const auto& [key, value] : fixed.values())
+    if (!consumed.count(key)) {
+      std::vector<std::string> keys;
+      for (const auto& p : base.params) keys.push_back(p.key);
+      throw BadInput(what + ": '" + base_name + "' has no parameter '" + key + "'" +
+                     did_you_mean(key, keys) + "; " + integrator_registry().accepted_keys(base_name));
+    }
+  if (label.empty()) {
+    std::string canonical = base_name + "{";
+    bool first = true;
+    for (const auto& [key, value] : fixed.values()) {
+      canonical += (first ? "" : ",") + key + "=" + value;
+      first = false;
+    }
+    label = canonical + "}";
+  }
+  require_input(printable(label) == label && valid_utf8(label),
+                what + ": the label holds a control character");
+  auto& variants = registered_variants();
+  if (const auto it = variants.find(label); it != variants.end()) {
+    if (it->second.base == base_name && it->second.fixed.values() == fixed.values()) return label;
+    throw BadInput(what + ": label '" + label + "' is already the variant " + it->second.base +
+                   " with other parameters; give this one another label");
+  }
+  if (const auto* e = integrator_registry().find(label))
+    throw BadInput(what + ": label '" + label + "' is the name of " +
+                   (e->built_in ? std::string("a built-in integrator") : "another integrator") +
+                   "; give the variant another label");
+  IntegratorRegistry::Entry entry;
+  entry.info = base.info;
+  entry.info.name = label;
+  std::string assignments;
+  for (const auto& [key, value] : fixed.values())
+    assignments += (assignments.empty() ? "" : ", ") + key + " = " + value;
+  entry.info.description = base.info.description + " (variant: " + assignments + ")";
+  for (const auto& p : base.params)
+    if (!fixed.contains(p.key)) entry.params.push_back(p);
+  entry.make = [base_name, fixed, params = entry.params](const Params& given) {
+    Params all = fixed;
+    for (const auto& p : params) all.set(p.key, given.text(p.key));
+    return integrator_registry().create(base_name, all);
+  };
+  entry.built_in = false;
+  mutable_integrator_registry().add(std::move(entry));
+  variants[label] = {base_name, fixed};
+  return label;
 }
 
 void load_method_search_path(const std::vector<std::string>& dirs) {
@@ -434,7 +555,9 @@ void load_method_search_path(const std::vector<std::string>& dirs) {
   }
 }
 
-std::string method_file_source(const std::string& name) {
+std::string method_file_source(const std::string& given) {
+  const std::optional<VariantOf> variant = variant_of(given);
+  const std::string name = variant ? variant->base : given;
   const auto& files = loaded_method_files();
   if (const auto it = files.find(name); it != files.end()) return it->second.path;
   for (const MethodDefinition& m : built_in_methods())
@@ -453,12 +576,19 @@ nlohmann::json with_method_files(nlohmann::json spec) {
       for (const auto& x : v)
         if (x.is_string()) names.push_back(x.get<std::string>());
   }
-  nlohmann::json files = nlohmann::json::object();
+  nlohmann::json files = nlohmann::json::object(), variants = nlohmann::json::object();
   const auto& loaded = loaded_method_files();
-  for (const auto& n : names)
+  for (const auto& given : names) {
+    std::string n = given;
+    if (const std::optional<VariantOf> v = variant_of(given)) {
+      variants[given] = {{"method", v->base}, {"params", v->fixed.values()}};
+      n = v->base;
+    }
     if (const auto it = loaded.find(n); it != loaded.end())
       files[n] = {{"file", it->second.path}, {"fnv1a64", hex16(fnv1a64(it->second.text))}};
+  }
   if (!files.empty()) spec["method_files"] = files;
+  if (!variants.empty()) spec["variants"] = variants;
   return spec;
 }
 
@@ -484,8 +614,18 @@ std::vector<double> parse_real_list(const std::string& text, const std::string& 
 std::vector<std::string> split_list(const std::string& s, const std::string& flag) {
   std::vector<std::string> out;
   std::size_t start = 0;
+  // The next comma outside braces (a variant's assignments stay with their method).
+  auto next_comma = [&s](std::size_t from) {
+    int depth = 0;
+    for (std::size_t i = from; i < s.size(); ++i) {
+      if (s[i] == '{') ++depth;
+      if (s[i] == '}' && depth > 0) --depth;
+      if (s[i] == ',' && depth == 0) return i;
+    }
+    return std::string::npos;
+  };
   while (true) {
-    const auto comma = s.find(',', start);
+    const auto comma = next_comma(start);
     const std::string item =
         s.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     require_input(!item.empty(), flag + ": empty name in '" + s + "'");

@@ -4,6 +4,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -110,8 +111,8 @@ bool is_method_file_token(const std::string& token);
 // Loads and registers `path` (relative paths from `base` when given, else from the working
 // folder); returns the method's name.
 std::string register_method_file(const std::string& path, const std::string& base = "");
-// `tokens` with every method-file token replaced by its method's name (registering the file);
-// names pass unchanged.
+// `tokens` with every method-file token replaced by its method's name (registering the file) and
+// every variant by its label (registering it, below); names pass unchanged.
 std::vector<std::string> resolve_integrator_tokens(std::vector<std::string> tokens,
                                                    const std::string& base = "");
 // The search path: every *.toml (sorted by name) in each folder of STIFFBENCH_METHOD_PATH
@@ -127,7 +128,27 @@ std::string method_file_source(const std::string& name);
 // unchanged when it names none.
 nlohmann::json with_method_files(nlohmann::json spec);
 
-// Splits "a,b,c" (empty items are BadInput naming the flag).
+// ---- Integrator variants -----------------------------------------------------------------------
+// Wherever an integrator name is taken, `METHOD{key=value,...}` is METHOD (a name or a method-file
+// path) with some of its parameters fixed: `radau5{linear_solver=dense_lu}`,
+// `my_esdirk.toml{newton=full}`. The variant is registered process-wide under its label, which
+// tables and plots show: `label=TEXT` among the assignments, else the canonical text
+// `NAME{k=v,...}` (keys sorted, the method file replaced by its method's name). Its values are
+// checked against METHOD's declarations when it is registered (BadInput naming the variant);
+// the fixed keys are not offered to --param (a variant's own value wins). The same variant given
+// again is registered once; a label already taken by another method is BadInput.
+bool is_variant_token(const std::string& token);
+// Registers the variant (relative method-file paths from `base`) and returns its label.
+std::string register_variant(const std::string& token, const std::string& base = "");
+// The method a variant label stands for and its fixed parameters; nullopt for other names.
+struct VariantOf {
+  std::string base;  // the registered method it is a variant of
+  Params fixed;
+};
+std::optional<VariantOf> variant_of(const std::string& name);
+
+// Splits "a,b,c" (empty items are BadInput naming the flag); a comma inside braces (a variant's
+// assignments) does not split.
 std::vector<std::string> split_list(const std::string& s, const std::string& flag);
 
 // The whole of `text` as a finite number, else BadInput "FLAG: 'text' is not a finite number"
