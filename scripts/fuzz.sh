@@ -17,8 +17,8 @@ cxx="${FUZZ_CXX:-clang++}"
 flags=(-std=c++20 -O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
   -DTOML_HEADER_ONLY=0 -DTOML_SHARED_LIB=1 -I"$root" -isystem /usr/include/eigen3)
 # The shared sources, compiled once (about a minute on 2 cores); then one small main each.
-srcs=(core/params.cpp experiments/spec_file.cpp experiments/format.cpp
-  experiments/input_checks.cpp experiments/csv.cpp fuzz/targets.cpp)
+srcs=(core/params.cpp experiments/framework/spec_file.cpp experiments/output/format.cpp
+  experiments/output/input_checks.cpp experiments/output/csv.cpp fuzz/targets.cpp)
 objs=()
 for s in "${srcs[@]}"; do
   o="$out/$(echo "$s" | tr '/' '_').o"

@@ -8,4 +8,4 @@ out="${1:-results}"
 shift || true
 "$root/scripts/install-deps.sh"
 "$root/scripts/build.sh" "$root/build"
-"$root/build/experiments/stiffbench" report --out "$out" "$@"
+"$root/build/stiffbench" report --out "$out" "$@"

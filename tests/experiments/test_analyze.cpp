@@ -1,4 +1,4 @@
-// `stiffbench analyze` (experiments/analyze.hpp): the files it writes carry the figures of the
+// `stiffbench analyze` (experiments/studies/analyze.hpp): the files it writes carry the figures of the
 // method analysis (core/method_analysis.hpp), checked here against independent computations —
 // closed forms, published values, and exact rational arithmetic done outside stiffbench (Python's
 // fractions module on the rooted trees, noted at each figure); methods without coefficients get
@@ -17,10 +17,10 @@
 
 #include <Eigen/Dense>
 
-#include "experiments/analyze.hpp"
-#include "experiments/cli_main.hpp"
-#include "experiments/commands.hpp"
-#include "experiments/study.hpp"
+#include "experiments/studies/analyze.hpp"
+#include "cli/cli_main.hpp"
+#include "experiments/commands/list_describe.hpp"
+#include "experiments/framework/study.hpp"
 
 namespace fs = std::filesystem;
 using namespace stiffbench;

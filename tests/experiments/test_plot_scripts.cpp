@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "experiments/build_info.hpp"
-#include "experiments/plotting.hpp"
+#include "experiments/output/plotting.hpp"
 
 namespace stiffbench {
 // Defined in the generated embedded_plots.cpp of the experiments library.
