@@ -8,6 +8,7 @@
 #include <iostream>
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include "core/driver.hpp"
 #include "core/run_control.hpp"
@@ -112,17 +113,90 @@ bool arguments_are_utf8(int argc, char** argv) {
   return true;
 }
 
+// The counters a command is judged by, as it found them: a program (or a test) that calls
+// cli_main several times judges each call by its own runs only.
+struct CountersBefore {
+  long audit_failures = audit_failed_checks();
+  long faults = fault_count();
+  long plots = failed_plot_count();
+};
+
+// Whether argv[1], when it is a command name, is one of the app's commands (else the message).
+bool known_command(CLI::App& app, int argc, char** argv) {
+  if (argc <= 1 || argv[1][0] == '-') return true;
+  std::vector<std::string> names;
+  bool known = false;
+  for (const auto* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+    names.push_back(sub->get_name());
+    known = known || sub->get_name() == argv[1];
+  }
+  if (!known)
+    std::cerr << "stiffbench: unknown command '" << argv[1] << "'" << did_you_mean(argv[1], names)
+              << "; known: " << join(names) << "\n";
+  return known;
+}
+
+// Parses and runs the command (subcommands registered by add_*_command run inside parse(), their
+// callbacks, so one try covers parsing and running). The exit code when it did not complete.
+std::optional<int> parse_and_run(CLI::App& app, int argc, char** argv) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    remove_created_output_dirs();
+    std::cerr << "stiffbench: " << e.what() << "\n";
+    return 2;
+  } catch (const BadInput& e) {
+    // A refused run leaves no trace: output folders created for it are removed when empty.
+    remove_created_output_dirs();
+    std::cerr << "stiffbench: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "stiffbench: error: " << e.what() << "\n";
+    return 1;
+  } catch (const Interrupted& i) {
+    return interrupted_exit(i.signal);
+  }
+  return std::nullopt;
+}
+
+// The exit code of a command that ran to its end.
+int completed_exit_code(const CountersBefore& before) {
+  // A signal that arrived after the last run (while a table or plot was written): the results
+  // are complete, but the exit code still says the command was interrupted.
+  if (const int sig = interrupt_requested()) return interrupted_exit(sig);
+  // A run that ended with status error (the model or the integrator threw mid-run) is a failed
+  // row: its table was written, and the exit code says so (README).
+  if (const long faults = fault_count() - before.faults; faults > 0) {
+    std::cerr << "stiffbench: " << faults << " run" << (faults == 1 ? "" : "s")
+              << " ended with status error or timeout (see the status and message columns)\n";
+    return kExitRowsFailed;
+  }
+  // A plot that gnuplot did not complete (its warning above): the tables are written, the
+  // command still fails so that a script notices.
+  if (const long plots = failed_plot_count() - before.plots; plots > 0) {
+    std::cerr << "stiffbench: " << plots << " plot" << (plots == 1 ? "" : "s")
+              << " not written (see the warnings above); the tables are complete\n";
+    return 1;
+  }
+  // `stiffbench audit`: a claim that does not hold (status fail) fails the command.
+  if (const long failed = audit_failed_checks() - before.audit_failures; failed > 0) {
+    std::cerr << "stiffbench: " << failed << " audit check" << (failed == 1 ? "" : "s")
+              << " failed (status fail in audit.csv; the reason column says why)\n";
+    return kExitRowsFailed;
+  }
+  return g_command_exit_code;
+}
+
 }  // namespace
 
 int cli_main(int argc, char** argv) {
   set_command_line(argc, argv);
   g_command_exit_code = 0;
-  // Failed audit checks of this call only (a program may call cli_main more than once).
-  // The process-wide counters as this command found them: a program (or a test) that calls
-  // cli_main several times judges each call by its own runs only.
-  const long audit_failures_before = audit_failed_checks();
-  const long faults_before = fault_count();
-  const long plots_before = failed_plot_count();
+  const CountersBefore before;
   const struct ForgetCommandLine {
     ~ForgetCommandLine() { clear_command_line(); }
   } forget;
@@ -161,69 +235,12 @@ int cli_main(int argc, char** argv) {
       set_force_output(false);
     }
   } forget_settings;
-  if (argc > 1 && argv[1][0] != '-') {
-    bool known = false;
-    std::vector<std::string> names;
-    for (const auto* sub : app.get_subcommands([](CLI::App*) { return true; })) {
-      names.push_back(sub->get_name());
-      known = known || sub->get_name() == argv[1];
-    }
-    if (!known) {
-      std::cerr << "stiffbench: unknown command '" << argv[1] << "'" << did_you_mean(argv[1], names)
-                << "; known: " << join(names) << "\n";
-      return 2;
-    }
-  }
+  if (!known_command(app, argc, argv)) return 2;
   if (!arguments_are_utf8(argc, argv)) return 2;
   // SIGINT/SIGTERM: the runs stop at their next poll, and the exit code is 128 + signal.
   const InterruptHandlers handlers;
-  // Subcommands registered by add_*_command run inside parse() (their callbacks), so one try
-  // covers parsing and running.
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    remove_created_output_dirs();
-    std::cerr << "stiffbench: " << e.what() << "\n";
-    return 2;
-  } catch (const BadInput& e) {
-    // A refused run leaves no trace: output folders created for it are removed when empty.
-    remove_created_output_dirs();
-    std::cerr << "stiffbench: " << e.what() << "\n";
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "stiffbench: error: " << e.what() << "\n";
-    return 1;
-  } catch (const Interrupted& i) {
-    return interrupted_exit(i.signal);
-  }
-  // A signal that arrived after the last run (while a table or plot was written): the results
-  // are complete, but the exit code still says the command was interrupted.
-  if (const int sig = interrupt_requested()) return interrupted_exit(sig);
-  // A run that ended with status error (the model or the integrator threw mid-run) is a failed
-  // row: its table was written, and the exit code says so (README).
-  if (const long faults = fault_count() - faults_before; faults > 0) {
-    std::cerr << "stiffbench: " << faults << " run" << (faults == 1 ? "" : "s")
-              << " ended with status error or timeout (see the status and message columns)\n";
-    return kExitRowsFailed;
-  }
-  // A plot that gnuplot did not complete (its warning above): the tables are written, the
-  // command still fails so that a script notices.
-  if (const long plots = failed_plot_count() - plots_before; plots > 0) {
-    std::cerr << "stiffbench: " << plots << " plot" << (plots == 1 ? "" : "s")
-              << " not written (see the warnings above); the tables are complete\n";
-    return 1;
-  }
-  // `stiffbench audit`: a claim that does not hold (status fail) fails the command.
-  if (const long failed = audit_failed_checks() - audit_failures_before; failed > 0) {
-    std::cerr << "stiffbench: " << failed << " audit check" << (failed == 1 ? "" : "s")
-              << " failed (status fail in audit.csv; the reason column says why)\n";
-    return kExitRowsFailed;
-  }
-  return g_command_exit_code;
+  if (const auto code = parse_and_run(app, argc, argv)) return *code;
+  return completed_exit_code(before);
 }
 
 }  // namespace stiffbench

@@ -588,6 +588,71 @@ Table compare_table(const CompareResult& r) {
   return t;
 }
 
+// The section of one table present on both sides: its matched rows, the changed ones, and the
+// timing of every row when the table was timed with intervals.
+void table_markdown(std::ostringstream& md, const CompareResult& r, const FileComparison& f) {
+  md << "\n## " << f.file << "\n\n"
+     << f.rows << (f.rows == 1 ? " row" : " rows") << " matched by "
+     << (f.key_columns.empty() ? "row number" : join(f.key_columns, ", ")) << ": ";
+  md << (f.changed_rows ? std::to_string(f.changed_rows) + " differ" : "all agree") << ".\n";
+  for (const auto& n : f.notes) md << "- " << n << "\n";
+  std::vector<const RowComparison*> rows;
+  // A table timed with intervals gets every row's timing; single times (one run per row) say
+  // nothing row by row and stay in compare.csv.
+  const RowComparison* timed = nullptr;
+  for (const auto& row : r.rows)
+    if (row.file == f.file) {
+      rows.push_back(&row);
+      if (!timed && row.has_timing && row.timing.has_interval) timed = &row;
+    }
+  if (f.changed_rows) {
+    Table t{{"row", "error ratio", "f_evals ratio", "counters", "differences"}, {}};
+    std::size_t shown = 0;
+    for (const auto* row : rows)
+      if (row->changed && shown++ < kMaxMarkdownRows)
+        t.rows.push_back({row->key, error_ratio(*row),
+                          ratio_of_texts(row->f_evals_old, row->f_evals_new), counters_text(*row),
+                          join(row->differences, "; ")});
+    md << "\nChanged rows (ratios NEW/OLD):\n\n" << t.to_markdown();
+    if (shown > kMaxMarkdownRows)
+      md << "\n(" << shown - kMaxMarkdownRows << " more in compare.csv)\n";
+  }
+  if (!timed) {
+    for (const auto* row : rows)
+      if (row->has_timing) {
+        md << "\n"
+           << row->timing.quantity
+           << ": one run per row on each side, no verdict (both times are in compare.csv).\n";
+        break;
+      }
+    return;
+  }
+  Table t{{"row", "error ratio", "f_evals ratio", "counters", "OLD time [95% interval]",
+           "NEW time [95% interval]", "time ratio", "verdict"},
+          {}};
+  for (std::size_t k = 0; k < rows.size() && k < kMaxMarkdownRows; ++k) {
+    const auto& row = *rows[k];
+    const auto& tm = row.timing;
+    t.rows.push_back({row.key, error_ratio(row), ratio_of_texts(row.f_evals_old, row.f_evals_new),
+                      counters_text(row),
+                      row.has_timing ? interval_text(tm.old_median, tm.old_low, tm.old_high,
+                                                     tm.old_runs, tm.has_interval)
+                                     : "-",
+                      row.has_timing ? interval_text(tm.new_median, tm.new_low, tm.new_high,
+                                                     tm.new_runs, tm.has_interval)
+                                     : "-",
+                      row.has_timing ? compare_ratio(tm.old_median, tm.new_median) : "-",
+                      row.has_timing ? tm.verdict : "-"});
+  }
+  md << "\nPer row (ratios NEW/OLD; time: " << timed->timing.quantity
+     << ", the median with its bootstrap 95% interval; faster/slower when the intervals are "
+        "disjoint and each side has at least "
+     << kCompareMinTimedRuns << " runs):\n\n"
+     << t.to_markdown();
+  if (rows.size() > kMaxMarkdownRows)
+    md << "\n(" << rows.size() - kMaxMarkdownRows << " more in compare.csv)\n";
+}
+
 std::string compare_markdown(const CompareResult& r) {
   std::ostringstream md;
   md << "# Compare: " << r.old_dir.string() << " (OLD) against " << r.new_dir.string()
@@ -619,69 +684,8 @@ std::string compare_markdown(const CompareResult& r) {
     md << t.to_markdown();
   }
 
-  for (const auto& f : r.files) {
-    if (f.presence != FileComparison::Presence::both || !f.is_table) continue;
-    md << "\n## " << f.file << "\n\n"
-       << f.rows << (f.rows == 1 ? " row" : " rows") << " matched by "
-       << (f.key_columns.empty() ? "row number" : join(f.key_columns, ", ")) << ": ";
-    md << (f.changed_rows ? std::to_string(f.changed_rows) + " differ" : "all agree") << ".\n";
-    for (const auto& n : f.notes) md << "- " << n << "\n";
-    std::vector<const RowComparison*> rows;
-    // A table timed with intervals gets every row's timing; single times (one run per row) say
-    // nothing row by row and stay in compare.csv.
-    const RowComparison* timed = nullptr;
-    for (const auto& row : r.rows)
-      if (row.file == f.file) {
-        rows.push_back(&row);
-        if (!timed && row.has_timing && row.timing.has_interval) timed = &row;
-      }
-    if (f.changed_rows) {
-      Table t{{"row", "error ratio", "f_evals ratio", "counters", "differences"}, {}};
-      std::size_t shown = 0;
-      for (const auto* row : rows)
-        if (row->changed && shown++ < kMaxMarkdownRows)
-          t.rows.push_back({row->key, error_ratio(*row),
-                            ratio_of_texts(row->f_evals_old, row->f_evals_new), counters_text(*row),
-                            join(row->differences, "; ")});
-      md << "\nChanged rows (ratios NEW/OLD):\n\n" << t.to_markdown();
-      if (shown > kMaxMarkdownRows)
-        md << "\n(" << shown - kMaxMarkdownRows << " more in compare.csv)\n";
-    }
-    if (!timed) {
-      for (const auto* row : rows)
-        if (row->has_timing) {
-          md << "\n"
-             << row->timing.quantity
-             << ": one run per row on each side, no verdict (both times are in compare.csv).\n";
-          break;
-        }
-      continue;
-    }
-    Table t{{"row", "error ratio", "f_evals ratio", "counters", "OLD time [95% interval]",
-             "NEW time [95% interval]", "time ratio", "verdict"},
-            {}};
-    for (std::size_t k = 0; k < rows.size() && k < kMaxMarkdownRows; ++k) {
-      const auto& row = *rows[k];
-      const auto& tm = row.timing;
-      t.rows.push_back({row.key, error_ratio(row), ratio_of_texts(row.f_evals_old, row.f_evals_new),
-                        counters_text(row),
-                        row.has_timing ? interval_text(tm.old_median, tm.old_low, tm.old_high,
-                                                       tm.old_runs, tm.has_interval)
-                                       : "-",
-                        row.has_timing ? interval_text(tm.new_median, tm.new_low, tm.new_high,
-                                                       tm.new_runs, tm.has_interval)
-                                       : "-",
-                        row.has_timing ? compare_ratio(tm.old_median, tm.new_median) : "-",
-                        row.has_timing ? tm.verdict : "-"});
-    }
-    md << "\nPer row (ratios NEW/OLD; time: " << timed->timing.quantity
-       << ", the median with its bootstrap 95% interval; faster/slower when the intervals are "
-          "disjoint and each side has at least "
-       << kCompareMinTimedRuns << " runs):\n\n"
-       << t.to_markdown();
-    if (rows.size() > kMaxMarkdownRows)
-      md << "\n(" << rows.size() - kMaxMarkdownRows << " more in compare.csv)\n";
-  }
+  for (const auto& f : r.files)
+    if (f.presence == FileComparison::Presence::both && f.is_table) table_markdown(md, r, f);
   return md.str();
 }
 

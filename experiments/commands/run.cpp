@@ -513,6 +513,20 @@ void write_run_json(const RunOptions& opt, const SpecFile& spec, const Expansion
   write_file_atomic(fs::path(opt.out_dir) / "run.json", run.dump(2) + "\n");
 }
 
+// Why a unit's rows fail it: "a row has status S" (the last row whose status is none of ok,
+// floor, stable_up_to, solver_limit, unstable_for_all_h), or "no rows"; empty when they do not.
+std::string unit_failure(const std::vector<std::vector<std::string>>& rows, std::size_t status_col,
+                         std::size_t n_study) {
+  std::string message;
+  for (const auto& r : rows) {
+    const std::string st = status_col < n_study ? r[status_col] : "ok";
+    if (st != "ok" && st != "floor" && st != "stable_up_to" && st != "solver_limit" &&
+        st != "unstable_for_all_h")
+      message = "a row has status " + st;
+  }
+  return rows.empty() ? "no rows" : message;
+}
+
 // Runs the units of `todo`, appending each unit's rows to the CSV as it finishes; returns with
 // `done` holding every unit's rows.
 void run_units(const SpecFile& spec, const Expansion& ex, const std::vector<long>& todo,
@@ -541,20 +555,8 @@ void run_units(const SpecFile& spec, const Expansion& ex, const std::vector<long
     try {
       const Table t = run_unit(spec, p, integ, out_dir);
       rows = t.rows;
-      for (const auto& r : rows) {
-        const std::string st = static_cast<std::size_t>(status_col) < n_study
-                                   ? r[static_cast<std::size_t>(status_col)]
-                                   : "ok";
-        if (st != "ok" && st != "floor" && st != "stable_up_to" && st != "solver_limit" &&
-            st != "unstable_for_all_h") {
-          unit_status = "failed";
-          message = "a row has status " + st;
-        }
-      }
-      if (rows.empty()) {
-        unit_status = "failed";
-        message = "no rows";
-      }
+      message = unit_failure(rows, static_cast<std::size_t>(status_col), n_study);
+      if (!message.empty()) unit_status = "failed";
     } catch (const std::exception& e) {
       unit_status = "error";
       message = e.what();

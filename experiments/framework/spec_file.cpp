@@ -273,21 +273,22 @@ void read_integrators(const SpecEntry& integrators, const SpecKindSchema& schema
   }
 }
 
-}  // namespace
-
-SpecFile parse_spec_text(const std::string& source, const std::string& file,
-                         const std::vector<std::string>& sets, const SpecSchema& schema) {
-  toml::table root;
+// The TOML document of a spec file (BadInput at the line and column of a syntax error).
+toml::table parse_toml(const std::string& source, const std::string& file) {
   try {
     require_ascii_outside_strings(source, file);
-    root = toml::parse(source, file);
+    return toml::parse(source, file);
   } catch (const toml::parse_error& err) {
     const auto& b = err.source().begin;
     throw BadInput(file + ":" + std::to_string(b.line) + ":" + std::to_string(b.column) + ": " +
                    std::string(err.description()));
   }
-  SpecFile spec;
-  spec.file = file;
+}
+
+// The schema of the document's `kind` (which it sets in spec.kind); BadInput when it is missing,
+// unknown or a method file's kind.
+SpecKindSchema kind_schema_of(const toml::table& root, const std::string& file,
+                              const SpecSchema& schema, SpecFile& spec) {
   const toml::node* kind = root.get("kind");
   if (!kind || !kind->is_string())
     throw BadInput(file + ": key 'kind' missing or not a string; one of " + join(schema.kinds));
@@ -300,7 +301,17 @@ SpecFile parse_spec_text(const std::string& source, const std::string& file,
   if (!found)
     throw BadInput(where_of(file, *kind) + ": key 'kind': unknown kind '" + spec.kind + "'" +
                    did_you_mean(spec.kind, schema.kinds) + "; known: " + join(schema.kinds));
-  const SpecKindSchema& kind_schema = *found;
+  return *found;
+}
+
+}  // namespace
+
+SpecFile parse_spec_text(const std::string& source, const std::string& file,
+                         const std::vector<std::string>& sets, const SpecSchema& schema) {
+  const toml::table root = parse_toml(source, file);
+  SpecFile spec;
+  spec.file = file;
+  const SpecKindSchema kind_schema = kind_schema_of(root, file, schema, spec);
 
   std::vector<SpecEntry> settings, params;
   SpecEntry integrators;

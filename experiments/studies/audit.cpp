@@ -516,6 +516,19 @@ constexpr double kSlopeTol = 0.3;
 constexpr double kErrMax = 1e-3, kFloorMin = 1e-13, kFloorFactor = 100;
 constexpr int kSlopePoints = 3, kLadderLevels = 28;
 
+// The least-squares slope of ly against lx from the raw sums (n Σxy − Σx Σy)/(n Σxx − (Σx)²).
+double slope_from_sums(const std::vector<double>& lx, const std::vector<double>& ly) {
+  const double n = static_cast<double>(lx.size());
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (std::size_t i = 0; i < lx.size(); ++i) {
+    sx += lx[i];
+    sy += ly[i];
+    sxx += lx[i] * lx[i];
+    sxy += lx[i] * ly[i];
+  }
+  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
+}
+
 void slope_check(std::vector<AuditRow>& rows, const std::string& name) {
   const std::string check = "local_error_slope";
   auto probe = create(name);
@@ -578,15 +591,7 @@ void slope_check(std::vector<AuditRow>& rows, const std::string& name) {
                                   ", 1e-3] (errors at h = 0.5/2^k: " + errs_text + ")" +
                                   (note.empty() ? "" : "; " + note)));
   }
-  const double n = static_cast<double>(lx.size());
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (std::size_t i = 0; i < lx.size(); ++i) {
-    sx += lx[i];
-    sy += ly[i];
-    sxx += lx[i] * lx[i];
-    sxy += lx[i] * ly[i];
-  }
-  const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  const double slope = slope_from_sums(lx, ly);
   const double h_min = std::exp(*std::min_element(lx.begin(), lx.end()));
   const double h_max = std::exp(*std::max_element(lx.begin(), lx.end()));
   rows.push_back(row(name, check, label, std::to_string(expected), num(slope, 3),

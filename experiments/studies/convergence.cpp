@@ -578,6 +578,109 @@ ReferencePlan tighter_plan(const ReferencePlan& plan) {
 
 double inf_norm(CVecRef y) { return y.size() ? y.cwiseAbs().maxCoeff() : 0.0; }
 
+// Stage 1 of the per-method probe: what the probes found about the target error.
+struct ProbeBracket {
+  double h_below = 0, h_above = 0;  // bracket: error below / above the target
+  double e_below = 0, e_above = 0;
+  bool floor_hit = false;
+  double h_hint = 0;  // set when a probe lands just above the target
+};
+
+using ProbeFn = std::function<double(double)>;
+
+// Stage 1: from h, towards the coarsest step allowed, where the error is about `target`, while
+// fewer than kProbeRuns - 2 runs (counted in `runs` by `probe`) have been made.
+ProbeBracket probe_coarsest(double h, double lo, double hi, double target, int q, const int& runs,
+                            const ProbeFn& probe, const ProbeFn& floor_at) {
+  ProbeBracket b;
+  const int stage1_runs = kProbeRuns - 2;
+  while (runs < stage1_runs) {
+    const double e = probe(h);
+    double next;
+    if (std::isfinite(e) && e > target && e <= 2 * target && e > kFloorFactor * floor_at(h)) {
+      // Within a factor 2 above the target: close enough; the step e ∝ h^p gives the target.
+      b.h_hint = h * std::pow(target / e, 1.0 / q);
+      break;
+    }
+    if (!std::isfinite(e) || e > target) {
+      if (!(b.h_above > 0) || h < b.h_above) {
+        b.h_above = h;
+        b.e_above = std::isfinite(e) ? e : 0;
+      }
+      if (h <= lo) break;
+      next = std::max(lo, h / 4);
+    } else if (e <= kFloorFactor * floor_at(h)) {
+      b.floor_hit = true;
+      b.h_below = std::max(b.h_below, h);
+      b.e_below = 0;
+      if (h >= hi) break;
+      next = std::min(hi, h * 4);
+    } else {
+      b.h_below = h;
+      b.e_below = e;
+      if (e > target / 3) break;  // within a factor 3 below the target: close enough
+      if (h >= hi) break;
+      next = std::min(hi, h * std::pow(target / e, 1.0 / q));
+    }
+    // Inside a bracket: interpolate in log-log when both ends have errors, else bisect.
+    if (b.h_below > 0 && b.h_above > 0) {
+      if (b.e_below > 0 && b.e_above > 0)
+        next = b.h_below * std::exp(std::log(b.h_above / b.h_below) *
+                                    std::log(target / b.e_below) / std::log(b.e_above / b.e_below));
+      else
+        next = std::sqrt(b.h_below * b.h_above);
+      next = std::clamp(next, std::min(b.h_below, b.h_above), std::max(b.h_below, b.h_above));
+    }
+    if (std::abs(next - h) <= 0.02 * h) break;  // no progress (e.g. the same step count)
+    h = next;
+  }
+  return b;
+}
+
+// h_top: the largest usable probe at or below the target, else the model's prediction.
+double top_step(const ProbeBracket& b, const std::vector<std::pair<double, double>>& good,
+                double target, double lo, double hi, int q) {
+  double h_top = 0;
+  for (const auto& [gh, ge] : good)
+    if (ge <= target) h_top = std::max(h_top, gh);
+  if (!(h_top > 0)) h_top = std::clamp(b.h_below > 0 ? b.h_below : lo, lo, hi);
+  if (b.h_hint > 0) h_top = std::clamp(std::max(h_top, b.h_hint), lo, hi);
+  if (b.h_hint == 0 && b.e_below > 0 && b.e_below < target / 3) {
+    const double predicted = b.h_below * std::pow(target / b.e_below, 1.0 / q);
+    // Never at or beyond a step whose run failed or overshot the target.
+    if (!(b.h_above > 0) || predicted < b.h_above) h_top = std::min(hi, std::max(h_top, predicted));
+  }
+  return h_top;
+}
+
+// Stage 2: the ladder moves down (at most by its own length span = h0/h_finest, not below lo)
+// from h_top until its finest error is about kLadderFloorMargin times the floors: the most
+// asymptotic levels. Returns h0.
+double probe_finest(double h_top, double lo, double span, int q, const int& runs,
+                    const ProbeFn& probe, const ProbeFn& predict, const ProbeFn& floor_at,
+                    const std::function<void(double)>& calibrate) {
+  const double h0_min = std::max(lo, h_top / span);
+  const double fine_lo = h0_min / span, fine_hi = h_top / span;
+  double h_fine = fine_hi;
+  if (calibrate) calibrate(fine_hi);
+  auto fine_target = [&](double hf) { return kLadderFloorMargin * floor_at(hf); };
+  if (predict(h_fine) <= fine_target(h_fine)) return h_top;  // already reaches the floor region
+  for (int it = 0; it < 3; ++it)
+    h_fine = std::clamp(h_fine * std::pow(fine_target(h_fine) / predict(h_fine), 1.0 / q), fine_lo,
+                        fine_hi);
+  while (runs < kProbeRuns) {
+    const double e = probe(h_fine);
+    if (!std::isfinite(e)) break;
+    const double ratio = fine_target(h_fine) / std::max(e, 1e-300);
+    if (std::abs(std::log(ratio)) <= std::log(3.0)) break;
+    const double next =
+        std::clamp(h_fine * std::clamp(std::pow(ratio, 1.0 / q), 1.0 / 16, 16.0), fine_lo, fine_hi);
+    if (next == h_fine) break;
+    h_fine = next;
+  }
+  return std::clamp(h_fine * span, h0_min, h_top);
+}
+
 // The per-method probe (see the header): the coarsest step of one integrator's ladder.
 // error_at(h): the error of a run at h (NaN when it failed); floor_at(h): the larger floor of a
 // run at h; q: the expected slope. calibrate(h), when set, is called once before stage 2 with the
@@ -612,91 +715,15 @@ double probe_ladder(const ConvergenceSpec& spec, double t_span, bool local, doub
       if (std::abs(std::log(g.first / h)) < std::abs(std::log(best->first / h))) best = &g;
     return best->second * std::pow(h / best->first, q);
   };
-  // Stage 1: the coarsest step allowed, h_top, where the error is about 1e-2·s.
-  double h = std::clamp(spec.h, lo, hi);
-  double h_below = 0, h_above = 0;  // bracket: error below / above the target
-  double e_below = 0, e_above = 0;
-  bool floor_hit = false;
-  double h_hint = 0;  // set when a probe lands just above the target
-  const int stage1_runs = kProbeRuns - 2;
-  while (runs < stage1_runs) {
-    const double e = probe(h);
-    double next;
-    if (std::isfinite(e) && e > target && e <= 2 * target && e > kFloorFactor * floor_at(h)) {
-      // Within a factor 2 above the target: close enough; the step e ∝ h^p gives the target.
-      h_hint = h * std::pow(target / e, 1.0 / q);
-      break;
-    }
-    if (!std::isfinite(e) || e > target) {
-      if (!(h_above > 0) || h < h_above) {
-        h_above = h;
-        e_above = std::isfinite(e) ? e : 0;
-      }
-      if (h <= lo) break;
-      next = std::max(lo, h / 4);
-    } else if (e <= kFloorFactor * floor_at(h)) {
-      floor_hit = true;
-      h_below = std::max(h_below, h);
-      e_below = 0;
-      if (h >= hi) break;
-      next = std::min(hi, h * 4);
-    } else {
-      h_below = h;
-      e_below = e;
-      if (e > target / 3) break;  // within a factor 3 below the target: close enough
-      if (h >= hi) break;
-      next = std::min(hi, h * std::pow(target / e, 1.0 / q));
-    }
-    // Inside a bracket: interpolate in log-log when both ends have errors, else bisect.
-    if (h_below > 0 && h_above > 0) {
-      if (e_below > 0 && e_above > 0)
-        next = h_below * std::exp(std::log(h_above / h_below) * std::log(target / e_below) /
-                                  std::log(e_above / e_below));
-      else
-        next = std::sqrt(h_below * h_above);
-      next = std::clamp(next, std::min(h_below, h_above), std::max(h_below, h_above));
-    }
-    if (std::abs(next - h) <= 0.02 * h) break;  // no progress (e.g. the same step count)
-    h = next;
-  }
-  if (good.empty()) return floor_hit ? hi : lo;
-  // h_top: the largest usable probe at or below the target, else the model's prediction.
-  double h_top = 0;
-  for (const auto& [gh, ge] : good)
-    if (ge <= target) h_top = std::max(h_top, gh);
-  if (!(h_top > 0)) h_top = std::clamp(h_below > 0 ? h_below : lo, lo, hi);
-  if (h_hint > 0) h_top = std::clamp(std::max(h_top, h_hint), lo, hi);
-  if (h_hint == 0 && e_below > 0 && e_below < target / 3) {
-    const double predicted = h_below * std::pow(target / e_below, 1.0 / q);
-    // Never at or beyond a step whose run failed or overshot the target.
-    if (!(h_above > 0) || predicted < h_above) h_top = std::min(hi, std::max(h_top, predicted));
-  }
-  // Stage 2: the ladder moves down (at most by its own length h0/h_finest, not below lo) until
-  // its finest error is about kLadderFloorMargin times the floors: the most asymptotic levels.
-  const double h0_min = std::max(lo, h_top / span);
-  const double fine_lo = h0_min / span, fine_hi = h_top / span;
-  double h_fine = fine_hi;
-  if (calibrate) calibrate(fine_hi);
-  auto fine_target = [&](double hf) { return kLadderFloorMargin * floor_at(hf); };
-  if (predict(h_fine) <= fine_target(h_fine)) return h_top;  // already reaches the floor region
-  for (int it = 0; it < 3; ++it)
-    h_fine = std::clamp(h_fine * std::pow(fine_target(h_fine) / predict(h_fine), 1.0 / q), fine_lo,
-                        fine_hi);
-  while (runs < kProbeRuns) {
-    const double e = probe(h_fine);
-    if (!std::isfinite(e)) break;
-    const double ratio = fine_target(h_fine) / std::max(e, 1e-300);
-    if (std::abs(std::log(ratio)) <= std::log(3.0)) break;
-    const double next =
-        std::clamp(h_fine * std::clamp(std::pow(ratio, 1.0 / q), 1.0 / 16, 16.0), fine_lo, fine_hi);
-    if (next == h_fine) break;
-    h_fine = next;
-  }
-  return std::clamp(h_fine * span, h0_min, h_top);
+  const ProbeBracket b =
+      probe_coarsest(std::clamp(spec.h, lo, hi), lo, hi, target, q, runs, probe, floor_at);
+  if (good.empty()) return b.floor_hit ? hi : lo;
+  const double h_top = top_step(b, good, target, lo, hi, q);
+  return probe_finest(h_top, lo, span, q, runs, probe, predict, floor_at, calibrate);
 }
 
 // One convergence or local-error study in progress: the system, its initial state, the reference
-// plan and its check, and the reference values once computed. run_study's steps share it.
+// plan and its check, and the reference values once computed. run_step_study's steps share it.
 struct StudyState {
   const ConvergenceSpec& spec;
   const OdeSystem& sys;
@@ -945,7 +972,47 @@ void keep_rows_still_falling(std::vector<ConvergenceRow>& rows, bool local) {
   }
 }
 
-ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress, bool local) {
+// The rows of one integrator over its ladder, with its round-off floor applied (progress lines
+// to st.progress; `done` of `total` rows so far; ref_index: the row's local reference).
+void integrator_rows(StudyState& st, Integrator& integ, const std::vector<double>& ladder,
+                     std::size_t& ref_index, std::size_t& done, std::size_t total,
+                     ConvergenceResult& result) {
+  std::ostream* progress = st.progress;
+  std::vector<ConvergenceRow> rows;
+  std::vector<Vec> finals;
+  for (double h : ladder) {
+    finals.emplace_back();
+    rows.push_back(measure_row(st, integ, h, ref_index++, result, finals.back()));
+    if (progress) *progress << progress_line(++done, total, rows.back()) << std::flush;
+  }
+  ConvergenceResult::Floor fl = integrator_floor(st, integ, rows, finals);
+  if (progress && fl.source != "model")
+    *progress << "floor: " << fl.integrator << " " << format_short(fl.value) << " (" << fl.source
+              << (fl.source == "perturbed" ? ", two reruns at h = " + format_short(fl.h)
+                                           : std::string())
+              << ")\n";
+  if (progress && !fl.note.empty())
+    *progress << "floor: " << fl.integrator << " uses the model N·u·s (" << fl.note << ")\n";
+  for (auto& row : rows) apply_floor(row, fl, st.numerical_ref);
+  if (fl.source == "perturbed") keep_rows_still_falling(rows, st.local);
+  for (auto& row : rows) result.rows.push_back(std::move(row));
+  result.floors.push_back(std::move(fl));
+}
+
+// The order fit of every integrator, with its analysed order and round-off floor.
+void add_fits(const Setup& setup, bool local, ConvergenceResult& result) {
+  for (std::size_t i = 0; i < setup.integrators.size(); ++i) {
+    const Integrator& integ = *setup.integrators[i];
+    OrderFit fit = fit_order(result.rows, integ.info().name, local, result.ladder);
+    if (const auto a = coefficient_analysis(integ)) fit.analysed_order = a->order;
+    fit.floor_used = result.floors[i].value;
+    fit.floor_source = result.floors[i].source;
+    result.fits.push_back(std::move(fit));
+  }
+}
+
+ConvergenceResult run_step_study(const ConvergenceSpec& given, std::ostream* progress,
+                                 bool local) {
   given.validate();
   Setup setup = make_setup(given.model, given.integrators, setup_params(given));
   const OdeSystem& sys = *setup.model;
@@ -995,37 +1062,10 @@ ConvergenceResult run_study(const ConvergenceSpec& given, std::ostream* progress
   std::size_t total = 0;
   for (const auto& ladder : ladders) total += ladder.size();
   std::size_t done = 0, ref_index = 0;
-  for (std::size_t i = 0; i < setup.integrators.size(); ++i) {
-    Integrator& integ = *setup.integrators[i];
-    std::vector<ConvergenceRow> rows;
-    std::vector<Vec> finals;
-    for (double h : ladders[i]) {
-      finals.emplace_back();
-      rows.push_back(measure_row(st, integ, h, ref_index++, result, finals.back()));
-      if (progress) *progress << progress_line(++done, total, rows.back()) << std::flush;
-    }
-    ConvergenceResult::Floor fl = integrator_floor(st, integ, rows, finals);
-    if (progress && fl.source != "model")
-      *progress << "floor: " << fl.integrator << " " << format_short(fl.value) << " (" << fl.source
-                << (fl.source == "perturbed" ? ", two reruns at h = " + format_short(fl.h)
-                                             : std::string())
-                << ")\n";
-    if (progress && !fl.note.empty())
-      *progress << "floor: " << fl.integrator << " uses the model N·u·s (" << fl.note << ")\n";
-    for (auto& row : rows) apply_floor(row, fl, st.numerical_ref);
-    if (fl.source == "perturbed") keep_rows_still_falling(rows, local);
-    for (auto& row : rows) result.rows.push_back(std::move(row));
-    result.floors.push_back(std::move(fl));
-  }
+  for (std::size_t i = 0; i < setup.integrators.size(); ++i)
+    integrator_rows(st, *setup.integrators[i], ladders[i], ref_index, done, total, result);
   add_observed_orders(result.rows);
-  for (std::size_t i = 0; i < setup.integrators.size(); ++i) {
-    const Integrator& integ = *setup.integrators[i];
-    OrderFit fit = fit_order(result.rows, integ.info().name, local, result.ladder);
-    if (const auto a = coefficient_analysis(integ)) fit.analysed_order = a->order;
-    fit.floor_used = result.floors[i].value;
-    fit.floor_source = result.floors[i].source;
-    result.fits.push_back(std::move(fit));
-  }
+  add_fits(setup, local, result);
   return result;
 }
 
@@ -1034,11 +1074,11 @@ std::string optional_full(const std::optional<double>& x) { return x ? format_fu
 }  // namespace
 
 ConvergenceResult run_convergence(const ConvergenceSpec& spec, std::ostream* progress) {
-  return run_study(spec, progress, false);
+  return run_step_study(spec, progress, false);
 }
 
 ConvergenceResult run_local_error(const ConvergenceSpec& spec, std::ostream* progress) {
-  return run_study(spec, progress, true);
+  return run_step_study(spec, progress, true);
 }
 
 std::optional<double> fitted_order(const std::vector<ConvergenceRow>& rows,
@@ -1268,36 +1308,53 @@ std::string finer_levels_advice(const FitLevels& lv, std::size_t last, double ex
   return "add --levels or use a smaller --h";
 }
 
-// Why a fit over the window [a, a + len) is more than kOrderTolerance from the expected slope,
-// read from the pairwise orders.
-std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, double slope,
-                           int expected_slope, const std::string& ladder) {
-  const std::size_t n = lv.rs.size();
-  const double expected = expected_slope;
-  const double q_first = lv.pair_order(a + 1), q_last = lv.pair_order(a + len - 1);
-  const std::string all = lv.pair_orders(1, n);
+// What the pairwise orders of a fit window [a, a + len) and around it show.
+struct WindowOrders {
+  double q_first = 0, q_last = 0;  // the window's first and last pairwise orders
+  double w_lo = 0, w_hi = 0;       // their range over the window
   // A coarser pair near the expected slope (within 0.3): the method showed its order there
-  // and something else sets the error in the window. A steady window (orders within 0.1):
-  // the method's order on this problem. The window's orders moving towards the expected
-  // slope: pre-asymptotic.
+  // and something else sets the error in the window.
   bool coarser_near = false;
-  double w_lo = q_first, w_hi = q_first;
-  for (std::size_t b = 1; b <= a; ++b)
-    if (lv.usable[b] && lv.usable[b - 1] && std::abs(lv.pair_order(b) - expected) <= 0.3)
-      coarser_near = true;
-  for (std::size_t b = a + 1; b < a + len; ++b) {
-    w_lo = std::min(w_lo, lv.pair_order(b));
-    w_hi = std::max(w_hi, lv.pair_order(b));
-  }
-  const std::vector<double> last_orders = last_pair_orders(lv, a + len - 1);
+  std::vector<double> last_orders;  // the pairwise orders up to the window's finest level
   // The finest usable level of the integrator (not only of the window): orders still moving
   // towards the expected slope there make the whole approach pre-asymptotic too.
-  const std::size_t last_usable = finest_usable(lv, a + len - 1);
-  const bool approaching = orders_approach(last_orders, expected) ||
-                           orders_approach(last_pair_orders(lv, last_usable), expected);
-  const auto& finest = *lv.rs[last_usable];
-  const bool near_floors =
+  std::size_t last_usable = 0;
+  bool approaching = false;
+  bool near_floors = false;  // that level is within kLadderFloorMargin of its floors
+};
+
+WindowOrders window_orders(const FitLevels& lv, std::size_t a, std::size_t len, double expected) {
+  WindowOrders w;
+  w.q_first = lv.pair_order(a + 1);
+  w.q_last = lv.pair_order(a + len - 1);
+  w.w_lo = w.w_hi = w.q_first;
+  for (std::size_t b = 1; b <= a; ++b)
+    if (lv.usable[b] && lv.usable[b - 1] && std::abs(lv.pair_order(b) - expected) <= 0.3)
+      w.coarser_near = true;
+  for (std::size_t b = a + 1; b < a + len; ++b) {
+    w.w_lo = std::min(w.w_lo, lv.pair_order(b));
+    w.w_hi = std::max(w.w_hi, lv.pair_order(b));
+  }
+  w.last_orders = last_pair_orders(lv, a + len - 1);
+  w.last_usable = finest_usable(lv, a + len - 1);
+  w.approaching = orders_approach(w.last_orders, expected) ||
+                  orders_approach(last_pair_orders(lv, w.last_usable), expected);
+  const auto& finest = *lv.rs[w.last_usable];
+  w.near_floors =
       finest.error <= kLadderFloorMargin * std::max(finest.floor_used, finest.reference_floor);
+  return w;
+}
+
+// Why a fit over the window [a, a + len) is more than kOrderTolerance from the expected slope,
+// read from the pairwise orders. A steady window (orders within 0.1): the method's order on this
+// problem. The window's orders moving towards the expected slope: pre-asymptotic.
+std::string off_fit_reason(const FitLevels& lv, std::size_t a, std::size_t len, double slope,
+                           int expected_slope, const std::string& ladder) {
+  const double expected = expected_slope;
+  const std::string all = lv.pair_orders(1, lv.rs.size());
+  const WindowOrders w = window_orders(lv, a, len, expected);
+  const auto& [q_first, q_last, w_lo, w_hi, coarser_near, last_orders, last_usable, approaching,
+               near_floors] = w;
   const auto limit = order_limit(last_orders);
   const std::string levelling =
       limit ? " (levelling off near " + format_fixed(*limit, 2) + ")" : std::string();
@@ -1409,6 +1466,51 @@ void fit_over_window(const FitLevels& lv, std::size_t best_a, std::size_t best_l
   }
 }
 
+// No three consecutive usable levels agree: still approaching the order (pre-asymptotic) or
+// wandering (unsettled); finer levels help unless the floor ends the ladder.
+std::string unsettled_reason(const FitLevels& lv, int expected_slope, const std::string& ladder) {
+  const std::size_t n = lv.rs.size();
+  const double expected = expected_slope;
+  std::size_t last = 0;
+  for (std::size_t b = 0; b < n; ++b)
+    if (lv.usable[b]) last = b;
+  const std::string all = lv.pair_orders(1, n);
+  const std::string agree = "no three consecutive levels agree within " + g_short(kOrderAgreement);
+  if (orders_approach(last_pair_orders(lv, last), expected))
+    return "pre-asymptotic: the pairwise orders above the floors are still moving "
+           "towards " +
+           std::to_string(expected_slope) + " (" + all + "; " + agree +
+           "): " + finer_levels_advice(lv, last, expected, ladder);
+  return "unsettled orders: the pairwise orders above the floors (" + all + ") " +
+         "neither settle (" + agree + ") nor approach " + std::to_string(expected_slope) +
+         " (noise, a solver tolerance or a change of regime at these steps): " +
+         (floor_ends_ladder(lv, last) ? floor_end_advice(lv, last, expected)
+                                      : "add --levels to see whether they settle at finer steps");
+}
+
+// After "only K levels above ": the round-off floor, how many rows are at it and what to change. The finest usable level (or the coarsest level when none is usable) and
+// the first round-off floor row after it, whose floor the reason names.
+std::string roundoff_reason(const FitLevels& lv, int n_usable, int n_roundoff, double expected,
+                            const std::string& ladder) {
+  std::size_t last = 0;
+  for (std::size_t b = 0; b < lv.rs.size(); ++b)
+    if (lv.usable[b]) last = b;
+  const ConvergenceRow* floor_row = nullptr;
+  for (const auto* r : lv.rs)
+    if (r->at_floor && r->error <= kFloorFactor * r->floor_used && !floor_row) floor_row = r;
+  const std::string through = n_usable > 0 ? orders_through_floor(lv, last, expected) : "";
+  std::string advice;
+  if (!through.empty() && floor_row->floor_source != "perturbed")
+    advice = floor_end_advice(lv, last, expected);
+  else if (ladder == "per-method")
+    advice =
+        "use a larger --h (the probe's steps stay within [h/64, 16·h]) or a smaller "
+        "--refine (the same levels over a shorter range of steps)";
+  else
+    advice = "use a larger --h or --ladder per-method";
+  return roundoff_words(*floor_row) + ", " + std::to_string(n_roundoff) + " at it: " + advice;
+}
+
 }  // namespace
 
 OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& integrator,
@@ -1449,48 +1551,10 @@ OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& i
   const std::string levels = n_usable == 1 ? " level" : " levels";
   const double expected = fit.expected_slope;
   if (n_usable >= 3) {
-    // No three consecutive usable levels agree: still approaching the order (pre-asymptotic) or
-    // wandering (unsettled); finer levels help unless the floor ends the ladder.
-    std::size_t last = 0;
-    for (std::size_t b = 0; b < n; ++b)
-      if (lv.usable[b]) last = b;
-    const std::string all = lv.pair_orders(1, n);
-    const std::string agree =
-        "no three consecutive levels agree within " + g_short(kOrderAgreement);
-    if (orders_approach(last_pair_orders(lv, last), expected))
-      fit.reason =
-          "pre-asymptotic: the pairwise orders above the floors are still moving "
-          "towards " +
-          std::to_string(fit.expected_slope) + " (" + all + "; " + agree +
-          "): " + finer_levels_advice(lv, last, expected, ladder);
-    else
-      fit.reason =
-          "unsettled orders: the pairwise orders above the floors (" + all + ") " +
-          "neither settle (" + agree + ") nor approach " + std::to_string(fit.expected_slope) +
-          " (noise, a solver tolerance or a change of regime at these steps): " +
-          (floor_ends_ladder(lv, last) ? floor_end_advice(lv, last, expected)
-                                       : "add --levels to see whether they settle at finer steps");
+    fit.reason = unsettled_reason(lv, fit.expected_slope, ladder);
   } else if (n_roundoff > 0) {
-    // The finest usable level (or the coarsest level when none is usable) and the first
-    // round-off floor row after it, whose floor the reason names.
-    std::size_t last = 0;
-    for (std::size_t b = 0; b < n; ++b)
-      if (lv.usable[b]) last = b;
-    const ConvergenceRow* floor_row = nullptr;
-    for (const auto* r : lv.rs)
-      if (r->at_floor && r->error <= kFloorFactor * r->floor_used && !floor_row) floor_row = r;
-    const std::string through = n_usable > 0 ? orders_through_floor(lv, last, expected) : "";
-    std::string advice;
-    if (!through.empty() && floor_row->floor_source != "perturbed")
-      advice = floor_end_advice(lv, last, expected);
-    else if (ladder == "per-method")
-      advice =
-          "use a larger --h (the probe's steps stay within [h/64, 16·h]) or a smaller "
-          "--refine (the same levels over a shorter range of steps)";
-    else
-      advice = "use a larger --h or --ladder per-method";
-    fit.reason = "only " + k + levels + " above " + roundoff_words(*floor_row) + ", " +
-                 std::to_string(n_roundoff) + " at it: " + advice;
+    fit.reason = "only " + k + levels + " above " +
+                 roundoff_reason(lv, n_usable, n_roundoff, expected, ladder);
   } else if (n_reference > 0) {
     fit.reason = "only " + k + levels +
                  " above the reference's accuracy: tighten --reference-rtol or use a more "

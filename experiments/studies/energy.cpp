@@ -64,12 +64,12 @@ std::string names_of(const std::vector<Invariant>& invs) {
   return s.empty() ? "none" : s;
 }
 
-}  // namespace
-
-EnergyRun measure_energy_drift(const OdeSystem& sys, Integrator& integ,
-                               const EnergyRunOptions& opt) {
+// The index of opt.invariant among the model's invariants `invs`; BadInput when the model has
+// no such invariant or the integrator cannot run fixed steps on it.
+std::size_t checked_main_invariant(const OdeSystem& sys, const Integrator& integ,
+                                   const std::vector<Invariant>& invs,
+                                   const EnergyRunOptions& opt) {
   require_input(opt.samples >= 1, "--samples must be >= 1");
-  const std::vector<Invariant> invs = sys.invariants();
   std::size_t main_index = invs.size();
   for (std::size_t i = 0; i < invs.size(); ++i)
     if (invs[i].name == opt.invariant) main_index = i;
@@ -80,6 +80,44 @@ EnergyRun measure_energy_drift(const OdeSystem& sys, Integrator& integ,
                 "integrator '" + integ.info().name +
                     "' is adaptive only: the energy-drift study runs fixed steps (--h)");
   check_compatible(integ.info(), sys);
+  return main_index;
+}
+
+// The invariants other than the main one: their initial values and largest relative errors.
+struct OtherInvariants {
+  std::vector<const Invariant*> invs;
+  std::vector<double> v0, max;
+  std::vector<char> absolute;
+
+  OtherInvariants(const std::vector<Invariant>& all, std::size_t main_index, double t0,
+                  const Vec& y0) {
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      if (i == main_index) continue;
+      invs.push_back(&all[i]);
+      v0.push_back(all[i].value(t0, y0));
+      max.push_back(0.0);
+      absolute.push_back(invariant_error_is_absolute(v0.back(), all[i].arbitrary_zero));
+    }
+  }
+  void add(double t, CVecRef y) {
+    for (std::size_t i = 0; i < invs.size(); ++i)
+      max[i] = std::max(max[i], relative_error(invs[i]->value(t, y), v0[i], absolute[i] != 0));
+  }
+};
+
+// The largest error over the run divided by the largest over its first tenth (infinite when the
+// first tenth had none and the run some, 1 when neither had any).
+double growth_ratio(double max_all, double max_tenth) {
+  if (max_tenth > 0) return max_all / max_tenth;
+  return max_all > 0 ? std::numeric_limits<double>::infinity() : 1.0;
+}
+
+}  // namespace
+
+EnergyRun measure_energy_drift(const OdeSystem& sys, Integrator& integ,
+                               const EnergyRunOptions& opt) {
+  const std::vector<Invariant> invs = sys.invariants();
+  const std::size_t main_index = checked_main_invariant(sys, integ, invs, opt);
 
   const double t0 = sys.initial_time();
   FixedStepOptions fopt;
@@ -97,17 +135,7 @@ EnergyRun measure_energy_drift(const OdeSystem& sys, Integrator& integ,
   const Vec y0 = sys.initial_state();
   const double v0 = main_inv.value(t0, y0);
   const bool absolute = invariant_error_is_absolute(v0, main_inv.arbitrary_zero);
-  std::vector<const Invariant*> others;
-  std::vector<double> others_v0, others_max;
-  std::vector<char> others_absolute;
-  for (std::size_t i = 0; i < invs.size(); ++i) {
-    if (i == main_index) continue;
-    others.push_back(&invs[i]);
-    others_v0.push_back(invs[i].value(t0, y0));
-    others_max.push_back(0.0);
-    others_absolute.push_back(
-        invariant_error_is_absolute(others_v0.back(), invs[i].arbitrary_zero));
-  }
+  OtherInvariants others(invs, main_index, t0, y0);
 
   EnergyRun run;
   run.integrator = integ.info().name;
@@ -133,9 +161,7 @@ EnergyRun measure_energy_drift(const OdeSystem& sys, Integrator& integ,
       reached_tenth = true;
     }
     slope.add(t, e);
-    for (std::size_t i = 0; i < others.size(); ++i)
-      others_max[i] = std::max(others_max[i], relative_error(others[i]->value(t, y), others_v0[i],
-                                                             others_absolute[i] != 0));
+    others.add(t, y);
     last = {t, v, e, since_last};
     if (k % stride == 0 || k == n) {
       run.samples.push_back(last);
@@ -159,14 +185,10 @@ EnergyRun measure_energy_drift(const OdeSystem& sys, Integrator& integ,
   run.final_rel_error = last.rel_error;
   run.final_change = absolute ? last.value - v0 : (last.value - v0) / std::abs(v0);
   run.drift_rate = slope.slope();
-  if (reached_tenth || r.stats.status == Status::ok) {
-    if (max_tenth > 0)
-      run.growth_ratio = max_all / max_tenth;
-    else
-      run.growth_ratio = max_all > 0 ? std::numeric_limits<double>::infinity() : 1.0;
-  }
-  for (std::size_t i = 0; i < others.size(); ++i)
-    run.other_max_rel_error.emplace_back(others[i]->name, others_max[i]);
+  if (reached_tenth || r.stats.status == Status::ok)
+    run.growth_ratio = growth_ratio(max_all, max_tenth);
+  for (std::size_t i = 0; i < others.invs.size(); ++i)
+    run.other_max_rel_error.emplace_back(others.invs[i]->name, others.max[i]);
   return run;
 }
 

@@ -702,13 +702,12 @@ std::optional<double> loglog_slope(const std::vector<double>& x, const std::vect
   return least_squares_slope(lx, ly);
 }
 
-StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress) {
-  spec.validate();
-  StabilityResult res;
+namespace {
+
+// The set-up of every value of the swept parameter (one without a sweep), each created and
+// checked before the first run, so a bad value or an incompatible pair is reported at once.
+std::vector<Setup> stability_setups(const StabilitySpec& spec, const std::vector<double>& values) {
   const bool sweep = !spec.sweep_param.empty();
-  const std::vector<double> values = sweep ? spec.sweep_values : std::vector<double>{0.0};
-  // Every set-up is created (and checked) before the first run, so a bad value of the swept
-  // parameter or an incompatible pair is reported at once.
   std::vector<Setup> setups;
   for (const double v : values) {
     Params p = spec.params;
@@ -719,6 +718,44 @@ StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress)
     require_input(integ->supports_fixed_step(),
                   "--integrators: '" + integ->info().name +
                       "' is adaptive only: the stability study runs fixed steps");
+  return setups;
+}
+
+// The log-log slopes of the measured and predicted h_max against the swept value, per integrator.
+std::vector<StabilityResult::Fit> sweep_fits(const StabilitySpec& spec,
+                                             const std::vector<StabilityRow>& rows) {
+  std::vector<StabilityResult::Fit> fits;
+  for (const auto& name : spec.integrators) {
+    StabilityResult::Fit f;
+    f.integrator = name;
+    std::vector<double> xm, ym, xp, yp;
+    for (const auto& r : rows) {
+      if (r.integrator != name) continue;
+      if (r.status == "ok" && r.h_measured) {
+        xm.push_back(r.value);
+        ym.push_back(*r.h_measured);
+      }
+      if (r.h_predicted && *r.h_predicted > 0) {
+        xp.push_back(r.value);
+        yp.push_back(*r.h_predicted);
+      }
+    }
+    f.points = static_cast<int>(xm.size());
+    f.measured_slope = loglog_slope(xm, ym);
+    f.predicted_slope = loglog_slope(xp, yp);
+    fits.push_back(f);
+  }
+  return fits;
+}
+
+}  // namespace
+
+StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress) {
+  spec.validate();
+  StabilityResult res;
+  const bool sweep = !spec.sweep_param.empty();
+  const std::vector<double> values = sweep ? spec.sweep_values : std::vector<double>{0.0};
+  std::vector<Setup> setups = stability_setups(spec, values);
   // The criterion of every value too: --criterion energy with a value whose energy has an
   // arbitrary zero (--sweep gravity=0,1) is BadInput before the first value runs.
   std::vector<EnergyCriterion> criteria;
@@ -762,28 +799,7 @@ StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress)
       res.rows.push_back(std::move(row));
     }
   }
-  if (sweep) {
-    for (const auto& name : spec.integrators) {
-      StabilityResult::Fit f;
-      f.integrator = name;
-      std::vector<double> xm, ym, xp, yp;
-      for (const auto& r : res.rows) {
-        if (r.integrator != name) continue;
-        if (r.status == "ok" && r.h_measured) {
-          xm.push_back(r.value);
-          ym.push_back(*r.h_measured);
-        }
-        if (r.h_predicted && *r.h_predicted > 0) {
-          xp.push_back(r.value);
-          yp.push_back(*r.h_predicted);
-        }
-      }
-      f.points = static_cast<int>(xm.size());
-      f.measured_slope = loglog_slope(xm, ym);
-      f.predicted_slope = loglog_slope(xp, yp);
-      res.fits.push_back(f);
-    }
-  }
+  if (sweep) res.fits = sweep_fits(spec, res.rows);
   return res;
 }
 
@@ -1071,17 +1087,10 @@ std::string StabilityJob::report_markdown(const std::string& note) const {
   return md.str();
 }
 
-}  // namespace
-
-StudyKind stability_study_kind() {
+// The options of `stiffbench stability` (the flags, the spec-file keys and their defaults).
+std::vector<ParamSpec> stability_options() {
   using P = ParamType;
-  StudyKind k;
-  k.name = "stability";
-  k.stem = "stability";
-  k.summary =
-      "largest stable fixed step h_max per integrator (bisection) against the linear-theory "
-      "prediction from the system's spectrum; writes stability.{csv,md,json,png}";
-  k.options = {
+  return {
       {"sweep", P::text, "",
        "repeat over a model parameter: NAME=v1,v2,... or NAME=lo:hi:n (n log-spaced values) and "
        "fit the log-log slope of h_max against it"},
@@ -1128,6 +1137,18 @@ StudyKind stability_study_kind() {
       {"dense_limit", P::integer, "600",
        "compute the exact spectrum (dense eigensolver) up to this dimension",
        Bounds::non_negative()}};
+}
+
+}  // namespace
+
+StudyKind stability_study_kind() {
+  StudyKind k;
+  k.name = "stability";
+  k.stem = "stability";
+  k.summary =
+      "largest stable fixed step h_max per integrator (bisection) against the linear-theory "
+      "prediction from the system's spectrum; writes stability.{csv,md,json,png}";
+  k.options = stability_options();
   k.unit_columns = stability_table(StabilityResult{}).columns;
   k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
     StabilitySpec s;
