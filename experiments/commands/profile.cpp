@@ -27,7 +27,7 @@
 
 namespace stiffbench {
 
-// suites/{mechanical,stiff}/*.toml, compiled in (cmake/embed_plots.cmake).
+// suites/{mechanical,stiff}/*.toml, compiled in (cmake/embed_files.cmake).
 const std::vector<std::pair<std::string_view, std::string_view>>& embedded_profile_suite_stiff();
 const std::vector<std::pair<std::string_view, std::string_view>>&
 embedded_profile_suite_mechanical();

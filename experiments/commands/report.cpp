@@ -18,7 +18,7 @@
 
 namespace stiffbench {
 
-// suites/report/*.toml, compiled in (cmake/embed_plots.cmake).
+// suites/report/*.toml, compiled in (cmake/embed_files.cmake).
 const std::vector<std::pair<std::string_view, std::string_view>>& embedded_report_suite();
 
 namespace fs = std::filesystem;

@@ -12,7 +12,7 @@
 
 namespace stiffbench {
 
-// experiments/output/html/* (page.css, errors.js, page.js), compiled in (cmake/embed_plots.cmake).
+// experiments/output/html/* (page.css, errors.js, page.js), compiled in (cmake/embed_files.cmake).
 const std::vector<std::pair<std::string_view, std::string_view>>& embedded_html_assets();
 
 namespace fs = std::filesystem;

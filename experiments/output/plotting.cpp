@@ -66,7 +66,7 @@ std::vector<PlotPanel> family_panels(const std::vector<std::string>& integrators
   return panels;
 }
 
-// The scripts compiled into the library (generated from plots/*.gp by cmake/embed_plots.cmake).
+// The scripts compiled into the library (generated from plots/*.gp by cmake/embed_files.cmake).
 const std::vector<std::pair<std::string_view, std::string_view>>& embedded_plot_scripts();
 
 namespace {
