@@ -19,8 +19,8 @@ import sys
 # Includes that break the rules above and that the split of experiments/ by job has not removed
 # yet: the interfaces that replace them are still to be written (run_metadata given the model's
 # description; family panels and the replot table outside output/; StepStudySpec, the
-# reference and the timing helpers in experiments/support/; the analysis of coefficients in
-# experiments/support/). Each one removed must leave this list.
+# reference and the timing helpers in experiments/support/). Each one removed must leave this
+# list.
 KNOWN = {
     ("experiments/output/output.cpp", "experiments/framework/catalog.hpp"),
     ("experiments/output/plotting.cpp", "experiments/framework/catalog.hpp"),
@@ -31,10 +31,8 @@ KNOWN = {
     ("experiments/output/plotting.cpp", "experiments/studies/stability.hpp"),
     ("experiments/studies/budget.cpp", "experiments/studies/energy.hpp"),
     ("experiments/studies/budget.hpp", "experiments/studies/work_precision.hpp"),
-    ("experiments/studies/convergence.cpp", "experiments/studies/analyze.hpp"),
     ("experiments/studies/recommend.cpp", "experiments/studies/convergence.hpp"),
     ("experiments/studies/recommend.hpp", "experiments/studies/work_precision.hpp"),
-    ("experiments/studies/region.cpp", "experiments/studies/analyze.hpp"),
     ("experiments/studies/work_precision.hpp", "experiments/studies/convergence.hpp"),
 }
 

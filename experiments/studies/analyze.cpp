@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "experiments/framework/catalog.hpp"
+#include "experiments/support/coefficients.hpp"
 
 namespace stiffbench {
 
@@ -17,15 +18,6 @@ namespace {
 
 constexpr int kMaxOrder = 8;  // order conditions are analysed up to this order
 constexpr const char* kNotCoefficientDefined = "not coefficient-defined";
-
-// "explicit_rk" (A strictly lower triangular), "dirk" (lower triangular) or "irk".
-std::string tableau_kind(const ButcherTableau& t) {
-  if (t.is_explicit()) return "explicit_rk";
-  for (Index i = 0; i < t.a.rows(); ++i)
-    for (Index j = i + 1; j < t.a.cols(); ++j)
-      if (t.a(i, j) != 0.0) return "irk";
-  return "dirk";
-}
 
 // What a method without coefficients has: its stability data's limits (BDF2's sampled, the
 // others' exact) and, with a rational R = P/Q, its dissipation and dispersion.
@@ -64,16 +56,6 @@ std::vector<std::string> chosen(const AnalyzeSpec& spec) {
 }
 
 }  // namespace
-
-std::optional<MethodAnalysis> coefficient_analysis(const Integrator& integ) {
-  if (const ButcherTableau* t = integ.butcher_tableau())
-    return analyze_runge_kutta(*t, tableau_kind(*t));
-  if (const RosenbrockTableau* t = integ.rosenbrock_tableau()) return analyze_rosenbrock(*t);
-  if (const AdditiveTableau* t = integ.additive_tableau()) return analyze_additive(*t);
-  if (const KickDriftCoefficients* c = integ.kick_drift_coefficients())
-    return analyze_kick_drift(*c);
-  return std::nullopt;
-}
 
 std::vector<std::string> analyze_integrators() {
   std::vector<std::string> out;
@@ -145,10 +127,6 @@ std::vector<AnalyzedMethod> analyze_object(const MethodInfo& info, const Integra
 }
 
 }  // namespace
-
-std::string additive_part_name(const std::string& integrator, const std::string& part) {
-  return integrator + ":" + part;
-}
 
 AnalyzedMethod analyze_integrator(const std::string& name, int points) {
   const auto& entry = integrator_registry().at(name);

@@ -37,6 +37,7 @@
 #include "experiments/output/output.hpp"
 #include "experiments/output/plotting.hpp"
 #include "experiments/framework/study.hpp"
+#include "experiments/support/coefficients.hpp"
 
 namespace stiffbench {
 
@@ -55,10 +56,6 @@ struct AnalyzeSpec {
 // The registered integrators with coefficients or stability data, in registry order.
 std::vector<std::string> analyze_integrators();
 
-// The analysis of an integrator's own coefficients (butcher_tableau(), rosenbrock_tableau() or
-// kick_drift_coefficients()); empty when it has none. Convergence and local-error orders tables
-// show its achieved order beside the claimed one.
-std::optional<MethodAnalysis> coefficient_analysis(const Integrator& integ);
 
 struct AnalyzedMethod {
   std::string integrator;
@@ -81,9 +78,6 @@ struct AnalyzeResult {
 // The analysis of one registered integrator (created with its defaults): its own row (for an
 // additive pair the pair's order from the additive conditions, without the two tables' rows).
 AnalyzedMethod analyze_integrator(const std::string& name, int points = 121);
-// The name of an additive pair's table analysed alone ("ark324l2sa:explicit"; part "explicit"
-// or "implicit"): run_analyze puts these two rows right after the pair's.
-std::string additive_part_name(const std::string& integrator, const std::string& part);
 AnalyzeResult run_analyze(const AnalyzeSpec& spec);
 // The one call: check DIR, analyse, write DIR/analyze.{csv,md,json}, analyze_conditions.csv and
 // analyze_dispersion.csv, plot, print the summary (ctx.out); `integrators` are a user's own

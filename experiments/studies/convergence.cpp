@@ -16,9 +16,9 @@
 #include <stdexcept>
 
 #include "core/driver.hpp"
-#include "experiments/studies/analyze.hpp"
 #include "experiments/build_info.hpp"
 #include "experiments/framework/catalog.hpp"
+#include "experiments/support/coefficients.hpp"
 
 namespace stiffbench {
 

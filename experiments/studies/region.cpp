@@ -9,8 +9,8 @@
 #include <set>
 #include <sstream>
 
-#include "experiments/studies/analyze.hpp"
 #include "experiments/framework/catalog.hpp"
+#include "experiments/support/coefficients.hpp"
 
 namespace stiffbench {
 
