@@ -7,8 +7,8 @@
 #include <deque>
 
 #include "core/driver.hpp"
-#include "experiments/catalog.hpp"
-#include "experiments/work_precision.hpp"
+#include "experiments/framework/catalog.hpp"
+#include "experiments/studies/work_precision.hpp"
 
 namespace stiffbench::bench {
 

@@ -29,7 +29,7 @@
 #include "bench/bench_common.hpp"
 #include "bench/plain_cloth.hpp"
 #include "core/driver.hpp"
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 
 extern char** environ;
 

@@ -17,7 +17,7 @@
 #include "bench/bench_common.hpp"
 #include "bench/plain_cloth.hpp"
 #include "bench/plain_sph.hpp"
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 #include "models/sph/neighbour_grid.hpp"
 #include "models/sph/sph_fluid.hpp"
 

@@ -7,7 +7,7 @@
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 
 namespace {
 

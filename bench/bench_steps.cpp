@@ -31,7 +31,7 @@
 #include "bench/alloc_count.hpp"
 #include "bench/bench_common.hpp"
 #include "core/driver.hpp"
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 #include "models/mass_spring/network.hpp"
 
 namespace stiffbench::bench {

@@ -3,7 +3,7 @@
 #   <prefix>/bin/stiffbench
 #   <prefix>/lib/libstiffbench_{core,models,integrators,experiments,cli}.a
 #   <prefix>/include/stiffbench/stiffbench.hpp        the public umbrella header
-#   <prefix>/include/stiffbench/{core,models,integrators,experiments}/...   every header
+#   <prefix>/include/stiffbench/{core,models,integrators,experiments,cli}/...   every header
 #   <prefix>/share/stiffbench/plots/*.gp              gnuplot scripts (the binary looks here)
 #   <prefix>/lib/cmake/stiffbench/stiffbenchConfig.cmake, ...ConfigVersion.cmake, ...Targets.cmake
 # A consumer writes find_package(stiffbench REQUIRED) and links stiffbench::stiffbench (or the
@@ -27,7 +27,7 @@ install(FILES ${STIFFBENCH_PLOT_SCRIPTS} DESTINATION ${CMAKE_INSTALL_DATADIR}/st
 
 set(_sb_incdir ${CMAKE_INSTALL_INCLUDEDIR}/stiffbench)
 # integrators/reference/sundials/ is internal (its headers include SUNDIALS'): not installed.
-foreach(_layer core models integrators experiments)
+foreach(_layer core models integrators experiments cli)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${_layer}/ DESTINATION ${_sb_incdir}/${_layer}
           FILES_MATCHING PATTERN "*.hpp" REGEX "/reference/sundials(/|$)" EXCLUDE)
 endforeach()
@@ -35,7 +35,7 @@ install(FILES ${PROJECT_SOURCE_DIR}/include/stiffbench/stiffbench.hpp DESTINATIO
 install(FILES ${PROJECT_BINARY_DIR}/generated/experiments/build_info.hpp
         DESTINATION ${_sb_incdir}/experiments)
 # Installed headers include each other as "stiffbench/core/..." (rewritten here), so only
-# <prefix>/include is on a consumer's include path: no top-level core/, models/, experiments/.
+# <prefix>/include is on a consumer's include path: no top-level core/, models/, experiments/, cli/.
 install(CODE "set(DIR \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}/${_sb_incdir}\")
               include(\"${PROJECT_SOURCE_DIR}/cmake/rewrite_includes.cmake\")")
 

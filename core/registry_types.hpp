@@ -1,5 +1,5 @@
 // Registry types for models and integrators. The layers fill them (models/register.hpp,
-// integrators/register.hpp); experiments/catalog.hpp holds the process-wide instances.
+// integrators/register.hpp); experiments/framework/catalog.hpp holds the process-wide instances.
 #pragma once
 
 #include "core/integrator.hpp"
@@ -15,7 +15,7 @@ namespace stiffbench {
 
 // What a model of given parameters would allocate, estimated from the parameters alone (before
 // anything is built), so that a run too large for the machine is refused up front
-// (experiments/catalog.hpp, check_run_size). Doubles: n = 1e9 cubed must not overflow.
+// (experiments/framework/catalog.hpp, check_run_size). Doubles: n = 1e9 cubed must not overflow.
 struct ModelSize {
   double dimension = 0;          // state size (unknowns)
   double model_bytes = 0;        // the model's own data (springs, particles, neighbour lists)

@@ -1,5 +1,5 @@
 // The built-in method files (methods/*.toml at the repository root) compiled into the library:
-// a C++ file generated at build time by cmake/embed_plots.cmake (integrators/CMakeLists.txt)
+// a C++ file generated at build time by cmake/embed_files.cmake (integrators/CMakeLists.txt)
 // holds each file's name and text. built_in_methods() (integrators/method_file.hpp) parses them
 // once; nothing else reads them.
 #pragma once

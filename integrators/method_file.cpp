@@ -796,7 +796,7 @@ void check_keys(const toml::table& root, const std::string& origin, MethodKind k
 }
 
 // Refuses non-ASCII text outside strings and comments before toml++ sees it (toml++ 3.3.0
-// reaches undefined behaviour on some such input; see experiments/spec_file.cpp).
+// reaches undefined behaviour on some such input; see experiments/framework/spec_file.cpp).
 void require_ascii_outside_strings(const std::string& text, const std::string& origin) {
   int line = 1;
   for (std::size_t i = 0; i < text.size(); ++i) {

@@ -1,5 +1,5 @@
 # Shared set-up of every stiffbench plot script: terminal, palette, panel layout.
-# stiffbench (experiments/plotting.cpp) defines these gnuplot strings before running a script:
+# stiffbench (experiments/output/plotting.cpp) defines these gnuplot strings before running a script:
 #   outfile  output file;  term  'png' or 'svg';  plotdir  this folder;  ttl  the title
 #   csvfile  the CSV read (scripts read only stiffbench's CSV files)
 #   npanels  number of panels; ptitleK / pmethodsK (K = 1..npanels): a family's title and its

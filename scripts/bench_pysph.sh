@@ -64,7 +64,7 @@ echo "bench_pysph: $(nproc) cores, load average $(cut -d' ' -f1-3 /proc/loadavg)
   --openmp --tf "$t_end" --disable-output -d "$work/pysph" >"$work/pysph.log" 2>&1)
 
 # stiffbench at the matched count.
-OMP_NUM_THREADS="$threads" "$build/experiments/stiffbench" solve --model sph_dam_break_2d \
+OMP_NUM_THREADS="$threads" "$build/stiffbench" solve --model sph_dam_break_2d \
   --param n=45 --integrator symplectic_euler --t-end "$t_end" >"$work/testbed.log" 2>&1
 
 /usr/bin/python3 - "$work" <<'EOF'

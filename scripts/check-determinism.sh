@@ -11,7 +11,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="${1:-$root/build}"
-bin="$build/experiments/stiffbench"
+bin="$build/stiffbench"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 fail=0
@@ -45,7 +45,7 @@ same_twice convergence convergence.csv "$bin" convergence --model kepler --param
   --integrators rk4,velocity_verlet,sdirk2 --t-end 2 --h 0.05 --levels 3 --reference cvode_bdf
 same_twice work-precision work_precision.csv "$bin" work-precision --model van_der_pol \
   --integrators rk4,cvode_bdf --t-end 1 --levels 3 --tol-levels 3
-same_twice sweep convergence.csv "$bin" run "$root/experiments/specs/sweep_spring_chain.toml"
+same_twice sweep convergence.csv "$bin" run "$root/suites/sweep_spring_chain.toml"
 
 # 1 and 2 threads, every model.
 models=$("$bin" list models | awk -F'|' 'NR > 2 { gsub(/ /, "", $2); print $2 }')

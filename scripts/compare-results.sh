@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Same results before and after a change: runs `stiffbench report` (full, or --quick) and every
-# sweep spec of experiments/specs/*.toml with two binaries and compares every CSV column but the
+# sweep spec of suites/*.toml with two binaries and compares every CSV column but the
 # wall times (scripts/compare_csv.py); then checks that `stiffbench run` on each section spec of
-# the report (experiments/specs/report/*.toml) gives the rows of that section (NEW binary only).
+# the report (suites/report/*.toml) gives the rows of that section (NEW binary only).
 #
 #   scripts/compare-results.sh OLD_BIN NEW_BIN WORK_DIR [--quick]
 #
@@ -26,7 +26,7 @@ report "$new" "$work/new/report"
 python3 "$root/scripts/compare_csv.py" "$work/old/report" "$work/new/report" || status=1
 
 echo "== sweep specs (stiffbench run)"
-for spec in "$root"/experiments/specs/*.toml; do
+for spec in "$root"/suites/*.toml; do
   name="$(basename "$spec" .toml)"
   for side in old new; do
     bin="$old"; [ "$side" = new ] && bin="$new"
@@ -37,7 +37,7 @@ for spec in "$root"/experiments/specs/*.toml; do
 done
 
 echo "== each report section spec through 'stiffbench run' (new binary) against its section"
-for spec in "$root"/experiments/specs/report/*.toml; do
+for spec in "$root"/suites/report/*.toml; do
   name="$(basename "$spec" .toml)"; name="${name#[0-9][0-9]_}"
   [ -d "$work/new/report/$name" ] || { echo "skip $name (not in this report)"; continue; }
   sets=()

@@ -19,14 +19,14 @@ cxx="${FUZZ_CXX:-clang++}"
 flags=(-std=c++20 -O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
   -DTOML_HEADER_ONLY=0 -DTOML_SHARED_LIB=1 -I"$root" -isystem /usr/include/eigen3)
 # The shared sources, compiled once (about a minute on 2 cores); then one small main each.
-srcs=(core/params.cpp experiments/spec_file.cpp experiments/format.cpp
-  experiments/input_checks.cpp experiments/csv.cpp fuzz/targets.cpp)
+srcs=(core/params.cpp experiments/framework/spec_file.cpp experiments/output/format.cpp
+  experiments/output/input_checks.cpp experiments/output/csv.cpp fuzz/targets.cpp)
 # The method-file target's sources: every .cpp of core/ and integrators/ but the references and
 # the registration, plus the embedded built-in methods (generated as the build generates them).
 mapfile -t lib_srcs < <(cd "$root" && find core integrators -name '*.cpp' \
   ! -path 'integrators/reference/*' ! -name register.cpp | sort)
-cmake -DOUT="$out/embedded_methods.cpp" -DPLOTS_DIR="$root/methods" -DPATTERN='*.toml' \
-  -DFUNCTION=embedded_method_files -P "$root/cmake/embed_plots.cmake"
+cmake -DOUT="$out/embedded_methods.cpp" -DDIR="$root/methods" -DPATTERN='*.toml' \
+  -DFUNCTION=embedded_method_files -P "$root/cmake/embed_files.cmake"
 # Compiles each source once (two at a time); an object newer than its source is kept.
 compile() {
   local -n list=$1

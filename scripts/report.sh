@@ -14,4 +14,4 @@ jobs="$(nproc 2>/dev/null || echo 2)"
 "$root/scripts/install-deps.sh"
 cmake -S "$root" -B "$root/build" -DCMAKE_BUILD_TYPE="${CMAKE_BUILD_TYPE:-Release}" >/dev/null
 cmake --build "$root/build" -j "$jobs" --target stiffbench
-"$root/build/experiments/stiffbench" report --out "$out" "$@"
+"$root/build/stiffbench" report --out "$out" "$@"

@@ -19,8 +19,8 @@ fi
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 BUILD=${1:-build}
 [[ "$BUILD" = /* ]] || BUILD="$ROOT/$BUILD"
-BIN="$BUILD/experiments/stiffbench"
-SPEC="$ROOT/experiments/specs/sweep_spring_chain.toml"
+BIN="$BUILD/stiffbench"
+SPEC="$ROOT/suites/sweep_spring_chain.toml"
 N=4
 [[ -x "$BIN" ]] || { echo "slurm-smoke: $BIN not found (build first)" >&2; exit 1; }
 

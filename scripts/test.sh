@@ -13,21 +13,21 @@ echo "== Release build and tests"
 echo "== stiffbench audit: every built-in method's claims (counts, orders, tableaux; exit 3 on a failed check)"
 rm -rf "$root/build/audit"
 start=$(date +%s)
-if ! "$root/build/experiments/stiffbench" audit --out "$root/build/audit" \
+if ! "$root/build/stiffbench" audit --out "$root/build/audit" \
     >"$root/build/audit.log" 2>&1; then
   tail -n 40 "$root/build/audit.log" >&2
   grep ',fail,' "$root/build/audit/audit.csv" >&2 || true
   exit 1
 fi
 echo "audit took $(( $(date +%s) - start )) s"
-echo "== Function lengths: none in experiments/ over 120 lines (the five longest)"
-python3 "$root/scripts/function_lengths.py" -n 5 --max 120 "$root"/experiments/*.cpp
+echo "== Function lengths: none in experiments/ or cli/ over 80 lines (the five longest)"
+python3 "$root/scripts/function_lengths.py" -n 5 --max 80 $(find "$root/experiments" "$root/cli" -name '*.cpp' | sort)
 echo "== Install check (cmake --install, examples/user_system with find_package, add_subdirectory)"
 "$root/scripts/check-install.sh" "$root/build"
 echo "== stiffbench report --quick --html (every experiment kind with its plot)"
 rm -rf "$root/build/report-quick"
 start=$(date +%s)
-if ! "$root/build/experiments/stiffbench" report --quick --html --out "$root/build/report-quick" \
+if ! "$root/build/stiffbench" report --quick --html --out "$root/build/report-quick" \
     2>"$root/build/report-quick.log"; then
   tail -n 30 "$root/build/report-quick.log" >&2
   exit 1
@@ -44,7 +44,7 @@ echo "== report.html in headless Chromium (sections, plots, no console error, so
 echo "== stiffbench profile stiff --quick --html, and profile.html in headless Chromium"
 rm -rf "$root/build/profile-quick"
 start=$(date +%s)
-if ! "$root/build/experiments/stiffbench" profile stiff --quick --html --out "$root/build/profile-quick" \
+if ! "$root/build/stiffbench" profile stiff --quick --html --out "$root/build/profile-quick" \
     >"$root/build/profile-quick.log" 2>&1; then
   tail -n 30 "$root/build/profile-quick.log" >&2
   exit 1
@@ -64,7 +64,7 @@ echo "fuzzing took $(( $(date +%s) - start )) s"
 # --- end of the determinism and fuzzing block
 
 # --- Slurm smoke test (scripts/slurm-smoke.sh): a 4-task job array of
-# experiments/specs/sweep_spring_chain.toml on a single-node Slurm started on localhost, merged
+# suites/sweep_spring_chain.toml on a single-node Slurm started on localhost, merged
 # and compared with the unsharded run (about 10 s). Without root (it installs packages and
 # starts daemons) the same comparison with the 4 shards run locally.
 echo "== Slurm smoke test"
@@ -96,7 +96,7 @@ if [ "${STIFFBENCH_SKIP_SANITIZE:-0}" != "1" ]; then
   rm -rf "$root/build-sanitize/report-quick"
   start=$(date +%s)
   if ! ASAN_OPTIONS=detect_leaks=1:exitcode=23 UBSAN_OPTIONS=print_stacktrace=1 \
-      "$root/build-sanitize/experiments/stiffbench" report --quick \
+      "$root/build-sanitize/stiffbench" report --quick \
       --out "$root/build-sanitize/report-quick" 2>"$root/build-sanitize/report-quick.log"; then
     tail -n 60 "$root/build-sanitize/report-quick.log" >&2
     exit 1

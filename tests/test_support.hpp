@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 
 namespace stiffbench::testing_support {
 

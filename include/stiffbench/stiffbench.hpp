@@ -22,28 +22,31 @@
 //   integrators/method_file.hpp            methods as files: load_method_file(path),
 //                                           parse_method_file, make_integrator(method),
 //                                           method_registry_entry (register_integrator)
-//   core/registry.hpp, core/registry_types.hpp, experiments/catalog.hpp
+//   core/registry.hpp, core/registry_types.hpp, experiments/framework/catalog.hpp
 //                                           the registries, make_setup, register_model and
 //                                           register_integrator for a user's own entries
-//   experiments/study.hpp                   the study registry and pipeline: StudyTarget,
+//   experiments/framework/study.hpp         the study registry and pipeline: StudyTarget,
 //                                           StudyObjects (a user's own system and integrator
 //                                           objects, nothing registered), StudyContext, run_study
-//   experiments/convergence.hpp, local error (same header), experiments/work_precision.hpp,
-//   experiments/stability.hpp, experiments/energy.hpp, experiments/region.hpp,
-//   experiments/audit.hpp, experiments/analyze.hpp
+//   experiments/studies/convergence.hpp (local error too), work_precision.hpp, stability.hpp,
+//   energy.hpp, region.hpp, audit.hpp, analyze.hpp
 //                                           the studies: spec in, records out, CSV/Markdown/JSON
 //                                           writers
-//   experiments/profile.hpp                 performance and data profiles over a suite of
+//   experiments/commands/profile.hpp        performance and data profiles over a suite of
 //                                           work-precision specs (run_profile, make_profile_suite)
-//   experiments/compare.hpp                 two runs compared (compare_runs): run records, rows
+//   experiments/commands/compare.hpp        two runs compared (compare_runs): run records, rows
 //                                           by key, tolerances, wall-time verdicts
-//   experiments/output.hpp, experiments/plotting.hpp
+//   experiments/output/output.hpp, experiments/output/plotting.hpp
 //                                           tables, atomic files, run metadata, gnuplot plots
-//   experiments/cli_main.hpp                the whole command line as cli_main(argc, argv)
-// Every other installed header (the models' and integrators' own classes, commands.hpp) is
-// public but may change between versions.
+//   cli/cli_main.hpp                        the whole command line as cli_main(argc, argv)
+// The headers' paths before experiments/ was split by job (experiments/NAME.hpp) still work
+// for this version: each forwards to its new place.
+// Every other installed header (the models' and integrators' own classes,
+// experiments/commands/list_describe.hpp) is public but may change between versions.
 #pragma once
 
+#include "cli/cli_main.hpp"
+#include "core/theory/additive_conditions.hpp"
 #include "core/driver.hpp"
 #include "core/integrator.hpp"
 #include "core/ode_system.hpp"
@@ -56,18 +59,17 @@
 #include "core/theory/additive_conditions.hpp"
 #include "core/theory/tableau.hpp"
 #include "core/types.hpp"
-#include "experiments/analyze.hpp"
-#include "experiments/audit.hpp"
-#include "experiments/catalog.hpp"
-#include "experiments/cli_main.hpp"
-#include "experiments/compare.hpp"
-#include "experiments/convergence.hpp"
-#include "experiments/energy.hpp"
-#include "experiments/output.hpp"
-#include "experiments/plotting.hpp"
-#include "experiments/profile.hpp"
-#include "experiments/region.hpp"
-#include "experiments/stability.hpp"
-#include "experiments/study.hpp"
-#include "experiments/work_precision.hpp"
+#include "experiments/commands/compare.hpp"
+#include "experiments/commands/profile.hpp"
+#include "experiments/framework/catalog.hpp"
+#include "experiments/framework/study.hpp"
+#include "experiments/output/output.hpp"
+#include "experiments/output/plotting.hpp"
+#include "experiments/studies/analyze.hpp"
+#include "experiments/studies/audit.hpp"
+#include "experiments/studies/convergence.hpp"
+#include "experiments/studies/energy.hpp"
+#include "experiments/studies/region.hpp"
+#include "experiments/studies/stability.hpp"
+#include "experiments/studies/work_precision.hpp"
 #include "integrators/method_file.hpp"

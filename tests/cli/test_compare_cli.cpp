@@ -14,7 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "experiments/csv.hpp"
+#include "experiments/output/csv.hpp"
 #include "tests/cli_support.hpp"
 
 namespace stiffbench {

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "core/params.hpp"
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 #include "tests/cli_support.hpp"
 
 namespace stiffbench {

@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "experiments/catalog.hpp"
-#include "experiments/cli_main.hpp"
-#include "experiments/csv.hpp"
+#include "experiments/framework/catalog.hpp"
+#include "cli/cli_main.hpp"
+#include "experiments/output/csv.hpp"
 #include "tests/cli_support.hpp"
 
 namespace stiffbench {

@@ -20,9 +20,9 @@
 #include <string>
 
 #include "core/types.hpp"
-#include "experiments/commands.hpp"
-#include "experiments/convergence.hpp"
-#include "experiments/output.hpp"
+#include "experiments/commands/list_describe.hpp"
+#include "experiments/studies/convergence.hpp"
+#include "experiments/output/output.hpp"
 #include "tests/cli_support.hpp"
 
 namespace {

@@ -1,5 +1,5 @@
 // `stiffbench report SUITE`: a user's folder of spec files, one section each, and the identity
-// between a section and `stiffbench run` on its spec file (experiments/report.cpp).
+// between a section and `stiffbench run` on its spec file (experiments/commands/report.cpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -134,7 +134,7 @@ TEST(ReportSuite, UserFolderRunsEachSpecAsASection) {
 // the same override: equal rows (wall times aside).
 TEST(ReportSuite, PendulumSectionEqualsRunOnItsSpec) {
   const fs::path dir = fresh_dir("suite", "pendulum");
-  const std::string spec = (kSource / "experiments/specs/report/04_pendulum.toml").string();
+  const std::string spec = (kSource / "suites/report/04_pendulum.toml").string();
   const auto r = run_cli("report " + shell_quote(spec) + " --quick --out " +
                          shell_quote((dir / "report").string()));
   ASSERT_EQ(r.code, 0) << r.err;

@@ -1,5 +1,5 @@
 // `stiffbench run SPEC.toml`, --shard + merge, --resume after SIGKILL, --slurm, spec errors
-// (experiments/sweep.hpp). Runs the real binary like test_cli.cpp.
+// (experiments/commands/run.hpp). Runs the real binary like test_cli.cpp.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -26,7 +26,7 @@ namespace fs = std::filesystem;
 // to the build folder, while the runner writes absolute spec paths into its job scripts. This
 // file is tests/cli/test_sweep.cpp: three levels below the repository root.
 const fs::path kSource = fs::absolute(fs::path(__FILE__)).parent_path().parent_path().parent_path();
-const std::string kSweep = (kSource / "experiments/specs/sweep_spring_chain.toml").string();
+const std::string kSweep = (kSource / "suites/sweep_spring_chain.toml").string();
 
 using Outcome = stiffbench::testing_support::CliOutcome;
 using stiffbench::testing_support::slurp;
@@ -393,7 +393,7 @@ TEST(Sweep, SpecErrorsNameFileLineAndKey) {
 
 TEST(Sweep, EverySpecInTheRepositoryValidates) {
   int n = 0;
-  for (const auto& e : fs::directory_iterator(kSource / "experiments/specs")) {
+  for (const auto& e : fs::directory_iterator(kSource / "suites")) {
     if (e.path().extension() != ".toml") continue;
     ++n;
     const Outcome o = run("run " + e.path().string() + " --check");

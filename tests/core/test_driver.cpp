@@ -6,7 +6,7 @@
 #include <utility>
 
 #include "core/driver.hpp"
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {

@@ -2,7 +2,7 @@
 // range are errors naming the key.
 #include <gtest/gtest.h>
 
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 
 namespace stiffbench {
 namespace {

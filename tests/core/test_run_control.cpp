@@ -25,9 +25,9 @@
 
 #include "core/driver.hpp"
 #include "core/run_control.hpp"
-#include "experiments/catalog.hpp"
-#include "experiments/convergence.hpp"
-#include "experiments/stability.hpp"
+#include "experiments/framework/catalog.hpp"
+#include "experiments/studies/convergence.hpp"
+#include "experiments/studies/stability.hpp"
 #include "tests/test_support.hpp"
 
 namespace fs = std::filesystem;

@@ -1,6 +1,7 @@
-// `stiffbench analyze` (experiments/analyze.hpp): the files it writes carry the figures of the
-// method analysis (core/theory/method_analysis.hpp), checked here against independent computations
-// — closed forms, published values, and exact rational arithmetic done outside stiffbench (Python's
+// `stiffbench analyze` (experiments/studies/analyze.hpp): the files it writes carry the figures
+// of the method analysis (core/theory/method_analysis.hpp), checked here against independent
+// computations — closed forms, published values, and exact rational arithmetic done outside
+// stiffbench (Python's
 // fractions module on the rooted trees, noted at each figure); methods without coefficients get
 // a row instead of a failure; bad names are refused before anything runs.
 #include <gtest/gtest.h>
@@ -17,10 +18,10 @@
 
 #include <Eigen/Dense>
 
-#include "experiments/analyze.hpp"
-#include "experiments/cli_main.hpp"
-#include "experiments/commands.hpp"
-#include "experiments/study.hpp"
+#include "experiments/studies/analyze.hpp"
+#include "cli/cli_main.hpp"
+#include "experiments/commands/list_describe.hpp"
+#include "experiments/framework/study.hpp"
 
 namespace fs = std::filesystem;
 using namespace stiffbench;

@@ -1,4 +1,4 @@
-// `stiffbench audit` (experiments/audit.hpp): the counting wrapper counts what is called on it,
+// `stiffbench audit` (experiments/studies/audit.hpp): the counting wrapper counts what is called on it,
 // deliberately broken methods are each caught by the check that concerns their defect, built-in
 // methods pass; and study rows carry the name a method was registered under (one tableau
 // registered twice is two rows).
@@ -13,10 +13,10 @@
 #include <sstream>
 
 #include "core/driver.hpp"
-#include "experiments/audit.hpp"
-#include "experiments/catalog.hpp"
-#include "experiments/cli_main.hpp"
-#include "experiments/convergence.hpp"
+#include "experiments/studies/audit.hpp"
+#include "experiments/framework/catalog.hpp"
+#include "cli/cli_main.hpp"
+#include "experiments/studies/convergence.hpp"
 #include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/explicit/tableaux.hpp"
 #include "integrators/imex/imex_ark.hpp"

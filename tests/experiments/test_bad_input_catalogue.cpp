@@ -23,7 +23,7 @@
 #include <vector>
 
 #include "core/driver.hpp"
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 
 namespace fs = std::filesystem;
 using namespace stiffbench;

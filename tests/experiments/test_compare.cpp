@@ -1,4 +1,4 @@
-// compare_runs (experiments/compare.hpp) on small hand-written result folders: row matching by
+// compare_runs (experiments/commands/compare.hpp) on small hand-written result folders: row matching by
 // key columns, the tolerance on reals against exact counters, the wall-time verdict from the
 // bootstrap intervals, run-record differences and bad input.
 #include <gtest/gtest.h>
@@ -8,7 +8,7 @@
 #include <string>
 
 #include "core/types.hpp"
-#include "experiments/compare.hpp"
+#include "experiments/commands/compare.hpp"
 #include "tests/cli_support.hpp"
 
 namespace stiffbench {

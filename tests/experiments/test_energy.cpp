@@ -1,4 +1,4 @@
-// The energy-drift experiment (experiments/energy.hpp): closed forms on the harmonic
+// The energy-drift experiment (experiments/studies/energy.hpp): closed forms on the harmonic
 // oscillator, the Kepler acceptance numbers, the sampler's max-since-last rows, failures and
 // bad input, the output files (the command line: tests/cli/test_energy_cli.cpp).
 #include <gtest/gtest.h>
@@ -16,7 +16,7 @@
 #include <unistd.h>
 
 #include "core/driver.hpp"
-#include "experiments/energy.hpp"
+#include "experiments/studies/energy.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {

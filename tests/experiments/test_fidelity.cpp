@@ -1,4 +1,4 @@
-// `stiffbench fidelity` (experiments/fidelity.hpp): the analytic damping and phase of one step on
+// `stiffbench fidelity` (experiments/studies/fidelity.hpp): the analytic damping and phase of one step on
 // the undamped oscillator against closed forms derived here, the measured curve from
 // harmonic_oscillator runs against the same closed forms, the recurrence fit on synthetic
 // sequences, the modal analysis against the spring chain's known frequencies, the per-mode
@@ -13,7 +13,7 @@
 #include <numbers>
 
 #include "core/types.hpp"
-#include "experiments/fidelity.hpp"
+#include "experiments/studies/fidelity.hpp"
 
 namespace stiffbench {
 namespace {

@@ -18,7 +18,7 @@
 
 #include "core/types.hpp"
 #include "experiments/build_info.hpp"
-#include "experiments/catalog_markdown.hpp"
+#include "experiments/commands/catalog_markdown.hpp"
 
 namespace {
 

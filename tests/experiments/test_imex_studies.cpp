@@ -29,8 +29,8 @@
 #include <vector>
 
 #include "core/theory/linear_stability.hpp"
-#include "experiments/convergence.hpp"
-#include "experiments/stability.hpp"
+#include "experiments/studies/convergence.hpp"
+#include "experiments/studies/stability.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {

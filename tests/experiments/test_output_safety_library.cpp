@@ -1,4 +1,4 @@
-// Output safety at the library level (experiments/output.hpp): the spec difference named in a
+// Output safety at the library level (experiments/output/output.hpp): the spec difference named in a
 // refusal, check_existing_results, the study functions' and the report's checks of the output
 // folder, and write_file_atomic's temporaries (the command line: tests/cli/test_output_safety.cpp).
 #include <gtest/gtest.h>
@@ -14,9 +14,9 @@
 #include <string>
 
 #include "core/types.hpp"
-#include "experiments/commands.hpp"
-#include "experiments/convergence.hpp"
-#include "experiments/output.hpp"
+#include "experiments/commands/list_describe.hpp"
+#include "experiments/studies/convergence.hpp"
+#include "experiments/output/output.hpp"
 #include "tests/cli_support.hpp"
 
 namespace {

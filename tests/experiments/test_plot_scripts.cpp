@@ -1,4 +1,4 @@
-// The gnuplot scripts compiled into the library (cmake/embed_plots.cmake), which a user program
+// The gnuplot scripts compiled into the library (cmake/embed_files.cmake), which a user program
 // linking an installed stiffbench draws with when no plots/ folder is found: the embedded texts
 // must equal the files in plots/ byte for byte (checked against the files themselves, read
 // here independently), and a plot drawn from them alone must produce a PNG.
@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "experiments/build_info.hpp"
-#include "experiments/plotting.hpp"
+#include "experiments/output/plotting.hpp"
 
 namespace stiffbench {
 // Defined in the generated embedded_plots.cpp of the experiments library.

@@ -21,8 +21,8 @@
 #include <nlohmann/json.hpp>
 
 #include "core/types.hpp"
-#include "experiments/cli_main.hpp"
-#include "experiments/profile.hpp"
+#include "cli/cli_main.hpp"
+#include "experiments/commands/profile.hpp"
 #include "integrators/embedded_methods.hpp"
 
 namespace stiffbench {

@@ -15,11 +15,11 @@
 #include <string>
 #include <vector>
 
-#include "experiments/catalog.hpp"
-#include "experiments/cli_main.hpp"
-#include "experiments/csv.hpp"
-#include "experiments/recommend.hpp"
-#include "experiments/study.hpp"
+#include "experiments/framework/catalog.hpp"
+#include "cli/cli_main.hpp"
+#include "experiments/output/csv.hpp"
+#include "experiments/studies/recommend.hpp"
+#include "experiments/framework/study.hpp"
 
 namespace stiffbench {
 namespace {

@@ -12,9 +12,9 @@
 #include <sstream>
 
 #include "core/driver.hpp"
-#include "experiments/commands.hpp"
-#include "experiments/convergence.hpp"
-#include "experiments/output.hpp"
+#include "experiments/commands/list_describe.hpp"
+#include "experiments/studies/convergence.hpp"
+#include "experiments/output/output.hpp"
 #include "tests/cli_support.hpp"
 #include "tests/test_support.hpp"
 

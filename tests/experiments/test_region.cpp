@@ -1,4 +1,4 @@
-// The stability-region experiment (experiments/region.hpp): limits against the published values
+// The stability-region experiment (experiments/studies/region.hpp): limits against the published values
 // of docs/reference-values.md and their closed forms, region.csv points checked against R(z)
 // recomputed independently from each tableau (ButcherTableau::stability), the polyline contract of
 // the CSV, the fitted box, and the refusals.
@@ -14,7 +14,7 @@
 #include <numbers>
 #include <sstream>
 
-#include "experiments/region.hpp"
+#include "experiments/studies/region.hpp"
 #include "integrators/explicit/tableaux.hpp"
 #include "integrators/implicit/dirk.hpp"
 

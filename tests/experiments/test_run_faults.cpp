@@ -10,8 +10,8 @@
 #include <stdexcept>
 
 #include "core/driver.hpp"
-#include "experiments/catalog.hpp"
-#include "experiments/convergence.hpp"
+#include "experiments/framework/catalog.hpp"
+#include "experiments/studies/convergence.hpp"
 
 using namespace stiffbench;
 

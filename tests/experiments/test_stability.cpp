@@ -1,4 +1,4 @@
-// The stability-limit experiment (experiments/stability.hpp): measured h_max on the fixed-fixed
+// The stability-limit experiment (experiments/studies/stability.hpp): measured h_max on the fixed-fixed
 // spring chain against the closed-form limits, the unstable-for-all-h and A-stable statuses (one
 // run at the largest step for a method predicted stable for every step, the search with
 // probe_unbounded, a contradicted prediction), a non-finite spectrum as no prediction, the
@@ -15,7 +15,7 @@
 #include "core/theory/linear_stability.hpp"
 #include "core/theory/tableau.hpp"
 #include "core/types.hpp"
-#include "experiments/stability.hpp"
+#include "experiments/studies/stability.hpp"
 
 namespace stiffbench {
 namespace {

@@ -1,4 +1,4 @@
-// The study framework (experiments/study.hpp): options declared once, a user's own study
+// The study framework (experiments/framework/study.hpp): options declared once, a user's own study
 // registered with one call and run from the command line and from a spec file, studies on a
 // user's objects without registering them by name.
 #include <gtest/gtest.h>
@@ -11,13 +11,13 @@
 
 #include "core/driver.hpp"
 #include "experiments/build_info.hpp"
-#include "experiments/cli_main.hpp"
-#include "experiments/convergence.hpp"
-#include "experiments/energy.hpp"
-#include "experiments/stability.hpp"
-#include "experiments/study.hpp"
-#include "experiments/sweep.hpp"
-#include "experiments/work_precision.hpp"
+#include "cli/cli_main.hpp"
+#include "experiments/studies/convergence.hpp"
+#include "experiments/studies/energy.hpp"
+#include "experiments/studies/stability.hpp"
+#include "experiments/framework/study.hpp"
+#include "experiments/commands/run.hpp"
+#include "experiments/studies/work_precision.hpp"
 #include "tests/test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -110,9 +110,9 @@ bool names_key(const std::string& text, const std::string& key) {
 TEST(StudyFramework, OptionKeysAreNamedInAtMostTwoFiles) {
   const fs::path dir = fs::path(STIFFBENCH_SOURCE_DIR) / "experiments";
   std::vector<std::pair<std::string, std::string>> files;
-  for (const auto& e : fs::directory_iterator(dir))
+  for (const auto& e : fs::recursive_directory_iterator(dir))
     if (e.path().extension() == ".cpp" || e.path().extension() == ".hpp")
-      files.emplace_back(e.path().filename().string(), slurp_file(e.path()));
+      files.emplace_back(fs::relative(e.path(), dir).string(), slurp_file(e.path()));
   ASSERT_GT(files.size(), 10u);
   std::set<std::string> keys;
   for (const auto& kind : study_kinds())

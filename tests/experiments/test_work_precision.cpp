@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "core/driver.hpp"
-#include "experiments/work_precision.hpp"
+#include "experiments/studies/work_precision.hpp"
 
 namespace stiffbench {
 namespace {

@@ -8,7 +8,7 @@
 #include <limits>
 
 #include "core/driver.hpp"
-#include "experiments/convergence.hpp"
+#include "experiments/studies/convergence.hpp"
 #include "integrators/explicit/tableaux.hpp"
 #include "integrators/implicit/radau5.hpp"
 #include "tests/test_support.hpp"

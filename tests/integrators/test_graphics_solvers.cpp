@@ -11,8 +11,8 @@
 
 #include "core/driver.hpp"
 #include "core/springs.hpp"
-#include "experiments/catalog.hpp"
-#include "experiments/convergence.hpp"
+#include "experiments/framework/catalog.hpp"
+#include "experiments/studies/convergence.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {

@@ -5,7 +5,7 @@
 #include <complex>
 
 #include "core/driver.hpp"
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 #include "integrators/implicit/dirk.hpp"
 #include "integrators/solvers/newton.hpp"
 #include "models/problems/dahlquist.hpp"

@@ -7,7 +7,7 @@
 #include <numbers>
 
 #include "core/driver.hpp"
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 #include "integrators/explicit/tableaux.hpp"
 #include "tests/test_support.hpp"
 

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "core/types.hpp"
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 #include "integrators/coefficient_expr.hpp"
 #include "integrators/embedded_methods.hpp"
 #include "integrators/explicit/tableaux.hpp"

@@ -6,8 +6,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "experiments/catalog.hpp"
-#include "experiments/commands.hpp"
+#include "experiments/framework/catalog.hpp"
+#include "experiments/commands/list_describe.hpp"
 #include "integrators/method_entry.hpp"
 
 namespace stiffbench {

@@ -2,8 +2,8 @@
 // `convergence` and `local-error` commands use.
 #include <gtest/gtest.h>
 
-#include "experiments/catalog.hpp"
-#include "experiments/convergence.hpp"
+#include "experiments/framework/catalog.hpp"
+#include "experiments/studies/convergence.hpp"
 
 namespace stiffbench {
 namespace {

@@ -17,7 +17,7 @@
 
 #include "core/constraints.hpp"
 #include "core/driver.hpp"
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 #include "models/mass_spring/network.hpp"
 #include "tests/test_support.hpp"
 

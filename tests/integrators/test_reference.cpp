@@ -9,9 +9,9 @@
 #include <string>
 
 #include "core/driver.hpp"
-#include "experiments/catalog.hpp"
-#include "experiments/convergence.hpp"
-#include "experiments/work_precision.hpp"
+#include "experiments/framework/catalog.hpp"
+#include "experiments/studies/convergence.hpp"
+#include "experiments/studies/work_precision.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {

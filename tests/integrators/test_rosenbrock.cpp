@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "core/driver.hpp"
-#include "experiments/convergence.hpp"
+#include "experiments/studies/convergence.hpp"
 #include "integrators/implicit/rosenbrock.hpp"
 #include "tests/test_support.hpp"
 

@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {

@@ -6,7 +6,7 @@
 #include <numbers>
 
 #include "core/driver.hpp"
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 #include "integrators/adaptive/embedded_rk.hpp"
 #include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/explicit/tableaux.hpp"

@@ -16,7 +16,7 @@
 
 #include "core/driver.hpp"
 #include "core/split_views.hpp"
-#include "experiments/commands.hpp"
+#include "experiments/commands/list_describe.hpp"
 #include "models/grid/fluid_2d.hpp"
 #include "tests/test_support.hpp"
 

@@ -13,9 +13,9 @@
 #include <sstream>
 
 #include "core/driver.hpp"
-#include "experiments/convergence.hpp"
-#include "experiments/frames.hpp"
-#include "experiments/stability.hpp"
+#include "experiments/studies/convergence.hpp"
+#include "experiments/output/frames.hpp"
+#include "experiments/studies/stability.hpp"
 #include "models/grid/fluid_2d.hpp"
 #include "models/grid/heat_2d.hpp"
 #include "tests/test_support.hpp"

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "core/driver.hpp"
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 #include "models/mass_spring/builders.hpp"
 #include "models/mass_spring/network.hpp"
 #include "tests/test_support.hpp"

@@ -17,7 +17,7 @@
 
 #include "core/ode_system.hpp"
 #include "core/params.hpp"
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 
 namespace stiffbench {
 namespace {

@@ -19,7 +19,7 @@
 
 #include "core/driver.hpp"
 #include "core/ode_system.hpp"
-#include "experiments/catalog.hpp"
+#include "experiments/framework/catalog.hpp"
 #include "models/problems/van_der_pol.hpp"
 #include "tests/test_support.hpp"
 

@@ -1,0 +1,28 @@
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "cli/cli.hpp"
+
+namespace stiffbench {
+
+void add_plot_command(CLI::App& app) {
+  struct State {
+    std::string dir;
+    PlotOptions plot;
+  };
+  auto st = std::make_shared<State>();
+  auto* cmd = app.add_subcommand(
+      "plot",
+      "redraw the plots of an output folder (searched recursively) from its CSV files; needs "
+      "gnuplot");
+  cmd->add_option("dir", st->dir, "output folder of an experiment or of `stiffbench report`")
+      ->required();
+  cmd->add_flag("--svg", st->plot.svg, "also write each plot as SVG next to its PNG");
+  cmd->callback([st]() {
+    if (replot_directory(st->dir, st->plot, std::cout, std::cerr) == 0)
+      throw std::runtime_error("no plot could be drawn (is gnuplot installed?)");
+  });
+}
+
+}  // namespace stiffbench
