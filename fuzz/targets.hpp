@@ -14,9 +14,9 @@ namespace stiffbench::fuzz {
 
 // `--param` lines ("key=value" per line) against declared parameters of every type.
 void params_one(std::string_view data);
-// A spec file (experiments/spec_file.*) with this text.
+// A spec file (experiments/framework/spec_file.*) with this text.
 void spec_file_one(std::string_view data);
-// The CSV readers of `plot` and `merge` / `run --resume` (experiments/csv.*).
+// The CSV readers of `plot` and `merge` / `run --resume` (experiments/output/csv.*).
 void csv_one(std::string_view data);
 // A method file (integrators/method_file.*) with this text. Defined in method_file_target.cpp,
 // which needs the integrator library (scripts/fuzz.sh compiles core/ and integrators/ for it).
