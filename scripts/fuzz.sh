@@ -24,7 +24,7 @@ srcs=(core/params.cpp experiments/framework/spec_file.cpp experiments/output/for
 # The method-file target's sources: every .cpp of core/ and integrators/ but the references and
 # the registration, plus the embedded built-in methods (generated as the build generates them).
 mapfile -t lib_srcs < <(cd "$root" && find core integrators -name '*.cpp' \
-  ! -path 'integrators/reference/*' ! -name register.cpp | sort)
+  ! -path 'integrators/reference/*' ! -name register.cpp ! -path core/params.cpp | sort)
 cmake -DOUT="$out/embedded_methods.cpp" -DDIR="$root/methods" -DPATTERN='*.toml' \
   -DFUNCTION=embedded_method_files -P "$root/cmake/embed_files.cmake"
 # Compiles each source once (two at a time); an object newer than its source is kept.
