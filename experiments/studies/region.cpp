@@ -13,7 +13,6 @@
 #include "core/driver.hpp"
 #include "core/run_control.hpp"
 #include "experiments/framework/catalog.hpp"
-#include "experiments/studies/analyze.hpp"
 #include "experiments/support/coefficients.hpp"
 
 namespace stiffbench {

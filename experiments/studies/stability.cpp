@@ -15,7 +15,7 @@
 #include "core/theory/linear_stability.hpp"
 #include "experiments/framework/catalog.hpp"
 #include "experiments/output/progress.hpp"
-#include "experiments/progress.hpp"
+#include "experiments/output/progress.hpp"
 
 namespace stiffbench {
 
