@@ -16,7 +16,7 @@ mkdir -p "$out"
 cxx="${FUZZ_CXX:-clang++}"
 # toml++ as the real build uses it: Debian's shared library (its CMake config's definitions), not
 # the header-only parser, whose debug assertions abort on inputs the library refuses cleanly.
-flags=(-std=c++20 -O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
+flags=(-std=c++20 -O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined -Wno-pass-failed
   -DTOML_HEADER_ONLY=0 -DTOML_SHARED_LIB=1 -I"$root" -isystem /usr/include/eigen3)
 # The shared sources, compiled once (about a minute on 2 cores); then one small main each.
 srcs=(core/params.cpp experiments/framework/spec_file.cpp experiments/output/format.cpp
@@ -68,8 +68,9 @@ for t in "${targets[@]}"; do
   work="$out/corpus_$t"
   rm -rf "$work"
   mkdir -p "$work"
-  find "$root/fuzz/corpus/$t" "$root/fuzz/regressions/$t" -type f ! -name '.*' \
-    -exec cp {} "$work/" \;
+  dirs=("$root/fuzz/corpus/$t")
+  [ -d "$root/fuzz/regressions/$t" ] && dirs+=("$root/fuzz/regressions/$t")
+  find "${dirs[@]}" -type f ! -name '.*' -exec cp {} "$work/" \;
   log="$out/fuzz_$t.log"
   if (cd "$out" && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
       "./fuzz_$t" -max_total_time="$seconds" -print_final_stats=1 -timeout=10 -rss_limit_mb=2048 \
