@@ -450,16 +450,14 @@ std::optional<VariantOf> variant_of(const std::string& name) {
   return std::nullopt;
 }
 
-std::string register_variant(const std::string& token, const std::string& base_dir) {
-  const std::string what = "integrator variant '" + token + "'";
+namespace {
+// The assignments between the braces of `token` (`label` apart), checked for form only.
+Params variant_assignments(const std::string& token, const std::string& what, std::string& label) {
   const auto open = token.find('{');
-  const std::string method = trimmed_text(token.substr(0, open));
-  require_input(!method.empty(), what + ": no method before '{' (write METHOD{key=value,...})");
   const std::string body = token.substr(open + 1, token.size() - open - 2);
   require_input(body.find_first_of("{}") == std::string::npos,
                 what + ": braces cannot nest (write METHOD{key=value,...})");
   Params fixed;
-  std::string label;
   std::stringstream ss(body);
   std::string item;
   while (std::getline(ss, item, ',')) {
@@ -479,6 +477,16 @@ std::string register_variant(const std::string& token, const std::string& base_d
     fixed.set(key, value);
   }
   require_input(!fixed.empty(), what + ": no parameter (write METHOD{key=value,...})");
+  return fixed;
+}
+}  // namespace
+
+std::string register_variant(const std::string& token, const std::string& base_dir) {
+  const std::string what = "integrator variant '" + token + "'";
+  const std::string method = trimmed_text(token.substr(0, token.find('{')));
+  require_input(!method.empty(), what + ": no method before '{' (write METHOD{key=value,...})");
+  std::string label;
+  const Params fixed = variant_assignments(token, what, label);
   const std::string base_name =
       is_method_file_token(method) ? register_method_file(method, base_dir) : method;
   const auto& base = integrator_registry().at(base_name);
