@@ -3,6 +3,7 @@
 #include <memory>
 #include <string>
 
+#include "experiments/commands/list_describe.hpp"
 #include "cli/cli.hpp"
 #include "experiments/commands/compare.hpp"
 
@@ -16,10 +17,7 @@ void add_compare_command(CLI::App& app) {
   auto st = std::make_shared<State>();
   auto* cmd = app.add_subcommand(
       "compare",
-      "compare two runs (output folders OLD and NEW of a study, report, profile or run): which "
-      "run records differ, per row the ratios NEW/OLD of error, f_evals and counters, wall times "
-      "with both intervals and a verdict; writes DIR/compare.{md,csv,json}. Exit code 1: the "
-      "results differ");
+      command_entry("compare").summary);
   cmd->footer(
       "Files are matched by their path relative to OLD and NEW. Run records (*.json): spec, "
       "versions (stiffbench, Eigen, SUNDIALS, GSL), git revision, compiler, flags, CPU model, "

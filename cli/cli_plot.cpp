@@ -2,6 +2,7 @@
 #include <iostream>
 #include <memory>
 
+#include "experiments/commands/list_describe.hpp"
 #include "cli/cli.hpp"
 
 namespace stiffbench {
@@ -14,8 +15,7 @@ void add_plot_command(CLI::App& app) {
   auto st = std::make_shared<State>();
   auto* cmd = app.add_subcommand(
       "plot",
-      "redraw the plots of an output folder (searched recursively) from its CSV files; needs "
-      "gnuplot");
+      command_entry("plot").summary);
   cmd->add_option("dir", st->dir, "output folder of an experiment or of `stiffbench report`")
       ->required();
   cmd->add_flag("--svg", st->plot.svg, "also write each plot as SVG next to its PNG");

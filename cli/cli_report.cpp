@@ -17,8 +17,7 @@ void add_report_command(CLI::App& app) {
   auto opt = std::make_shared<ReportOptions>();
   auto* report = app.add_subcommand(
       "report",
-      "run a suite of spec files (default: the built-in suite, suites/report/) and "
-      "write DIR/REPORT.md with one section per spec");
+      command_entry("report").summary);
   report->add_option("suite", opt->suite,
                      "a folder of spec files (run in name order) or spec files, one section each "
                      "(default: the built-in suite)");
@@ -43,9 +42,7 @@ void add_profile_command(CLI::App& app) {
   auto st = std::make_shared<State>();
   auto* profile = app.add_subcommand(
       "profile",
-      "performance and data profiles over a suite of work-precision specs (built in: stiff, "
-      "mechanical; or a folder): runs or reuses DIR/<problem>/, writes DIR/profile.{csv,md,json} "
-      "and plots, prints the rankings");
+      command_entry("profile").summary);
   profile->add_option("suite", st->opt.suite, "a built-in suite (stiff, mechanical) or a folder")
       ->required();
   profile->add_option("--tau", st->taus, "target accuracies, comma-separated (error <= tau)")

@@ -3,6 +3,7 @@
 #include <iostream>
 #include <memory>
 
+#include "experiments/commands/list_describe.hpp"
 #include "cli/cli.hpp"
 #include "experiments/output/output.hpp"
 #include "experiments/commands/run.hpp"
@@ -19,9 +20,7 @@ void add_run_commands(CLI::App& app) {
   auto st = std::make_shared<State>();
   auto* run = app.add_subcommand(
       "run",
-      "run a TOML spec file (one experiment kind; list-valued keys expand into a sweep); "
-      "writes OUT/<kind>.csv row by row and OUT/run.json. Exit code 3: some unit failed (its "
-      "rows record status and message)");
+      command_entry("run").summary);
   run->add_option("spec", st->opt.spec_file, "spec file (suites/*.toml)")->required();
   run->add_option("--set", st->opt.sets,
                   "override a spec key: KEY=VALUE in TOML syntax, e.g. t_end=2, "
@@ -54,8 +53,7 @@ void add_run_commands(CLI::App& app) {
 
   auto* merge = app.add_subcommand(
       "merge",
-      "join the folders of `run --shard` into one (rows sorted by unit); refuses folders of "
-      "different specs. Exit code 3: units missing or failed");
+      command_entry("merge").summary);
   merge->add_option("--out", st->merge_out, "output directory")->required();
   merge->add_option("dirs", st->merge_dirs, "shard folders")->required();
   merge->callback([st]() {

@@ -21,9 +21,7 @@ void add_solve_command(CLI::App& app) {
   SolveOptions& o = st->opt;
   auto* solve =
       app.add_subcommand("solve",
-                         "one run (fixed step with --h, else the model's suggested step or "
-                         "adaptive): final state, invariants, observables, statistics; --frames "
-                         "writes particle frames");
+                         command_entry("solve").summary);
   solve->add_option("--model", o.model, "model name")->required();
   solve
       ->add_option("--integrator", o.integrator,

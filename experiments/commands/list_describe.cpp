@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <ostream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -47,54 +48,56 @@ void list_integrators(std::ostream& out) {
   out << t.to_markdown();
 }
 
+const std::vector<CommandEntry>& command_entries() {
+  static const std::vector<CommandEntry> entries = {
+      {"solve", "trajectory CSV (t,y0,y1,...); with --frames: VTK/CSV frames, observables.csv",
+       "one run (fixed step with --h, else the model's suggested step or adaptive): final "
+       "state, invariants, observables, statistics; --times/--log-outputs: the state at given "
+       "times (exact stops when adaptive, nearest step when fixed); --frames writes particle "
+       "frames"},
+      {"run", "OUT/<kind>.csv row by row, OUT/run.json",
+       "run a TOML spec file (one experiment kind; list-valued keys expand into a sweep); "
+       "writes OUT/<kind>.csv row by row and OUT/run.json. Exit code 3: some unit failed (its "
+       "rows record status and message)"},
+      {"merge", "OUT/<kind>.csv, OUT/run.json",
+       "join the folders of `run --shard` into one (rows sorted by unit); refuses folders of "
+       "different specs. Exit code 3: units missing or failed"},
+      {"plot", "NAME.png (and .svg) next to each CSV",
+       "redraw the plots of an output folder (searched recursively) from its CSV files; needs "
+       "gnuplot"},
+      {"report", "DIR/REPORT.md and one folder per study",
+       "run a suite of spec files (default: the built-in suite, suites/report/) and write "
+       "DIR/REPORT.md with one section per spec"},
+      {"profile", "DIR/profile.{csv,md,json}, profile_<tau>_<cost>.png, one run folder per problem",
+       "performance and data profiles over a suite of work-precision specs (built in: stiff, "
+       "mechanical; or a folder): runs or reuses DIR/<problem>/, writes DIR/profile.{csv,md,json} "
+       "and plots, prints the rankings"},
+      {"compare", "DIR/compare.{md,csv,json}",
+       "compare two runs (output folders OLD and NEW of a study, report, profile or run): which "
+       "run records differ, per row the ratios NEW/OLD of error, f_evals and counters, wall "
+       "times with both intervals and a verdict; writes DIR/compare.{md,csv,json}. Exit code 1: "
+       "the results differ"}};
+  return entries;
+}
+
+const CommandEntry& command_entry(const std::string& name) {
+  for (const auto& c : command_entries())
+    if (c.name == name) return c;
+  throw std::logic_error("no command entry '" + name + "'");
+}
+
+// Every command from the two declarations: the command table above and the study registry.
 Table experiments_table() {
   Table t{{"experiment", "writes", "description"}, {}};
-  t.rows.push_back({"solve",
-                    "trajectory CSV (t,y0,y1,...); with --frames: VTK/CSV frames, observables.csv",
-                    "one run (fixed step, the model's suggested step, or adaptive); final state, "
-                    "invariants, observables and statistics; --times/--log-outputs: the state at "
-                    "given times (exact stops when adaptive, nearest step when fixed)"});
-  t.rows.push_back({"convergence", "convergence.{csv,md,json,png}; reference/<hash>.csv",
-                    "global error at t_end vs h, observed orders; a non-exact reference is "
-                    "cached in the output folder"});
-  t.rows.push_back(
-      {"local-error", "local_error.{csv,md,json,png}", "error of one step vs h, observed slopes"});
-  t.rows.push_back({"work-precision", "work_precision.{csv,md,json,png}",
-                    "error at t_end against work: h ladder for fixed-step methods, tolerance "
-                    "ladder for references"});
-  t.rows.push_back({"stability", "stability.{csv,md,json,png}",
-                    "largest stable fixed step per integrator (bisection) against linear theory; "
-                    "--sweep over a stiffness parameter with log-log slope"});
-  t.rows.push_back({"region", "region.{csv,md,json,png}, region_limits.csv",
-                    "stability region boundaries (amplification 1) from the coefficients, axis and "
-                    "oscillator limits, A-stability"});
-  t.rows.push_back({"analyze",
-                    "analyze.{csv,md,json,png}, analyze_conditions.csv, analyze_dispersion.csv",
-                    "what the coefficients say, nothing run: order conditions to order 8, stage "
-                    "and embedded order, error norms, R = P/Q, A-/L-stability, exact axis limits, "
-                    "internal stability, SSP coefficient, dissipation and dispersion"});
-  t.rows.push_back({"energy", "energy.{csv,md,json,png}, energy_summary.csv",
-                    "relative invariant error at every step, sampled; max, final, drift rate, "
-                    "growth ratio"});
-  t.rows.push_back({"plot", "NAME.png (and .svg) next to each CSV",
-                    "redraw the plots of an output folder from its CSV files"});
-  t.rows.push_back({"report", "DIR/REPORT.md and one folder per study",
-                    "the default suite: convergence, local error, energy drift, stability "
-                    "limits and regions, work-precision"});
-  t.rows.push_back(
-      {"profile", "DIR/profile.{csv,md,json}, profile_<tau>_<cost>.png, one run folder per problem",
-       "performance and data profiles over a suite of work-precision specs (stiff, "
-       "mechanical or a folder) at each --tau and --cost, rankings"});
-  t.rows.push_back({"compare", "DIR/compare.{md,csv,json}",
-                    "two runs of the same study, report or profile: which specs, revisions, "
-                    "compilers, CPUs and versions differ; per row the error, f_evals and counter "
-                    "ratios and wall times with a verdict; exit 1 when results differ"});
-  // Studies registered from outside the library (register_study).
+  const auto& commands = command_entries();
+  t.rows.push_back({commands.front().name, commands.front().writes, commands.front().summary});
   for (const auto& k : study_kinds()) {
-    bool listed = false;
-    for (const auto& row : t.rows) listed = listed || row[0] == k.name;
-    if (!listed) t.rows.push_back({k.name, k.stem + ".{csv,md,json,png}", k.summary});
+    std::string writes = k.stem + ".{csv,md,json,png}";
+    for (const auto& f : k.extra_files) writes += ", " + f;
+    t.rows.push_back({k.name, writes, k.summary});
   }
+  for (std::size_t i = 1; i < commands.size(); ++i)
+    t.rows.push_back({commands[i].name, commands[i].writes, commands[i].summary});
   return t;
 }
 

@@ -12,6 +12,18 @@
 namespace stiffbench {
 
 void cmd_list(const std::string& what, std::ostream& out);
+
+// The commands that are not studies (the studies come from their registry, study_kinds()). The
+// summary is also the command's --help description (cli/), so each is written once here; `list
+// experiments` shows the solve command first, then the studies, then the others.
+struct CommandEntry {
+  std::string name;
+  std::string writes;   // the files it writes
+  std::string summary;  // one paragraph: what it does
+};
+const std::vector<CommandEntry>& command_entries();
+// The entry of `name` (std::logic_error for a name that is not a command: a programming error).
+const CommandEntry& command_entry(const std::string& name);
 void cmd_describe(const std::string& name, std::ostream& out);
 
 struct ReportOptions {

@@ -16,6 +16,7 @@
 #include "experiments/studies/energy.hpp"
 #include "experiments/studies/stability.hpp"
 #include "experiments/framework/study.hpp"
+#include "experiments/commands/list_describe.hpp"
 #include "experiments/commands/run.hpp"
 #include "experiments/studies/work_precision.hpp"
 #include "tests/test_support.hpp"
@@ -236,6 +237,27 @@ TEST(StudyFramework, UserStudyRunsFromTheCommandLineAndFromASpecFile) {
   const std::string csv = slurp_file(dir / "out" / "feval_count.csv");
   EXPECT_NE(csv.find(",3,rk4,3,12,ok,"), std::string::npos) << csv;
   EXPECT_NE(csv.find(",7,heun,7,14,ok,"), std::string::npos) << csv;
+}
+
+// `list experiments` comes from the two declarations, not from a list of its own: one row per
+// command of command_entries() and per study of the registry, a study registered by a program
+// included, solve first and the studies before the other commands.
+TEST(StudyFramework, ListExperimentsIsTheCommandTableAndTheStudyRegistry) {
+  register_feval_study();
+  std::ostringstream out;
+  cmd_list("experiments", out);
+  const std::string text = out.str();
+  std::vector<std::string> names;
+  for (const auto& c : command_entries()) names.push_back(c.name);
+  for (const auto& k : study_kinds()) names.push_back(k.name);
+  EXPECT_EQ(names.size(), command_entries().size() + study_kinds().size());
+  for (const auto& n : names)
+    EXPECT_NE(text.find("| " + n + " |"), std::string::npos) << n << "\n" << text;
+  EXPECT_NE(text.find("| feval-count |"), std::string::npos);
+  EXPECT_LT(text.find("| solve |"), text.find("| convergence |"));
+  EXPECT_LT(text.find("| feval-count |"), text.find("| report |"));
+  // Each command's --help says what its row says (the same declaration).
+  for (const auto& c : command_entries()) EXPECT_NE(text.find(c.summary), std::string::npos) << c.name;
 }
 
 namespace {
