@@ -12,42 +12,6 @@
 
 namespace stiffbench {
 
-namespace {
-
-void list_models(std::ostream& out) {
-  Table t{{"model", "kind", "exact", "parameters", "description"}, {}};
-  for (const auto& e : model_registry().entries()) {
-    std::vector<std::string> keys;
-    for (const auto& p : e.params) keys.push_back(p.key);
-    t.rows.push_back({e.info.name, e.info.mechanical ? "mechanical" : "first-order",
-                      e.info.exact ? "yes" : "no", join(keys, " "), e.info.description});
-  }
-  out << t.to_markdown();
-}
-
-// "fixed", "adaptive" or "fixed, adaptive": what a default-constructed instance supports.
-std::string step_modes(const IntegratorRegistry::Entry& e) {
-  const auto integ = integrator_registry().create(e.info.name, Params{});
-  std::vector<std::string> modes;
-  if (integ->supports_fixed_step()) modes.push_back("fixed");
-  if (integ->supports_adaptive()) modes.push_back("adaptive");
-  return join(modes, ", ");
-}
-
-void list_integrators(std::ostream& out) {
-  Table t{
-      {"integrator", "family", "kind", "order", "f evals/step", "step", "requires", "description"},
-      {}};
-  for (const auto& e : integrator_registry().entries()) {
-    const MethodInfo& m = e.info;
-    t.rows.push_back({m.name, to_string(m.family), m.kind.empty() ? "-" : m.kind,
-                      m.order ? std::to_string(m.order) : "variable",
-                      m.stages ? std::to_string(m.stages) : "variable", step_modes(e),
-                      describe_requirements(m.requires_), m.description});
-  }
-  out << t.to_markdown();
-}
-
 const std::vector<CommandEntry>& command_entries() {
   static const std::vector<CommandEntry> entries = {
       {"solve", "trajectory CSV (t,y0,y1,...); with --frames: VTK/CSV frames, observables.csv",
@@ -84,6 +48,42 @@ const CommandEntry& command_entry(const std::string& name) {
   for (const auto& c : command_entries())
     if (c.name == name) return c;
   throw std::logic_error("no command entry '" + name + "'");
+}
+
+namespace {
+
+void list_models(std::ostream& out) {
+  Table t{{"model", "kind", "exact", "parameters", "description"}, {}};
+  for (const auto& e : model_registry().entries()) {
+    std::vector<std::string> keys;
+    for (const auto& p : e.params) keys.push_back(p.key);
+    t.rows.push_back({e.info.name, e.info.mechanical ? "mechanical" : "first-order",
+                      e.info.exact ? "yes" : "no", join(keys, " "), e.info.description});
+  }
+  out << t.to_markdown();
+}
+
+// "fixed", "adaptive" or "fixed, adaptive": what a default-constructed instance supports.
+std::string step_modes(const IntegratorRegistry::Entry& e) {
+  const auto integ = integrator_registry().create(e.info.name, Params{});
+  std::vector<std::string> modes;
+  if (integ->supports_fixed_step()) modes.push_back("fixed");
+  if (integ->supports_adaptive()) modes.push_back("adaptive");
+  return join(modes, ", ");
+}
+
+void list_integrators(std::ostream& out) {
+  Table t{
+      {"integrator", "family", "kind", "order", "f evals/step", "step", "requires", "description"},
+      {}};
+  for (const auto& e : integrator_registry().entries()) {
+    const MethodInfo& m = e.info;
+    t.rows.push_back({m.name, to_string(m.family), m.kind.empty() ? "-" : m.kind,
+                      m.order ? std::to_string(m.order) : "variable",
+                      m.stages ? std::to_string(m.stages) : "variable", step_modes(e),
+                      describe_requirements(m.requires_), m.description});
+  }
+  out << t.to_markdown();
 }
 
 // Every command from the two declarations: the command table above and the study registry.
