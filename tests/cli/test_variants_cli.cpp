@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "experiments/build_info.hpp"
+#include "experiments/output/csv.hpp"
 #include "tests/cli_support.hpp"
 
 namespace stiffbench {
@@ -41,33 +42,15 @@ fs::path write_my_esdirk(const fs::path& dir) {
   return p;
 }
 
-// Rows of a CSV as maps column -> cell (no quoted commas in the columns read here, except the
-// integrator label, which the writer quotes).
+// Rows of a CSV as maps column -> cell (the library's CSV line reader, quoted labels included).
 std::vector<std::map<std::string, std::string>> rows_of(const fs::path& csv) {
-  auto split = [](const std::string& line) {
-    std::vector<std::string> cells;
-    std::string cur;
-    bool quoted = false;
-    for (const char c : line) {
-      if (c == '"') {
-        quoted = !quoted;
-      } else if (c == ',' && !quoted) {
-        cells.push_back(cur);
-        cur.clear();
-      } else {
-        cur += c;
-      }
-    }
-    cells.push_back(cur);
-    return cells;
-  };
   std::istringstream in(slurp(csv));
   std::string line;
   std::getline(in, line);
-  const auto header = split(line);
+  const auto header = parse_csv_line(line);
   std::vector<std::map<std::string, std::string>> out;
   while (std::getline(in, line)) {
-    const auto cells = split(line);
+    const auto cells = parse_csv_line(line);
     std::map<std::string, std::string> row;
     for (std::size_t i = 0; i < header.size() && i < cells.size(); ++i) row[header[i]] = cells[i];
     out.push_back(row);

@@ -134,7 +134,8 @@ TEST(LinearStability, RegionBoundaryLiesOnUnitModulus) {
 // boundary traced on the amplification alone (an s×s complex solve per point, the rational form
 // removed) lies on the same curve, for implicit methods with poles in the box too. (Not for
 // Gauss methods: their boundary is the imaginary axis, where |R| − 1 is round-off of either
-// sign, so the traced segments there are noise in both evaluations.)
+// sign, so the traced segments there are noise in both evaluations.) Each crossing is bisected
+// 40 times on a cell of 0.1, to about 1e-13; 1e-9 leaves room for the two evaluations' round-off.
 TEST(LinearStability, RegionFromTheRationalFormMatchesTheStageSolve) {
   for (const std::string name : {"radau5", "esdirk43", "sdirk2", "rk4", "dopri5"}) {
     const auto with = stability_of(name);

@@ -250,7 +250,6 @@ TEST(StudyFramework, ListExperimentsIsTheCommandTableAndTheStudyRegistry) {
   std::vector<std::string> names;
   for (const auto& c : command_entries()) names.push_back(c.name);
   for (const auto& k : study_kinds()) names.push_back(k.name);
-  EXPECT_EQ(names.size(), command_entries().size() + study_kinds().size());
   for (const auto& n : names)
     EXPECT_NE(text.find("| " + n + " |"), std::string::npos) << n << "\n" << text;
   EXPECT_NE(text.find("| feval-count |"), std::string::npos);
