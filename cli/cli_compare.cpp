@@ -3,9 +3,9 @@
 #include <memory>
 #include <string>
 
-#include "experiments/commands/list_describe.hpp"
 #include "cli/cli.hpp"
 #include "experiments/commands/compare.hpp"
+#include "experiments/commands/list_describe.hpp"
 
 namespace stiffbench {
 
@@ -15,9 +15,7 @@ void add_compare_command(CLI::App& app) {
     CompareOptions opt;
   };
   auto st = std::make_shared<State>();
-  auto* cmd = app.add_subcommand(
-      "compare",
-      command_entry("compare").summary);
+  auto* cmd = app.add_subcommand("compare", command_entry("compare").summary);
   cmd->footer(
       "Files are matched by their path relative to OLD and NEW. Run records (*.json): spec, "
       "versions (stiffbench, Eigen, SUNDIALS, GSL), git revision, compiler, flags, CPU model, "

@@ -2,10 +2,10 @@
 #include <iostream>
 #include <memory>
 
-#include "experiments/framework/catalog.hpp"
-#include "experiments/commands/catalog_markdown.hpp"
 #include "cli/cli.hpp"
+#include "experiments/commands/catalog_markdown.hpp"
 #include "experiments/commands/list_describe.hpp"
+#include "experiments/framework/catalog.hpp"
 
 namespace stiffbench {
 

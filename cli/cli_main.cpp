@@ -10,16 +10,16 @@
 #include <memory>
 #include <optional>
 
+#include "cli/cli.hpp"
 #include "core/driver.hpp"
 #include "core/run_control.hpp"
-#include "experiments/studies/audit.hpp"
-#include "experiments/framework/catalog.hpp"
-#include "cli/cli.hpp"
 #include "experiments/commands/list_describe.hpp"
+#include "experiments/commands/run.hpp"
+#include "experiments/framework/catalog.hpp"
+#include "experiments/framework/study.hpp"
 #include "experiments/output/output.hpp"
 #include "experiments/output/plotting.hpp"
-#include "experiments/framework/study.hpp"
-#include "experiments/commands/run.hpp"
+#include "experiments/studies/audit.hpp"
 
 namespace stiffbench {
 

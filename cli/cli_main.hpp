@@ -1,7 +1,7 @@
 // The whole stiffbench command line as a function. The stiffbench binary's main() only calls
 // it; a program that links the library can first add its own models or integrators
-// (register_model / register_integrator in experiments/framework/catalog.hpp) and then call it, so that
-// its models get `list`, `describe`, `solve` and every experiment by name:
+// (register_model / register_integrator in experiments/framework/catalog.hpp) and then call it, so
+// that its models get `list`, `describe`, `solve` and every experiment by name:
 //
 //   int main(int argc, char** argv) {
 //     stiffbench::register_model({{"my_brusselator", "..."}, {/* ParamSpecs */}, factory});

@@ -2,8 +2,8 @@
 #include <iostream>
 #include <memory>
 
-#include "experiments/commands/list_describe.hpp"
 #include "cli/cli.hpp"
+#include "experiments/commands/list_describe.hpp"
 
 namespace stiffbench {
 
@@ -13,9 +13,7 @@ void add_plot_command(CLI::App& app) {
     PlotOptions plot;
   };
   auto st = std::make_shared<State>();
-  auto* cmd = app.add_subcommand(
-      "plot",
-      command_entry("plot").summary);
+  auto* cmd = app.add_subcommand("plot", command_entry("plot").summary);
   cmd->add_option("dir", st->dir, "output folder of an experiment or of `stiffbench report`")
       ->required();
   cmd->add_flag("--svg", st->plot.svg, "also write each plot as SVG next to its PNG");

@@ -5,19 +5,17 @@
 #include <string>
 #include <vector>
 
-#include "experiments/framework/catalog.hpp"
 #include "cli/cli.hpp"
 #include "experiments/commands/list_describe.hpp"
-#include "experiments/output/output.hpp"
 #include "experiments/commands/profile.hpp"
+#include "experiments/framework/catalog.hpp"
+#include "experiments/output/output.hpp"
 
 namespace stiffbench {
 
 void add_report_command(CLI::App& app) {
   auto opt = std::make_shared<ReportOptions>();
-  auto* report = app.add_subcommand(
-      "report",
-      command_entry("report").summary);
+  auto* report = app.add_subcommand("report", command_entry("report").summary);
   report->add_option("suite", opt->suite,
                      "a folder of spec files (run in name order) or spec files, one section each "
                      "(default: the built-in suite)");
@@ -40,9 +38,7 @@ void add_profile_command(CLI::App& app) {
     std::vector<std::string> taus = {"1e-3", "1e-6"}, costs = {"f_evals", "wall"};
   };
   auto st = std::make_shared<State>();
-  auto* profile = app.add_subcommand(
-      "profile",
-      command_entry("profile").summary);
+  auto* profile = app.add_subcommand("profile", command_entry("profile").summary);
   profile->add_option("suite", st->opt.suite, "a built-in suite (stiff, mechanical) or a folder")
       ->required();
   profile->add_option("--tau", st->taus, "target accuracies, comma-separated (error <= tau)")

@@ -3,10 +3,10 @@
 #include <iostream>
 #include <memory>
 
-#include "experiments/commands/list_describe.hpp"
 #include "cli/cli.hpp"
-#include "experiments/output/output.hpp"
+#include "experiments/commands/list_describe.hpp"
 #include "experiments/commands/run.hpp"
+#include "experiments/output/output.hpp"
 
 namespace stiffbench {
 
@@ -18,9 +18,7 @@ void add_run_commands(CLI::App& app) {
     std::vector<std::string> merge_dirs;
   };
   auto st = std::make_shared<State>();
-  auto* run = app.add_subcommand(
-      "run",
-      command_entry("run").summary);
+  auto* run = app.add_subcommand("run", command_entry("run").summary);
   run->add_option("spec", st->opt.spec_file, "spec file (suites/*.toml)")->required();
   run->add_option("--set", st->opt.sets,
                   "override a spec key: KEY=VALUE in TOML syntax, e.g. t_end=2, "
@@ -51,9 +49,7 @@ void add_run_commands(CLI::App& app) {
     }
   });
 
-  auto* merge = app.add_subcommand(
-      "merge",
-      command_entry("merge").summary);
+  auto* merge = app.add_subcommand("merge", command_entry("merge").summary);
   merge->add_option("--out", st->merge_out, "output directory")->required();
   merge->add_option("dirs", st->merge_dirs, "shard folders")->required();
   merge->callback([st]() {

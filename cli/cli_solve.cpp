@@ -5,8 +5,8 @@
 #include <string>
 #include <utility>
 
-#include "core/types.hpp"
 #include "cli/cli.hpp"
+#include "core/types.hpp"
 #include "experiments/commands/list_describe.hpp"
 
 namespace stiffbench {
@@ -19,9 +19,7 @@ void add_solve_command(CLI::App& app) {
   };
   auto st = std::make_shared<State>();
   SolveOptions& o = st->opt;
-  auto* solve =
-      app.add_subcommand("solve",
-                         command_entry("solve").summary);
+  auto* solve = app.add_subcommand("solve", command_entry("solve").summary);
   solve->add_option("--model", o.model, "model name")->required();
   solve
       ->add_option("--integrator", o.integrator,

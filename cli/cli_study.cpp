@@ -1,13 +1,13 @@
-// One subcommand per registered study (experiments/framework/study.hpp): its flags come from the study's
-// option declarations (`t_end` is `--t-end`), and its callback runs the study pipeline.
+// One subcommand per registered study (experiments/framework/study.hpp): its flags come from the
+// study's option declarations (`t_end` is `--t-end`), and its callback runs the study pipeline.
 #include <iostream>
 #include <map>
 #include <memory>
 
-#include "experiments/framework/catalog.hpp"
 #include "cli/cli.hpp"
-#include "experiments/output/output.hpp"
+#include "experiments/framework/catalog.hpp"
 #include "experiments/framework/study.hpp"
+#include "experiments/output/output.hpp"
 
 namespace stiffbench {
 

@@ -1,3 +1,4 @@
-// Forwards to experiments/studies/work_precision.hpp for one version (its path before experiments/ was split by job).
+// Forwards to experiments/studies/work_precision.hpp for one version (its path before experiments/
+// was split by job).
 #pragma once
 #include "experiments/studies/work_precision.hpp"

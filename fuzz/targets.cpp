@@ -14,8 +14,8 @@
 
 #include "core/params.hpp"
 #include "core/types.hpp"
-#include "experiments/output/csv.hpp"
 #include "experiments/framework/spec_file.hpp"
+#include "experiments/output/csv.hpp"
 
 namespace stiffbench::fuzz {
 

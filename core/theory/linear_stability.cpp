@@ -705,8 +705,9 @@ std::vector<std::vector<std::complex<double>>> region_boundary(const LinearStabi
   const double dx = (re_max - re_min) / n, dy = (im_max - im_min) / n;
   auto at = [&](int i, int j) { return cd(re_min + i * dx, im_min + j * dy); };
   const std::function<double(cd)> modulus =
-      s.rational ? std::function<double(cd)>([r = *s.rational](cd z) { return rational_modulus(r, z); })
-                 : s.amplification;
+      s.rational
+          ? std::function<double(cd)>([r = *s.rational](cd z) { return rational_modulus(r, z); })
+          : s.amplification;
   auto phi = [&](cd z) {
     const double v = modulus(z) - 1.0;
     return std::isfinite(v) ? std::min(v, 1.0) : 1.0;

@@ -5,7 +5,8 @@
 // Files are matched by their path relative to OLD and NEW (every *.csv and *.json below them;
 // hidden files are left out; lines starting with '#' are comments, e.g. the key of a reference
 // cache and its note with the time it took).
-//  - Run records: every JSON file that records a run (run_metadata in experiments/output/output.hpp,
+//  - Run records: every JSON file that records a run (run_metadata in
+//  experiments/output/output.hpp,
 //    at its top or under "metadata" for `run`): the spec (every differing key), the experiment,
 //    stiffbench, Eigen, SUNDIALS and GSL versions, git revision, compiler, build type, flags,
 //    CPU model, thread count, seed and caller. Dates and command lines are not compared.

@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "experiments/studies/convergence.hpp"
 #include "experiments/commands/solve.hpp"
 #include "experiments/framework/spec_file.hpp"
+#include "experiments/studies/convergence.hpp"
 
 namespace stiffbench {
 
@@ -30,7 +30,7 @@ struct ReportOptions {
   std::string out_dir = "results";
   bool quick = false;
   bool svg = false;
-  bool html = false;   // also write DIR/report.html (experiments/output/html.hpp; implies SVG plots)
+  bool html = false;  // also write DIR/report.html (experiments/output/html.hpp; implies SVG plots)
   bool force = false;  // --force: replace a report of another suite in out_dir
   // Spec files and folders of spec files (each folder's *.toml in name order), one section per
   // spec; empty: the built-in suite (suites/report/, compiled in).

@@ -19,11 +19,11 @@
 
 #include "core/params.hpp"
 #include "experiments/build_info.hpp"
+#include "experiments/commands/run.hpp"
 #include "experiments/framework/catalog.hpp"
+#include "experiments/framework/study.hpp"
 #include "experiments/output/csv.hpp"
 #include "experiments/output/html.hpp"
-#include "experiments/framework/study.hpp"
-#include "experiments/commands/run.hpp"
 
 namespace stiffbench {
 
@@ -181,8 +181,8 @@ ProfileSuite load_profile_suite(const std::string& name, bool quick) {
   std::string source;
   if (const auto* files = builtin_files(name)) {
     for (const auto& [file, text] : *files)
-      specs.push_back(parse_spec_text(
-          std::string(text), "suites/" + name + "/" + std::string(file), {}));
+      specs.push_back(
+          parse_spec_text(std::string(text), "suites/" + name + "/" + std::string(file), {}));
     source = "built-in";
   } else {
     std::error_code ec;

@@ -46,9 +46,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "experiments/framework/spec_file.hpp"
 #include "experiments/output/output.hpp"
 #include "experiments/output/plotting.hpp"
-#include "experiments/framework/spec_file.hpp"
 
 namespace stiffbench {
 
@@ -117,8 +117,8 @@ struct ProfileOptions {
   std::vector<std::string> costs = {"f_evals", "wall"};
   std::string out_dir = "results";
   bool quick = false;
-  // Also write DIR/profile.html (experiments/output/html.hpp): every τ and cost as a section with its
-  // plots as inline SVG, the cost table and the ranking (implies SVG plots).
+  // Also write DIR/profile.html (experiments/output/html.hpp): every τ and cost as a section with
+  // its plots as inline SVG, the cost table and the ranking (implies SVG plots).
   bool html = false;
   // Replace results of other specs in DIR/<problem>/ and DIR/profile.* (runs of the same spec
   // are always reused or completed, never started over).

@@ -11,10 +11,10 @@
 
 #include "experiments/build_info.hpp"
 #include "experiments/commands/list_describe.hpp"
-#include "experiments/output/html.hpp"
+#include "experiments/commands/run.hpp"
 #include "experiments/framework/spec_file.hpp"
 #include "experiments/framework/study.hpp"
-#include "experiments/commands/run.hpp"
+#include "experiments/output/html.hpp"
 
 namespace stiffbench {
 

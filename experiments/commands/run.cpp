@@ -18,11 +18,11 @@
 #include "core/run_control.hpp"
 #include "core/types.hpp"
 #include "experiments/framework/catalog.hpp"
+#include "experiments/framework/spec_file.hpp"
+#include "experiments/framework/study.hpp"
 #include "experiments/output/csv.hpp"
 #include "experiments/output/output.hpp"
 #include "experiments/output/progress.hpp"
-#include "experiments/framework/spec_file.hpp"
-#include "experiments/framework/study.hpp"
 
 namespace stiffbench {
 

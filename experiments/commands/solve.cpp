@@ -1,6 +1,6 @@
-// `stiffbench solve` (experiments/commands/solve.hpp): one run of a model with an integrator, its summary
-// on `out`, and optionally its trajectory (--out FILE.csv) or frames (--frames N --out DIR).
-// cmd_solve resolves the run (end time, step, output times), checks the output, runs it and
+// `stiffbench solve` (experiments/commands/solve.hpp): one run of a model with an integrator, its
+// summary on `out`, and optionally its trajectory (--out FILE.csv) or frames (--frames N --out
+// DIR). cmd_solve resolves the run (end time, step, output times), checks the output, runs it and
 // prints the summary, each step a helper below.
 #include "experiments/commands/solve.hpp"
 

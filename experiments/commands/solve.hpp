@@ -1,5 +1,5 @@
-// `stiffbench solve`: one run of a model with an integrator (experiments/commands/solve.cpp). Included by
-// experiments/commands/list_describe.hpp with the other subcommands.
+// `stiffbench solve`: one run of a model with an integrator (experiments/commands/solve.cpp).
+// Included by experiments/commands/list_describe.hpp with the other subcommands.
 #pragma once
 
 #include <iosfwd>

@@ -50,8 +50,8 @@ IntegratorRegistry& mutable_integrator_registry() {
   return reg;
 }
 
-// The registries a study of objects sees (ScopedStudyObjects in experiments/framework/study.hpp): copies
-// of the process-wide ones with the user's objects added, for this thread only.
+// The registries a study of objects sees (ScopedStudyObjects in experiments/framework/study.hpp):
+// copies of the process-wide ones with the user's objects added, for this thread only.
 thread_local const ModelRegistry* t_models = nullptr;
 thread_local const IntegratorRegistry* t_integrators = nullptr;
 
@@ -498,7 +498,8 @@ std::string register_variant(const std::string& token, const std::string& base_d
       std::vector<std::string> keys;
       for (const auto& p : base.params) keys.push_back(p.key);
       throw BadInput(what + ": '" + base_name + "' has no parameter '" + key + "'" +
-                     did_you_mean(key, keys) + "; " + integrator_registry().accepted_keys(base_name));
+                     did_you_mean(key, keys) + "; " +
+                     integrator_registry().accepted_keys(base_name));
     }
   if (label.empty()) {
     std::string canonical = base_name + "{";

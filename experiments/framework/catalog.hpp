@@ -40,7 +40,8 @@ using IntegratorFactory = std::function<std::unique_ptr<Integrator>()>;
 // Makes a user's system (under `system_name`, empty: its name()) and integrators (under their
 // info().name) visible to model_registry() and integrator_registry() on this thread until the
 // matching pop_object_scope(); returns the system's name and appends the integrators' names.
-// Names already registered are BadInput. ScopedStudyObjects (experiments/framework/study.hpp) pairs them.
+// Names already registered are BadInput. ScopedStudyObjects (experiments/framework/study.hpp) pairs
+// them.
 std::string push_object_scope(const SystemFactory& system, const std::string& system_name,
                               const std::vector<IntegratorFactory>& integrators,
                               std::vector<std::string>* integrator_names);

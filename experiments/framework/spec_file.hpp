@@ -59,8 +59,8 @@ struct SpecKindSchema {
   bool model_required = true;  // false: `model` may be left out (fidelity)
 };
 // The kinds a reader knows: the registered studies (spec_schema(), from each study's option
-// declarations; experiments/framework/spec_schema.cpp), or a schema of a program's own (the fuzz targets
-// pass a small one, so that they link without the studies).
+// declarations; experiments/framework/spec_schema.cpp), or a schema of a program's own (the fuzz
+// targets pass a small one, so that they link without the studies).
 struct SpecSchema {
   std::vector<std::string> kinds;
   std::function<std::optional<SpecKindSchema>(const std::string& kind)> find;

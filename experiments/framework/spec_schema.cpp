@@ -1,5 +1,5 @@
-// The spec-file schema of the registered studies (experiments/framework/spec_file.hpp): each kind's keys
-// and their types come from the study's option declarations (experiments/framework/study.hpp).
+// The spec-file schema of the registered studies (experiments/framework/spec_file.hpp): each kind's
+// keys and their types come from the study's option declarations (experiments/framework/study.hpp).
 #include "experiments/framework/spec_file.hpp"
 #include "experiments/framework/study.hpp"
 

@@ -1,5 +1,6 @@
-// Number formats of the output files and tables (declared in experiments/output/output.hpp), in a file
-// of their own so the spec-file parser's fuzz target links them without the rest of the library.
+// Number formats of the output files and tables (declared in experiments/output/output.hpp), in a
+// file of their own so the spec-file parser's fuzz target links them without the rest of the
+// library.
 #include <charconv>
 #include <cmath>
 #include <cstdio>

@@ -1,5 +1,5 @@
-// One self-contained HTML page (experiments/output/html.hpp): a small Markdown renderer, SVG inlining
-// and the page writer.
+// One self-contained HTML page (experiments/output/html.hpp): a small Markdown renderer, SVG
+// inlining and the page writer.
 #include "experiments/output/html.hpp"
 
 #include <cctype>

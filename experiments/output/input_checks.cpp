@@ -1,5 +1,5 @@
-// The checks of input files and text fields (declared in experiments/output/output.hpp), in a file of
-// their own so the spec-file parser's fuzz target links them without the rest of the library.
+// The checks of input files and text fields (declared in experiments/output/output.hpp), in a file
+// of their own so the spec-file parser's fuzz target links them without the rest of the library.
 #include <cerrno>
 #include <cstdint>
 #include <cstring>

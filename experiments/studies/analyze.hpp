@@ -56,12 +56,11 @@ struct AnalyzeSpec {
 // The registered integrators with coefficients or stability data, in registry order.
 std::vector<std::string> analyze_integrators();
 
-
 struct AnalyzedMethod {
   std::string integrator;
   std::string family;                // registry family
   bool coefficient_defined = false;  // `analysis` holds the analysis of its coefficients
-  bool stopped = false;  // over --max-wall: only the name and a note "stopped: …"
+  bool stopped = false;              // over --max-wall: only the name and a note "stopped: …"
   MethodAnalysis analysis;           // name, kind and claimed order are set for every method
   // Methods that are not coefficient-defined: what their linear stability data give.
   std::string stability_kind;  // LinearStability::kind; empty without stability data

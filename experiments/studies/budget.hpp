@@ -16,9 +16,9 @@
 // Per configuration, from the model's initial state over `frame_count` frames:
 //   ms_per_frame   wall time of the frame loop (the integrator's set-up in reset() excluded,
 //                  e.g. a prefactorisation) / frame_count, in ms; timed over repeated runs with
-//                  the timing of work-precision (experiments/studies/work_precision.hpp: rounds shuffled
-//                  with the seed, kRepeatLongRun, kRepeatBudget, timing_spread: median, minimum,
-//                  bootstrap 95% interval) and the maximum;
+//                  the timing of work-precision (experiments/studies/work_precision.hpp: rounds
+//                  shuffled with the seed, kRepeatLongRun, kRepeatBudget, timing_spread: median,
+//                  minimum, bootstrap 95% interval) and the maximum;
 //   strain         for a spring network (OdeSystem::spring_network()): the relative strain
 //                  |l - L|/L of every spring with k > 0 and L > 0 (structural, shear and bend
 //                  alike); strain_max and strain_rms at the last frame, strain_peak the largest
@@ -62,8 +62,8 @@
 #include "core/solve_stats.hpp"
 #include "core/springs.hpp"
 #include "core/types.hpp"
-#include "experiments/output/output.hpp"
 #include "experiments/framework/study.hpp"
+#include "experiments/output/output.hpp"
 #include "experiments/studies/work_precision.hpp"
 
 namespace stiffbench {

@@ -625,8 +625,8 @@ ProbeBracket probe_coarsest(double h, double lo, double hi, double target, int q
     // Inside a bracket: interpolate in log-log when both ends have errors, else bisect.
     if (b.h_below > 0 && b.h_above > 0) {
       if (b.e_below > 0 && b.e_above > 0)
-        next = b.h_below * std::exp(std::log(b.h_above / b.h_below) *
-                                    std::log(target / b.e_below) / std::log(b.e_above / b.e_below));
+        next = b.h_below * std::exp(std::log(b.h_above / b.h_below) * std::log(target / b.e_below) /
+                                    std::log(b.e_above / b.e_below));
       else
         next = std::sqrt(b.h_below * b.h_above);
       next = std::clamp(next, std::min(b.h_below, b.h_above), std::max(b.h_below, b.h_above));
@@ -1011,8 +1011,7 @@ void add_fits(const Setup& setup, bool local, ConvergenceResult& result) {
   }
 }
 
-ConvergenceResult run_step_study(const ConvergenceSpec& given, std::ostream* progress,
-                                 bool local) {
+ConvergenceResult run_step_study(const ConvergenceSpec& given, std::ostream* progress, bool local) {
   given.validate();
   Setup setup = make_setup(given.model, given.integrators, setup_params(given));
   const OdeSystem& sys = *setup.model;
@@ -1488,8 +1487,9 @@ std::string unsettled_reason(const FitLevels& lv, int expected_slope, const std:
                                       : "add --levels to see whether they settle at finer steps");
 }
 
-// After "only K levels above ": the round-off floor, how many rows are at it and what to change. The finest usable level (or the coarsest level when none is usable) and
-// the first round-off floor row after it, whose floor the reason names.
+// After "only K levels above ": the round-off floor, how many rows are at it and what to change.
+// The finest usable level (or the coarsest level when none is usable) and the first round-off floor
+// row after it, whose floor the reason names.
 std::string roundoff_reason(const FitLevels& lv, int n_usable, int n_roundoff, double expected,
                             const std::string& ladder) {
   std::size_t last = 0;

@@ -112,9 +112,9 @@
 #include "core/params.hpp"
 #include "core/solve_stats.hpp"
 #include "experiments/framework/catalog.hpp"
+#include "experiments/framework/study.hpp"
 #include "experiments/output/output.hpp"
 #include "experiments/output/plotting.hpp"
-#include "experiments/framework/study.hpp"
 
 namespace stiffbench {
 

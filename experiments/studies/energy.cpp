@@ -7,8 +7,8 @@
 #include <sstream>
 
 #include "experiments/framework/catalog.hpp"
-#include "experiments/output/progress.hpp"
 #include "experiments/framework/study.hpp"
+#include "experiments/output/progress.hpp"
 
 namespace stiffbench {
 

@@ -43,9 +43,9 @@
 
 #include "core/driver.hpp"
 #include "core/params.hpp"
+#include "experiments/framework/study.hpp"
 #include "experiments/output/output.hpp"
 #include "experiments/output/plotting.hpp"
-#include "experiments/framework/study.hpp"
 
 namespace stiffbench {
 

@@ -43,8 +43,8 @@
 
 #include "core/params.hpp"
 #include "core/solve_stats.hpp"
-#include "experiments/output/output.hpp"
 #include "experiments/framework/study.hpp"
+#include "experiments/output/output.hpp"
 #include "experiments/studies/work_precision.hpp"
 
 namespace stiffbench {

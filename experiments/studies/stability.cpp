@@ -15,7 +15,6 @@
 #include "core/theory/linear_stability.hpp"
 #include "experiments/framework/catalog.hpp"
 #include "experiments/output/progress.hpp"
-#include "experiments/output/progress.hpp"
 
 namespace stiffbench {
 

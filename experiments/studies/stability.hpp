@@ -97,9 +97,9 @@
 #include <nlohmann/json.hpp>
 
 #include "core/params.hpp"
+#include "experiments/framework/study.hpp"
 #include "experiments/output/output.hpp"
 #include "experiments/output/plotting.hpp"
-#include "experiments/framework/study.hpp"
 
 namespace stiffbench {
 

@@ -20,15 +20,15 @@
 #include "core/params.hpp"
 #include "core/solve_stats.hpp"
 #include "experiments/framework/catalog.hpp"
-#include "experiments/studies/convergence.hpp"
 #include "experiments/output/output.hpp"
 #include "experiments/output/plotting.hpp"
+#include "experiments/studies/convergence.hpp"
 
 namespace stiffbench {
 
-// The step ladder and reference are StepStudySpec's (experiments/studies/convergence.hpp) with other
-// defaults: t_end = 0 (the model's literature end time); h = 0, the coarsest step: the model's
-// suggested step, else (t_end - t0)/16000. Fixed steps on stiff problems are pre-asymptotic
+// The step ladder and reference are StepStudySpec's (experiments/studies/convergence.hpp) with
+// other defaults: t_end = 0 (the model's literature end time); h = 0, the coarsest step: the
+// model's suggested step, else (t_end - t0)/16000. Fixed steps on stiff problems are pre-asymptotic
 // for a long way (bdf2 on HIRES: the final-time error crosses zero near h = 0.04, so a ladder
 // through it is not monotone), so the default starts fine; choose --h for your problem.
 // 4 levels; the reference (default cvode_bdf) at rtol 1e-14, atol 1e-16.
@@ -145,7 +145,8 @@ TimingSpread timing_spread(const std::vector<double>& samples, std::uint64_t see
                            std::uint64_t stream, int resamples = kBootstrapResamples);
 
 // The timing columns of work_precision.csv, in order: the median, the fastest run, the
-// bootstrap interval of the median and the number of runs (read by experiments/commands/compare.cpp).
+// bootstrap interval of the median and the number of runs (read by
+// experiments/commands/compare.cpp).
 struct TimingColumnNames {
   const char *median, *min, *ci_low, *ci_high, *runs;
 };

@@ -46,7 +46,6 @@
 #pragma once
 
 #include "cli/cli_main.hpp"
-#include "core/theory/additive_conditions.hpp"
 #include "core/driver.hpp"
 #include "core/integrator.hpp"
 #include "core/ode_system.hpp"

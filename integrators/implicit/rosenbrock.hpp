@@ -23,11 +23,11 @@
 // scale. Its error enters y⁺ as h² times itself per step, so it sets an error floor ∝ h: with a
 // forward difference (δ = √ε max(1, |t|)) rodas4 on Prothero–Robinson λ = -1 stalls at ~7e-12
 // (observed order -0.5 from h = 0.0125 to 0.00625), with δ = ε^⅓ max(1, |t|) it shows 3.7 there
-// (errors ~1e-12), and with this δ it keeps order 4 down to 4e-14 (tests/integrators/test_rosenbrock.cpp).
-// Order conditions (HW II §IV.7, Table 7.1 up to order 4): Σ_i w_i Φ_i(τ) = 1/γ(τ) over the
-// rooted trees τ, where Φ multiplies, along each edge from a vertex to its son, by α_jk when the
-// vertex has two or more sons and by β_jk = α_jk + γ_jk (the diagonal γ included) when it has
-// exactly one.
+// (errors ~1e-12), and with this δ it keeps order 4 down to 4e-14
+// (tests/integrators/test_rosenbrock.cpp). Order conditions (HW II §IV.7, Table 7.1 up to order 4):
+// Σ_i w_i Φ_i(τ) = 1/γ(τ) over the rooted trees τ, where Φ multiplies, along each edge from a
+// vertex to its son, by α_jk when the vertex has two or more sons and by β_jk = α_jk + γ_jk (the
+// diagonal γ included) when it has exactly one.
 //
 // The Rosenbrock methods are method files (methods/NAME.toml, kind = "rosenbrock"), compiled
 // into the library and parsed by built_in_methods() (integrators/method_file.hpp):

@@ -5,8 +5,8 @@
 // leaves a system of the dofs' size n (half of 2n):
 //   A k_v = M (r_v + c K r_x),   A = M - c M D - c² M K,   then k_x = r_x + c k_v.
 // The elimination is exact: Newton iterates equal those of the first-order form up to round-off
-// and the linear solver's tolerance (tests/integrators/test_velocity_form.cpp compares the two forms).
-// Scaling the rows by the diagonal mass matrix M makes A symmetric when M K and M D are
+// and the linear solver's tolerance (tests/integrators/test_velocity_form.cpp compares the two
+// forms). Scaling the rows by the diagonal mass matrix M makes A symmetric when M K and M D are
 // (MechanicalSystem::symmetric_force_jacobians()), and positive definite where -M K and -M D
 // are positive semi-definite (mass-spring networks with the `compressed_dd_only` option).
 //

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "experiments/framework/catalog.hpp"
 #include "cli/cli_main.hpp"
+#include "experiments/framework/catalog.hpp"
 #include "experiments/output/csv.hpp"
 #include "tests/cli_support.hpp"
 

@@ -21,8 +21,8 @@
 
 #include "core/types.hpp"
 #include "experiments/commands/list_describe.hpp"
-#include "experiments/studies/convergence.hpp"
 #include "experiments/output/output.hpp"
+#include "experiments/studies/convergence.hpp"
 #include "tests/cli_support.hpp"
 
 namespace {

@@ -96,9 +96,10 @@ TEST(VariantsCli, WorkPrecisionLabelsAMethodFileVariantAndTwoRadau5Settings) {
 
 TEST(VariantsCli, GlobalParamForOneMethodNamesTheVariantSyntax) {
   const fs::path dir = fresh_dir("variants", "global_param");
-  const auto r = run_cli("work-precision --model van_der_pol --integrators esdirk43,radau5 "
-                         "--param newton=full --tol-levels 2 --repeats 1 --out " +
-                         shell_quote((dir / "out").string()));
+  const auto r = run_cli(
+      "work-precision --model van_der_pol --integrators esdirk43,radau5 "
+      "--param newton=full --tol-levels 2 --repeats 1 --out " +
+      shell_quote((dir / "out").string()));
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("radau5{key=value}"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "out" / "work_precision.csv"));
@@ -107,20 +108,26 @@ TEST(VariantsCli, GlobalParamForOneMethodNamesTheVariantSyntax) {
 TEST(VariantsCli, BadVariantsAreRefusedNamingThem) {
   const fs::path dir = fresh_dir("variants", "bad");
   const std::string out = " --tol-levels 2 --repeats 1 --out " + shell_quote((dir / "o").string());
-  const auto unknown = run_cli("work-precision --model van_der_pol --integrators "
-                               "'radau5{newtn=frozen}'" + out);
+  const auto unknown = run_cli(
+      "work-precision --model van_der_pol --integrators "
+      "'radau5{newtn=frozen}'" +
+      out);
   EXPECT_EQ(unknown.code, 2);
   EXPECT_NE(unknown.err.find("integrator variant 'radau5{newtn=frozen}'"), std::string::npos)
       << unknown.err;
   EXPECT_NE(unknown.err.find("newton"), std::string::npos) << unknown.err;  // did you mean
-  const auto value = run_cli("work-precision --model van_der_pol --integrators "
-                             "'radau5{newton=full}'" + out);
+  const auto value = run_cli(
+      "work-precision --model van_der_pol --integrators "
+      "'radau5{newton=full}'" +
+      out);
   EXPECT_EQ(value.code, 2);
   EXPECT_NE(value.err.find("'full'"), std::string::npos) << value.err;
   const auto empty = run_cli("work-precision --model van_der_pol --integrators 'radau5{}'" + out);
   EXPECT_EQ(empty.code, 2) << empty.err;
-  const auto clash = run_cli("work-precision --model van_der_pol --integrators "
-                             "'radau5{newton=frozen,label=rk4}'" + out);
+  const auto clash = run_cli(
+      "work-precision --model van_der_pol --integrators "
+      "'radau5{newton=frozen,label=rk4}'" +
+      out);
   EXPECT_EQ(clash.code, 2);
   EXPECT_NE(clash.err.find("label 'rk4'"), std::string::npos) << clash.err;
 }
@@ -142,8 +149,7 @@ TEST(VariantsCli, RunAndProfileTakeVariantsInSpecFiles) {
   std::set<std::string> labels;
   for (const auto& row : rows_of(dir / "run" / "work_precision.csv"))
     labels.insert(row.at("integrator"));
-  EXPECT_EQ(labels,
-            (std::set<std::string>{"my_esdirk{newton=full}", "radau5", "radau5_dense"}));
+  EXPECT_EQ(labels, (std::set<std::string>{"my_esdirk{newton=full}", "radau5", "radau5_dense"}));
   const auto profile = run_cli("profile " + shell_quote((dir / "suite").string()) + " --out " +
                                shell_quote((dir / "profile").string()));
   ASSERT_EQ(profile.code, 0) << profile.err;

@@ -18,10 +18,10 @@
 
 #include <Eigen/Dense>
 
-#include "experiments/studies/analyze.hpp"
 #include "cli/cli_main.hpp"
 #include "experiments/commands/list_describe.hpp"
 #include "experiments/framework/study.hpp"
+#include "experiments/studies/analyze.hpp"
 
 namespace fs = std::filesystem;
 using namespace stiffbench;

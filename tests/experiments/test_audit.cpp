@@ -1,5 +1,5 @@
-// `stiffbench audit` (experiments/studies/audit.hpp): the counting wrapper counts what is called on it,
-// deliberately broken methods are each caught by the check that concerns their defect, built-in
+// `stiffbench audit` (experiments/studies/audit.hpp): the counting wrapper counts what is called on
+// it, deliberately broken methods are each caught by the check that concerns their defect, built-in
 // methods pass; and study rows carry the name a method was registered under (one tableau
 // registered twice is two rows).
 #include <gtest/gtest.h>
@@ -12,10 +12,10 @@
 #include <set>
 #include <sstream>
 
-#include "core/driver.hpp"
-#include "experiments/studies/audit.hpp"
-#include "experiments/framework/catalog.hpp"
 #include "cli/cli_main.hpp"
+#include "core/driver.hpp"
+#include "experiments/framework/catalog.hpp"
+#include "experiments/studies/audit.hpp"
 #include "experiments/studies/convergence.hpp"
 #include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/explicit/tableaux.hpp"

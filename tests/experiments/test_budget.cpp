@@ -17,9 +17,9 @@
 
 #include "core/driver.hpp"
 #include "core/ode_system.hpp"
-#include "experiments/studies/budget.hpp"
 #include "experiments/framework/catalog.hpp"
 #include "experiments/framework/study.hpp"
+#include "experiments/studies/budget.hpp"
 
 namespace stiffbench {
 namespace {

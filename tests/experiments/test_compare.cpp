@@ -1,6 +1,6 @@
-// compare_runs (experiments/commands/compare.hpp) on small hand-written result folders: row matching by
-// key columns, the tolerance on reals against exact counters, the wall-time verdict from the
-// bootstrap intervals, run-record differences and bad input.
+// compare_runs (experiments/commands/compare.hpp) on small hand-written result folders: row
+// matching by key columns, the tolerance on reals against exact counters, the wall-time verdict
+// from the bootstrap intervals, run-record differences and bad input.
 #include <gtest/gtest.h>
 
 #include <filesystem>

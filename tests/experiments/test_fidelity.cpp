@@ -1,5 +1,5 @@
-// `stiffbench fidelity` (experiments/studies/fidelity.hpp): the analytic damping and phase of one step on
-// the undamped oscillator against closed forms derived here, the measured curve from
+// `stiffbench fidelity` (experiments/studies/fidelity.hpp): the analytic damping and phase of one
+// step on the undamped oscillator against closed forms derived here, the measured curve from
 // harmonic_oscillator runs against the same closed forms, the recurrence fit on synthetic
 // sequences, the modal analysis against the spring chain's known frequencies, the per-mode
 // agreement on a cloth, and the refusals.

@@ -1,5 +1,5 @@
-// The HTML page writer (experiments/output/html.hpp): the Markdown subset, escaping, SVG inlining and
-// the page itself. The expected strings are written out by hand from the rules in html.hpp (the
+// The HTML page writer (experiments/output/html.hpp): the Markdown subset, escaping, SVG inlining
+// and the page itself. The expected strings are written out by hand from the rules in html.hpp (the
 // HTML a reader would write for each input), not produced by the code under test.
 #include "experiments/output/html.hpp"
 

@@ -1,5 +1,5 @@
-// Output safety at the library level (experiments/output/output.hpp): the spec difference named in a
-// refusal, check_existing_results, the study functions' and the report's checks of the output
+// Output safety at the library level (experiments/output/output.hpp): the spec difference named in
+// a refusal, check_existing_results, the study functions' and the report's checks of the output
 // folder, and write_file_atomic's temporaries (the command line: tests/cli/test_output_safety.cpp).
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -15,8 +15,8 @@
 
 #include "core/types.hpp"
 #include "experiments/commands/list_describe.hpp"
-#include "experiments/studies/convergence.hpp"
 #include "experiments/output/output.hpp"
+#include "experiments/studies/convergence.hpp"
 #include "tests/cli_support.hpp"
 
 namespace {

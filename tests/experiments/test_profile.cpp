@@ -20,8 +20,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/types.hpp"
 #include "cli/cli_main.hpp"
+#include "core/types.hpp"
 #include "experiments/commands/profile.hpp"
 #include "integrators/embedded_methods.hpp"
 

@@ -15,11 +15,11 @@
 #include <string>
 #include <vector>
 
-#include "experiments/framework/catalog.hpp"
 #include "cli/cli_main.hpp"
+#include "experiments/framework/catalog.hpp"
+#include "experiments/framework/study.hpp"
 #include "experiments/output/csv.hpp"
 #include "experiments/studies/recommend.hpp"
-#include "experiments/framework/study.hpp"
 
 namespace stiffbench {
 namespace {

@@ -13,8 +13,8 @@
 
 #include "core/driver.hpp"
 #include "experiments/commands/list_describe.hpp"
-#include "experiments/studies/convergence.hpp"
 #include "experiments/output/output.hpp"
+#include "experiments/studies/convergence.hpp"
 #include "tests/cli_support.hpp"
 #include "tests/test_support.hpp"
 

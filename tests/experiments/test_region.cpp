@@ -1,5 +1,5 @@
-// The stability-region experiment (experiments/studies/region.hpp): limits against the published values
-// of docs/reference-values.md and their closed forms, region.csv points checked against R(z)
+// The stability-region experiment (experiments/studies/region.hpp): limits against the published
+// values of docs/reference-values.md and their closed forms, region.csv points checked against R(z)
 // recomputed independently from each tableau (ButcherTableau::stability), the polyline contract of
 // the CSV, the fitted box, and the refusals.
 #include <gtest/gtest.h>

@@ -1,7 +1,7 @@
-// The stability-limit experiment (experiments/studies/stability.hpp): measured h_max on the fixed-fixed
-// spring chain against the closed-form limits, the unstable-for-all-h and A-stable statuses (one
-// run at the largest step for a method predicted stable for every step, the search with
-// probe_unbounded, a contradicted prediction), a non-finite spectrum as no prediction, the
+// The stability-limit experiment (experiments/studies/stability.hpp): measured h_max on the
+// fixed-fixed spring chain against the closed-form limits, the unstable-for-all-h and A-stable
+// statuses (one run at the largest step for a method predicted stable for every step, the search
+// with probe_unbounded, a contradicted prediction), a non-finite spectrum as no prediction, the
 // k^(-1/2) and 1/|λ| scalings of a sweep, and the sweep parser.
 #include <gtest/gtest.h>
 

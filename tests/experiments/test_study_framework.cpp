@@ -9,15 +9,15 @@
 #include <set>
 #include <sstream>
 
+#include "cli/cli_main.hpp"
 #include "core/driver.hpp"
 #include "experiments/build_info.hpp"
-#include "cli/cli_main.hpp"
+#include "experiments/commands/list_describe.hpp"
+#include "experiments/commands/run.hpp"
+#include "experiments/framework/study.hpp"
 #include "experiments/studies/convergence.hpp"
 #include "experiments/studies/energy.hpp"
 #include "experiments/studies/stability.hpp"
-#include "experiments/framework/study.hpp"
-#include "experiments/commands/list_describe.hpp"
-#include "experiments/commands/run.hpp"
 #include "experiments/studies/work_precision.hpp"
 #include "tests/test_support.hpp"
 
@@ -256,7 +256,8 @@ TEST(StudyFramework, ListExperimentsIsTheCommandTableAndTheStudyRegistry) {
   EXPECT_LT(text.find("| solve |"), text.find("| convergence |"));
   EXPECT_LT(text.find("| feval-count |"), text.find("| report |"));
   // Each command's --help says what its row says (the same declaration).
-  for (const auto& c : command_entries()) EXPECT_NE(text.find(c.summary), std::string::npos) << c.name;
+  for (const auto& c : command_entries())
+    EXPECT_NE(text.find(c.summary), std::string::npos) << c.name;
 }
 
 namespace {

@@ -6,8 +6,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "experiments/framework/catalog.hpp"
 #include "experiments/commands/list_describe.hpp"
+#include "experiments/framework/catalog.hpp"
 #include "integrators/method_entry.hpp"
 
 namespace stiffbench {

@@ -444,8 +444,8 @@ TEST(AdaptiveController, StepsOfHmaxLandOnOutputTimes) {
 }
 
 // A stiff van der Pol (ε = 1e-6) started with h0 = 0.1 over its first fast transient: the
-// estimate rejects the too-large trials, counted in error_test_failures, and the evaluation count still
-// follows the header (h0 given: no heuristic evaluation): f_evals = A + (d - 1)(A + R) with d
+// estimate rejects the too-large trials, counted in error_test_failures, and the evaluation count
+// still follows the header (h0 given: no heuristic evaluation): f_evals = A + (d - 1)(A + R) with d
 // distinct stage evaluations, one Jacobian per accepted point. The end value agrees with a tight
 // radau5 run to the tolerance's order. Measured: ros3p 7357 steps, 12 rejected, difference
 // 1.8e-7; rodas4 1313 steps, 11 rejected, 8.1e-8.

@@ -13,8 +13,8 @@
 #include <sstream>
 
 #include "core/driver.hpp"
-#include "experiments/studies/convergence.hpp"
 #include "experiments/output/frames.hpp"
+#include "experiments/studies/convergence.hpp"
 #include "experiments/studies/stability.hpp"
 #include "models/grid/fluid_2d.hpp"
 #include "models/grid/heat_2d.hpp"
