@@ -177,29 +177,36 @@ void validate_point(const SpecFile& s, const Point& p) {
                        "'; known: " + join(integrator_registry().names()));
       integ.push_back(e);
     }
+    // Each parameter is checked against the model and the integrators (its file, line and key
+    // in the message) before the job resolves them, then again with the study's helpers (a
+    // reference method) for keys that none of them takes.
+    auto check_params = [&](bool require_consumed) {
+      for (const auto& [key, value] : p.params.values()) {
+        const SpecEntry& entry = *find_entry(s.params, key);
+        Params one;
+        one.set(key, value);
+        std::set<std::string> consumed;
+        try {
+          if (model)
+            resolve_params(model->params, one, &consumed, "model '" + model->info.name + "'");
+          for (const auto* e : integ)
+            resolve_params(e->params, one, &consumed, "integrator '" + e->info.name + "'");
+        } catch (const BadInput& err) {
+          spec_error(entry, err.what());
+        }
+        if (require_consumed && !consumed.count(key)) {
+          std::string accepted = model ? model_registry().accepted_keys(model->info.name) : "";
+          for (const auto* e : integ)
+            accepted += "; " + integrator_registry().accepted_keys(e->info.name);
+          spec_error(entry, "unknown parameter; " + accepted);
+        }
+      }
+    };
+    check_params(false);
     const auto job = point_job(s, p, s.integrators, "");
     for (const auto& helper : job->helper_integrators())
       if (const auto* e = integrator_registry().find(helper)) integ.push_back(e);
-    for (const auto& [key, value] : p.params.values()) {
-      const SpecEntry& entry = *find_entry(s.params, key);
-      Params one;
-      one.set(key, value);
-      std::set<std::string> consumed;
-      try {
-        if (model)
-          resolve_params(model->params, one, &consumed, "model '" + model->info.name + "'");
-        for (const auto* e : integ)
-          resolve_params(e->params, one, &consumed, "integrator '" + e->info.name + "'");
-      } catch (const BadInput& err) {
-        spec_error(entry, err.what());
-      }
-      if (!consumed.count(key)) {
-        std::string accepted = model ? model_registry().accepted_keys(model->info.name) : "";
-        for (const auto* e : integ)
-          accepted += "; " + integrator_registry().accepted_keys(e->info.name);
-        spec_error(entry, "unknown parameter; " + accepted);
-      }
-    }
+    check_params(true);
   } catch (const BadInput& e) {
     const std::string msg = e.what();
     if (msg.rfind(s.file, 0) == 0 || msg.rfind("--set", 0) == 0) throw BadInput(msg + at);

@@ -18,6 +18,7 @@
 
 #include "core/driver.hpp"
 #include "experiments/framework/catalog.hpp"
+#include "experiments/framework/resolve.hpp"
 #include "experiments/output/frames.hpp"
 #include "experiments/output/output.hpp"
 #include "experiments/output/plotting.hpp"

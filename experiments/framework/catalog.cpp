@@ -22,8 +22,6 @@ namespace stiffbench {
 
 namespace {
 
-constexpr const char* kRegisteredSystem = "user system (register_system)";
-
 ModelRegistry& mutable_model_registry() {
   static ModelRegistry reg = [] {
     ModelRegistry r("model");
@@ -50,149 +48,19 @@ IntegratorRegistry& mutable_integrator_registry() {
   return reg;
 }
 
-// The registries a study of objects sees (ScopedStudyObjects in experiments/framework/study.hpp):
-// copies of the process-wide ones with the user's objects added, for this thread only.
-thread_local const ModelRegistry* t_models = nullptr;
-thread_local const IntegratorRegistry* t_integrators = nullptr;
-
 }  // namespace
 
-const ModelRegistry& model_registry() { return t_models ? *t_models : mutable_model_registry(); }
-const IntegratorRegistry& integrator_registry() {
-  return t_integrators ? *t_integrators : mutable_integrator_registry();
-}
-
-namespace {
-
-struct ObjectScope {
-  ModelRegistry models = mutable_model_registry();
-  IntegratorRegistry integrators = mutable_integrator_registry();
-};
-thread_local std::vector<std::unique_ptr<ObjectScope>> t_scopes;
-
-}  // namespace
-
-std::string push_object_scope(const SystemFactory& system, const std::string& system_name,
-                              const std::vector<IntegratorFactory>& integrators,
-                              std::vector<std::string>* integrator_names) {
-  auto scope = std::make_unique<ObjectScope>();
-  if (t_models) scope->models = *t_models;
-  if (t_integrators) scope->integrators = *t_integrators;
-  std::string name = system_name;
-  if (system) {
-    auto probe = system();
-    require_input(probe != nullptr, "study target: the system factory returned no system");
-    if (name.empty()) name = probe->name();
-    require_input(!scope->models.find(name),
-                  "study target: '" + name +
-                      "' is the name of a registered model; give the system another name");
-    ModelRegistry::Entry entry;
-    entry.info.name = name;
-    entry.info.description = "system object given to a study";
-    entry.info.mechanical = probe->as_mechanical() != nullptr;
-    entry.info.exact = probe->has_exact();
-    entry.info.source = "a user's system object";
-    entry.built_in = false;
-    entry.make = [system](const Params&) { return system(); };
-    scope->models.add(std::move(entry));
-  }
-  for (const auto& make : integrators) {
-    require_input(static_cast<bool>(make), "study target: empty integrator factory");
-    auto probe = make();
-    require_input(probe != nullptr, "study target: an integrator factory returned no integrator");
-    IntegratorRegistry::Entry entry;
-    entry.info = probe->info();
-    require_input(!entry.info.name.empty(), "study target: an integrator object has no name");
-    require_input(!scope->integrators.find(entry.info.name),
-                  "study target: integrator '" + entry.info.name +
-                      "' is already registered (or given twice); give your method another name");
-    entry.built_in = false;
-    entry.make = [make](const Params&) { return make(); };
-    if (integrator_names) integrator_names->push_back(entry.info.name);
-    scope->integrators.add(std::move(entry));
-  }
-  t_models = &scope->models;
-  t_integrators = &scope->integrators;
-  t_scopes.push_back(std::move(scope));
-  return name;
-}
-
-void pop_object_scope() {
-  if (t_scopes.empty()) return;
-  t_scopes.pop_back();
-  t_models = t_scopes.empty() ? nullptr : &t_scopes.back()->models;
-  t_integrators = t_scopes.empty() ? nullptr : &t_scopes.back()->integrators;
-}
+const ModelRegistry& model_registry() { return mutable_model_registry(); }
+const IntegratorRegistry& integrator_registry() { return mutable_integrator_registry(); }
 
 void register_model(ModelRegistry::Entry entry) {
   entry.built_in = false;
   mutable_model_registry().add(std::move(entry));
 }
 
-std::string register_system(SystemFactory factory, std::string name) {
-  require_input(static_cast<bool>(factory), "register_system: empty factory");
-  auto probe = factory();
-  require_input(probe != nullptr, "register_system: the factory returned no system");
-  if (name.empty()) name = probe->name();
-  if (const auto* e = model_registry().find(name))
-    require_input(!e->built_in && e->info.source == kRegisteredSystem,
-                  "register_system: '" + name + "' is already a model; choose another name");
-  ModelRegistry::Entry entry;
-  entry.info.name = name;
-  entry.info.description = "system object given to a study";
-  entry.info.mechanical = probe->as_mechanical() != nullptr;
-  entry.info.exact = probe->has_exact();
-  entry.info.source = kRegisteredSystem;
-  entry.built_in = false;
-  entry.make = [f = std::move(factory)](const Params&) { return f(); };
-  mutable_model_registry().add_or_replace(std::move(entry));
-  return name;
-}
-
 void register_integrator(IntegratorRegistry::Entry entry) {
   entry.built_in = false;
   mutable_integrator_registry().add(std::move(entry));
-}
-
-Setup make_setup(const std::string& model, const std::vector<std::string>& given,
-                 const Params& user) {
-  // Method files given by path are registered and replaced by their names.
-  const std::vector<std::string> integrators = resolve_integrator_tokens(given);
-  Setup s;
-  // Look the model up first so an unknown name is reported as such, then check the sizes
-  // before anything is allocated.
-  const auto& model_entry = model_registry().at(model);
-  for (const auto& name : integrators) integrator_registry().at(name);
-  // Every value is type- and range-checked (resolve_params) before anything is sized or built.
-  resolve_params(model_entry.params, user, nullptr, "model '" + model + "'");
-  for (const auto& name : integrators) {
-    try {
-      resolve_params(integrator_registry().at(name).params, user, nullptr,
-                     "integrator '" + name + "'");
-    } catch (const BadInput& e) {
-      if (integrators.size() < 2) throw;
-      throw BadInput(std::string(e.what()) +
-                     "; --param applies to every integrator of the study: to set a parameter "
-                     "for some methods only, give them as variants, e.g. '" +
-                     name + "{key=value}' beside '" + name + "'");
-    }
-  }
-  check_run_size(model, integrators, user);
-  std::set<std::string> consumed;
-  std::string accepted = model_registry().accepted_keys(model);
-  s.model = model_registry().create(model, user, &consumed);
-  for (const auto& name : integrators) {
-    s.integrators.push_back(integrator_registry().create(name, user, &consumed));
-    check_compatible(s.integrators.back()->info(), *s.model);
-    if (!integrator_registry().at(name).params.empty())
-      accepted += "; " + integrator_registry().accepted_keys(name);
-  }
-  std::vector<std::string> keys;
-  for (const auto& p : model_registry().at(model).params) keys.push_back(p.key);
-  for (const auto& name : integrators)
-    for (const auto& p : integrator_registry().at(name).params) keys.push_back(p.key);
-  check_all_consumed(user, consumed, accepted, keys);
-  return s;
 }
 
 namespace {
@@ -209,22 +77,6 @@ double available_memory() {
   return 0;  // unknown: only --max-memory and kMaxDimension apply
 }
 
-// Work vectors of a run: the integrators' stages and workspaces (Radau5: 3 complex stages and
-// Newton vectors; extrapolation-free), the driver's outputs and the model's scratch; generous.
-constexpr double kWorkVectors = 48;
-// Sparse matrices: value + index (12 bytes) for the Jacobian, the iteration matrix and an LU
-// or Cholesky factor with fill (x4).
-constexpr double kSparseCopies = 6;
-
-bool uses_dense(const Params& p) {
-  auto is = [&](const char* key, std::initializer_list<const char*> values) {
-    if (!p.contains(key)) return false;
-    for (const char* v : values)
-      if (p.values().at(key) == v) return true;
-    return false;
-  };
-  return is("linear_solver", {"dense_lu", "dense"}) || is("jacobian", {"fd_dense"});
-}
 }  // namespace
 
 std::string format_bytes(double bytes) {
@@ -282,74 +134,6 @@ double memory_limit(std::string* source) {
   }
   if (source) *source = "the memory available on this machine (raise or lower with --max-memory)";
   return available_memory();
-}
-
-RunMemory estimate_run_memory(const std::string& model, const std::vector<std::string>& integrators,
-                              const Params& user) {
-  RunMemory m;
-  const auto& entry = model_registry().at(model);
-  if (!entry.info.size) return m;
-  // The model's parameters with defaults; a value that does not parse is reported here exactly
-  // as the model's creation would report it.
-  m.model = entry.info.size(resolve_params(entry.params, user, nullptr, "model '" + model + "'"));
-  const double n = m.model.dimension;
-  m.state_bytes = kWorkVectors * 8.0 * n;
-  for (const auto& name : integrators) {
-    const auto& ie = integrator_registry().at(name);
-    if (ie.info.family != Family::implicit && ie.info.family != Family::imex &&
-        ie.info.family != Family::reference)
-      continue;
-    Params ip = resolve_params(ie.params, user, nullptr, "integrator '" + name + "'");
-    if (const std::optional<VariantOf> v = variant_of(name))
-      for (const auto& [key, value] : v->fixed.values()) ip.set(key, value);
-    m.jacobian_bytes = std::max(m.jacobian_bytes, kSparseCopies * 12.0 * m.model.jacobian_nonzeros);
-    if (uses_dense(ip)) {
-      // Jacobian, iteration matrix and LU factor: three n x n doubles (Radau5's complex system
-      // is of the same order).
-      const double dense = 3.0 * 8.0 * n * n;
-      if (dense > m.dense_bytes) {
-        m.dense_bytes = dense;
-        m.dense_integrator = name;
-      }
-    }
-  }
-  return m;
-}
-
-void check_run_size(const std::string& model, const std::vector<std::string>& integrators,
-                    const Params& user) {
-  const RunMemory m = estimate_run_memory(model, integrators, user);
-  if (m.model.dimension <= 0) return;
-  char dim[64];
-  std::snprintf(dim, sizeof dim, "%.4g", m.model.dimension);
-  const std::string what =
-      "model '" + model + "' with " + m.model.driver + " has " + dim + " unknowns";
-  require_input(m.model.dimension <= kMaxDimension,
-                what + ", more than the largest supported system (" +
-                    std::to_string(static_cast<long long>(kMaxDimension)) +
-                    " unknowns: sparse matrices index with 32-bit integers); reduce " +
-                    m.model.driver);
-  std::string source;
-  const double limit = memory_limit(&source);
-  if (limit <= 0) return;  // unknown available memory and no --max-memory
-  if (m.dense_bytes > 0 && m.total() > limit) {
-    throw BadInput(what + ": integrator '" + m.dense_integrator +
-                   "' with dense linear algebra would need about " + format_bytes(m.total()) +
-                   " (dense matrices " + format_bytes(m.dense_bytes) + "), more than the limit " +
-                   format_bytes(limit) + " (" + source +
-                   "); use a sparse or matrix-free option instead (--param linear_solver=auto, "
-                   "sparse_lu, klu, cg or gmres; jacobian=auto, analytic or matrix_free) or "
-                   "reduce " +
-                   m.model.driver);
-  }
-  require_input(m.total() <= limit, what + ": the run would need about " + format_bytes(m.total()) +
-                                        " (model " + format_bytes(m.model.model_bytes) +
-                                        ", state and work vectors " + format_bytes(m.state_bytes) +
-                                        (m.jacobian_bytes > 0 ? ", Jacobian and factors " +
-                                                                    format_bytes(m.jacobian_bytes)
-                                                              : std::string()) +
-                                        "), more than the limit " + format_bytes(limit) + " (" +
-                                        source + "); reduce " + m.model.driver);
 }
 
 // ---- Methods as files --------------------------------------------------------------------------

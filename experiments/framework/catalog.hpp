@@ -30,40 +30,11 @@ const IntegratorRegistry& integrator_registry();
 void register_model(ModelRegistry::Entry entry);
 void register_integrator(IntegratorRegistry::Entry entry);
 
-// A user's system object for the studies that take one (run_convergence, run_local_error,
-// run_work_precision with a SystemFactory): makes a fresh copy for every run.
+// A user's system object for a study (StudyObjects in experiments/framework/resolve.hpp): makes a
+// fresh copy for every run.
 using SystemFactory = std::function<std::unique_ptr<OdeSystem>()>;
-// A user's integrator object for the studies (StudyTarget::integrator_objects): a fresh one per
-// use.
+// A user's integrator object for a study (StudyObjects): a fresh one per use.
 using IntegratorFactory = std::function<std::unique_ptr<Integrator>()>;
-
-// Makes a user's system (under `system_name`, empty: its name()) and integrators (under their
-// info().name) visible to model_registry() and integrator_registry() on this thread until the
-// matching pop_object_scope(); returns the system's name and appends the integrators' names.
-// Names already registered are BadInput. ScopedStudyObjects (experiments/framework/study.hpp) pairs
-// them.
-std::string push_object_scope(const SystemFactory& system, const std::string& system_name,
-                              const std::vector<IntegratorFactory>& integrators,
-                              std::vector<std::string>* integrator_names);
-void pop_object_scope();
-
-// Registers `factory` as a model without parameters named `name` (empty: the system's name()),
-// replacing a system registered earlier under that name by this function, and returns the name.
-// A built-in model's or register_model's name is BadInput (it would be shadowed). Results and
-// the reference cache know the system by this name and its initial state: give different
-// systems different names.
-std::string register_system(SystemFactory factory, std::string name = "");
-
-struct Setup {
-  std::unique_ptr<OdeSystem> model;
-  std::vector<std::unique_ptr<Integrator>> integrators;
-};
-
-// Creates the model and each integrator, offering every user key to each of them; a key none of
-// them declares is BadInput naming it. Each integrator is checked against the model, so an
-// incompatible pair is reported before any run starts.
-Setup make_setup(const std::string& model, const std::vector<std::string>& integrators,
-                 const Params& user);
 
 // ---- Sizes and memory -------------------------------------------------------------------------
 // A run is checked before anything is allocated: the model's ModelSize (from its parameters)
@@ -80,17 +51,6 @@ struct RunMemory {
   std::string dense_integrator;  // the first such integrator (for the message)
   double total() const { return model.model_bytes + state_bytes + jacobian_bytes + dense_bytes; }
 };
-
-// The estimate for `model` run by `integrators` with the user's parameters (a model without a
-// size estimate, registered from outside, gives dimension 0 and is not checked).
-RunMemory estimate_run_memory(const std::string& model, const std::vector<std::string>& integrators,
-                              const Params& user);
-
-// BadInput naming the parameter, the memory the run would need and the limit, when it exceeds
-// the limit or kMaxDimension; dense linear algebra on a large system is refused with a pointer
-// to the sparse and matrix-free options. Called by make_setup before anything is created.
-void check_run_size(const std::string& model, const std::vector<std::string>& integrators,
-                    const Params& user);
 
 // --max-memory: bytes, or a number with K/M/G/T (powers of 1024), e.g. 512M, 8G. 0 (default):
 // the available memory. BadInput naming the flag for anything else.

@@ -127,33 +127,20 @@ void describe_study(const StudyKind& kind, std::ostream& out) {
   out << t.to_markdown();
 }
 
-ScopedStudyObjects::ScopedStudyObjects(const StudyObjects& objects, std::string& model,
-                                       std::vector<std::string>& integrators) {
-  if (objects.empty()) return;
-  const std::string name =
-      push_object_scope(objects.system, model, objects.integrators, &integrators);
-  if (objects.system) model = name;
-  active_ = true;
-}
-
-ScopedStudyObjects::~ScopedStudyObjects() {
-  if (active_) pop_object_scope();
-}
-
 std::unique_ptr<StudyJob> make_study(const StudyKind& kind, const StudyTarget& target,
                                      const Params& options, const StudyContext& ctx,
-                                     const std::function<std::string(const std::string&)>& how) {
+                                     const std::function<std::string(const std::string&)>& how,
+                                     const std::string& base) {
   if (kind.takes_model && kind.model_required)
-    require_input(!target.model.empty(), how("model") + " is required");
+    require_input(!target.model.empty() || target.objects.system, how("model") + " is required");
   require_input(
       kind.takes_params || target.params.empty(),
       "--param does not apply to " + kind.name + ": it depends only on the methods' coefficients");
   if (kind.integrators_required)
-    require_input(!target.integrators.empty(), "--integrators: no integrator given");
-  // Method files given by path are registered and replaced by their names (catalog.hpp).
-  StudyTarget resolved = target;
-  resolved.integrators = resolve_integrator_tokens(target.integrators);
-  return kind.make(resolved, resolve_study_options(kind, options, how), ctx);
+    require_input(!target.integrators.empty() || !target.objects.integrators.empty(),
+                  "--integrators: no integrator given");
+  const Params resolved = resolve_study_options(kind, options, how);
+  return kind.make(resolve_inputs(target, {}, base), resolved, ctx);
 }
 
 namespace {
@@ -169,9 +156,6 @@ std::unique_ptr<StudyJob> run_study(const std::string& kind_name, StudyTarget ta
                                     const Params& options, const std::filesystem::path& dir,
                                     StudyContext ctx) {
   const StudyKind& kind = study_kind(kind_name);
-  // Method files are registered process-wide before the scope copies the registries.
-  target.integrators = resolve_integrator_tokens(std::move(target.integrators));
-  const ScopedStudyObjects scope(target.objects, target.model, target.integrators);
   if (ctx.use_output_cache && ctx.cache_dir.empty()) ctx.cache_dir = dir.string();
   auto job = make_study(kind, target, options, ctx, option_flag);
   run_study_job(kind, *job, dir, ctx);

@@ -11,9 +11,9 @@
 // Every study then goes through one pipeline (run_study): check the output folder, run with
 // progress and run control, write its tables atomically, plot, print the summary.
 //
-// Studies run on objects: a StudyTarget names a registered model and integrators, or carries a
-// user's own system and integrator objects, which the study sees under their names for the
-// duration of the call only (nothing is registered process-wide).
+// Studies run on a StudyInputs value (experiments/framework/resolve.hpp): what the command line,
+// a spec file or a program said (a StudyTarget: names, method files, variants, a user's own
+// system and integrator objects), resolved once before the study is configured.
 #pragma once
 
 #include <filesystem>
@@ -27,28 +27,11 @@
 
 #include "core/params.hpp"
 #include "experiments/framework/catalog.hpp"
+#include "experiments/framework/resolve.hpp"
 #include "experiments/output/output.hpp"
 #include "experiments/output/plotting.hpp"
 
 namespace stiffbench {
-
-// A user's own system and integrator objects for a study (nothing is registered by name).
-struct StudyObjects {
-  // The system: a fresh copy per run. Its results carry the spec's model name when given, else
-  // the system's name(); that name must not be a registered model's.
-  SystemFactory system;
-  // Integrators, run after the spec's named ones under their info().name.
-  std::vector<IntegratorFactory> integrators;
-  bool empty() const { return !system && integrators.empty(); }
-};
-
-// What a study runs on.
-struct StudyTarget {
-  std::string model;                     // a registered model (or the name of `system`)
-  Params params;                         // model and integrator parameters (--param)
-  std::vector<std::string> integrators;  // registered integrators, run in this order
-  StudyObjects objects;                  // a user's own system and integrators (optional)
-};
 
 // Settings of one invocation, passed to the pipeline instead of process-wide flags.
 struct StudyContext {
@@ -84,6 +67,61 @@ class StudyJob {
   virtual std::string default_title() const = 0;
 };
 
+// A study's functions over its typed spec and result. One generic job, TypedStudyJob, runs any
+// study from them; a study declares a StudyFunctions value instead of a job class.
+template <class Spec, class Result>
+struct StudyFunctions {
+  std::function<Result(const StudyInputs&, const Spec&, std::ostream* progress)> run;
+  std::function<Table(const Spec&, const Result&)> unit_table;
+  // DIR/STEM.{csv,md,json}, the kind's extra files and the plot; returns whether it plotted.
+  std::function<bool(const std::filesystem::path& dir, const Spec&, const Result&,
+                     const std::string& title, const PlotOptions&, std::ostream& err)>
+      write;
+  std::function<void(const Spec&, const Result&, std::ostream& out)> print_summary;
+  std::function<std::string(const Spec&, const Result&, const std::string& note)>
+      report_markdown;
+  std::function<std::string(const Spec&)> default_title;
+  // Integrators besides the studied ones whose parameters the study consumes (optional).
+  std::function<std::vector<std::string>(const Spec&)> helpers;
+};
+
+// The job of any study: its inputs, typed spec (whose to_json() is the recorded spec) and result.
+template <class Spec, class Result>
+class TypedStudyJob final : public StudyJob {
+ public:
+  TypedStudyJob(const StudyFunctions<Spec, Result>& fns, StudyInputs in, Spec spec)
+      : fns_(fns), in_(std::move(in)), spec_(std::move(spec)) {}
+  nlohmann::json spec_json() const override { return spec_.to_json(); }
+  std::vector<std::string> helper_integrators() const override {
+    return fns_.helpers ? fns_.helpers(spec_) : std::vector<std::string>{};
+  }
+  void run(std::ostream* progress) override { result_ = fns_.run(in_, spec_, progress); }
+  Table unit_table() const override { return fns_.unit_table(spec_, result_); }
+  bool write(const std::filesystem::path& dir, const std::string& title, const PlotOptions& plot,
+             std::ostream& err) const override {
+    return fns_.write(dir, spec_, result_, title, plot, err);
+  }
+  void print_summary(std::ostream& out) const override { fns_.print_summary(spec_, result_, out); }
+  std::string report_markdown(const std::string& note) const override {
+    return fns_.report_markdown(spec_, result_, note);
+  }
+  std::string default_title() const override { return fns_.default_title(spec_); }
+  const Spec& spec() const { return spec_; }
+  const Result& result() const { return result_; }
+
+ private:
+  const StudyFunctions<Spec, Result>& fns_;  // a study's static table
+  StudyInputs in_;
+  Spec spec_;
+  Result result_{};
+};
+
+// The result of a job of this study (std::bad_cast for another study's job).
+template <class Spec, class Result>
+const Result& typed_result(const StudyJob& job) {
+  return dynamic_cast<const TypedStudyJob<Spec, Result>&>(job).result();
+}
+
 struct StudyKind {
   std::string name;     // the command and spec-file kind, e.g. "work-precision"
   std::string stem;     // file stem of its outputs, e.g. "work_precision"
@@ -104,10 +142,10 @@ struct StudyKind {
   std::vector<std::string> required;      // options that must be given
   std::vector<std::string> extra_files;   // besides STEM.{csv,md,json}, e.g. energy_summary.csv
   std::vector<std::string> unit_columns;  // the columns of StudyJob::unit_table()
-  // Builds the job from resolved options (every declared key with a default is present; an
-  // option without default is present only when given). BadInput naming the option for values
-  // the declaration cannot express (combinations, lists).
-  std::function<std::unique_ptr<StudyJob>(const StudyTarget&, const Params& options,
+  // Builds the job from the resolved inputs and options (every declared key with a default is
+  // present; an option without default is present only when given). BadInput naming the option
+  // for values the declaration cannot express (combinations, lists).
+  std::function<std::unique_ptr<StudyJob>(const StudyInputs&, const Params& options,
                                           const StudyContext&)>
       make;
 };
@@ -133,26 +171,20 @@ std::string option_flag(const std::string& key);
 // The options table of `stiffbench describe STUDY`.
 void describe_study(const StudyKind& kind, std::ostream& out);
 
-// Objects of a StudyTarget (a user's system and integrators) made visible by name to the
-// registries (model_registry(), integrator_registry()) of this thread while the scope lives.
-// Names of registered models or integrators are BadInput. Used by run_study and make_study.
-class ScopedStudyObjects {
- public:
-  // Sets `model` (when objects.system is given) and appends the objects' integrator names.
-  ScopedStudyObjects(const StudyObjects& objects, std::string& model,
-                     std::vector<std::string>& integrators);
-  ~ScopedStudyObjects();
-  ScopedStudyObjects(const ScopedStudyObjects&) = delete;
-  ScopedStudyObjects& operator=(const ScopedStudyObjects&) = delete;
-
- private:
-  bool active_ = false;
+// TEMPORARY while the studies move to StudyInputs: refuses objects (removed when no study uses it).
+struct ScopedStudyObjects {
+  ScopedStudyObjects(const StudyObjects& objects, const std::string&,
+                     const std::vector<std::string>&) {
+    require_input(objects.empty(), "this study does not take objects yet");
+  }
 };
 
-// Configures a job from a target whose objects are in scope (options resolved with `how`).
+// Configures a job: the target resolved (resolve_inputs, relative method-file paths from
+// `base`), the options resolved with `how`.
 std::unique_ptr<StudyJob> make_study(const StudyKind& kind, const StudyTarget& target,
                                      const Params& options, const StudyContext& ctx,
-                                     const std::function<std::string(const std::string&)>& how);
+                                     const std::function<std::string(const std::string&)>& how,
+                                     const std::string& base = "");
 
 // The pipeline of a one-off study, for the command line and for programs: checks that DIR can
 // be written and holds no results of a different spec (unless ctx.force), runs the study
@@ -162,8 +194,7 @@ std::unique_ptr<StudyJob> make_study(const StudyKind& kind, const StudyTarget& t
 std::unique_ptr<StudyJob> run_study(const std::string& kind, StudyTarget target,
                                     const Params& options, const std::filesystem::path& dir,
                                     StudyContext ctx);
-// The same pipeline for a job already configured (the typed one-call functions of each study,
-// e.g. convergence_study with StudyObjects); the caller keeps the job's objects in scope.
+// The same pipeline for a job already configured (e.g. a TypedStudyJob a program made).
 void run_study_job(const StudyKind& kind, StudyJob& job, const std::filesystem::path& dir,
                    const StudyContext& ctx);
 

@@ -678,7 +678,7 @@ StudyKind analyze_study_kind() {
                 Bounds::in(2, 10000)}};
   k.extra_files = {"analyze_conditions.csv", "analyze_dispersion.csv"};
   k.unit_columns = analyze_table(AnalyzeResult{}).columns;
-  k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
+  k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
     AnalyzeSpec s;
     s.integrators = t.integrators;
     s.points = static_cast<int>(o.integer("nu_points"));

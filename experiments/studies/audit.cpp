@@ -965,7 +965,7 @@ StudyKind audit_study_kind() {
   k.takes_params = false;
   k.integrators_required = false;
   k.unit_columns = audit_table(AuditResult{}).columns;
-  k.make = [](const StudyTarget& t, const Params&, const StudyContext&) {
+  k.make = [](const StudyInputs& t, const Params&, const StudyContext&) {
     AuditSpec s;
     s.integrators = t.integrators;
     return std::make_unique<AuditJob>(std::move(s));

@@ -820,7 +820,7 @@ StudyKind budget_study_kind() {
        "error is the strain itself",
        Bounds::non_negative()}};
   k.unit_columns = budget_table(BudgetResult{}).columns;
-  k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
+  k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
     BudgetSpec spec;
     spec.model = t.model;
     spec.params = t.params;

@@ -2013,7 +2013,7 @@ StudyKind step_size_kind(bool local) {
   k.unit_columns =
       (local ? local_error_table(ConvergenceResult{}) : convergence_table(ConvergenceResult{}))
           .columns;
-  k.make = [local](const StudyTarget& t, const Params& o, const StudyContext& ctx) {
+  k.make = [local](const StudyInputs& t, const Params& o, const StudyContext& ctx) {
     ConvergenceSpec spec;
     spec.model = t.model;
     spec.params = t.params;

@@ -192,9 +192,10 @@ EnergyRun measure_energy_drift(const OdeSystem& sys, Integrator& integ,
   return run;
 }
 
-EnergyResult run_energy(const EnergySpec& given, std::ostream* progress) {
+EnergyResult run_energy(const StudyInputs& in, const EnergySpec& spec, std::ostream* progress) {
+  const EnergySpec given = with_inputs(spec, in);
   given.validate();
-  Setup setup = make_setup(given.model, given.integrators, given.params);
+  Setup setup = make_setup(in);
   const OdeSystem& sys = *setup.model;
 
   EnergyResult res;
@@ -479,32 +480,28 @@ bool plot_energy(const fs::path& csv, const std::string& title, const PlotOption
 
 namespace {
 
-class EnergyJob : public StudyJob {
- public:
-  explicit EnergyJob(EnergySpec spec) : spec_(std::move(spec)) { spec_.validate(); }
-  nlohmann::json spec_json() const override { return spec_.to_json(); }
-  void run(std::ostream* progress) override { result_ = run_energy(spec_, progress); }
-  Table unit_table() const override { return energy_summary_table(result_); }
-  bool write(const std::filesystem::path& dir, const std::string& title, const PlotOptions& plot,
-             std::ostream& err) const override {
-    return write_energy_outputs(dir, spec_, result_, plot, err, title);
-  }
-  void print_summary(std::ostream& out) const override {
-    out << energy_markdown_table(result_).to_markdown();
-    for (const auto& run : result_.runs)
-      if (run.stats.status != Status::ok)
-        out << run.integrator << ": " << run.stats.message << "\n";
-  }
-  std::string report_markdown(const std::string& note) const override {
-    return note + "\n\n" + energy_markdown_table(result_).to_markdown() + "\n";
-  }
-  std::string default_title() const override { return "Energy drift: " + spec_.model; }
-  const EnergyResult& result() const { return result_; }
+const StudyFunctions<EnergySpec, EnergyResult> kEnergy{
+    .run = [](const StudyInputs& in, const EnergySpec& s,
+              std::ostream* progress) { return run_energy(in, s, progress); },
+    .unit_table = [](const EnergySpec&, const EnergyResult& r) { return energy_summary_table(r); },
+    .write = [](const std::filesystem::path& dir, const EnergySpec& s, const EnergyResult& r,
+                const std::string& title, const PlotOptions& plot,
+                std::ostream& err) { return write_energy_outputs(dir, s, r, plot, err, title); },
+    .print_summary =
+        [](const EnergySpec&, const EnergyResult& r, std::ostream& out) {
+          out << energy_markdown_table(r).to_markdown();
+          for (const auto& run : r.runs)
+            if (run.stats.status != Status::ok)
+              out << run.integrator << ": " << run.stats.message << "\n";
+        },
+    .report_markdown =
+        [](const EnergySpec&, const EnergyResult& r, const std::string& note) {
+          return note + "\n\n" + energy_markdown_table(r).to_markdown() + "\n";
+        },
+    .default_title = [](const EnergySpec& s) { return "Energy drift: " + s.model; },
+    .helpers = {}};
 
- private:
-  EnergySpec spec_;
-  EnergyResult result_;
-};
+using EnergyJob = TypedStudyJob<EnergySpec, EnergyResult>;
 
 }  // namespace
 
@@ -533,33 +530,31 @@ StudyKind energy_study_kind() {
        "which invariant of the model is measured (see `stiffbench describe MODEL`)"}};
   k.extra_files = {"energy_summary.csv"};
   k.unit_columns = energy_summary_table(EnergyResult{}).columns;
-  k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
-    EnergySpec s;
-    s.model = t.model;
-    s.params = t.params;
-    s.integrators = t.integrators;
+  k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
+    EnergySpec s = with_inputs(EnergySpec{}, t);
     s.h = optional_real(o, "h");
     s.t_end = optional_real(o, "t_end");
     s.samples = o.integer("samples");
     s.invariant = o.text("invariant");
-    return std::make_unique<EnergyJob>(std::move(s));
+    s.validate();
+    return std::make_unique<EnergyJob>(kEnergy, t, std::move(s));
   };
   return k;
 }
 
 const EnergyResult& energy_result(const StudyJob& job) {
-  return dynamic_cast<const EnergyJob&>(job).result();
+  return typed_result<EnergySpec, EnergyResult>(job);
 }
 
-EnergyResult run_energy(EnergySpec spec, const StudyObjects& objects, std::ostream* progress) {
-  const ScopedStudyObjects scope(objects, spec.model, spec.integrators);
-  return run_energy(static_cast<const EnergySpec&>(spec), progress);
+EnergyResult run_energy(const EnergySpec& spec, std::ostream* progress) {
+  return run_energy(inputs_of(spec), spec, progress);
 }
 
-EnergyResult energy_study(EnergySpec spec, const StudyObjects& objects,
-                          const std::filesystem::path& dir, const StudyContext& ctx) {
-  const ScopedStudyObjects scope(objects, spec.model, spec.integrators);
-  EnergyJob job(std::move(spec));
+EnergyResult energy_study(const StudyInputs& in, EnergySpec spec, const std::filesystem::path& dir,
+                          const StudyContext& ctx) {
+  spec = with_inputs(std::move(spec), in);
+  spec.validate();
+  EnergyJob job(kEnergy, in, std::move(spec));
   run_study_job(study_kind("energy"), job, dir, ctx);
   return job.result();
 }

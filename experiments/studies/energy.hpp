@@ -132,16 +132,16 @@ struct EnergyResult {
   std::vector<EnergyRun> runs;
 };
 
-// Creates the model and integrators by name (make_setup: unknown names, unused --param keys and
-// incompatible pairs are BadInput before anything runs) and measures each integrator in turn.
-// Progress lines go to `progress` when non-null.
+// Creates the model and integrators of `in` (make_setup: unused --param keys and incompatible
+// pairs are BadInput before anything runs) and measures each integrator in turn; the spec's
+// model, params and integrators are `in`'s. Progress lines go to `progress` when non-null.
+EnergyResult run_energy(const StudyInputs& in, const EnergySpec& spec, std::ostream* progress);
+// The same on the names the spec gives (resolve_inputs first).
 EnergyResult run_energy(const EnergySpec& spec, std::ostream* progress);
-// The same on a user's objects (see run_convergence with StudyObjects).
-EnergyResult run_energy(EnergySpec spec, const StudyObjects& objects, std::ostream* progress);
 // The one call: check DIR, run, write DIR/energy.{csv,md,json} and energy_summary.csv, plot,
 // print (ctx.out).
-EnergyResult energy_study(EnergySpec spec, const StudyObjects& objects,
-                          const std::filesystem::path& dir, const StudyContext& ctx = {});
+EnergyResult energy_study(const StudyInputs& in, EnergySpec spec, const std::filesystem::path& dir,
+                          const StudyContext& ctx = {});
 const EnergyResult& energy_result(const StudyJob& job);
 
 Table energy_table(const EnergyResult& r);          // the energy.csv contract (sampled rows)

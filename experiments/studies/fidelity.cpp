@@ -790,7 +790,7 @@ StudyKind fidelity_study_kind() {
        Bounds::in(40, 100000000)}};
   k.extra_files = {"modes.csv"};
   k.unit_columns = fidelity_table(FidelityResult{}).columns;
-  k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
+  k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
     FidelitySpec s;
     s.integrators = t.integrators;
     s.model = t.model;

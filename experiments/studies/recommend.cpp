@@ -425,7 +425,7 @@ StudyKind recommend_study_kind() {
       {"seed", P::integer, "1", "seed of the bootstrap", Bounds::non_negative()}};
   k.required = {"rtol"};
   k.unit_columns = recommend_table(RecommendResult{}).columns;
-  k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
+  k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
     RecommendSpec spec;
     spec.model = t.model;
     spec.params = t.params;

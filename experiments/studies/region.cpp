@@ -495,7 +495,7 @@ StudyKind region_study_kind() {
                 Bounds::in(10, 4000)}};
   k.extra_files = {"region_limits.csv"};
   k.unit_columns = region_limits_table(RegionResult{}).columns;
-  k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
+  k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
     RegionSpec s;
     s.integrators = t.integrators;
     if (o.contains("box")) s.box = parse_region_box(o.text("box"));

@@ -1150,7 +1150,7 @@ StudyKind stability_study_kind() {
       "prediction from the system's spectrum; writes stability.{csv,md,json,png}";
   k.options = stability_options();
   k.unit_columns = stability_table(StabilityResult{}).columns;
-  k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
+  k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
     StabilitySpec s;
     s.model = t.model;
     s.params = t.params;

@@ -829,7 +829,7 @@ StudyKind work_precision_study_kind() {
        Bounds::non_negative()}};
   k.options.insert(k.options.end(), own.begin(), own.end());
   k.unit_columns = work_precision_table(WorkPrecisionResult{}).columns;
-  k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
+  k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
     WorkPrecisionSpec spec;
     spec.model = t.model;
     spec.params = t.params;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "experiments/framework/catalog.hpp"
+#include "experiments/framework/resolve.hpp"
 
 namespace stiffbench {
 namespace {

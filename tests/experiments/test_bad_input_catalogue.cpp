@@ -24,6 +24,7 @@
 
 #include "core/driver.hpp"
 #include "experiments/framework/catalog.hpp"
+#include "experiments/framework/resolve.hpp"
 
 namespace fs = std::filesystem;
 using namespace stiffbench;

@@ -18,6 +18,7 @@
 #include "core/driver.hpp"
 #include "core/ode_system.hpp"
 #include "experiments/framework/catalog.hpp"
+#include "experiments/framework/resolve.hpp"
 #include "experiments/framework/study.hpp"
 #include "experiments/studies/budget.hpp"
 

@@ -219,7 +219,10 @@ TEST(LibraryApi, StudiesOnASystemObjectMatchTheNamedModel) {
   ASSERT_EQ(c.rows.size(), d.rows.size());
   for (std::size_t k = 0; k < c.rows.size(); ++k) EXPECT_EQ(c.rows[k].error, d.rows[k].error) << k;
   // A built-in model's name cannot be taken by a system object.
-  EXPECT_THROW(register_system(kepler, "kepler"), BadInput);
+  StudyTarget taken;
+  taken.model = "kepler";
+  taken.objects.system = kepler;
+  EXPECT_THROW(resolve_inputs(taken), BadInput);
 }
 
 TEST(LibraryApi, RegisteringANameTwiceIsAnError) {

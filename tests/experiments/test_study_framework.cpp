@@ -147,12 +147,12 @@ namespace {
 // its table has the f evaluations taken. One registration line below adds it everywhere.
 class FevalJob : public StudyJob {
  public:
-  FevalJob(StudyTarget t, long steps, double h) : t_(std::move(t)), steps_(steps), h_(h) {}
+  FevalJob(StudyInputs t, long steps, double h) : t_(std::move(t)), steps_(steps), h_(h) {}
   nlohmann::json spec_json() const override {
     return {{"model", t_.model}, {"integrators", t_.integrators}, {"steps", steps_}, {"h", h_}};
   }
   void run(std::ostream*) override {
-    Setup setup = make_setup(t_.model, t_.integrators, t_.params);
+    Setup setup = make_setup(t_);
     table_ = Table{{"integrator", "steps", "f_evals"}, {}};
     for (auto& integ : setup.integrators) {
       FixedStepOptions opt;
@@ -178,7 +178,7 @@ class FevalJob : public StudyJob {
   std::string default_title() const override { return "f evaluations"; }
 
  private:
-  StudyTarget t_;
+  StudyInputs t_;
   long steps_;
   double h_;
   Table table_;
@@ -193,7 +193,7 @@ void register_feval_study() {
   k.options = {{"steps", ParamType::integer, "10", "steps", Bounds::at_least(1)},
                {"h", ParamType::real, "0.01", "step", Bounds::positive()}};
   k.unit_columns = {"integrator", "steps", "f_evals"};
-  k.make = [](const StudyTarget& t, const Params& o, const StudyContext&) {
+  k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
     return std::make_unique<FevalJob>(t, o.integer("steps"), o.real("h"));
   };
   register_study(std::move(k));
