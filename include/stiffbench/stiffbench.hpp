@@ -23,11 +23,13 @@
 //                                           parse_method_file, make_integrator(method),
 //                                           method_registry_entry (register_integrator)
 //   core/registry.hpp, core/registry_types.hpp, experiments/framework/catalog.hpp
-//                                           the registries, make_setup, register_model and
+//                                           the registries, register_model and
 //                                           register_integrator for a user's own entries
-//   experiments/framework/study.hpp         the study registry and pipeline: StudyTarget,
-//                                           StudyObjects (a user's own system and integrator
-//                                           objects, nothing registered), StudyContext, run_study
+//   experiments/framework/resolve.hpp       StudyTarget, StudyObjects (a user's own system and
+//                                           integrator objects, nothing registered),
+//                                           resolve_inputs -> StudyInputs, make_setup
+//   experiments/framework/study.hpp         the study registry and pipeline: StudyContext,
+//                                           TypedStudyJob, run_study
 //   experiments/studies/convergence.hpp (local error too), work_precision.hpp, stability.hpp,
 //   energy.hpp, region.hpp, audit.hpp, analyze.hpp
 //                                           the studies: spec in, records out, CSV/Markdown/JSON
@@ -61,6 +63,7 @@
 #include "experiments/commands/compare.hpp"
 #include "experiments/commands/profile.hpp"
 #include "experiments/framework/catalog.hpp"
+#include "experiments/framework/resolve.hpp"
 #include "experiments/framework/study.hpp"
 #include "experiments/output/output.hpp"
 #include "experiments/output/plotting.hpp"
