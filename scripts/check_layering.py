@@ -9,7 +9,7 @@ Fails (exit 1, one line per offending include) when
   - experiments/ includes cli/ (but for the forwarding headers directly in experiments/);
   - experiments/output/ includes experiments/studies/, experiments/commands/ or the registries
     (experiments/framework/catalog.hpp);
-  - a study (experiments/studies/X.*) includes another study's header;
+  - a study (experiments/studies/X.* and its parts X_PART.*) includes another study's header;
   - or an include listed in KNOWN below no longer occurs (the list only shrinks).
 """
 import pathlib
@@ -29,8 +29,6 @@ KNOWN = {
     ("experiments/output/plotting.cpp", "experiments/studies/energy.hpp"),
     ("experiments/output/plotting.cpp", "experiments/studies/region.hpp"),
     ("experiments/output/plotting.cpp", "experiments/studies/stability.hpp"),
-    ("experiments/studies/budget.cpp", "experiments/studies/energy.hpp"),
-    ("experiments/studies/budget.hpp", "experiments/studies/work_precision.hpp"),
     ("experiments/studies/recommend.cpp", "experiments/studies/convergence.hpp"),
     ("experiments/studies/recommend.hpp", "experiments/studies/work_precision.hpp"),
     ("experiments/studies/work_precision.hpp", "experiments/studies/convergence.hpp"),
@@ -39,7 +37,19 @@ KNOWN = {
 INCLUDE = re.compile(r'^\s*#\s*include\s*"([^"]+)"')
 
 
-def rules(src: str, inc: str):
+def study_of(path: str, headers) -> str:
+    """The study a file of experiments/studies/ belongs to: X for X.* and for its parts X_PART.*
+    (X_output, X_search, ...), X being the shortest prefix of the stem, cut at an underscore, that
+    names a header X.hpp in `headers` (the stems of experiments/studies/*.hpp)."""
+    stem = pathlib.PurePosixPath(path).stem
+    parts = stem.split("_")
+    for n in range(1, len(parts) + 1):
+        if "_".join(parts[:n]) in headers:
+            return "_".join(parts[:n])
+    return stem
+
+
+def rules(src: str, inc: str, headers=frozenset()):
     """The rules the include `inc` of the file `src` breaks (paths relative to the root)."""
     layer = src.split("/", 1)[0]
     target = inc.split("/", 1)[0]
@@ -58,14 +68,13 @@ def rules(src: str, inc: str):
         if inc.startswith("experiments/framework/catalog."):
             yield "experiments/output/ must not include the registries (framework/catalog)"
     if src.startswith("experiments/studies/") and inc.startswith("experiments/studies/"):
-        own = pathlib.PurePosixPath(src).stem.removesuffix("_output")
-        other = pathlib.PurePosixPath(inc).stem.removesuffix("_output")
-        if own != other:
+        if study_of(src, headers) != study_of(inc, headers):
             yield "a study must not include another study"
 
 
 def main() -> int:
     root = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else pathlib.Path(__file__).parent.parent)
+    headers = {p.stem for p in (root / "experiments" / "studies").glob("*.hpp")}
     bad = []
     seen = set()
     for layer in ("core", "models", "integrators", "experiments", "cli"):
@@ -80,7 +89,8 @@ def main() -> int:
                 if (src, m.group(1)) in KNOWN:
                     seen.add((src, m.group(1)))
                     continue
-                bad += [f"{src}:{n}: includes {m.group(1)}: {why}" for why in rules(src, m.group(1))]
+                bad += [f"{src}:{n}: includes {m.group(1)}: {why}"
+                        for why in rules(src, m.group(1), headers)]
     bad += [f"{src}: no longer includes {inc}: remove it from KNOWN in {pathlib.Path(__file__).name}"
             for src, inc in sorted(KNOWN - seen)]
     for line in bad:

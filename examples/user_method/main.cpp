@@ -121,15 +121,15 @@ int main(int argc, char** argv) {
   conv.levels = 6;
   const ConvergenceResult c = convergence_study(conv, mine, out + "/convergence", false, ctx);
 
-  StabilitySpec stab;  // largest stable step of each method on the w = 50 mode
-  stab.integrators = {"rk4"};
-  const StabilityResult s = stability_study(stab, mine, out + "/stability", ctx);
+  // rk4 by name and the objects, resolved once into the inputs the next two studies run on.
+  const StudyInputs in = resolve_inputs(StudyTarget{.integrators = {"rk4"}, .objects = mine});
+  // Largest stable step of each method on the w = 50 mode.
+  const StabilityResult s = stability_study(in, StabilitySpec{}, out + "/stability", ctx);
 
   EnergySpec energy;  // relative energy error of long fixed-step runs
-  energy.integrators = {"rk4"};
   energy.h = 0.01;
   energy.t_end = 100;
-  energy_study(energy, mine, out + "/energy", ctx);
+  energy_study(in, energy, out + "/energy", ctx);
 
   WorkPrecisionSpec wp;  // error against f evaluations; CVODE over a tolerance ladder
   wp.integrators = {"rk4", "cvode_bdf"};

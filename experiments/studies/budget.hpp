@@ -16,7 +16,7 @@
 // Per configuration, from the model's initial state over `frame_count` frames:
 //   ms_per_frame   wall time of the frame loop (the integrator's set-up in reset() excluded,
 //                  e.g. a prefactorisation) / frame_count, in ms; timed over repeated runs with
-//                  the timing of work-precision (experiments/studies/work_precision.hpp: rounds
+//                  the timing of work-precision (experiments/support/timing.hpp: rounds
 //                  shuffled with the seed, kRepeatLongRun, kRepeatBudget, timing_spread: median,
 //                  minimum, bootstrap 95% interval) and the maximum;
 //   strain         for a spring network (OdeSystem::spring_network()): the relative strain
@@ -64,7 +64,8 @@
 #include "core/types.hpp"
 #include "experiments/framework/study.hpp"
 #include "experiments/output/output.hpp"
-#include "experiments/studies/work_precision.hpp"
+#include "experiments/output/plotting.hpp"
+#include "experiments/support/timing.hpp"
 
 namespace stiffbench {
 
@@ -79,7 +80,7 @@ struct BudgetSpec {
   // 10×1 and 2×20, 4×10, 20×2 (Macklin et al. 2019).
   std::vector<long> substeps_list = {1, 2, 4, 10, 20};
   std::vector<long> iterations_list = {1, 2, 5, 10, 20};
-  int timing_repeats = 3;  // most runs per configuration (see work-precision's timing)
+  int timing_repeats = 3;  // most runs per configuration (experiments/support/timing.hpp)
   unsigned long seed = 1;
   double max_strain = 10.0;  // strain_peak above this is `unstable` (spring networks)
   // Reference of the strain error (spring networks): the same scene run with `ref_integrator`
@@ -143,6 +144,11 @@ struct BudgetResult {
   std::vector<BudgetRow> rows;
 };
 
+// Runs the grid of every integrator of `in` on its model (a mechanical one), after its
+// reference (spec.ref_integrator, looked up in `in` too); the spec's model, params and
+// integrators are `in`'s. Progress lines go to `progress` when non-null.
+BudgetResult run_budget(const StudyInputs& in, const BudgetSpec& spec, std::ostream* progress);
+// The same on the names the spec gives (resolve_inputs first).
 BudgetResult run_budget(const BudgetSpec& spec, std::ostream* progress);
 Table budget_table(const BudgetResult& r);
 // Per method the configuration of smallest error among those that fit; nullptr when none fits.
@@ -164,9 +170,10 @@ void write_budget_outputs(const std::filesystem::path& dir, const BudgetSpec& sp
 bool plot_budget(const std::filesystem::path& csv, const std::string& title, const PlotOptions& opt,
                  std::ostream& err);
 
-// The one call on a user's objects (the pipeline of experiments/framework/study.hpp).
-BudgetResult budget_study(BudgetSpec spec, const StudyObjects& objects,
-                          const std::filesystem::path& dir, const StudyContext& ctx = {});
+// The one call: check DIR, run, write DIR/budget.{csv,md,json}, plot, print (ctx.out); the
+// pipeline of experiments/framework/study.hpp.
+BudgetResult budget_study(const StudyInputs& in, BudgetSpec spec, const std::filesystem::path& dir,
+                          const StudyContext& ctx = {});
 const BudgetResult& budget_result(const StudyJob& job);
 
 }  // namespace stiffbench

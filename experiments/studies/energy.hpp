@@ -46,16 +46,9 @@
 #include "experiments/framework/study.hpp"
 #include "experiments/output/output.hpp"
 #include "experiments/output/plotting.hpp"
+#include "experiments/support/invariant_error.hpp"
 
 namespace stiffbench {
-
-// Initial values of at most this magnitude are taken as zero (see above).
-inline constexpr double kZeroInvariant = 1e-10;
-// Whether the error of an invariant with initial value i0 is absolute (see above); arbitrary_zero
-// is Invariant::arbitrary_zero.
-inline bool invariant_error_is_absolute(double i0, const std::string& arbitrary_zero = {}) {
-  return !arbitrary_zero.empty() || !(std::abs(i0) > kZeroInvariant);
-}
 
 struct EnergySpec {
   std::string model;

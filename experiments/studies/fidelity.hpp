@@ -122,14 +122,40 @@ struct FidelityResult {
   };
   std::vector<Unfitted> unfitted;  // measured runs the recurrence did not fit (nonlinear method)
   std::vector<double> mode_steps_used;
+  // Per integrator (in the spec's order), from its stability data with the run: the analytic
+  // values shown at nu = 0.1, 1 and 10 (those in [nu_min, nu_max]) and the largest differences
+  // |A_measured − A_analytic| / max(1, A_analytic) and |θ_measured − θ_analytic| over its
+  // measured points.
+  struct Analytic {
+    std::string integrator;
+    bool stability = false;  // the method has linear stability data
+    bool curve = false;      // ... with a mechanical multiplier: an analytic curve
+    long measured = 0;       // measured points
+    double max_da = 0.0, max_dtheta = 0.0;
+    std::vector<OscillatorResponse> glance;
+  };
+  std::vector<Analytic> analytic;
+  // key=value of the model's rest state applied to parameters the user did not set.
+  std::vector<std::string> rest_state_applied;
 };
 
-// The spec with the model's rest state (ModelInfo::rest_state) applied to the parameters the
-// user did not set, so that the per-mode analysis linearises at an equilibrium at rest (the
-// defaults of cloth load it with gravity and a random perturbation). `applied` lists the
-// key=value pairs added. run_fidelity applies it itself; the command records the result.
-FidelitySpec with_rest_state(FidelitySpec spec, std::vector<std::string>* applied = nullptr);
+// The spec with the model's rest state (ModelInfo::rest_state of `in`'s model) applied to the
+// parameters the user did not set, so that the per-mode analysis linearises at an equilibrium at
+// rest (the defaults of cloth load it with gravity and a random perturbation). `applied` lists
+// the key=value pairs added. run_fidelity applies it itself; the command records the result.
+FidelitySpec with_rest_state(const StudyInputs& in, FidelitySpec spec,
+                             std::vector<std::string>* applied = nullptr);
+// The curves of every integrator of `in` and, when `in` has a model, its modes; the spec's
+// model, params (with the rest state applied) and integrators are `in`'s. Every refusal of the
+// model (not mechanical, not at rest, damped) comes before any run.
+FidelityResult run_fidelity(const StudyInputs& in, const FidelitySpec& spec,
+                            std::ostream* progress = nullptr);
+// The same on the names the spec gives (resolve_inputs first).
 FidelityResult run_fidelity(const FidelitySpec& spec, std::ostream* progress = nullptr);
+// The one call: check DIR, run, write DIR/fidelity.{csv,md,json} and modes.csv, plot, print
+// (ctx.out).
+FidelityResult fidelity_study(const StudyInputs& in, FidelitySpec spec,
+                              const std::filesystem::path& dir, const StudyContext& ctx = {});
 Table fidelity_table(const FidelityResult& r);
 Table modes_table(const FidelityResult& r);
 

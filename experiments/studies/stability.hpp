@@ -179,12 +179,16 @@ struct StabilityResult {
   std::vector<Fit> fits;  // sweeps only
 };
 
-StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress);
-// The same on a user's objects (see run_convergence with StudyObjects).
-StabilityResult run_stability(StabilitySpec spec, const StudyObjects& objects,
+// Measures every integrator of `in` on its model (per value of the sweep: a fresh model each
+// time); the spec's model, params and integrators are `in`'s. Every set-up (unused --param keys,
+// incompatible pairs, adaptive-only methods) is checked before the first run. Progress lines go
+// to `progress` when non-null.
+StabilityResult run_stability(const StudyInputs& in, const StabilitySpec& spec,
                               std::ostream* progress);
+// The same on the names the spec gives (resolve_inputs first).
+StabilityResult run_stability(const StabilitySpec& spec, std::ostream* progress);
 // The one call: check DIR, run, write DIR/stability.{csv,md,json}, plot, print (ctx.out).
-StabilityResult stability_study(StabilitySpec spec, const StudyObjects& objects,
+StabilityResult stability_study(const StudyInputs& in, StabilitySpec spec,
                                 const std::filesystem::path& dir, const StudyContext& ctx = {});
 const StabilityResult& stability_result(const StudyJob& job);
 

@@ -338,5 +338,37 @@ TEST(Budget, SpringStrainsAgreeWithTheirSummary) {
   EXPECT_NEAR(st.rms, std::sqrt(sum2 / static_cast<double>(s.size())), 1e-15);
 }
 
+// The study on inputs resolved once: a method file given by its path (Ralston's method under
+// another name) and a variant of a built-in method run under their labels.
+TEST(Budget, RunsFromResolvedInputsWithAMethodFileAndAVariant) {
+  const auto dir =
+      fs::temp_directory_path() / ("stiffbench_budget_inputs_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const auto file = dir / "budget_ralston.toml";
+  std::ofstream(file) << "name = \"budget_ralston\"\nkind = \"explicit_rk\"\n"
+                      << "class = \"explicit RK\"\norder = 2\nstage_order = 1\n"
+                      << "description = \"Ralston's method under another name\"\n"
+                      << "A = [[0, 0], [\"2/3\", 0]]\nb = [\"1/4\", \"3/4\"]\n";
+  StudyTarget t;
+  t.model = "cloth";
+  t.params = Params{{"n", 4}, {"perturbation", 0.0}};
+  t.integrators = {file.string(), "backward_euler{newton_max_iter=30}"};
+  const StudyInputs in = resolve_inputs(t);
+  BudgetSpec spec;
+  spec.frame_count = 2;
+  spec.substeps_list = {1, 2};
+  spec.timing_repeats = 1;
+  spec.ref_substeps = 0;
+  const BudgetResult r = run_budget(in, spec, nullptr);
+  std::vector<std::string> labels;
+  for (const auto& row : r.rows) labels.push_back(row.integrator);
+  EXPECT_EQ(labels, (std::vector<std::string>{"budget_ralston", "budget_ralston",
+                                              "backward_euler{newton_max_iter=30}",
+                                              "backward_euler{newton_max_iter=30}"}));
+  EXPECT_EQ(r.model, "cloth");
+  for (const auto& row : r.rows) EXPECT_EQ(row.stats.status, Status::ok) << row.integrator;
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace stiffbench

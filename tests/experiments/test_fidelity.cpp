@@ -4,15 +4,18 @@
 // sequences, the modal analysis against the spring chain's known frequencies, the per-mode
 // agreement on a cloth, and the refusals.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <complex>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <numbers>
 
 #include "core/types.hpp"
+#include "experiments/framework/resolve.hpp"
 #include "experiments/studies/fidelity.hpp"
 
 namespace stiffbench {
@@ -178,7 +181,7 @@ TEST(Fidelity, ClothModesAgreeWithTheCurveWithinFivePercent) {
   s.model = "cloth";
   s.params = Params{{"n", "6"}};
   std::vector<std::string> applied;
-  EXPECT_EQ(with_rest_state(s, &applied).params.values(),
+  EXPECT_EQ(with_rest_state(inputs_of(s), s, &applied).params.values(),
             (Params{{"n", "6"}, {"gravity", "0"}, {"perturbation", "0"}}.values()));
   EXPECT_EQ(applied, (std::vector<std::string>{"gravity=0", "perturbation=0"}));
   s.measure = false;
@@ -282,6 +285,40 @@ TEST(Fidelity, SpringMethodsAreMeasuredOnASpringAndOthersAreNamed) {
     EXPECT_NEAR(p.r.phase, std::arg(mu), 1e-6) << "nu " << p.r.nu;
   }
   EXPECT_GE(measured, 7);  // of 9 (a step whose fit is refused is listed in r.unfitted)
+}
+
+// The study on inputs resolved once: a method file given by its path (Ralston's method under
+// another name) and a variant of a built-in method, their curves under their labels.
+TEST(Fidelity, RunsFromResolvedInputsWithAMethodFileAndAVariant) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("stiffbench_fidelity_inputs_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto file = dir / "fidelity_ralston.toml";
+  std::ofstream(file) << "name = \"fidelity_ralston\"\nkind = \"explicit_rk\"\n"
+                      << "class = \"explicit RK\"\norder = 2\nstage_order = 1\n"
+                      << "description = \"Ralston's method under another name\"\n"
+                      << "A = [[0, 0], [\"2/3\", 0]]\nb = [\"1/4\", \"3/4\"]\n";
+  StudyTarget t;
+  t.integrators = {file.string(), "backward_euler{newton_max_iter=30}"};
+  const StudyInputs in = resolve_inputs(t);
+  FidelitySpec spec = oscillator_spec({});
+  spec.curve_points = 3;
+  const FidelityResult r = run_fidelity(in, spec);
+  std::map<std::string, std::map<std::string, int>> count;  // integrator, source -> points
+  for (const auto& p : r.curve) ++count[p.integrator][p.source];
+  using Counts = std::map<std::string, int>;
+  EXPECT_EQ(count["fidelity_ralston"], (Counts{{"analytic", 3}, {"measured", 3}}));
+  EXPECT_EQ(count["backward_euler{newton_max_iter=30}"],
+            (Counts{{"analytic", 3}, {"measured", 3}}));
+  EXPECT_EQ(count.size(), 2u);
+  ASSERT_EQ(r.analytic.size(), 2u);
+  EXPECT_EQ(r.analytic[0].integrator, "fidelity_ralston");
+  EXPECT_EQ(r.analytic[1].integrator, "backward_euler{newton_max_iter=30}");
+  for (const auto& a : r.analytic) {
+    EXPECT_EQ(a.measured, 3) << a.integrator;
+    EXPECT_LT(a.max_da, 1e-6) << a.integrator;  // the measured points lie on the analytic curve
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

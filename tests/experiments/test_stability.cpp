@@ -5,7 +5,11 @@
 // k^(-1/2) and 1/|λ| scalings of a sweep, and the sweep parser.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -15,6 +19,7 @@
 #include "core/theory/linear_stability.hpp"
 #include "core/theory/tableau.hpp"
 #include "core/types.hpp"
+#include "experiments/framework/resolve.hpp"
 #include "experiments/studies/stability.hpp"
 
 namespace stiffbench {
@@ -29,6 +34,15 @@ const StabilityRow& row_of(const StabilityResult& r, const std::string& integrat
   for (const auto& row : r.rows)
     if (row.integrator == integrator && row.value == value) return row;
   throw std::logic_error("no row for " + integrator);
+}
+
+// The study on a user's objects beside the spec's names (resolve_inputs with StudyObjects).
+StabilityResult run_on_objects(const StabilitySpec& spec, StudyObjects objects) {
+  const StudyInputs in = resolve_inputs(StudyTarget{.model = spec.model,
+                                                    .params = spec.params,
+                                                    .integrators = spec.integrators,
+                                                    .objects = std::move(objects)});
+  return run_stability(in, spec, nullptr);
 }
 
 TEST(Stability, SpringChainLimitsMatchLinearTheory) {
@@ -122,7 +136,7 @@ TEST(Stability, NewtonFailureIsSolverLimitNotInstability) {
   spec.h_cap_factor = 1e5;  // steps up to 1e5 · 2/ω, ω = 3k·y0² = 3000: hk up to ~7e4
   spec.periods = 50;
   const StabilityResult r =
-      run_stability(spec, StudyObjects{[] { return std::make_unique<CubicDecay>(); }, {}}, nullptr);
+      run_on_objects(spec, StudyObjects{[] { return std::make_unique<CubicDecay>(); }, {}});
   for (const char* name : {"backward_euler", "trapezoidal"}) {
     SCOPED_TRACE(name);
     const auto& row = row_of(r, name);
@@ -141,7 +155,7 @@ TEST(Stability, NewtonFailureIsSolverLimitNotInstability) {
   more.integrators = {"backward_euler"};
   more.params.set("newton_max_iter", "200");
   const StabilityResult r2 =
-      run_stability(more, StudyObjects{[] { return std::make_unique<CubicDecay>(); }, {}}, nullptr);
+      run_on_objects(more, StudyObjects{[] { return std::make_unique<CubicDecay>(); }, {}});
   const auto& row2 = row_of(r2, "backward_euler");
   ASSERT_TRUE(row2.h_measured);
   EXPECT_GT(*row2.h_measured, h_fail);
@@ -338,8 +352,8 @@ class MislabelledEuler final : public Integrator {
 TEST(Stability, InstabilityAtTheLargestStepContradictsThePrediction) {
   StabilitySpec spec;
   spec.model = "dahlquist";
-  const StabilityResult r = run_stability(
-      spec, StudyObjects{nullptr, {[] { return std::make_unique<MislabelledEuler>(); }}}, nullptr);
+  const StabilityResult r = run_on_objects(
+      spec, StudyObjects{nullptr, {[] { return std::make_unique<MislabelledEuler>(); }}});
   const auto& row = row_of(r, "mislabelled_euler");
   EXPECT_TRUE(row.predicted_unbounded);
   EXPECT_TRUE(row.checked_at_cap);
@@ -382,6 +396,45 @@ TEST(Stability, NonFiniteSpectrumIsNoPrediction) {
     EXPECT_NE(r.rows[k].no_prediction.find("not finite"), std::string::npos);
     EXPECT_EQ(t.rows[k][5], "");  // h_max_predicted: empty, not "inf"
   }
+}
+
+// Ralston's method (methods/ralston.toml) written to a scratch folder under another name.
+std::filesystem::path write_ralston_file(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("stiffbench_stability_methods_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto path = dir / (name + ".toml");
+  std::ofstream(path) << "name = \"" << name << "\"\n"
+                      << "kind = \"explicit_rk\"\nclass = \"explicit RK\"\norder = 2\n"
+                      << "stage_order = 1\ndescription = \"Ralston's method under another name\"\n"
+                      << "A = [[0, 0], [\"2/3\", 0]]\nb = [\"1/4\", \"3/4\"]\n";
+  return path;
+}
+
+// The study on inputs resolved once: a method file given by its path and a variant of a built-in
+// method run under their labels, the variant with its fixed parameter.
+TEST(Stability, RunsFromResolvedInputsWithAMethodFileAndAVariant) {
+  const auto file = write_ralston_file("stability_ralston");
+  StudyTarget t;
+  t.model = "dahlquist";
+  t.integrators = {file.string(), "backward_euler{newton_max_iter=30}"};
+  const StudyInputs in = resolve_inputs(t);
+  EXPECT_EQ(in.integrators,
+            (std::vector<std::string>{"stability_ralston", "backward_euler{newton_max_iter=30}"}));
+  const StabilityResult r = run_stability(in, StabilitySpec{}, nullptr);
+  ASSERT_EQ(r.rows.size(), 2u);
+  EXPECT_EQ(r.rows[0].integrator, "stability_ralston");
+  EXPECT_EQ(r.rows[1].integrator, "backward_euler{newton_max_iter=30}");
+  EXPECT_EQ(r.rows[0].model, "dahlquist");
+  // Ralston on the real axis: stable for h|λ| <= 2, measured by bisection; backward Euler:
+  // predicted stable for every step and stable at the largest one.
+  EXPECT_EQ(r.rows[0].status, "ok") << r.rows[0].message;
+  ASSERT_TRUE(r.rows[0].h_predicted);
+  ASSERT_TRUE(r.rows[0].h_measured);
+  EXPECT_NEAR(*r.rows[0].h_measured / *r.rows[0].h_predicted, 1.0, 0.01);
+  EXPECT_TRUE(r.rows[1].predicted_unbounded);
+  EXPECT_EQ(r.rows[1].status, "stable_up_to") << r.rows[1].message;
+  std::filesystem::remove_all(file.parent_path());
 }
 
 }  // namespace
