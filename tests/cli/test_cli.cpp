@@ -267,15 +267,15 @@ TEST(Cli, WrongAnswersEndWithTheirStatusAndExitZero) {
   EXPECT_NE(dopri.out.find("step size too small: h = "), std::string::npos) << dopri.out;
 
   const auto dir = stiffbench::testing_support::fresh_dir("cli", "wrong_answers");
-  const Outcome wp = run(
-      "work-precision --model robertson --integrators radau5,dopri5 --reference published "
-      "--tol-levels 2 --rtol-max 1e-3 --atol-factor 1 --repeats 1 --out " +
-      dir.string());
+  const Outcome wp =
+      run("work-precision --model robertson --integrators radau5,dopri5 --reference published "
+          "--tol-levels 2 --rtol-max 1e-3 --atol-factor 1 --repeats 1 --out " +
+          dir.string());
   ASSERT_EQ(wp.code, 0) << wp.err;
   const auto rows = read_csv(dir / "work_precision.csv");
   ASSERT_EQ(rows.size(), 5u);
-  const auto status = static_cast<std::size_t>(
-      std::find(rows[0].begin(), rows[0].end(), "status") - rows[0].begin());
+  const auto status = static_cast<std::size_t>(std::find(rows[0].begin(), rows[0].end(), "status") -
+                                               rows[0].begin());
   ASSERT_LT(status, rows[0].size());
   std::map<std::string, std::string> by_row;
   for (std::size_t i = 1; i < rows.size(); ++i)
