@@ -1,11 +1,14 @@
 #include "core/driver.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace stiffbench {
 
@@ -83,6 +86,27 @@ void record_timeout(RunResult& r, const std::string& what, double t_goal) {
   if (!t_timeouts_expected) ++g_faults;
 }
 
+// The admissible-set check at an output time: the first component of `nonneg` (the model's
+// non-negative components) below -bound ends the run with status invalid_state and a message
+// naming the component, its value, t and the bound. Returns true when it did.
+bool left_admissible_set(const std::vector<Index>& nonneg, double bound, RunResult& r) {
+  for (const Index i : nonneg) {
+    if (!(r.y[i] < -bound)) continue;
+    r.stats.status = Status::invalid_state;
+    std::ostringstream msg;
+    msg.precision(12);
+    msg << "component y[" << i << "] = " << r.y[i] << " < -" << bound << " at t = " << r.t
+        << ": the model's solution keeps it non-negative";
+    r.stats.message = msg.str();
+    return true;
+  }
+  return false;
+}
+
+// The bound of that check when the run has no absolute tolerance: round-off relative to the
+// state's size (core/driver.hpp).
+double roundoff_bound(CVecRef y) { return 1e-8 * std::max(1.0, max_norm(y)); }
+
 }  // namespace
 
 long fault_count() { return g_faults.load(); }
@@ -159,6 +183,7 @@ RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0
   };
 
   const EvalCounters before = sys.counters();
+  const std::vector<Index> nonneg = sys.nonnegative_components();
   const RowClock clock;
   const auto start = std::chrono::steady_clock::now();
   integ.reset(sys, t0, r.y);
@@ -201,8 +226,9 @@ RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0
       r.stats.message = msg.str();
       break;
     }
-    if (observer && k + 1 == output_step(next_output_index)) {
-      observer(r.t, r.y);
+    if (k + 1 == output_step(next_output_index)) {
+      if (!nonneg.empty() && left_admissible_set(nonneg, roundoff_bound(r.y), r)) break;
+      if (observer) observer(r.t, r.y);
       ++next_output_index;
     }
   }
@@ -246,6 +272,8 @@ RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOp
                ? opt.t_end
                : t0 + (opt.t_end - t0) * static_cast<double>(j) / static_cast<double>(n_stops);
   };
+  const std::vector<Index> nonneg = sys.nonnegative_components();
+  const std::optional<double> atol = integ.absolute_tolerance();
   const EvalCounters before = sys.counters();
   const RowClock clock;
   const auto start = std::chrono::steady_clock::now();
@@ -276,6 +304,9 @@ RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOp
       r.stats.message = "non-finite state at t = " + std::to_string(t_out);
       break;
     }
+    if (!nonneg.empty() &&
+        left_admissible_set(nonneg, atol && *atol > 0 ? *atol : roundoff_bound(r.y), r))
+      break;
     if (observer) observer(r.t, r.y);
   }
   r.stats.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -65,6 +65,17 @@ struct AdaptiveOptions {
 RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOptions& opt,
                        const Observer& observer = {});
 
+// Admissible set: a model that declares non-negative components
+// (OdeSystem::nonnegative_components, e.g. concentrations) has the state checked at every output
+// time — each output step of run_fixed_step* (the last one at least), each output stop of
+// run_adaptive. A listed component below -bound ends the run with Status::invalid_state and a
+// message naming the component, its value, t and the bound. The bound is the integrator's
+// absolute tolerance in an adaptive run (Integrator::absolute_tolerance(), the method's `atol`:
+// the error the run was asked to keep, so a value further below 0 is not a small error of a
+// valid solution), and 1e-8·max(1, ‖y‖∞) of the state at that time otherwise (a fixed-step run,
+// atol = 0, or a method without one): far above round-off, far below a concentration that
+// matters. Like unstable, this is a numerical outcome of the method, not a fault.
+//
 // Faults inside a run: an exception other than BadInput thrown by the model or the
 // integrator during run_fixed_step* or run_adaptive (library references included: their
 // callbacks pass it across the C library) ends that run with Status::error and the exception's

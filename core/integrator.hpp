@@ -119,6 +119,10 @@ class Integrator {
   virtual bool supports_fixed_step() const { return true; }
   virtual bool supports_adaptive() const { return false; }
   virtual Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats);
+  // The absolute tolerance advance_to() controls the error to (the method's scalar `atol`): an
+  // adaptive run's bound for the admissible-set check (core/driver.hpp, run_adaptive). nullopt
+  // (the default) for methods without one; the driver then uses a bound from round-off.
+  virtual std::optional<double> absolute_tolerance() const { return std::nullopt; }
 
   // The method's linear stability (core/theory/linear_stability.hpp) from its coefficients, with
   // the parameters it was created with; empty where it has none (variable-order library methods).

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <functional>
+#include <numeric>
 #include <optional>
 #include <string>
 #include <utility>
@@ -110,6 +111,14 @@ struct Profile {
   std::vector<std::vector<double>> rows;
 };
 
+// 0, 1, ..., n-1: every component (the nonnegative_components() of a model whose unknowns are
+// all concentrations).
+inline std::vector<Index> all_components(Index n) {
+  std::vector<Index> all(static_cast<std::size_t>(n));
+  std::iota(all.begin(), all.end(), Index{0});
+  return all;
+}
+
 // What a problem's literature says beyond its equations: the end time, a published solution, a
 // suggested step. A capability of OdeSystem apart from the mathematics; every hook has a default
 // (none), so a system overrides only what it has.
@@ -128,6 +137,15 @@ class ProblemMetadata {
   virtual std::optional<PublishedSolution> published_solution() const { return std::nullopt; }
   // Suggested fixed step (see SuggestedStep). Empty when the model has none.
   virtual std::optional<SuggestedStep> suggested_step() const { return std::nullopt; }
+  // The components the exact solution keeps non-negative (concentrations), by index: the
+  // admissible set {y : y_i >= 0 for each listed i}. A state outside it at an output time ends
+  // the run with status invalid_state (core/driver.hpp says by how much it may be outside).
+  // Declare only what the problem guarantees for every admissible parameter value and initial
+  // state, e.g. by the positivity criterion (Hundsdorfer & Verwer, Numerical Solution of
+  // Time-Dependent Advection-Diffusion-Reaction Equations, 2003, §I.7): y(0) >= 0 and
+  // f_i(t, y) >= 0 whenever y >= 0 and y_i = 0 keep y(t) >= 0 (a mass-action kinetics' species
+  // is consumed only by reactions whose rate contains it). Empty (the default): no such set.
+  virtual std::vector<Index> nonnegative_components() const { return {}; }
 };
 
 // What `solve --frames` writes besides the state: particle and grid views, profiles and

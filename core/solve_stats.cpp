@@ -20,6 +20,10 @@ std::string to_string(Status s) {
       return "error";
     case Status::timeout:
       return "timeout";
+    case Status::step_size_too_small:
+      return "step_size_too_small";
+    case Status::invalid_state:
+      return "invalid_state";
   }
   return "?";
 }

@@ -10,7 +10,20 @@ namespace stiffbench {
 // error: the model or the integrator threw during the run (a fault, not a numerical outcome);
 // the driver ends that run with this status and the exception's message (core/driver.hpp).
 // timeout: the row passed its wall-clock limit (--max-wall, core/run_control.hpp).
-enum class Status { ok, unstable, newton_failed, solver_error, error, timeout };
+// step_size_too_small: an adaptive method's step fell below 10·u·|t| (u the unit round-off), so
+// t + h no longer differs from t by a usable amount (integrators/adaptive/controller.hpp).
+// invalid_state: the state left the model's admissible set at an output time, e.g. a
+// concentration below minus the run's absolute tolerance (core/driver.hpp).
+enum class Status {
+  ok,
+  unstable,
+  newton_failed,
+  solver_error,
+  error,
+  timeout,
+  step_size_too_small,
+  invalid_state
+};
 
 std::string to_string(Status s);
 

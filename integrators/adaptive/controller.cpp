@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 namespace stiffbench {
 
@@ -35,6 +36,19 @@ ControllerOptions read_controller_options(const Params& p) {
   require_input(h_max >= 0, "parameter 'h_max' must be >= 0");
   if (h_max > 0) o.h_max = h_max;
   return o;
+}
+
+std::string step_too_small_message(double t, double h, CVecRef y) {
+  std::ostringstream msg;
+  msg.precision(12);  // t apart from its neighbours at the steps where this fires
+  msg << "step size too small: h = " << h << " <= 10·u·|t| = " << step_too_small_limit(t)
+      << " at t = " << t;
+  if (y.size() > 0) {
+    Index i_max = 0;
+    y.cwiseAbs().maxCoeff(&i_max);
+    msg << "; largest state component y[" << i_max << "] = " << y[i_max];
+  }
+  return msg.str();
 }
 
 double wrms_norm(CVecRef e, CVecRef y0, CVecRef y1, double rtol, double atol) {

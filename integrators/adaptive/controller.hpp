@@ -90,14 +90,32 @@ struct AdaptiveCounts {
   long rejected = 0;
 };
 
+// The smallest usable step at t: a step h <= 10·u·|t|, u = ε/2 the unit round-off, changes t in
+// its last few bits only, so the method can no longer resolve the solution (a finite-time
+// singularity, a state outside where the model is defined, a tolerance below round-off). It is
+// the test of Hairer's codes DOPRI5 and RADAU5 (0.1·|h| <= |t|·UROUND, UROUND ≈ u), which end
+// such a run with "step size too small". No floor at t = 0, as there: near t = 0 every h > 0
+// still moves t exactly (a problem may have time scales far below 1), and a step that keeps
+// failing there shrinks geometrically until it underflows to 0, which the test catches, or
+// until max_steps trials.
+inline double step_too_small_limit(double t) {
+  return 10.0 * (0.5 * std::numeric_limits<double>::epsilon()) * std::abs(t);
+}
+
+// "step size too small: h = ... <= 10·u·|t| = ... at t = ...; largest state component
+// y[i] = ..." (y: the state at t).
+std::string step_too_small_message(double t, double h, CVecRef y);
+
 // Advances from t to exactly t_out: the step that would pass t_out (or end a few ulps before it)
 // is shortened (stretched) to end on it (no interpolation). trial(t, h) -> TrialResult computes a
 // candidate step without committing it; commit(t, h) makes the candidate the new state. h is the
 // proposed next step on entry and on exit (a step shortened to land on t_out does not shrink the
-// proposal for the next call). Fails with solver_error (message set) after opt.max_steps trials in
-// this call or when h falls below 16 ulp of t.
+// proposal for the next call). y is the state at t (what commit writes; read only for the
+// message below). Fails with solver_error (message set) after opt.max_steps trials in this call,
+// and with step_size_too_small (message naming t, h and y's largest component) when a step falls
+// to 10·u·|t| or below (step_too_small_limit).
 template <class Trial, class Commit>
-Status advance_adaptive(StepController& ctrl, double& t, double t_out, double& h,
+Status advance_adaptive(StepController& ctrl, double& t, double t_out, double& h, CVecRef y,
                         AdaptiveCounts& counts, std::string& message, Trial&& trial,
                         Commit&& commit) {
   const ControllerOptions& opt = ctrl.options();
@@ -115,10 +133,9 @@ Status advance_adaptive(StepController& ctrl, double& t, double t_out, double& h
     const bool last = t + h_try >= t_out - 64.0 * std::numeric_limits<double>::epsilon() *
                                                std::max(1.0, std::abs(t_out));
     if (last) h_try = t_out - t;
-    if (h_try <= 16.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t))) {
-      message =
-          "adaptive: step size " + std::to_string(h_try) + " too small at t = " + std::to_string(t);
-      return Status::solver_error;
+    if (!(h_try > step_too_small_limit(t))) {
+      message = step_too_small_message(t, h_try, y);
+      return Status::step_size_too_small;
     }
     const TrialResult r = trial(t, h_try);
     if (r.shrink > 0.0) {

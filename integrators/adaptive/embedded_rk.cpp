@@ -119,7 +119,8 @@ Status EmbeddedRungeKutta::advance_to(const OdeSystem& sys, double t_out, VecRef
     else
       k1_valid_ = false;
   };
-  const Status st = advance_adaptive(ctrl_, t_, t_out, h_, counts_, stats.message, trial, commit);
+  const Status st =
+      advance_adaptive(ctrl_, t_, t_out, h_, y, counts_, stats.message, trial, commit);
   stats.steps = counts_.accepted;
   stats.error_test_failures = counts_.rejected;
   return st;

@@ -35,6 +35,7 @@ class EmbeddedRungeKutta final : public Integrator {
   const ButcherTableau& tableau() const { return tableau_; }
   const ButcherTableau* butcher_tableau() const override { return &tableau_; }
   bool supports_adaptive() const override { return true; }
+  std::optional<double> absolute_tolerance() const override { return opt_.atol; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) override;

@@ -151,7 +151,8 @@ Status ImexArkIntegrator::advance_to(const OdeSystem& sys, double t_out, VecRef 
     return TrialResult{ctrl_.norm(err_, y, ynew_), 0.0};
   };
   const auto commit = [&](double, double) { y = ynew_; };
-  const Status st = advance_adaptive(ctrl_, t_, t_out, h_, counts_, stats.message, trial, commit);
+  const Status st =
+      advance_adaptive(ctrl_, t_, t_out, h_, y, counts_, stats.message, trial, commit);
   stats.steps = counts_.accepted;
   stats.error_test_failures = counts_.rejected;
   return st;

@@ -62,6 +62,7 @@ class ImexArkIntegrator final : public Integrator {
   std::optional<LinearStability> explicit_part_stability() const override;
   std::optional<LinearStability> partitioned_stability() const override;
   bool supports_adaptive() const override { return adaptive_; }
+  std::optional<double> absolute_tolerance() const override { return control_.atol; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;
   Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) override;

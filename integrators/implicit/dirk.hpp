@@ -97,6 +97,7 @@ class DirkIntegrator final : public Integrator {
   DirkIntegrator(ButcherTableau tableau, std::string description, ImplicitOptions opt,
                  ControllerOptions control = {}, bool error_filter = true);
   bool supports_adaptive() const override { return adaptive_; }
+  std::optional<double> absolute_tolerance() const override { return control_.atol; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   void restart(const OdeSystem& sys, double t, CVecRef y) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;

@@ -140,6 +140,7 @@ class Radau5 final : public Integrator {
   explicit Radau5(Radau5Options opt);
 
   bool supports_adaptive() const override { return true; }
+  std::optional<double> absolute_tolerance() const override { return opt_.control.atol; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   void restart(const OdeSystem& sys, double t, CVecRef y) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;

@@ -108,6 +108,7 @@ class Rosenbrock final : public Integrator {
   const RosenbrockTableau& tableau() const { return tab_; }
   const RosenbrockTableau* rosenbrock_tableau() const override { return &tab_; }
   bool supports_adaptive() const override { return tab_.b_embedded.size() > 0; }
+  std::optional<double> absolute_tolerance() const override { return control_.atol; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   void restart(const OdeSystem& sys, double t, CVecRef y) override;
   Status step(const OdeSystem& sys, double t, VecRef y, double h, SolveStats& stats) override;

@@ -117,6 +117,7 @@ class GslIntegrator final : public Integrator {
 
   bool supports_fixed_step() const override { return method_.fixed_ok; }
   bool supports_adaptive() const override { return true; }
+  std::optional<double> absolute_tolerance() const override { return atol_; }
 
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override {
     check_compatible(info(), sys);

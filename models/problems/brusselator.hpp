@@ -23,6 +23,10 @@
 // contributes 4c = 4α(N+1)² (its eigenvalues are −4c sin²(kπ/(2(N+1))), k = 1..N), the reaction
 // part the 2×2 block's row sums |2uv − 4| + u² and |3 − 2uv| + u².
 // profiles(): "brusselator" with columns x, u, v (the boundary points included).
+// Non-negative components: all 2N (u and v are the concentrations of the intermediates X and Y).
+// Where y >= 0 and u_i = 0, u_i' = 1 + c (u_{i−1} + u_{i+1}) > 0; where v_i = 0,
+// v_i' = 3 u_i + c (v_{i−1} + v_{i+1}) >= 0; the boundary values and y(0) are >= 0, so y(t) >= 0
+// for every α > 0 (the positivity criterion of core/ode_system.hpp).
 #pragma once
 
 #include <string>
@@ -44,6 +48,7 @@ class Brusselator final : public OdeSystem {
   bool has_jacobian() const override { return true; }
   std::optional<double> stiffness(double t, CVecRef y) const override;
   std::vector<Profile> profiles(double t, CVecRef y) const override;
+  std::vector<Index> nonnegative_components() const override { return all_components(2 * n_); }
 
   int cells() const { return n_; }
   double alpha() const { return alpha_; }

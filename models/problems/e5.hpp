@@ -21,6 +21,9 @@
 //    [ A - B y3,  -M C y3,   -B y1 - M C y2,   C],
 //    [ B y3,       0,         B y1,           -C]].
 // stiffness(): min(‖J‖₁, ‖J‖∞), the Gershgorin bound on the spectral radius.
+// Non-negative components: all four (concentrations of the pyrolysis' species). Where y >= 0 and
+// y_i = 0, f_i is 0, A y1, A y1 + C y4, B y1 y3 >= 0, so y(t) >= 0 for every A, B, C, M >= 0 (the
+// positivity criterion of core/ode_system.hpp).
 #pragma once
 
 #include "core/ode_system.hpp"
@@ -37,6 +40,7 @@ class E5 final : public OdeSystem {
   bool has_jacobian() const override { return true; }
   bool autonomous() const override { return true; }
   std::vector<Invariant> invariants() const override;
+  std::vector<Index> nonnegative_components() const override { return all_components(4); }
   std::optional<double> stiffness(double t, CVecRef y) const override;
 
   // End of the literature time span (Hairer–Wanner §IV.10).

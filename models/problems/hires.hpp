@@ -20,6 +20,10 @@
 // terms give w2 = w4 = w3 = w6 = w5 = 0, and the y7 terms give w7 = w8.
 // Jacobian: 25 fixed entries (the linear coefficients plus ±280 y8, ±280 y6 in rows 6–8).
 // stiffness(): min(‖J‖₁, ‖J‖∞), the Gershgorin bound on the spectral radius.
+// Non-negative components: all eight (the concentrations of the eight reactants, IVP test set).
+// Where y >= 0 and y_i = 0 every f_i above is a sum of non-negative terms (y6' = 0.69 y4 +
+// 1.71 y5 + 0.69 y7, y7' = 280 y6 y8, y8' = 1.81 y7, ...), and y(0) >= 0, so y(t) >= 0 (the
+// positivity criterion of core/ode_system.hpp).
 #pragma once
 
 #include "core/ode_system.hpp"
@@ -39,6 +43,7 @@ class Hires final : public OdeSystem {
   bool has_jacobian() const override { return true; }
   bool autonomous() const override { return true; }
   std::vector<Invariant> invariants() const override;
+  std::vector<Index> nonnegative_components() const override { return all_components(8); }
   std::optional<double> stiffness(double t, CVecRef y) const override;
 
  protected:

@@ -18,6 +18,9 @@
 //    [-y2 / s,             -(1 + y1)/s,   1/s],
 //    [ w,                   0,           -w  ]].
 // stiffness(): min(‖J‖₁, ‖J‖∞), the Gershgorin bound on the spectral radius.
+// Non-negative components: all three (scaled concentrations of HBrO2, Br⁻ and Ce(IV) in Field &
+// Noyes' model). Where y >= 0 and y_i = 0, f_i is s y2, y3/s, w y1 >= 0, so y(t) >= 0 for every
+// s > 0, w, q >= 0 (the positivity criterion of core/ode_system.hpp).
 #pragma once
 
 #include "core/ode_system.hpp"
@@ -35,6 +38,7 @@ class Orego final : public OdeSystem {
   bool has_jacobian() const override { return true; }
   bool autonomous() const override { return true; }
   std::optional<double> stiffness(double t, CVecRef y) const override;
+  std::vector<Index> nonnegative_components() const override { return all_components(3); }
 
   // End of the literature time span (Hairer–Wanner §IV.10; IVP test set).
   double literature_end_time() const { return 360.0; }

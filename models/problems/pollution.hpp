@@ -36,6 +36,9 @@
 // reactant of that reaction; entries where contributions cancel stay in the pattern).
 // stiffness(): min(‖J‖₁, ‖J‖∞), the Gershgorin bound on the spectral radius (dominated by
 // k18 + k19 ≈ 4.44e11 from O1D).
+// Non-negative components: all twenty (species concentrations). Mass action: every reaction that
+// consumes a species has it in its rate, so f_i >= 0 where y >= 0 and y_i = 0, and y(0) >= 0:
+// y(t) >= 0 (the positivity criterion of core/ode_system.hpp).
 #pragma once
 
 #include "core/ode_system.hpp"
@@ -50,6 +53,7 @@ class Pollution final : public OdeSystem {
   bool has_jacobian() const override { return true; }
   bool autonomous() const override { return true; }
   std::vector<Invariant> invariants() const override;
+  std::vector<Index> nonnegative_components() const override { return all_components(20); }
   std::optional<double> stiffness(double t, CVecRef y) const override;
 
   // End of the literature time span (IVP test set).

@@ -19,6 +19,9 @@
 //    [  0,  2 k2 y2,                 0]].
 // stiffness(): min(‖J‖₁, ‖J‖∞), the Gershgorin bound on the spectral radius of J (exact, 0.04,
 // at y(0)).
+// Non-negative components: all three (the concentrations of the three species). Where y >= 0
+// and y_i = 0, f_i is k3 y2 y3, k1 y1, k2 y2² >= 0, so y(t) >= 0 for every k1, k2, k3 >= 0 (the
+// positivity criterion of core/ode_system.hpp).
 #pragma once
 
 #include "core/ode_system.hpp"
@@ -41,6 +44,7 @@ class Robertson final : public OdeSystem {
   bool has_jacobian() const override { return true; }
   bool autonomous() const override { return true; }
   std::vector<Invariant> invariants() const override;
+  std::vector<Index> nonnegative_components() const override { return all_components(3); }
   std::optional<double> stiffness(double t, CVecRef y) const override;
 
  protected:

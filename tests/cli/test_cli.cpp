@@ -250,6 +250,43 @@ std::string join_cells(const std::vector<std::string>& cells) {
   return line;
 }
 
+// Robertson at rtol = atol = 1e-4 (t_end 1e11): radau5 reaches y1 ≈ -4.7e7 (outside the model's
+// non-negative concentrations: invalid_state); dopri5, explicit on a stiff problem, blows up and
+// its step falls to 10·u·t near t = 0.008 (step_size_too_small). Both are numerical outcomes of
+// the method, like unstable: exit 0, the status on stdout and in the CSV's status column.
+TEST(Cli, WrongAnswersEndWithTheirStatusAndExitZero) {
+  const std::string robertson =
+      "solve --model robertson --param rtol=1e-4 --param atol=1e-4 --outputs 1 --integrator ";
+  const Outcome radau = run(robertson + "radau5");
+  EXPECT_EQ(radau.code, 0) << radau.err;
+  EXPECT_NE(radau.out.find("status       invalid_state"), std::string::npos) << radau.out;
+  EXPECT_NE(radau.out.find("component y[0] = -4"), std::string::npos) << radau.out;
+  const Outcome dopri = run(robertson + "dopri5");
+  EXPECT_EQ(dopri.code, 0) << dopri.err;
+  EXPECT_NE(dopri.out.find("status       step_size_too_small"), std::string::npos) << dopri.out;
+  EXPECT_NE(dopri.out.find("step size too small: h = "), std::string::npos) << dopri.out;
+
+  const auto dir = stiffbench::testing_support::fresh_dir("cli", "wrong_answers");
+  const Outcome wp =
+      run("work-precision --model robertson --integrators radau5,dopri5 --reference published "
+          "--tol-levels 2 --rtol-max 1e-3 --atol-factor 1 --repeats 1 --out " +
+          dir.string());
+  ASSERT_EQ(wp.code, 0) << wp.err;
+  const auto rows = read_csv(dir / "work_precision.csv");
+  ASSERT_EQ(rows.size(), 5u);
+  const auto status = static_cast<std::size_t>(std::find(rows[0].begin(), rows[0].end(), "status") -
+                                               rows[0].begin());
+  ASSERT_LT(status, rows[0].size());
+  std::map<std::string, std::string> by_row;
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    by_row[rows[i][1] + " " + rows[i][2]] = rows[i][status];
+  EXPECT_NE(by_row["radau5 rtol=1e-03"], "ok");
+  EXPECT_EQ(by_row["radau5 rtol=1e-04"], "invalid_state");
+  EXPECT_EQ(by_row["dopri5 rtol=1e-03"], "step_size_too_small");
+  EXPECT_EQ(by_row["dopri5 rtol=1e-04"], "step_size_too_small");
+  std::filesystem::remove_all(dir);
+}
+
 // Implicit rows of convergence.csv carry their Jacobian and linear-solve counts.
 TEST(Cli, ConvergenceRowsOfImplicitMethodsCountJacobiansAndSolves) {
   const auto dir = std::filesystem::temp_directory_path() /

@@ -153,5 +153,86 @@ TEST(Driver, StatsCountEvaluationsAtTheBoundary) {
   EXPECT_EQ(r.stats.f_evals, 100 * 4);
 }
 
+// --- admissible set (OdeSystem::nonnegative_components) ----------------------------------------
+
+// y' = -k y, y(0) = 1, declared non-negative (its solution e^{-kt} is, by the positivity criterion
+// of core/ode_system.hpp: f = 0 at y = 0).
+class NonNegativeDecay final : public OdeSystem {
+ public:
+  explicit NonNegativeDecay(double k) : k_(k) {}
+  std::string name() const override { return "nonnegative_decay"; }
+  Index dimension() const override { return 1; }
+  Vec initial_state() const override { return Vec::Ones(1); }
+  std::vector<Index> nonnegative_components() const override { return {0}; }
+
+ protected:
+  void eval_rhs(double, CVecRef y, VecRef dydt) const override { dydt = -k_ * y; }
+
+ private:
+  double k_;
+};
+
+// Explicit Euler at hk = 1.5 multiplies y by R(-1.5) = 1 + (-1.5) = -0.5 per step: the state
+// alternates in sign while it decays (|R| < 1: not unstable). The driver checks the admissible set
+// at output steps only, with the fixed-step bound 1e-8·max(1, ‖y‖∞) = 1e-8.
+TEST(Driver, FixedStepStateBelowZeroAtAnOutputIsInvalidState) {
+  const NonNegativeDecay sys(10.0);
+  auto eu = make("euler");
+  FixedStepOptions opt;
+  opt.h = 0.15;
+  // Two steps and only the final state checked: y = 0.25 is admissible.
+  opt.t_end = 0.3;
+  EXPECT_EQ(run_fixed_step(sys, *eu, opt).stats.status, Status::ok);
+  // Three steps: y = -0.125 at t = 0.45.
+  opt.t_end = 0.45;
+  RunResult r = run_fixed_step(sys, *eu, opt);
+  EXPECT_EQ(r.stats.status, Status::invalid_state);
+  EXPECT_EQ(r.stats.steps, 3);
+  EXPECT_NE(r.stats.message.find("y[0] = -0.125 < -1e-08 at t = 0.45"), std::string::npos)
+      << r.stats.message;
+  EXPECT_EQ(to_string(r.stats.status), "invalid_state");
+  // Every step an output: the run ends after the first, at y = -0.5.
+  opt.outputs = 3;
+  r = run_fixed_step(sys, *eu, opt);
+  EXPECT_EQ(r.stats.status, Status::invalid_state);
+  EXPECT_EQ(r.stats.steps, 1);
+  EXPECT_NEAR(r.y[0], -0.5, 1e-15);
+  EXPECT_NE(r.stats.message.find("y[0] = -0.5 < -1e-08 at t = 0.15"), std::string::npos)
+      << r.stats.message;
+}
+
+// y' = -1, y(0) = 1 with a non-negativity it does not have (y = 1 - t): the driver trusts the
+// declaration, which makes the bound of an adaptive run visible. dopri5 integrates y = 1 - t
+// exactly (to round-off), so at t = 1.0005 the state is -5e-4: admissible under atol = 1e-3,
+// not under atol = 1e-4 (the bound of an adaptive run is the method's atol).
+class LinearDescent final : public OdeSystem {
+ public:
+  std::string name() const override { return "linear_descent"; }
+  Index dimension() const override { return 1; }
+  Vec initial_state() const override { return Vec::Ones(1); }
+  std::vector<Index> nonnegative_components() const override { return {0}; }
+
+ protected:
+  void eval_rhs(double, CVecRef, VecRef dydt) const override { dydt[0] = -1.0; }
+};
+
+TEST(Driver, AdaptiveBoundIsTheMethodsAtol) {
+  const LinearDescent sys;
+  AdaptiveOptions opt;
+  opt.t_end = 2.0;
+  opt.times = {1.0005, 2.0};
+  auto loose = make("dopri5", {"atol=1e-3"});
+  RunResult r = run_adaptive(sys, *loose, opt);
+  EXPECT_EQ(r.stats.status, Status::invalid_state);
+  EXPECT_EQ(r.t, 2.0) << r.stats.message;  // passed the check at t = 1.0005
+  EXPECT_NE(r.stats.message.find("< -0.001 at t = 2"), std::string::npos) << r.stats.message;
+  auto tight = make("dopri5", {"atol=1e-4"});
+  r = run_adaptive(sys, *tight, opt);
+  EXPECT_EQ(r.stats.status, Status::invalid_state);
+  EXPECT_EQ(r.t, 1.0005);
+  EXPECT_NEAR(r.y[0], -5e-4, 1e-14);
+  EXPECT_NE(r.stats.message.find("< -0.0001 at t = 1.0005"), std::string::npos) << r.stats.message;
+}
+
 }  // namespace
 }  // namespace stiffbench

@@ -4,6 +4,7 @@
 // ended with status error.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -102,6 +103,49 @@ TEST(RunFaults, LinearSolverRefusingItsMatrixEndsOnlyItsRow) {
       EXPECT_EQ(row.stats.status, Status::ok);
     }
   }
+}
+
+// y' = -10 y, y(0) = 1, exact e^{-10 t}, with its non-negativity declared (the positivity criterion
+// of core/ode_system.hpp: f = 0 at y = 0).
+class NonNegativeDecay final : public OdeSystem {
+ public:
+  std::string name() const override { return "nonnegative_decay"; }
+  Index dimension() const override { return 1; }
+  Vec initial_state() const override { return Vec::Ones(1); }
+  bool has_exact() const override { return true; }
+  void exact(double t, VecRef y) const override { y[0] = std::exp(-10.0 * t); }
+  std::vector<Index> nonnegative_components() const override { return {0}; }
+  void eval_rhs(double, CVecRef y, VecRef f) const override { f[0] = -10.0 * y[0]; }
+};
+
+// Explicit Euler's factor per step is R(-10h) = 1 - 10h: at h = 0.15 it is -0.5, so after 3 steps
+// y(0.45) = -0.125, outside the admissible set (not a blow-up: |R| < 1); at h = 0.075 and 0.0375
+// it is 0.25 and 0.625, and rk4's R(-1.5) = 0.2734... > 0. Only the first row ends invalid_state;
+// like unstable it is a numerical outcome, not a fault (no exit code 3), and the CSV says so.
+TEST(RunFaults, StateOutsideTheAdmissibleSetEndsOnlyItsRow) {
+  const long before = fault_count();
+  ConvergenceSpec spec;
+  spec.integrators = {"euler", "rk4"};
+  spec.t_end = 0.45;
+  spec.h = 0.15;
+  spec.levels = 3;
+  spec.refine = 2;
+  spec.reference = "exact";
+  const ConvergenceResult r = run_convergence(
+      spec, [] { return std::make_unique<NonNegativeDecay>(); }, nullptr);
+  ASSERT_EQ(r.rows.size(), 6u);
+  EXPECT_EQ(r.rows[0].stats.status, Status::invalid_state);
+  EXPECT_NE(r.rows[0].stats.message.find("y[0] = -0.125"), std::string::npos)
+      << r.rows[0].stats.message;
+  for (std::size_t i = 1; i < r.rows.size(); ++i)
+    EXPECT_EQ(r.rows[i].stats.status, Status::ok) << i << ": " << r.rows[i].stats.message;
+  EXPECT_EQ(fault_count(), before);
+  const Table t = convergence_table(r);
+  const auto col = static_cast<std::size_t>(
+      std::find(t.columns.begin(), t.columns.end(), "status") - t.columns.begin());
+  ASSERT_LT(col, t.columns.size());
+  EXPECT_EQ(t.rows[0][col], "invalid_state");
+  EXPECT_EQ(t.rows[1][col], "ok");
 }
 
 }  // namespace

@@ -6,9 +6,11 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <string>
 
 #include "core/driver.hpp"
 #include "experiments/studies/convergence.hpp"
+#include "integrators/adaptive/controller.hpp"
 #include "integrators/explicit/tableaux.hpp"
 #include "integrators/implicit/radau5.hpp"
 #include "tests/test_support.hpp"
@@ -351,6 +353,76 @@ TEST(Radau5, SparseMatchesDense) {
   ASSERT_EQ(rs.stats.status, Status::ok);
   EXPECT_EQ(rd.stats.steps, rs.stats.steps);
   EXPECT_LT((rd.y - rs.y).cwiseAbs().maxCoeff(), 1e-12 * rd.y.cwiseAbs().maxCoeff());
+}
+
+// --- the step-size floor and the admissible set ------------------------------------------------
+
+// y' = y², y(0) = 1: y = 1/(1 - t) blows up at t = 1. A numerical solution with y_n at t_n blows
+// up at t_n + 1/y_n, which the global error moves off 1 by O(rtol). Approaching it, an
+// error-controlled step shrinks with the distance to the singularity (h ≈ c·(t* - t), c < 1 set by
+// the tolerance), so it reaches the floor 10·u·|t| ≈ 1.1e-15 (u = 2^-53) within 1e-4 of t = 1
+// (rtol = 1e-6; measured: 1e-9 to 2e-5 after it), with y ≈ 1/(t* - t) > 1e8, still finite.
+// Every method on the shared adaptive loop ends there with step_size_too_small.
+class QuadraticBlowUp final : public OdeSystem {
+ public:
+  std::string name() const override { return "quadratic_blow_up"; }
+  Index dimension() const override { return 1; }
+  Vec initial_state() const override { return Vec::Ones(1); }
+  bool autonomous() const override { return true; }
+
+ protected:
+  void eval_rhs(double, CVecRef y, VecRef d) const override { d[0] = y[0] * y[0]; }
+};
+
+// The number after `key` in `text` (NaN when absent).
+double number_after(const std::string& text, const std::string& key) {
+  const auto at = text.find(key);
+  if (at == std::string::npos) return std::numeric_limits<double>::quiet_NaN();
+  return std::stod(text.substr(at + key.size()));
+}
+
+TEST(AdaptiveStepFloor, FiniteTimeSingularityEndsStepSizeTooSmallNearIt) {
+  const QuadraticBlowUp sys;
+  for (const std::string name : {"dopri5", "bs3", "radau5", "rodas4", "esdirk43"}) {
+    auto integ = make(name, {"rtol=1e-6", "atol=1e-6"});
+    AdaptiveOptions opt;
+    opt.t_end = 2.0;
+    const RunResult r = run_adaptive(sys, *integ, opt);
+    ASSERT_EQ(r.stats.status, Status::step_size_too_small) << name << ": " << r.stats.message;
+    EXPECT_EQ(to_string(r.stats.status), "step_size_too_small");
+    const std::string& m = r.stats.message;
+    EXPECT_NE(m.find("step size too small"), std::string::npos) << m;
+    const double t = number_after(m, "at t = ");
+    EXPECT_NEAR(t, 1.0, 1e-4) << name << ": " << m;
+    // The step that failed is at or below 10·u·t; the largest component is y ≈ 1/(1 - t).
+    EXPECT_LE(number_after(m, "h = "), 10.0 * 0.5 * std::numeric_limits<double>::epsilon() * t)
+        << m;
+    EXPECT_GT(number_after(m, "y[0] = "), 1e8) << name << ": " << m;
+  }
+}
+
+// The floor is 10·u·|t| (u = ε/2) and has none at t = 0.
+TEST(AdaptiveStepFloor, LimitIsTenUnitRoundoffsOfT) {
+  const double u = 0.5 * std::numeric_limits<double>::epsilon();
+  EXPECT_EQ(step_too_small_limit(0.0), 0.0);
+  EXPECT_EQ(step_too_small_limit(1.0), 10.0 * u);
+  EXPECT_EQ(step_too_small_limit(-4.0), 40.0 * u);
+  EXPECT_EQ(step_too_small_limit(1e11), 10.0 * u * 1e11);
+}
+
+// Robertson at rtol = atol = 1e-4 with radau5, one output at t = 1e11: Hairer's RADAU5 stops with
+// "step size too small" near t = 0.14; a run that goes on reaches concentrations far below zero
+// (y1 ≈ -4.7e7), outside the model's admissible set. Either way the run must not end ok.
+TEST(AdaptiveStepFloor, RobertsonAtLooseToleranceIsNeverOk) {
+  auto sys = model("robertson");
+  auto integ = make("radau5", {"rtol=1e-4", "atol=1e-4"});
+  AdaptiveOptions opt;
+  opt.t_end = 1e11;
+  opt.outputs = 1;
+  const RunResult r = run_adaptive(*sys, *integ, opt);
+  EXPECT_TRUE(r.stats.status == Status::step_size_too_small ||
+              r.stats.status == Status::invalid_state)
+      << to_string(r.stats.status) << ": " << r.stats.message;
 }
 
 }  // namespace

@@ -22,6 +22,7 @@ class SundialsFrontEnd : public Integrator {
   ~SundialsFrontEnd() override { SUNContext_Free(&ctx_); }
 
   bool supports_adaptive() const override { return true; }
+  std::optional<double> absolute_tolerance() const override { return set_.atol; }
   void reset(const OdeSystem& sys, double t0, CVecRef y0) override;
   Status advance_to(const OdeSystem& sys, double t_out, VecRef y, SolveStats& stats) override;
 
