@@ -99,7 +99,6 @@ class Monomial final : public OdeSystem {
   bool split_;
 };
 
-
 // y' = E y + I y with E = [[0, 1], [-1, 0]] (a rotation: the explicit part) and I = diag(-1, -2)
 // (decay: the implicit part), y(0) = (1, 1/2). E and I do not commute (EI - IE =
 // [[0, -1], [-1, 0]]), so a splitting's error is its own, not cancelled as on Kaps' problem,

@@ -467,8 +467,10 @@ const StudyFunctions<RegionSpec, RegionResult> kRegion{
           write_region_outputs(dir, s, r);
           return plot_region(dir / "region.csv", title, plot, err);
         },
-    .print_summary = [](const RegionSpec&, const RegionResult& r,
-                        std::ostream& out) { out << region_limits_markdown_table(r).to_markdown(); },
+    .print_summary =
+        [](const RegionSpec&, const RegionResult& r, std::ostream& out) {
+          out << region_limits_markdown_table(r).to_markdown();
+        },
     .report_markdown =
         [](const RegionSpec&, const RegionResult& r, const std::string& note) {
           return note + "\n\n" + region_limits_markdown_table(r).to_markdown() + "\n";

@@ -371,8 +371,8 @@ TEST(RegionExperiment, DefaultIntegratorsAreThoseWithStabilityData) {
 // variant of a built-in method and a user's integrator object; each row carries its label, and the
 // file's method has bs3's region.
 TEST(RegionExperiment, RunsFromResolvedInputsWithAMethodFileAVariantAndAnObject) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("sb_region_inputs_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("sb_region_inputs_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   std::ifstream in(std::filesystem::path(STIFFBENCH_SOURCE_DIR) / "methods" / "bs3.toml");
   std::stringstream text;
