@@ -4,6 +4,7 @@
 
 #include "cli/cli.hpp"
 #include "experiments/commands/list_describe.hpp"
+#include "experiments/commands/plot.hpp"
 
 namespace stiffbench {
 

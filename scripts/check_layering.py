@@ -9,7 +9,7 @@ Fails (exit 1, one line per offending include) when
   - experiments/ includes cli/ (but for the forwarding headers directly in experiments/);
   - experiments/output/ includes experiments/studies/, experiments/commands/ or the registries
     (experiments/framework/catalog.hpp);
-  - a study (experiments/studies/X.* and its parts X_PART.*) includes another study's header;
+  - a study (experiments/studies/X.* and its parts X_*.*) includes another study's header;
   - or an include listed in KNOWN below no longer occurs (the list only shrinks).
 """
 import pathlib
@@ -17,18 +17,9 @@ import re
 import sys
 
 # Includes that break the rules above and that the split of experiments/ by job has not removed
-# yet: the interfaces that replace them are still to be written (run_metadata given the model's
-# description; family panels and the replot table outside output/; StepStudySpec, the
-# reference and the timing helpers in experiments/support/). Each one removed must leave this
-# list.
+# yet: the interfaces that replace them are still to be written (StepStudySpec, the reference and
+# the timing helpers in experiments/support/). Each one removed must leave this list.
 KNOWN = {
-    ("experiments/output/output.cpp", "experiments/framework/catalog.hpp"),
-    ("experiments/output/plotting.cpp", "experiments/framework/catalog.hpp"),
-    ("experiments/output/plotting.cpp", "experiments/studies/analyze.hpp"),
-    ("experiments/output/plotting.cpp", "experiments/studies/budget.hpp"),
-    ("experiments/output/plotting.cpp", "experiments/studies/energy.hpp"),
-    ("experiments/output/plotting.cpp", "experiments/studies/region.hpp"),
-    ("experiments/output/plotting.cpp", "experiments/studies/stability.hpp"),
     ("experiments/studies/recommend.cpp", "experiments/studies/convergence.hpp"),
     ("experiments/studies/recommend.hpp", "experiments/studies/work_precision.hpp"),
     ("experiments/studies/work_precision.hpp", "experiments/studies/convergence.hpp"),
@@ -37,19 +28,21 @@ KNOWN = {
 INCLUDE = re.compile(r'^\s*#\s*include\s*"([^"]+)"')
 
 
-def study_of(path: str, headers) -> str:
-    """The study a file of experiments/studies/ belongs to: X for X.* and for its parts X_PART.*
-    (X_output, X_search, ...), X being the shortest prefix of the stem, cut at an underscore, that
-    names a header X.hpp in `headers` (the stems of experiments/studies/*.hpp)."""
+def study_names(root: pathlib.Path):
+    """The studies: the stems X of experiments/studies/X.hpp that are not a part of another one."""
+    stems = {p.stem for p in (root / "experiments" / "studies").glob("*.hpp")}
+    return {x for x in stems if not any(x.startswith(y + "_") for y in stems)}
+
+
+def study_of(path: str, studies):
+    """The study a file of experiments/studies/ belongs to: X for X.*, X_output.* and any other
+    part X_PART.* (e.g. audit_checks.cpp) of study X; the file's own stem when none matches."""
     stem = pathlib.PurePosixPath(path).stem
-    parts = stem.split("_")
-    for n in range(1, len(parts) + 1):
-        if "_".join(parts[:n]) in headers:
-            return "_".join(parts[:n])
-    return stem
+    owners = [x for x in studies if stem == x or stem.startswith(x + "_")]
+    return max(owners, key=len) if owners else stem
 
 
-def rules(src: str, inc: str, headers=frozenset()):
+def rules(src: str, inc: str, studies=frozenset()):
     """The rules the include `inc` of the file `src` breaks (paths relative to the root)."""
     layer = src.split("/", 1)[0]
     target = inc.split("/", 1)[0]
@@ -68,15 +61,15 @@ def rules(src: str, inc: str, headers=frozenset()):
         if inc.startswith("experiments/framework/catalog."):
             yield "experiments/output/ must not include the registries (framework/catalog)"
     if src.startswith("experiments/studies/") and inc.startswith("experiments/studies/"):
-        if study_of(src, headers) != study_of(inc, headers):
+        if study_of(src, studies) != study_of(inc, studies):
             yield "a study must not include another study"
 
 
 def main() -> int:
     root = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else pathlib.Path(__file__).parent.parent)
-    headers = {p.stem for p in (root / "experiments" / "studies").glob("*.hpp")}
     bad = []
     seen = set()
+    studies = study_names(root)
     for layer in ("core", "models", "integrators", "experiments", "cli"):
         for path in sorted((root / layer).rglob("*")):
             if path.suffix not in (".hpp", ".cpp", ".inc", ".h"):
@@ -89,8 +82,7 @@ def main() -> int:
                 if (src, m.group(1)) in KNOWN:
                     seen.add((src, m.group(1)))
                     continue
-                bad += [f"{src}:{n}: includes {m.group(1)}: {why}"
-                        for why in rules(src, m.group(1), headers)]
+                bad += [f"{src}:{n}: includes {m.group(1)}: {why}" for why in rules(src, m.group(1), studies)]
     bad += [f"{src}: no longer includes {inc}: remove it from KNOWN in {pathlib.Path(__file__).name}"
             for src, inc in sorted(KNOWN - seen)]
     for line in bad:

@@ -165,7 +165,10 @@ void cmd_report(const ReportOptions& opt, std::ostream& out, std::ostream& err) 
     auto job = make_spec_job(s.spec, "");
     job->run(&err);
     const fs::path dir = fs::path(opt.out_dir) / s.name;
-    const bool plotted = job->write(dir, s.spec.title, {opt.svg || opt.html}, err);
+    PlotOptions plot;
+    plot.svg = opt.svg || opt.html;
+    plot.family = registered_family;
+    const bool plotted = job->write(dir, s.spec.title, plot, err);
     md << "## " << s.spec.title << "\n\n";
     std::vector<std::string> files = {kind.stem + ".csv"};
     files.insert(files.end(), kind.extra_files.begin(), kind.extra_files.end());

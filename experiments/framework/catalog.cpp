@@ -385,6 +385,14 @@ nlohmann::json with_method_files(nlohmann::json spec) {
   return spec;
 }
 
+nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json& spec) {
+  std::optional<ModelRecord> model;
+  if (spec.is_object() && spec.contains("model") && spec["model"].is_string())
+    if (const auto* e = model_registry().find(spec["model"].get<std::string>()))
+      model = ModelRecord{e->info.name, e->info.description, e->info.source, e->built_in};
+  return run_metadata(experiment, with_method_files(spec), model);
+}
+
 double parse_real(const std::string& text, const std::string& flag) {
   std::size_t used = 0;
   double v = std::numeric_limits<double>::quiet_NaN();

@@ -88,6 +88,10 @@ std::string method_file_source(const std::string& name);
 // method files, so that results record the file and a changed file is a different spec; `spec`
 // unchanged when it names none.
 nlohmann::json with_method_files(nlohmann::json spec);
+// run_metadata (experiments/output/output.hpp) of a study's or a command's spec: the method files
+// and variants it names recorded (with_method_files), and the model it names described when it
+// is a registered one (also one registered from outside the library, register_model).
+nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json& spec);
 
 // ---- Integrator variants -----------------------------------------------------------------------
 // Wherever an integrator name is taken, `METHOD{key=value,...}` is METHOD (a name or a method-file

@@ -86,20 +86,22 @@ struct StudyInputs {
 StudyInputs resolve_inputs(const StudyTarget& target, const std::vector<std::string>& helpers = {},
                            const std::string& base = "");
 
-// The inputs a study spec names (its model, params and integrators fields), resolved.
+// The inputs a study spec names (its model, params and integrators fields; a study of methods
+// alone, e.g. region, has integrators only), resolved.
 template <class Spec>
 StudyInputs inputs_of(const Spec& spec) {
   StudyTarget t;
-  t.model = spec.model;
-  t.params = spec.params;
+  if constexpr (requires { spec.model; }) t.model = spec.model;
+  if constexpr (requires { spec.params; }) t.params = spec.params;
   t.integrators = spec.integrators;
   return resolve_inputs(t);
 }
-// `spec` with its model, params and integrators fields taken from `in` (what it records).
+// `spec` with its model, params and integrators fields (those it has) taken from `in` (what it
+// records).
 template <class Spec>
 Spec with_inputs(Spec spec, const StudyInputs& in) {
-  spec.model = in.model;
-  spec.params = in.params;
+  if constexpr (requires { spec.model; }) spec.model = in.model;
+  if constexpr (requires { spec.params; }) spec.params = in.params;
   spec.integrators = in.integrators;
   return spec;
 }

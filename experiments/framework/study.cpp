@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/integrator.hpp"
 #include "core/ode_system.hpp"
 
 namespace stiffbench {
@@ -173,8 +174,10 @@ void run_study_job(const StudyKind& kind, StudyJob& job_ref, const std::filesyst
   check_study_output(dir, kind.stem, with_method_files(job->spec_json()), ctx.force, ctx.err,
                      kind.extra_files);
   job->run(ctx.progress);
+  PlotOptions plot = ctx.plot;
+  if (!plot.family) plot.family = registered_family;
   const bool plotted =
-      job->write(dir, ctx.title.empty() ? job->default_title() : ctx.title, ctx.plot, err);
+      job->write(dir, ctx.title.empty() ? job->default_title() : ctx.title, plot, err);
   if (ctx.out) {
     std::ostream& out = *ctx.out;
     job->print_summary(out);
@@ -185,6 +188,16 @@ void run_study_job(const StudyKind& kind, StudyJob& job_ref, const std::filesyst
     out << "\n";
     if (plotted) out << "plot: " << (dir / (kind.stem + ".png")).string() << "\n";
   }
+}
+
+std::string integrator_family(const StudyInputs& in, const std::string& label) {
+  const auto* e = in.find_integrator(label);
+  return e ? to_string(e->info.family) : std::string();
+}
+
+std::string registered_family(const std::string& name) {
+  const auto* e = integrator_registry().find(name);
+  return e ? to_string(e->info.family) : std::string();
 }
 
 Resolved resolve_step(const OdeSystem& sys, double given, const std::string& model,

@@ -67,6 +67,12 @@ class StudyJob {
   virtual std::string default_title() const = 0;
 };
 
+// The family of integrator `label` of `in` (to_string(Family)), "" for an unknown label.
+std::string integrator_family(const StudyInputs& in, const std::string& label);
+// The family of a registered integrator, "" for an unknown name (FamilyOf for plots drawn outside
+// a study: `stiffbench plot`, jobs that do not set their own).
+std::string registered_family(const std::string& name);
+
 // A study's functions over its typed spec and result. One generic job, TypedStudyJob, runs any
 // study from them; a study declares a StudyFunctions value instead of a job class.
 template <class Spec, class Result>
@@ -97,9 +103,12 @@ class TypedStudyJob final : public StudyJob {
   }
   void run(std::ostream* progress) override { result_ = fns_.run(in_, spec_, progress); }
   Table unit_table() const override { return fns_.unit_table(spec_, result_); }
+  // The plots' panels take the families of the study's own integrators (objects included).
   bool write(const std::filesystem::path& dir, const std::string& title, const PlotOptions& plot,
              std::ostream& err) const override {
-    return fns_.write(dir, spec_, result_, title, plot, err);
+    PlotOptions own = plot;
+    own.family = [this](const std::string& label) { return integrator_family(in_, label); };
+    return fns_.write(dir, spec_, result_, title, own, err);
   }
   void print_summary(std::ostream& out) const override { fns_.print_summary(spec_, result_, out); }
   std::string report_markdown(const std::string& note) const override {

@@ -1,7 +1,5 @@
 #include "experiments/output/output.hpp"
 
-#include "experiments/framework/catalog.hpp"
-
 #include <omp.h>
 
 #include <Eigen/Core>
@@ -520,7 +518,8 @@ std::string cpu_model() {
   return model;
 }
 
-nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json& spec) {
+nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json& spec,
+                            const std::optional<ModelRecord>& model) {
   const auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
   std::tm tm{};
   gmtime_r(&now, &tm);
@@ -528,7 +527,7 @@ nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json&
   std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", &tm);
   nlohmann::json j;
   j["experiment"] = experiment;
-  j["spec"] = with_method_files(spec);  // the method files it names (catalog.hpp)
+  j["spec"] = spec;
   j["stiffbench_version"] = STIFFBENCH_VERSION;
   j["git_revision"] = git_revision();
   j["compiler"] = std::string("g++ ") + __VERSION__;
@@ -553,15 +552,11 @@ nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json&
     j["caller"] = "library";
     j["command_line"] = nullptr;
   }
-  // What the model is, also for one registered from outside the library (register_model).
-  if (spec.is_object() && spec.contains("model") && spec["model"].is_string()) {
-    if (const auto* e = model_registry().find(spec["model"].get<std::string>())) {
-      j["model"] = {{"name", e->info.name},
-                    {"description", e->info.description},
-                    {"source", e->info.source},
-                    {"built_in", e->built_in}};
-    }
-  }
+  if (model)
+    j["model"] = {{"name", model->name},
+                  {"description", model->description},
+                  {"source", model->source},
+                  {"built_in", model->built_in}};
   return j;
 }
 

@@ -194,10 +194,19 @@ struct RunNote {
 };
 std::string failed_runs_markdown(const std::vector<RunNote>& runs);
 
-// Metadata common to every experiment: spec, versions (stiffbench, Eigen, SUNDIALS, GSL),
-// compiler, build type, flags, git revision, CPU model, thread count (OpenMP max threads), seed
-// (the spec's "seed"; null when the study has none), date, command line.
-nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json& spec);
+// What run metadata records of a run's model (the caller describes it: a registered model or a
+// user's system).
+struct ModelRecord {
+  std::string name, description, source;
+  bool built_in = true;
+};
+// Metadata common to every experiment: spec (as given: the caller records the method files it
+// names), versions (stiffbench, Eigen, SUNDIALS, GSL), compiler, build type, flags, git revision,
+// CPU model, thread count (OpenMP max threads), seed (the spec's "seed"; null when the study has
+// none), date, command line, and `model` when given. (run_metadata(experiment, spec) in
+// experiments/framework/catalog.hpp fills in the method files and the registered model.)
+nlohmann::json run_metadata(const std::string& experiment, const nlohmann::json& spec,
+                            const std::optional<ModelRecord>& model);
 // The CPU's "model name" in /proc/cpuinfo ("unknown" where there is none).
 std::string cpu_model();
 

@@ -1,11 +1,5 @@
 #include "experiments/output/plotting.hpp"
 
-#include "experiments/studies/analyze.hpp"
-#include "experiments/studies/budget.hpp"
-#include "experiments/studies/energy.hpp"
-#include "experiments/studies/region.hpp"
-#include "experiments/studies/stability.hpp"
-
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
@@ -13,11 +7,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
-#include <functional>
 #include <iterator>
-#include <map>
-
-#include <nlohmann/json.hpp>
 #include <ostream>
 #include <sstream>
 #include <string_view>
@@ -30,9 +20,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "core/integrator.hpp"
 #include "core/params.hpp"
 #include "experiments/build_info.hpp"
-#include "experiments/framework/catalog.hpp"
 #include "experiments/output/csv.hpp"
 #include "experiments/output/output.hpp"
 
@@ -40,7 +30,8 @@ namespace stiffbench {
 
 namespace fs = std::filesystem;
 
-std::vector<PlotPanel> family_panels(const std::vector<std::string>& integrators) {
+std::vector<PlotPanel> family_panels(const std::vector<std::string>& integrators,
+                                     const FamilyOf& family) {
   const std::vector<std::pair<std::string, std::string>> order = {
       {"explicit", "explicit Runge-Kutta"},
       {"symplectic", "symplectic"},
@@ -50,17 +41,20 @@ std::vector<PlotPanel> family_panels(const std::vector<std::string>& integrators
       {"splitting", "splitting schemes"},
       {to_string(Family::reference), "library references"},
       {"other", "other"}};
+  auto family_of = [&family](const std::string& name) {
+    std::string f = family ? family(name) : "";
+    // An additive pair's table analysed alone ("ark324l2sa:explicit") goes with the pair.
+    if (f.empty() && family && name.find(':') != std::string::npos)
+      f = family(name.substr(0, name.find(':')));
+    return f.empty() ? std::string("other") : f;
+  };
+  std::vector<std::string> families;
+  for (const auto& name : integrators) families.push_back(family_of(name));
   std::vector<PlotPanel> panels;
-  for (const auto& [family, title] : order) {
+  for (const auto& [panel_family, title] : order) {
     PlotPanel p{title, {}};
-    for (const auto& name : integrators) {
-      // An additive pair's table analysed alone ("ark324l2sa:explicit") goes with the pair.
-      const auto* e = integrator_registry().find(name);
-      if (!e && name.find(':') != std::string::npos)
-        e = integrator_registry().find(name.substr(0, name.find(':')));
-      const std::string f = e ? to_string(e->info.family) : "other";
-      if (f == family) p.methods.push_back(name);
-    }
+    for (std::size_t i = 0; i < integrators.size(); ++i)
+      if (families[i] == panel_family) p.methods.push_back(integrators[i]);
     if (!p.methods.empty()) panels.push_back(std::move(p));
   }
   return panels;
@@ -284,7 +278,7 @@ bool plot_convergence(const fs::path& csv, const std::string& title, bool local,
                    {"ycolumn", local ? "5" : "6"},
                    {"slope_offset", local ? "1" : "0"},
                    {"ylab", local ? "local error (max-norm)" : "global error at t_end (max-norm)"}},
-                  family_panels(csv_column_values(csv, "integrator")), opt, err);
+                  family_panels(csv_column_values(csv, "integrator"), opt.family), opt, err);
 }
 
 bool plot_work_precision(const fs::path& csv, const std::string& title, const PlotOptions& opt,
@@ -295,7 +289,7 @@ bool plot_work_precision(const fs::path& csv, const std::string& title, const Pl
   // one tolerance ladder), so a study of a few methods gets one panel on common axes; larger
   // studies are split by family to stay readable.
   const std::vector<std::string> methods = csv_column_values(csv, "integrator");
-  std::vector<PlotPanel> panels = family_panels(methods);
+  std::vector<PlotPanel> panels = family_panels(methods, opt.family);
   if (methods.size() <= 8) panels = {PlotPanel{"all methods", methods}};
   // The `flag` column, 1-based for gnuplot (0: a CSV written before it existed): rows marked
   // reference_floor are drawn hollow.
@@ -310,78 +304,6 @@ bool plot_work_precision(const fs::path& csv, const std::string& title, const Pl
   return run_plot("work_precision.gp", stem,
                   {{"csvfile", csv.string()}, {"ttl", title}, {"flagcol", flagcol}}, panels, opt,
                   err);
-}
-
-namespace {
-
-using Replotter = std::function<bool(const fs::path& csv, const std::string& title,
-                                     const PlotOptions& opt, std::ostream& err)>;
-
-// The plot of each table stiffbench writes, by file name, with a title prefix.
-const std::map<std::string, std::pair<std::string, Replotter>>& replotters() {
-  static const std::map<std::string, std::pair<std::string, Replotter>> table = {
-      {"convergence.csv",
-       {"Global error", [](const fs::path& csv, const std::string& t, const PlotOptions& o,
-                           std::ostream& e) { return plot_convergence(csv, t, false, o, e); }}},
-      {"local_error.csv",
-       {"Local error", [](const fs::path& csv, const std::string& t, const PlotOptions& o,
-                          std::ostream& e) { return plot_convergence(csv, t, true, o, e); }}},
-      {"work_precision.csv", {"Work-precision", plot_work_precision}},
-      {"stability.csv", {"Stability limit", plot_stability}},
-      {"energy.csv", {"Energy drift", plot_energy}},
-      {"region.csv", {"Stability regions", plot_region}},
-      {"analyze_dispersion.csv", {"Dissipation and dispersion", plot_analyze}},
-      {"budget.csv", {"Frame budget", plot_budget}},
-  };
-  return table;
-}
-
-// "PREFIX: MODEL" with the model from NAME.json beside the CSV (just PREFIX without one).
-std::string replot_title(const fs::path& csv, const std::string& prefix) {
-  fs::path json = csv;
-  json.replace_extension(".json");
-  std::ifstream in(json);
-  if (!in) return prefix;
-  try {
-    const auto meta = nlohmann::json::parse(in);
-    if (meta.contains("spec") && meta["spec"].contains("model") &&
-        meta["spec"]["model"].is_string())
-      return prefix + ": " + meta["spec"]["model"].get<std::string>();
-  } catch (const std::exception&) {
-  }
-  return prefix;
-}
-
-}  // namespace
-
-int replot_directory(const fs::path& dir, const PlotOptions& opt, std::ostream& out,
-                     std::ostream& err) {
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw BadInput("plot: '" + dir.string() + "' is not a directory");
-  std::vector<fs::path> found;
-  for (const auto& entry : fs::recursive_directory_iterator(dir, ec))
-    if (entry.is_regular_file() && replotters().count(entry.path().filename().string()))
-      found.push_back(entry.path());
-  if (found.empty()) {
-    std::string names;
-    for (const auto& [name, unused] : replotters()) names += (names.empty() ? "" : ", ") + name;
-    throw BadInput("plot: no stiffbench table under '" + dir.string() + "' (looked for " + names +
-                   ")");
-  }
-  std::sort(found.begin(), found.end());
-  int drawn = 0;
-  for (const auto& csv : found) {
-    const auto& [prefix, draw] = replotters().at(csv.filename().string());
-    if (draw(csv, replot_title(csv, prefix), opt, err)) {
-      fs::path png = csv;
-      png.replace_extension(".png");
-      // analyze's curves are in analyze_dispersion.csv, its plot is analyze.png.
-      if (csv.filename() == "analyze_dispersion.csv") png = csv.parent_path() / "analyze.png";
-      out << "plot: " << png.string() << "\n";
-      ++drawn;
-    }
-  }
-  return drawn;
 }
 
 }  // namespace stiffbench

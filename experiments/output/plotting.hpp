@@ -1,6 +1,6 @@
 // Drawing: every experiment writes CSV first, then calls gnuplot on a script in plots/ that
 // reads only that CSV (measurement and drawing are separate steps). `stiffbench plot DIR`
-// redraws an existing folder from its CSV files the same way.
+// (experiments/commands/plot.hpp) redraws an existing folder from its CSV files the same way.
 //
 // Scripts are looked up relative to the running binary, so an installed stiffbench finds its
 // own copies: $STIFFBENCH_PLOTS_DIR if set, else <dir of binary>/../share/stiffbench/plots (the
@@ -15,6 +15,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <iosfwd>
 #include <string>
 #include <utility>
@@ -22,8 +23,15 @@
 
 namespace stiffbench {
 
+// The family of an integrator as to_string(Family) gives it ("explicit", "implicit", ...), or ""
+// when unknown.
+using FamilyOf = std::function<std::string(const std::string& integrator)>;
+
 struct PlotOptions {
   bool svg = false;  // also write an SVG next to each PNG
+  // The families of the panels, given by the caller (a study: its integrators' entries; `plot`:
+  // the CSV's family column or the registry). Unset: every integrator in panel "other".
+  FamilyOf family;
 };
 
 // One panel: a title (the family) and the integrators drawn in it.
@@ -32,10 +40,11 @@ struct PlotPanel {
   std::vector<std::string> methods;
 };
 
-// Groups integrator names into panels by registry family (explicit, symplectic, implicit,
-// reference; names not in the registry go to "other"), keeping the given order within a panel
-// and dropping empty panels.
-std::vector<PlotPanel> family_panels(const std::vector<std::string>& integrators);
+// Groups integrator names into panels by family (explicit, symplectic, implicit, reference, ...;
+// an additive pair's table alone, "NAME:explicit", goes with NAME; unknown names go to "other"),
+// keeping the given order within a panel and dropping empty panels.
+std::vector<PlotPanel> family_panels(const std::vector<std::string>& integrators,
+                                     const FamilyOf& family);
 
 // The directory holding the gnuplot scripts (see the lookup order above).
 std::filesystem::path plots_dir();
@@ -67,13 +76,5 @@ bool plot_convergence(const std::filesystem::path& csv, const std::string& title
                       const PlotOptions& opt, std::ostream& err);
 bool plot_work_precision(const std::filesystem::path& csv, const std::string& title,
                          const PlotOptions& opt, std::ostream& err);
-
-// `stiffbench plot DIR`: redraws every plot of an output folder (searched recursively) from
-// its CSV files: convergence.csv, local_error.csv, work_precision.csv, energy.csv,
-// stability.csv, region.csv, analyze_dispersion.csv (→ analyze.png), budget.csv. Titles name the
-// model from the NAME.json beside each CSV. Returns the number of plots drawn; BadInput when DIR is
-// not a directory or holds none of these files.
-int replot_directory(const std::filesystem::path& dir, const PlotOptions& opt, std::ostream& out,
-                     std::ostream& err);
 
 }  // namespace stiffbench

@@ -71,10 +71,8 @@ std::vector<std::string> analyze_integrators() {
 
 void AnalyzeSpec::validate() const {
   std::set<std::string> seen;
-  for (const auto& name : integrators) {
-    integrator_registry().at(name);  // BadInput naming an unknown integrator
+  for (const auto& name : integrators)
     require_input(seen.insert(name).second, "--integrators: '" + name + "' is listed twice");
-  }
   require_input(points >= 2 && points <= 10000,
                 "--nu-points must be between 2 and 10000 (got " + std::to_string(points) + ")");
 }
@@ -131,20 +129,22 @@ std::vector<AnalyzedMethod> analyze_object(const MethodInfo& info, const Integra
 
 }  // namespace
 
-AnalyzedMethod analyze_integrator(const std::string& name, int points) {
-  const auto& entry = integrator_registry().at(name);
-  return analyze_object(entry.info, *integrator_registry().create(name, Params{}), points).front();
+AnalyzedMethod analyze_integrator(const StudyInputs& in, const std::string& label, int points) {
+  return analyze_object(in.integrator_entry(label).info, *in.create_integrator(label, Params{}),
+                        points)
+      .front();
 }
 
-AnalyzeResult run_analyze(const AnalyzeSpec& spec) {
+AnalyzeResult run_analyze(const StudyInputs& in, const AnalyzeSpec& given, std::ostream*) {
+  const AnalyzeSpec spec = with_inputs(given, in);
   spec.validate();
   const std::vector<std::string> names = chosen(spec);
-  // Created on this thread: a study's own objects are visible to this thread's registry only.
+  // Created before the parallel loop: a user's factories need not be thread-safe.
   std::vector<MethodInfo> infos;
   std::vector<std::unique_ptr<Integrator>> integs;
   for (const auto& name : names) {
-    infos.push_back(integrator_registry().at(name).info);
-    integs.push_back(integrator_registry().create(name, Params{}));
+    infos.push_back(in.integrator_entry(name).info);
+    integs.push_back(in.create_integrator(name, Params{}));
   }
   std::vector<std::vector<AnalyzedMethod>> rows(names.size());
   std::vector<std::exception_ptr> failed(names.size());
@@ -614,7 +614,7 @@ bool plot_analyze(const std::filesystem::path& dispersion_csv, const std::string
   }
   // Two panels per family: |R(iν)| (odd K) and |arg R(iν) − ν| (even K), side by side.
   std::vector<PlotPanel> panels;
-  for (const auto& p : family_panels(drawn)) {
+  for (const auto& p : family_panels(drawn, opt.family)) {
     panels.push_back({p.title + ": |R(i nu)|", p.methods});
     panels.push_back({p.title + ": |arg R(i nu) - nu|", p.methods});
   }
@@ -627,32 +627,27 @@ bool plot_analyze(const std::filesystem::path& dispersion_csv, const std::string
 
 namespace {
 
-class AnalyzeJob : public StudyJob {
- public:
-  explicit AnalyzeJob(AnalyzeSpec spec) : spec_(std::move(spec)) { spec_.validate(); }
-  nlohmann::json spec_json() const override { return spec_.to_json(); }
-  void run(std::ostream*) override { result_ = run_analyze(spec_); }
-  Table unit_table() const override { return analyze_table(result_); }
-  bool write(const std::filesystem::path& dir, const std::string& title, const PlotOptions& plot,
-             std::ostream& err) const override {
-    write_analyze_outputs(dir, spec_, result_);
-    return plot_analyze(dir / "analyze_dispersion.csv", title, plot, err);
-  }
-  void print_summary(std::ostream& out) const override {
-    out << analyze_summary_table(result_).to_markdown();
-  }
-  std::string report_markdown(const std::string& note) const override {
-    return note + "\n\n" + analyze_summary_table(result_).to_markdown() + "\n";
-  }
-  std::string default_title() const override {
-    return "Dissipation |R(i nu)| and dispersion arg R(i nu) - nu";
-  }
-  const AnalyzeResult& result() const { return result_; }
+const StudyFunctions<AnalyzeSpec, AnalyzeResult> kAnalyze{
+    .run = [](const StudyInputs& in, const AnalyzeSpec& s,
+              std::ostream* progress) { return run_analyze(in, s, progress); },
+    .unit_table = [](const AnalyzeSpec&, const AnalyzeResult& r) { return analyze_table(r); },
+    .write =
+        [](const std::filesystem::path& dir, const AnalyzeSpec& s, const AnalyzeResult& r,
+           const std::string& title, const PlotOptions& plot, std::ostream& err) {
+          write_analyze_outputs(dir, s, r);
+          return plot_analyze(dir / "analyze_dispersion.csv", title, plot, err);
+        },
+    .print_summary = [](const AnalyzeSpec&, const AnalyzeResult& r,
+                        std::ostream& out) { out << analyze_summary_table(r).to_markdown(); },
+    .report_markdown =
+        [](const AnalyzeSpec&, const AnalyzeResult& r, const std::string& note) {
+          return note + "\n\n" + analyze_summary_table(r).to_markdown() + "\n";
+        },
+    .default_title =
+        [](const AnalyzeSpec&) { return "Dissipation |R(i nu)| and dispersion arg R(i nu) - nu"; },
+    .helpers = {}};
 
- private:
-  AnalyzeSpec spec_;
-  AnalyzeResult result_;
-};
+using AnalyzeJob = TypedStudyJob<AnalyzeSpec, AnalyzeResult>;
 
 }  // namespace
 
@@ -679,23 +674,27 @@ StudyKind analyze_study_kind() {
   k.extra_files = {"analyze_conditions.csv", "analyze_dispersion.csv"};
   k.unit_columns = analyze_table(AnalyzeResult{}).columns;
   k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
-    AnalyzeSpec s;
-    s.integrators = t.integrators;
+    AnalyzeSpec s = with_inputs(AnalyzeSpec{}, t);
     s.points = static_cast<int>(o.integer("nu_points"));
-    return std::make_unique<AnalyzeJob>(std::move(s));
+    s.validate();
+    return std::make_unique<AnalyzeJob>(kAnalyze, t, std::move(s));
   };
   return k;
 }
 
 const AnalyzeResult& analyze_result(const StudyJob& job) {
-  return dynamic_cast<const AnalyzeJob&>(job).result();
+  return typed_result<AnalyzeSpec, AnalyzeResult>(job);
 }
 
-AnalyzeResult analyze_study(AnalyzeSpec spec, const std::vector<IntegratorFactory>& integrators,
+AnalyzeResult run_analyze(const AnalyzeSpec& spec, std::ostream* progress) {
+  return run_analyze(inputs_of(spec), spec, progress);
+}
+
+AnalyzeResult analyze_study(const StudyInputs& in, AnalyzeSpec spec,
                             const std::filesystem::path& dir, const StudyContext& ctx) {
-  std::string no_model;
-  const ScopedStudyObjects scope(StudyObjects{nullptr, integrators}, no_model, spec.integrators);
-  AnalyzeJob job(std::move(spec));
+  spec = with_inputs(std::move(spec), in);
+  spec.validate();
+  AnalyzeJob job(kAnalyze, in, std::move(spec));
   run_study_job(study_kind("analyze"), job, dir, ctx);
   return job.result();
 }

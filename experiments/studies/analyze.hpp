@@ -42,13 +42,12 @@
 namespace stiffbench {
 
 struct AnalyzeSpec {
-  // Empty: every registered integrator with coefficients or linear stability data
-  // (analyze_integrators()).
+  // The integrators' labels (StudyInputs::integrators). Empty: every registered integrator with
+  // coefficients or linear stability data (analyze_integrators()).
   std::vector<std::string> integrators;
   int points = 121;  // ν samples of the dissipation/dispersion curves (--nu-points)
 
-  // BadInput naming the flag: an unknown integrator, one listed twice, --nu-points outside
-  // [2, 10000].
+  // BadInput naming the flag: an integrator listed twice, --nu-points outside [2, 10000].
   void validate() const;
   nlohmann::json to_json() const;
 };
@@ -75,14 +74,20 @@ struct AnalyzeResult {
   std::vector<AnalyzedMethod> methods;  // in the order of the spec
 };
 
-// The analysis of one registered integrator (created with its defaults): its own row (for an
+// The analysis of integrator `label` of `in` (created with its defaults): its own row (for an
 // additive pair the pair's order from the additive conditions, without the two tables' rows).
-AnalyzedMethod analyze_integrator(const std::string& name, int points = 121);
-AnalyzeResult run_analyze(const AnalyzeSpec& spec);
+AnalyzedMethod analyze_integrator(const StudyInputs& in, const std::string& label,
+                                  int points = 121);
+// Analyses `in`'s integrators (the spec's integrators are `in`'s; a user's own methods are given
+// as objects to resolve_inputs). Nothing is written to `progress` (the methods are analysed in
+// parallel).
+AnalyzeResult run_analyze(const StudyInputs& in, const AnalyzeSpec& spec,
+                          std::ostream* progress = nullptr);
+// The same on the names the spec gives (resolve_inputs first).
+AnalyzeResult run_analyze(const AnalyzeSpec& spec, std::ostream* progress = nullptr);
 // The one call: check DIR, analyse, write DIR/analyze.{csv,md,json}, analyze_conditions.csv and
-// analyze_dispersion.csv, plot, print the summary (ctx.out); `integrators` are a user's own
-// methods, analysed after spec.integrators.
-AnalyzeResult analyze_study(AnalyzeSpec spec, const std::vector<IntegratorFactory>& integrators,
+// analyze_dispersion.csv, plot, print the summary (ctx.out).
+AnalyzeResult analyze_study(const StudyInputs& in, AnalyzeSpec spec,
                             const std::filesystem::path& dir, const StudyContext& ctx = {});
 const AnalyzeResult& analyze_result(const StudyJob& job);
 

@@ -1,7 +1,8 @@
 // `stiffbench audit [--integrators a,b,...]`: checks what every method claims against what it
 // does, and writes audit.{csv,md,json} (one row per check), exit code 3 when a claim fails.
 //
-// Checks per integrator (default: every registered one; a user's own through StudyObjects):
+// Checks per integrator (default: every registered one; a user's own objects through
+// resolve_inputs):
 //   f_evals_fixed, jac_evals_fixed, f_evals_adaptive, jac_evals_adaptive (per system):
 //     the evaluations an independent counting wrapper around the system saw (its own
 //     eval_rhs / eval_acceleration / eval_jacobian / force_jacobians overrides; see
@@ -72,8 +73,9 @@ struct AuditRow {
 };
 
 struct AuditSpec {
-  std::vector<std::string> integrators;  // empty: every registered integrator
-  void validate() const;                 // BadInput: unknown integrator or one listed twice
+  // The integrators' labels (StudyInputs::integrators); empty: every registered integrator.
+  std::vector<std::string> integrators;
+  void validate() const;  // BadInput: an integrator listed twice
   nlohmann::json to_json() const;
 };
 
@@ -82,11 +84,16 @@ struct AuditResult {
   long count(const std::string& status) const;
 };
 
+// Audits `in`'s integrators (the spec's integrators are `in`'s; a user's own methods are given as
+// objects to resolve_inputs), one progress line per integrator.
+AuditResult run_audit(const StudyInputs& in, const AuditSpec& spec,
+                      std::ostream* progress = nullptr);
+// The same on the names the spec gives (resolve_inputs first).
 AuditResult run_audit(const AuditSpec& spec, std::ostream* progress = nullptr);
 
-// The checks of one integrator (a name the integrator registry knows, a user's object in scope
-// included), in the order of the table.
-std::vector<AuditRow> audit_integrator(const std::string& name);
+// The checks of one integrator, in the order of the table: rows named `name`, a fresh instance
+// from `create` for every run.
+std::vector<AuditRow> audit_integrator(const std::string& name, const IntegratorFactory& create);
 
 // audit.csv: integrator, check, system, claimed, measured, status (ok, fail, skip), reason.
 Table audit_table(const AuditResult& r);
@@ -97,9 +104,10 @@ const AuditResult& audit_result(const StudyJob& job);
 // Checks with status fail in this process (every audit run adds its own); the command line exits
 // with kExitRowsFailed (3) when it is not zero.
 long audit_failed_checks();
-// The one call for programs: `integrators` are a user's own methods, audited after
-// spec.integrators (when spec.integrators is empty, only they are audited).
-AuditResult audit_study(AuditSpec spec, const std::vector<IntegratorFactory>& integrators,
-                        const std::filesystem::path& dir, const StudyContext& ctx = {});
+// The one call for programs: check DIR, audit `in`'s integrators (none: every registered one),
+// write DIR/audit.{csv,md,json}, print (ctx.out); the failed checks count in
+// audit_failed_checks().
+AuditResult audit_study(const StudyInputs& in, AuditSpec spec, const std::filesystem::path& dir,
+                        const StudyContext& ctx = {});
 
 }  // namespace stiffbench

@@ -475,7 +475,7 @@ bool plot_energy(const fs::path& csv, const std::string& title, const PlotOption
                   {{"csvfile", csv.string()},
                    {"ttl", title},
                    {"ylab", "relative " + invariant + " error (max since previous sample)"}},
-                  family_panels(csv_column_values(csv, "integrator")), opt, err);
+                  family_panels(csv_column_values(csv, "integrator"), opt.family), opt, err);
 }
 
 namespace {

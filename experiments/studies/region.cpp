@@ -34,14 +34,15 @@ std::optional<LinearStability> stability_of(const std::string& name) {
   return integrator_registry().create(name, Params{})->linear_stability();
 }
 
-// The curves of a registered integrator: its own region, or for an additive (IMEX) pair, which
-// has none, the regions of its two tables alone (NAME:explicit, NAME:implicit; what `analyze`
-// shows of them), or for an operator splitting (lie, strang), whose R is not a function of one
-// hλ either, its explicit sub-integrator's region over one step (NAME:explicit: R(z) for lie,
-// R(z/2)² for strang; the default sub-integrators, what `stability` predicts from). Empty when
-// it has none of these.
-std::vector<std::pair<std::string, LinearStability>> region_curves(const std::string& name) {
-  const auto integ = integrator_registry().create(name, Params{});
+// The curves of an integrator of `in` (created with its defaults): its own region, or for an
+// additive (IMEX) pair, which has none, the regions of its two tables alone (NAME:explicit,
+// NAME:implicit; what `analyze` shows of them), or for an operator splitting (lie, strang), whose
+// R is not a function of one hλ either, its explicit sub-integrator's region over one step
+// (NAME:explicit: R(z) for lie, R(z/2)² for strang; the default sub-integrators, what
+// `stability` predicts from). Empty when it has none of these.
+std::vector<std::pair<std::string, LinearStability>> region_curves(const StudyInputs& in,
+                                                                   const std::string& name) {
+  const auto integ = in.create_integrator(name, Params{});
   if (auto s = integ->linear_stability()) return {{name, std::move(*s)}};
   if (const AdditiveTableau* t = integ->additive_tableau())
     return {{additive_part_name(name, "explicit"), tableau_stability(t->explicit_table)},
@@ -51,8 +52,8 @@ std::vector<std::pair<std::string, LinearStability>> region_curves(const std::st
   return {};
 }
 
-std::string no_region_reason(const std::string& name) {
-  const auto& info = integrator_registry().at(name).info;
+std::string no_region_reason(const StudyInputs& in, const std::string& name) {
+  const auto& info = in.integrator_entry(name).info;
   std::string why = info.family == Family::reference
                         ? "a library integrator: its coefficients are not known to stiffbench"
                         : "no stability data";
@@ -67,6 +68,16 @@ std::vector<std::string> chosen_integrators(const RegionSpec& spec) {
   return spec.integrators.empty() ? region_integrators() : spec.integrators;
 }
 
+// `spec` with `in`'s integrators, checked: BadInput for a bad spec or an integrator without a
+// region.
+RegionSpec checked_spec(const StudyInputs& in, const RegionSpec& given) {
+  RegionSpec spec = with_inputs(given, in);
+  spec.validate();
+  for (const auto& name : spec.integrators)
+    require_input(!region_curves(in, name).empty(), no_region_reason(in, name));
+  return spec;
+}
+
 }  // namespace
 
 std::vector<std::string> region_integrators() {
@@ -78,11 +89,8 @@ std::vector<std::string> region_integrators() {
 
 void RegionSpec::validate() const {
   std::set<std::string> seen;
-  for (const auto& name : integrators) {
-    integrator_registry().at(name);  // BadInput naming an unknown integrator
+  for (const auto& name : integrators)
     require_input(seen.insert(name).second, "--integrators: '" + name + "' is listed twice");
-    require_input(!region_curves(name).empty(), no_region_reason(name));
-  }
   if (box) {
     const RegionBox& b = *box;
     const std::string got = " (got " + format_full(b.re_min) + "," + format_full(b.re_max) + "," +
@@ -155,14 +163,14 @@ RegionBox fitted_region_box(const std::vector<LinearStability>& methods) {
   return b;
 }
 
-RegionResult run_region(const RegionSpec& spec) {
-  spec.validate();
+RegionResult run_region(const StudyInputs& in, const RegionSpec& given, std::ostream*) {
+  const RegionSpec spec = checked_spec(in, given);
   std::vector<std::string> names, family;
   std::vector<LinearStability> stab;
   for (const auto& name : chosen_integrators(spec))
-    for (auto& [row, s] : region_curves(name)) {
+    for (auto& [row, s] : region_curves(in, name)) {
       names.push_back(row);
-      family.push_back(to_string(integrator_registry().at(name).info.family));
+      family.push_back(to_string(in.integrator_entry(name).info.family));
       stab.push_back(std::move(s));
     }
 
@@ -422,7 +430,7 @@ bool plot_region(const std::filesystem::path& csv, const std::string& title, con
   // along |R| = 1 on a whole line (the imaginary axis of implicit midpoint and trapezoidal) are
   // traced through round-off and differ between two tableaux with the same R.
   const double tol = 2e-3 * std::max(span, 1.0);
-  const std::vector<PlotPanel> panels = family_panels(drawn);
+  const std::vector<PlotPanel> panels = family_panels(drawn, opt.family);
   PlotVars vars = {{"csvfile", csv.string()}, {"ttl", title}};
   for (std::size_t k = 0; k < panels.size(); ++k) {
     const auto& names = panels[k].methods;
@@ -449,30 +457,28 @@ bool plot_region(const std::filesystem::path& csv, const std::string& title, con
 
 namespace {
 
-class RegionJob : public StudyJob {
- public:
-  explicit RegionJob(RegionSpec spec) : spec_(std::move(spec)) { spec_.validate(); }
-  nlohmann::json spec_json() const override { return spec_.to_json(); }
-  void run(std::ostream*) override { result_ = run_region(spec_); }
-  Table unit_table() const override { return region_limits_table(result_); }
-  bool write(const std::filesystem::path& dir, const std::string& title, const PlotOptions& plot,
-             std::ostream& err) const override {
-    write_region_outputs(dir, spec_, result_);
-    return plot_region(dir / "region.csv", title, plot, err);
-  }
-  void print_summary(std::ostream& out) const override {
-    out << region_limits_markdown_table(result_).to_markdown();
-  }
-  std::string report_markdown(const std::string& note) const override {
-    return note + "\n\n" + region_limits_markdown_table(result_).to_markdown() + "\n";
-  }
-  std::string default_title() const override { return "Stability regions: boundary |R(z)| = 1"; }
-  const RegionResult& result() const { return result_; }
+const StudyFunctions<RegionSpec, RegionResult> kRegion{
+    .run = [](const StudyInputs& in, const RegionSpec& s,
+              std::ostream* progress) { return run_region(in, s, progress); },
+    .unit_table = [](const RegionSpec&, const RegionResult& r) { return region_limits_table(r); },
+    .write =
+        [](const std::filesystem::path& dir, const RegionSpec& s, const RegionResult& r,
+           const std::string& title, const PlotOptions& plot, std::ostream& err) {
+          write_region_outputs(dir, s, r);
+          return plot_region(dir / "region.csv", title, plot, err);
+        },
+    .print_summary =
+        [](const RegionSpec&, const RegionResult& r, std::ostream& out) {
+          out << region_limits_markdown_table(r).to_markdown();
+        },
+    .report_markdown =
+        [](const RegionSpec&, const RegionResult& r, const std::string& note) {
+          return note + "\n\n" + region_limits_markdown_table(r).to_markdown() + "\n";
+        },
+    .default_title = [](const RegionSpec&) { return "Stability regions: boundary |R(z)| = 1"; },
+    .helpers = {}};
 
- private:
-  RegionSpec spec_;
-  RegionResult result_;
-};
+using RegionJob = TypedStudyJob<RegionSpec, RegionResult>;
 
 }  // namespace
 
@@ -497,23 +503,24 @@ StudyKind region_study_kind() {
   k.unit_columns = region_limits_table(RegionResult{}).columns;
   k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
     RegionSpec s;
-    s.integrators = t.integrators;
     if (o.contains("box")) s.box = parse_region_box(o.text("box"));
     s.resolution = static_cast<int>(o.integer("resolution"));
-    return std::make_unique<RegionJob>(std::move(s));
+    return std::make_unique<RegionJob>(kRegion, t, checked_spec(t, s));
   };
   return k;
 }
 
 const RegionResult& region_result(const StudyJob& job) {
-  return dynamic_cast<const RegionJob&>(job).result();
+  return typed_result<RegionSpec, RegionResult>(job);
 }
 
-RegionResult region_study(RegionSpec spec, const std::vector<IntegratorFactory>& integrators,
-                          const std::filesystem::path& dir, const StudyContext& ctx) {
-  std::string no_model;
-  const ScopedStudyObjects scope(StudyObjects{nullptr, integrators}, no_model, spec.integrators);
-  RegionJob job(std::move(spec));
+RegionResult run_region(const RegionSpec& spec, std::ostream* progress) {
+  return run_region(inputs_of(spec), spec, progress);
+}
+
+RegionResult region_study(const StudyInputs& in, RegionSpec spec, const std::filesystem::path& dir,
+                          const StudyContext& ctx) {
+  RegionJob job(kRegion, in, checked_spec(in, spec));
   run_study_job(study_kind("region"), job, dir, ctx);
   return job.result();
 }

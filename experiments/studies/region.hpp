@@ -49,14 +49,15 @@ struct RegionBox {
 };
 
 struct RegionSpec {
-  // Empty: every registered integrator that has stability data (region_integrators()).
+  // The integrators' labels (StudyInputs::integrators). Empty: every registered integrator that
+  // has stability data (region_integrators()).
   std::vector<std::string> integrators;
   std::optional<RegionBox> box;  // empty: fitted to the chosen methods (see above)
   int resolution = 400;          // grid cells per side of the box
 
-  // BadInput naming the flag: unknown integrator, one listed twice, one without stability data
-  // ("cvode_bdf has no fixed stability region ..."), an empty or non-finite box, a resolution
-  // outside [10, 4000].
+  // BadInput naming the flag: an integrator listed twice, an empty or non-finite box, a
+  // resolution outside [10, 4000]. (run_region also refuses an integrator without stability
+  // data: "cvode_bdf has no fixed stability region ...".)
   void validate() const;
   nlohmann::json to_json() const;
 };
@@ -93,12 +94,18 @@ struct RegionResult {
 // Parses --box "re_min,re_max,im_min,im_max"; BadInput naming --box when malformed.
 RegionBox parse_region_box(const std::string& arg);
 
-RegionResult run_region(const RegionSpec& spec);
+// Computes the regions of `in`'s integrators (the spec's integrators are `in`'s; a user's own
+// methods, given as objects to resolve_inputs, need linear_stability()). BadInput before
+// anything is computed for an integrator without stability data or a bad spec. Nothing is
+// written to `progress` (the methods are computed in parallel).
+RegionResult run_region(const StudyInputs& in, const RegionSpec& spec,
+                        std::ostream* progress = nullptr);
+// The same on the names the spec gives (resolve_inputs first).
+RegionResult run_region(const RegionSpec& spec, std::ostream* progress = nullptr);
 // The one call: check DIR, compute, write DIR/region.{csv,md,json} and region_limits.csv, plot,
-// print (ctx.out); `integrators` are a user's own methods (with linear_stability()), added after
-// spec.integrators.
-RegionResult region_study(RegionSpec spec, const std::vector<IntegratorFactory>& integrators,
-                          const std::filesystem::path& dir, const StudyContext& ctx = {});
+// print (ctx.out).
+RegionResult region_study(const StudyInputs& in, RegionSpec spec, const std::filesystem::path& dir,
+                          const StudyContext& ctx = {});
 const RegionResult& region_result(const StudyJob& job);
 
 // The box enclosing the bounded boundaries and finite axis limits of `methods` (see above).

@@ -228,7 +228,7 @@ bool plot_stability(const std::filesystem::path& csv, const std::string& title,
                    {"ttl", title},
                    {"sweep", sweep ? "1" : "0"},
                    {"xlab", sweep ? params.front() : ""}},
-                  family_panels(csv_column_values(csv, "integrator")), opt, err);
+                  family_panels(csv_column_values(csv, "integrator"), opt.family), opt, err);
 }
 
 void print_stability_summary(const StabilitySpec& spec, const StabilityResult& r,

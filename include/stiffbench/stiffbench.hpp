@@ -40,6 +40,7 @@
 //                                           by key, tolerances, wall-time verdicts
 //   experiments/output/output.hpp, experiments/output/plotting.hpp
 //                                           tables, atomic files, run metadata, gnuplot plots
+//   experiments/commands/plot.hpp           an output folder's plots redrawn (replot_directory)
 //   cli/cli_main.hpp                        the whole command line as cli_main(argc, argv)
 // The headers' paths before experiments/ was split by job (experiments/NAME.hpp) still work
 // for this version: each forwards to its new place.
@@ -61,6 +62,7 @@
 #include "core/theory/tableau.hpp"
 #include "core/types.hpp"
 #include "experiments/commands/compare.hpp"
+#include "experiments/commands/plot.hpp"
 #include "experiments/commands/profile.hpp"
 #include "experiments/framework/catalog.hpp"
 #include "experiments/framework/resolve.hpp"

@@ -19,9 +19,12 @@
 #include <Eigen/Dense>
 
 #include "cli/cli_main.hpp"
+#include "experiments/build_info.hpp"
 #include "experiments/commands/list_describe.hpp"
 #include "experiments/framework/study.hpp"
 #include "experiments/studies/analyze.hpp"
+#include "integrators/explicit/explicit_rk.hpp"
+#include "integrators/explicit/tableaux.hpp"
 
 namespace fs = std::filesystem;
 using namespace stiffbench;
@@ -492,4 +495,47 @@ TEST(AnalyzeStudy, ReportSuiteHasTheAnalysisBesideTheRegions) {
   ASSERT_LT(regions, sections.size());
   EXPECT_EQ(analysis + 1, regions);
   EXPECT_EQ(sections[analysis].name, "method_analysis");
+}
+
+// A study's inputs from resolve_inputs: a method file (sdirk3's coefficients under another name),
+// a variant of a built-in method and a user's integrator object, through the pipeline
+// (analyze_study); each row of analyze.csv carries its label, and the file's method has sdirk3's
+// figures.
+TEST(AnalyzeStudy, RunsFromResolvedInputsWithAMethodFileAVariantAndAnObject) {
+  const fs::path dir = fresh("inputs");
+  fs::create_directories(dir / "methods");
+  std::string toml = slurp(fs::path(STIFFBENCH_SOURCE_DIR) / "methods" / "sdirk3.toml");
+  const std::string key = "name = \"sdirk3\"";
+  ASSERT_NE(toml.find(key), std::string::npos);
+  toml.replace(toml.find(key), key.size(), "name = \"test_analyze_sdirk3\"");
+  const fs::path file = dir / "methods" / "test_analyze_sdirk3.toml";
+  std::ofstream(file) << toml;
+
+  StudyTarget target;
+  target.integrators = {file.string(), "dopri5{rtol=1e-8}"};
+  ButcherTableau heun = explicit_tableaux().front();
+  for (const auto& t : explicit_tableaux())
+    if (t.name == "heun") heun = t;
+  heun.name = "test_analyze_heun_object";
+  target.objects.integrators = {
+      [heun] { return std::make_unique<ExplicitRungeKutta>(heun, "heun as an object"); }};
+  AnalyzeSpec spec;
+  spec.points = 11;
+  const AnalyzeResult r = analyze_study(resolve_inputs(target), spec, dir / "out");
+  ASSERT_EQ(r.methods.size(), 3u);
+  const Csv csv = read_csv(dir / "out" / "analyze.csv");
+  ASSERT_EQ(csv.rows.size(), 3u);
+  EXPECT_EQ(csv.rows[0].at("integrator"), "test_analyze_sdirk3");
+  EXPECT_EQ(csv.rows[1].at("integrator"), "dopri5{rtol=1e-8}");
+  EXPECT_EQ(csv.rows[2].at("integrator"), "test_analyze_heun_object");
+  EXPECT_EQ(csv.rows[0].at("kind"), "dirk");
+  EXPECT_EQ(csv.rows[0].at("order"), "3");
+  EXPECT_EQ(csv.rows[0].at("l_stable"), "yes");
+  EXPECT_EQ(csv.rows[1].at("order"), "5");
+  EXPECT_EQ(csv.rows[2].at("order"), "2");
+  EXPECT_EQ(read_csv(dir / "out" / "analyze_dispersion.csv").of("test_analyze_heun_object").size(),
+            11u);
+  const std::string json = slurp(dir / "out" / "analyze.json");
+  EXPECT_NE(json.find("test_analyze_sdirk3.toml"), std::string::npos);  // the file recorded
+  fs::remove_all(dir);
 }

@@ -14,6 +14,7 @@
 
 #include "cli/cli_main.hpp"
 #include "core/driver.hpp"
+#include "experiments/build_info.hpp"
 #include "experiments/framework/catalog.hpp"
 #include "experiments/studies/audit.hpp"
 #include "experiments/studies/convergence.hpp"
@@ -230,14 +231,14 @@ TEST(Audit, CatchesEachBrokenMethodForItsReason) {
   ButcherTableau over = explicit_tableau("heun");
   over.name = "heun_claims_3";
   over.order = 3;
-  StudyObjects objects;
-  objects.integrators = {
+  StudyTarget target;
+  target.objects.integrators = {
       [wrong_sum] { return std::make_unique<UncheckedRk>("test_wrong_embedded", wrong_sum, 2); },
       [over] { return std::make_unique<UncheckedRk>("test_overclaimed", over, 3); },
       [] { return std::make_unique<UnderReportingEuler>(); },
       [] { return std::make_unique<CopyingEuler>(); }};
   const long failed_before = audit_failed_checks();
-  const AuditResult r = audit_study({}, objects.integrators, scratch("broken"));
+  const AuditResult r = audit_study(resolve_inputs(target), {}, scratch("broken"));
   EXPECT_GT(audit_failed_checks(), failed_before);  // the command would exit 3
 
   auto expect_fail = [&](const std::string& integ, const std::string& check,
@@ -299,14 +300,13 @@ TEST(Audit, SplitMethodsAreAuditedOnSplitSystems) {
   AdditiveTableau over = *integrator_registry().create("ars232", Params{})->additive_tableau();
   over.name = "test_imex_overclaimed";
   over.order = 3;
-  StudyObjects objects;
-  objects.integrators = {[over] {
+  StudyTarget target;
+  target.integrators = {"lie", "strang", "ark324l2sa", "imex_ssp2_222"};
+  target.objects.integrators = {[over] {
     return std::make_unique<ImexArkIntegrator>(over, "ars232 claiming order 3", ImplicitOptions{});
   }};
-  AuditSpec spec;
-  spec.integrators = {"lie", "strang", "ark324l2sa", "imex_ssp2_222"};
-  const AuditResult r = audit_study(spec, objects.integrators, scratch("split"));
-  for (const auto& name : spec.integrators)
+  const AuditResult r = audit_study(resolve_inputs(target), {}, scratch("split"));
+  for (const auto& name : target.integrators)
     for (const auto& row : r.rows)
       if (row.integrator == name) {
         EXPECT_NE(row.status, "fail") << name << " " << row.check << ": " << row.reason;
@@ -340,7 +340,7 @@ TEST(Audit, BuiltInMethodsPass) {
   AuditSpec spec;
   spec.integrators = {"rk4", "dopri5", "rkf45", "velocity_verlet", "yoshida4", "rosenbrock2"};
   const auto dir = scratch("builtin");
-  const AuditResult r = audit_study(spec, {}, dir);
+  const AuditResult r = audit_study(inputs_of(spec), spec, dir);
   EXPECT_EQ(r.count("fail"), 0) << fails(r);
   for (const auto& name : spec.integrators) EXPECT_NE(find_row(r, name, "f_evals_fixed"), nullptr);
   EXPECT_EQ(find_row(r, "dopri5", "fsal")->measured, "yes");
@@ -368,11 +368,11 @@ TEST(Audit, RosenbrockWOrderClaimIsChecked) {
   RosenbrockTableau w3 = ros3p_tableau();
   w3.name = "test_ros3p_w3";
   w3.w_order = 3;
-  StudyObjects objects;
-  objects.integrators = {[w3] {
+  StudyTarget target;
+  target.objects.integrators = {[w3] {
     return std::make_unique<Rosenbrock>(w3, "ros3p claiming W-order 3", ImplicitOptions{});
   }};
-  const AuditResult r = audit_study({}, objects.integrators, scratch("rosenbrock"));
+  const AuditResult r = audit_study(resolve_inputs(target), {}, scratch("rosenbrock"));
   const AuditRow* w = find_row(r, "test_ros3p_w3", "w_order");
   ASSERT_NE(w, nullptr);
   EXPECT_EQ(w->status, "fail");
@@ -381,6 +381,33 @@ TEST(Audit, RosenbrockWOrderClaimIsChecked) {
       << w->reason;
   EXPECT_EQ(find_row(r, "test_ros3p_w3", "tableau_order")->status, "ok");
   EXPECT_EQ(find_row(r, "test_ros3p_w3", "embedded_order")->measured, "2");
+}
+
+// A study's inputs from resolve_inputs: a method file (heun's coefficients under another name) and
+// a variant of a built-in method; each row carries its label and both pass.
+TEST(Audit, RunsFromResolvedInputsWithAMethodFileAndAVariant) {
+  const auto dir = scratch("inputs");
+  std::filesystem::create_directories(dir);
+  std::ifstream in(std::filesystem::path(STIFFBENCH_SOURCE_DIR) / "methods" / "heun.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string toml = text.str();
+  const std::string key = "name = \"heun\"";
+  ASSERT_NE(toml.find(key), std::string::npos);
+  toml.replace(toml.find(key), key.size(), "name = \"test_audit_heun\"");
+  const auto file = dir / "test_audit_heun.toml";
+  std::ofstream(file) << toml;
+
+  StudyTarget target;
+  target.integrators = {file.string(), "bs3{rtol=1e-8}"};
+  const AuditResult r = run_audit(resolve_inputs(target), AuditSpec{});
+  std::set<std::string> labels;
+  for (const auto& row : r.rows) labels.insert(row.integrator);
+  EXPECT_EQ(labels, (std::set<std::string>{"test_audit_heun", "bs3{rtol=1e-8}"}));
+  EXPECT_EQ(r.count("fail"), 0) << fails(r);
+  EXPECT_EQ(find_row(r, "test_audit_heun", "tableau_order")->measured, "2");
+  EXPECT_EQ(find_row(r, "bs3{rtol=1e-8}", "adaptive_constant")->status, "ok");
+  std::filesystem::remove_all(dir);
 }
 
 int cli(std::vector<std::string> args) {
@@ -424,8 +451,9 @@ TEST(Audit, RefusesUnknownAndRepeatedNames) {
   AuditSpec spec;
   spec.integrators = {"rk4", "rk4"};
   EXPECT_THROW(spec.validate(), BadInput);
+  EXPECT_THROW(run_audit(spec), BadInput);
   spec.integrators = {"rk5"};
-  EXPECT_THROW(spec.validate(), BadInput);
+  EXPECT_THROW(run_audit(spec), BadInput);  // resolve_inputs names it
 }
 
 // Study rows carry the registered name: one tableau (rk4) registered twice under two names is two

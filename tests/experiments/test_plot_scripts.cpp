@@ -87,3 +87,26 @@ TEST(PlotScripts, EmbeddedScriptsAloneDrawAConvergencePng) {
   EXPECT_GT(fs::file_size(dir / "convergence.png"), 1000u) << err.str();
   fs::remove_all(dir);
 }
+
+// The panels take their families from the caller (output/ looks nothing up): an additive pair's
+// table alone ("imexpair:explicit") goes with the pair; an unknown name, or no lookup at all,
+// goes to "other".
+TEST(PlotPanels, FamiliesComeFromTheCaller) {
+  const FamilyOf family = [](const std::string& name) -> std::string {
+    if (name == "a") return "explicit";
+    if (name == "imexpair") return "imex";
+    if (name == "b") return "implicit";
+    return "";
+  };
+  const std::vector<std::string> names = {"b", "imexpair:explicit", "a", "unknown"};
+  const std::vector<PlotPanel> panels = family_panels(names, family);
+  ASSERT_EQ(panels.size(), 4u);
+  EXPECT_EQ(panels[0].methods, std::vector<std::string>{"a"});
+  EXPECT_EQ(panels[1].methods, std::vector<std::string>{"b"});
+  EXPECT_EQ(panels[2].methods, std::vector<std::string>{"imexpair:explicit"});
+  EXPECT_EQ(panels[3].title, "other");
+  EXPECT_EQ(panels[3].methods, std::vector<std::string>{"unknown"});
+  const std::vector<PlotPanel> none = family_panels(names, nullptr);
+  ASSERT_EQ(none.size(), 1u);
+  EXPECT_EQ(none[0].methods, names);
+}

@@ -12,9 +12,14 @@
 #include <fstream>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <sstream>
+#include <string>
+#include <vector>
 
+#include "experiments/build_info.hpp"
 #include "experiments/studies/region.hpp"
+#include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/explicit/tableaux.hpp"
 #include "integrators/implicit/dirk.hpp"
 
@@ -315,9 +320,10 @@ TEST(RegionExperiment, IdenticalStabilityFunctionsAreNamed) {
   EXPECT_EQ(method(r, "kutta3").same_as, "");
 }
 
+// run_region refuses before computing anything (resolve_inputs names an unknown integrator).
 void expect_bad_input(const RegionSpec& spec, const std::string& must_name) {
   try {
-    spec.validate();
+    run_region(spec);
     ADD_FAILURE() << "no BadInput; expected one naming " << must_name;
   } catch (const BadInput& e) {
     EXPECT_NE(std::string(e.what()).find(must_name), std::string::npos) << e.what();
@@ -328,7 +334,6 @@ TEST(RegionExperiment, RefusesIntegratorsWithoutStabilityDataAndBadBoxes) {
   RegionSpec spec;
   spec.integrators = {"rk4", "cvode_bdf"};
   expect_bad_input(spec, "'cvode_bdf' has no fixed stability region");
-  EXPECT_THROW(run_region(spec), BadInput);
   spec.integrators = {"gsl_rk8pd"};
   expect_bad_input(spec, "gsl_rk8pd");
   spec.integrators = {"no_such_method"};
@@ -360,6 +365,45 @@ TEST(RegionExperiment, DefaultIntegratorsAreThoseWithStabilityData) {
   EXPECT_NE(std::find(names.begin(), names.end(), "velocity_verlet"), names.end());
   EXPECT_EQ(std::find(names.begin(), names.end(), "cvode_bdf"), names.end());
   EXPECT_EQ(std::find(names.begin(), names.end(), "gsl_rk4"), names.end());
+}
+
+// A study's inputs from resolve_inputs: a method file (bs3's coefficients under another name), a
+// variant of a built-in method and a user's integrator object; each row carries its label, and the
+// file's method has bs3's region.
+TEST(RegionExperiment, RunsFromResolvedInputsWithAMethodFileAVariantAndAnObject) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("sb_region_inputs_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ifstream in(std::filesystem::path(STIFFBENCH_SOURCE_DIR) / "methods" / "bs3.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string toml = text.str();
+  const std::string key = "name = \"bs3\"";
+  ASSERT_NE(toml.find(key), std::string::npos);
+  toml.replace(toml.find(key), key.size(), "name = \"test_region_bs3\"");
+  const auto file = dir / "test_region_bs3.toml";
+  std::ofstream(file) << toml;
+
+  StudyTarget target;
+  target.integrators = {file.string(), "sdirk3{newton=full}", "bs3"};
+  ButcherTableau heun = tableau("heun");
+  heun.name = "test_region_heun_object";
+  target.objects.integrators = {
+      [heun] { return std::make_unique<ExplicitRungeKutta>(heun, "heun as an object"); }};
+  RegionSpec spec;
+  spec.resolution = 20;
+  const RegionResult r = run_region(resolve_inputs(target), spec);
+  std::vector<std::string> labels;
+  for (const auto& m : r.methods) labels.push_back(m.integrator);
+  EXPECT_EQ(labels, (std::vector<std::string>{"test_region_bs3", "sdirk3{newton=full}", "bs3",
+                                              "test_region_heun_object"}));
+  EXPECT_EQ(method(r, "test_region_bs3").same_as, "");
+  EXPECT_EQ(method(r, "bs3").same_as, "test_region_bs3");
+  EXPECT_EQ(method(r, "sdirk3{newton=full}").a_stable, std::optional<bool>(true));
+  EXPECT_NEAR(method(r, "test_region_heun_object").real_axis->limit, 2.0, 1e-12);
+  EXPECT_EQ(method(r, "test_region_heun_object").family, "explicit");
+  EXPECT_EQ(method(r, "sdirk3{newton=full}").family, "implicit");
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
