@@ -31,9 +31,6 @@ KNOWN = {
     ("experiments/output/plotting.cpp", "experiments/studies/stability.hpp"),
     ("experiments/studies/budget.cpp", "experiments/studies/energy.hpp"),
     ("experiments/studies/budget.hpp", "experiments/studies/work_precision.hpp"),
-    ("experiments/studies/recommend.cpp", "experiments/studies/convergence.hpp"),
-    ("experiments/studies/recommend.hpp", "experiments/studies/work_precision.hpp"),
-    ("experiments/studies/work_precision.hpp", "experiments/studies/convergence.hpp"),
 }
 
 INCLUDE = re.compile(r'^\s*#\s*include\s*"([^"]+)"')
