@@ -99,6 +99,10 @@
 // within [h/64, 16·h], for the global error at most (t_end − t0)/4 and with its finest level
 // within the driver's step limit. A fixed-step reference runs at (finest h of the common
 // ladder)/16 in both modes (for the local error at most (t − t0)/16 at each reference time t).
+//
+// The code of these rules that work-precision and recommend share lives in experiments/support/:
+// the spec and options (step_study), the reference and its cache (reference), the order fit
+// (order_fit) and the ladder probe's stages (step_ladder).
 #pragma once
 
 #include <functional>
