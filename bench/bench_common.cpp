@@ -8,7 +8,7 @@
 
 #include "core/driver.hpp"
 #include "experiments/framework/catalog.hpp"
-#include "experiments/studies/work_precision.hpp"
+#include "experiments/support/timing.hpp"
 
 namespace stiffbench::bench {
 

@@ -39,7 +39,7 @@ struct Config {
 // One measured benchmark as the summary sees it. With --benchmark_repetitions=N every
 // repetition's real time per iteration is kept: `seconds` is their median, `min_seconds` the
 // fastest, and [ci_low, ci_high] a bootstrap 95% interval of the median (timing_spread of
-// experiments/studies/work_precision.hpp: 2000 resamples, seeded by the benchmark's name, so the
+// experiments/support/timing.hpp: 2000 resamples, seeded by the benchmark's name, so the
 // same times give the same interval; with 5 repetitions it spans the fastest to the slowest).
 // `counters` are those of the repetition at the median (the lower middle one for an even N).
 struct Result {

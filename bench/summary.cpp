@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "bench/bench_common.hpp"
-#include "experiments/studies/work_precision.hpp"
+#include "experiments/support/timing.hpp"
 #include "models/mass_spring/network.hpp"
 
 namespace stiffbench::bench {

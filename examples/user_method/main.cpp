@@ -109,6 +109,10 @@ int main(int argc, char** argv) {
   // The objects: fresh copies for every run; results carry their names.
   const StudyObjects mine{[] { return std::make_unique<StiffSprings>(); },
                           {[] { return std::make_unique<Ralston3>(); }}};
+  // What a study runs on: the spec's names and the objects, resolved once.
+  auto inputs = [&](const auto& spec) {
+    return resolve_inputs(StudyTarget{spec.model, spec.params, spec.integrators, mine});
+  };
   StudyContext ctx;  // settings of the pipeline: progress and notes to stderr, plots as PNG
   ctx.progress = &std::cerr;
   ctx.err = &std::cerr;
@@ -119,7 +123,8 @@ int main(int argc, char** argv) {
   conv.t_end = 1;
   conv.h = 0.004;  // h*w from 0.2 down to 0.00625 on the stiff mode: the asymptotic range
   conv.levels = 6;
-  const ConvergenceResult c = convergence_study(conv, mine, out + "/convergence", false, ctx);
+  const ConvergenceResult c =
+      convergence_study(inputs(conv), conv, out + "/convergence", false, ctx);
 
   // rk4 by name and the objects, resolved once into the inputs the next two studies run on.
   const StudyInputs in = resolve_inputs(StudyTarget{.integrators = {"rk4"}, .objects = mine});
@@ -138,7 +143,7 @@ int main(int argc, char** argv) {
   wp.levels = 4;
   wp.tol_levels = 4;
   wp.repeats = 1;
-  work_precision_study(wp, mine, out + "/work_precision", ctx);
+  work_precision_study(inputs(wp), wp, out + "/work_precision", ctx);
 
   // What theory says of ralston3: order 3 (the observed order of the finest pair), and, like every
   // three-stage third-order method, R(z) = 1 + z + z^2/2 + z^3/6 with |R(iy)| <= 1 exactly for

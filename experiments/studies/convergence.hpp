@@ -99,6 +99,10 @@
 // within [h/64, 16·h], for the global error at most (t_end − t0)/4 and with its finest level
 // within the driver's step limit. A fixed-step reference runs at (finest h of the common
 // ladder)/16 in both modes (for the local error at most (t − t0)/16 at each reference time t).
+//
+// The code of these rules that work-precision and recommend share lives in experiments/support/:
+// the spec and options (step_study), the reference and its cache (reference), the order fit
+// (order_fit) and the ladder probe's stages (step_ladder).
 #pragma once
 
 #include <functional>
@@ -115,58 +119,18 @@
 #include "experiments/framework/study.hpp"
 #include "experiments/output/output.hpp"
 #include "experiments/output/plotting.hpp"
+#include "experiments/support/order_fit.hpp"
+#include "experiments/support/reference.hpp"
+#include "experiments/support/step_ladder.hpp"
+#include "experiments/support/step_study.hpp"
 
 namespace stiffbench {
 
-// What the step-size studies (convergence, local-error, work-precision) share: the system, the
-// ladder of steps h_k = h / refine^k and the reference the errors are measured against. Its
-// options are declared once (step_study_options) and read once (read_step_study_options).
-struct StepStudyDefaults;
-struct StepStudySpec {
-  std::string model;
-  Params params;
-  std::vector<std::string> integrators;
-  double t_end = 1.0;
-  // Coarsest step; NaN: the model's suggested step (SuggestedStep), an error if it has none.
-  double h = 0.1;
-  int levels = 5;
-  double refine = 2.0;
-  std::string reference = "auto";  // auto | exact | METHOD
-  // Tolerances of an adaptive reference (--reference-rtol, --reference-atol); unset: the
-  // study's defaults. Set with an exact or fixed-step reference: BadInput naming the flag.
-  std::optional<double> reference_rtol, reference_atol;
-
-  // h_k = h0 / refine^k for k < levels.
-  std::vector<double> step_ladder(double h0) const;
-  // BadInput naming the flag for a bad ladder or tolerance.
-  void validate_step_study() const;
-  // The keys above as JSON (the recorded spec of the three studies).
-  nlohmann::json step_study_json() const;
-  // The reference method (an integrator whose parameters the study consumes, when it is one).
-  std::vector<std::string> reference_integrators() const;
-  // The ladder length and reference tolerances of a study's declared defaults.
-  void apply_defaults(const StepStudyDefaults& d);
-};
-
-// The options of StepStudySpec for the study registry (which of them a study requires is its
-// StudyKind::required); the help texts and the defaults of the ladder and of the reference
-// tolerances differ between the studies.
-struct StepStudyDefaults {
-  std::string t_end_help, h_help;
-  std::string ladder_levels = "5", ref_rtol, ref_atol, ref_help;
-};
-std::vector<ParamSpec> step_study_options(const StepStudyDefaults& d);
-void read_step_study_options(const Params& options, StepStudySpec& spec);
-// The metadata of the three studies' NAME.json: the step used and where it came from, the
-// reference's description.
-void add_step_study_metadata(nlohmann::json& meta, double h_used, const std::string& h_source,
-                             const std::string& reference);
-
 struct ConvergenceSpec : StepStudySpec {
-  static constexpr double kDefaultReferenceRtol = 1e-12;
+  static constexpr double kDefaultReferenceRtol = kStepReferenceRtol;
   // "common" (every integrator on h/refine^k) or "per-method" (a probe per integrator).
   std::string ladder = "common";
-  static constexpr double kReferenceAtolDivisor = 100;  // default atol = rtol / 100
+  static constexpr double kReferenceAtolDivisor = kStepReferenceAtolDivisor;  // atol = rtol/100
   // Folder holding the reference cache (DIR/reference/); empty: no cache. Not part of the spec's
   // JSON (it is where the outputs go).
   std::string cache_dir;
@@ -180,47 +144,11 @@ struct ConvergenceSpec : StepStudySpec {
   nlohmann::json to_json() const;
 };
 
-// The reference state at t_end for work-precision: the exact solution (`auto` where the model
-// has one), else `reference` (default cvode_bdf) adaptively at the spec's tolerances, or a
-// fixed-step reference at h_fine/16; `description` says which.
-Vec reference_at_end(const StepStudySpec& spec, const OdeSystem& sys, double t_end, double h_fine,
-                     std::string* description);
-// Work-precision's reference (experiments/studies/work_precision.hpp, "The reference"), chosen from
-// spec.reference before anything runs. BadInput for an unknown METHOD, a METHOD that is also one
-// of spec.integrators (by name; a method file by the name it registers), `exact` on a model
-// without an exact solution, `published` without a published solution at t_end; with sys null
-// only the names are checked. `numerical` is the spec of the numerical reference for
-// reference_at_end (METHOD, or cvode_bdf for auto and published), `check` the same tighter by
-// kReferenceTightening: rtol and atol / 10, or for a fixed-step method h_fine / 2
-// (check_h_factor).
-struct ReferenceChoice {
-  std::string kind;    // "exact", "published", "auto" or "method"
-  std::string method;  // the numerical reference's integrator
-  StepStudySpec numerical, check;
-  double check_h_factor = 1;
-  std::string check_description;  // of the check run (reference_at_end's, or the halved step)
-};
-ReferenceChoice choose_reference(const StepStudySpec& spec, const OdeSystem* sys, double t_end,
-                                 double h_fine);
-// The same for a caller without a step study (recommend): `method` ("auto": the exact solution,
-// which the model must have) run adaptively at rtol and atol with `params`.
-Vec adaptive_state_at_end(const OdeSystem& sys, const Params& params, const std::string& method,
-                          std::optional<double> rtol, std::optional<double> atol, double t_end,
-                          std::string* description);
-
 // The floor check's constants (see the top of this file).
-constexpr double kUnitRoundoff = 0x1p-53;
-constexpr double kFloorFactor = 10;      // a row within this factor of a floor has status floor
-constexpr double kOrderAgreement = 0.2;  // max − min of the pairwise orders in a fit window
-constexpr double kOrderTolerance = 0.1;  // a fit further from the expected slope gets a reason
-// A fit more than this below the classical order (its window's pairwise orders agreeing, as in
-// every fit, and no coarser pair near the classical order) is reported as an order reduction to
-// the fitted value: the reason names it.
-constexpr double kOrderReductionSpread = 0.15;
-constexpr double kReferenceTightening = 10;  // the second reference run: tolerances / 10, h / 2
-constexpr double kLadderTop = 1e-2;          // per-method ladder: coarsest error ≤ about 1e-2·s
-constexpr double kLadderFloorMargin = 100;   // predicted finest error ≥ 100 × floor
-constexpr int kProbeRuns = 8;                // at most this many probe runs per integrator
+// (kUnitRoundoff, kFloorFactor: experiments/support/step_study.hpp; kOrderAgreement,
+// kOrderTolerance, kOrderReductionSpread, kLadderFloorMargin: experiments/support/order_fit.hpp;
+// kReferenceTightening: experiments/support/reference.hpp; kLadderTop, kProbeRuns:
+// experiments/support/step_ladder.hpp.)
 // --floor auto (the top of this file): the relative perturbation of y0 and its signs' seed, and
 // the factor from the second difference to the floor.
 constexpr double kFloorPerturbation = 0x1p-30;
@@ -261,31 +189,14 @@ struct ConvergenceRow {
   std::string status_text() const;
 };
 
-// The order fit of one integrator (a row of NAME_orders.csv).
-struct OrderFit {
-  std::string integrator;
-  int order = 0;  // the method's classical (claimed) order
-  // The order its coefficients achieve (every order condition up to it holds; `analyze`), empty
-  // for a method that is not coefficient-defined.
-  std::optional<int> analysed_order;
-  int expected_slope = 0;                   // order, or order + 1 for the local error
-  std::optional<double> fitted, fitted_se;  // slope of log(error) against log(h) and its SE
-  double h_min = 0, h_max = 0;              // the window's steps (0: no fit)
-  int levels_used = 0;
-  // The round-off floor of the integrator's rows and how it was found (perturbed, given; for
-  // model the bound at its finest level).
-  double floor_used = 0;
-  std::string floor_source;
-  // Why there is no fit, or why the fit is more than kOrderTolerance from the expected slope
-  // (what the pairwise orders show); empty otherwise.
-  std::string reason;
-};
-
 // The fit over the asymptotic window of the rows of `integrator` (in ladder order; their
 // at_floor and status must be set). `local`: the expected slope is order + 1. `ladder`: the
 // ladder that ran ("common" or "per-method"), so that the advice never names the one in use.
+// (experiments/support/order_fit.hpp on the integrator's points; the fit's integrator is set).
 OrderFit fit_order(const std::vector<ConvergenceRow>& rows, const std::string& integrator,
                    bool local, const std::string& ladder = "common");
+// The fit's view of one row.
+FitPoint fit_point(const ConvergenceRow& row);
 
 struct ConvergenceResult {
   std::vector<ConvergenceRow> rows;
@@ -325,20 +236,16 @@ struct ConvergenceResult {
   std::string floor_mode = "auto";  // the spec's --floor
 };
 
+// Runs the study on `in` (its model, parameters and integrators replace the spec's); the
+// reference and its tolerances are the spec's, a user-named reference looked up in `in`.
 // Progress lines go to `progress` when non-null.
+ConvergenceResult run_convergence(const StudyInputs& in, const ConvergenceSpec& spec,
+                                  std::ostream* progress);
+ConvergenceResult run_local_error(const StudyInputs& in, const ConvergenceSpec& spec,
+                                  std::ostream* progress);
+// The same on the names the spec gives (resolve_inputs first).
 ConvergenceResult run_convergence(const ConvergenceSpec& spec, std::ostream* progress);
 ConvergenceResult run_local_error(const ConvergenceSpec& spec, std::ostream* progress);
-// The same on a user's objects (nothing is registered by name): `objects.system` makes a fresh
-// copy per run (its results carry spec.model, empty: the system's name(); spec.params then holds
-// integrator parameters only); `objects.integrators` run after spec.integrators.
-ConvergenceResult run_convergence(ConvergenceSpec spec, const StudyObjects& objects,
-                                  std::ostream* progress);
-ConvergenceResult run_local_error(ConvergenceSpec spec, const StudyObjects& objects,
-                                  std::ostream* progress);
-ConvergenceResult run_convergence(ConvergenceSpec spec, const SystemFactory& system,
-                                  std::ostream* progress);
-ConvergenceResult run_local_error(ConvergenceSpec spec, const SystemFactory& system,
-                                  std::ostream* progress);
 
 // Least-squares slope of log(error) against log(h) over the last `points` ok rows of one
 // integrator (the asymptotic range); empty when fewer than two usable rows.
@@ -372,9 +279,11 @@ const ConvergenceResult& convergence_result(const StudyJob& job);
 ConvergenceResult convergence_study(ConvergenceSpec spec, const std::string& dir, bool local,
                                     std::ostream* progress, std::ostream& err,
                                     const PlotOptions& plot = {});
-// The one call on a user's objects: check DIR, run, write, plot, print (ctx.out) — the pipeline
-// of experiments/framework/study.hpp with ctx's settings (force, plot format, streams).
-ConvergenceResult convergence_study(ConvergenceSpec spec, const StudyObjects& objects,
+// The one call on resolved inputs (a program's objects: resolve_inputs(StudyTarget{.objects =
+// ...})): check DIR, run, write, plot, print (ctx.out) — the pipeline of
+// experiments/framework/study.hpp with ctx's settings (force, plot format, streams); the
+// reference cache in DIR unless spec.cache_dir or ctx.cache_dir is set.
+ConvergenceResult convergence_study(const StudyInputs& in, ConvergenceSpec spec,
                                     const std::filesystem::path& dir, bool local,
                                     const StudyContext& ctx = {});
 

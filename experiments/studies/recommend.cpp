@@ -10,7 +10,8 @@
 #include "core/driver.hpp"
 #include "core/run_control.hpp"
 #include "experiments/framework/catalog.hpp"
-#include "experiments/studies/convergence.hpp"
+#include "experiments/support/reference.hpp"
+#include "experiments/support/timing.hpp"
 
 namespace stiffbench {
 
@@ -97,14 +98,14 @@ std::pair<bool, std::string> family_fits(Family f, const FamilyChoice& c) {
   }
 }
 
-std::vector<RecommendCandidate> choose_candidates(const RecommendSpec& spec, const OdeSystem& sys,
-                                                  const FamilyChoice& c) {
+std::vector<RecommendCandidate> choose_candidates(const StudyInputs& in, const RecommendSpec& spec,
+                                                  const OdeSystem& sys, const FamilyChoice& c) {
   std::vector<std::string> names = integrator_registry().names();
   for (const auto& n : spec.integrators)
     if (std::find(names.begin(), names.end(), n) == names.end()) names.push_back(n);
   std::vector<RecommendCandidate> out;
   for (const auto& name : names) {
-    const MethodInfo& info = integrator_registry().at(name).info;
+    const MethodInfo& info = in.integrator_entry(name).info;
     RecommendCandidate cand{name, to_string(info.family), false, ""};
     try {
       check_compatible(info, sys);
@@ -123,8 +124,8 @@ std::vector<RecommendCandidate> choose_candidates(const RecommendSpec& spec, con
   return out;
 }
 
-bool takes_rtol(const std::string& name) {
-  for (const auto& p : integrator_registry().at(name).params)
+bool takes_rtol(const StudyInputs& in, const std::string& name) {
+  for (const auto& p : in.integrator_entry(name).params)
     if (p.key == "rtol") return true;
   return false;
 }
@@ -138,6 +139,7 @@ std::vector<double> settings_of(bool adaptive, double rtol, double h0) {
 }
 
 struct SweepState {
+  const StudyInputs& in;
   const RecommendSpec& spec;
   const OdeSystem& sys;
   const Vec& ref;
@@ -150,8 +152,8 @@ struct SweepState {
 // without meeting R ("" when it met R).
 std::string sweep_method(const SweepState& s, const RecommendCandidate& cand, double share,
                          std::vector<RecommendRow>& rows) {
-  const auto probe = integrator_registry().create(cand.integrator, s.spec.params);
-  const bool adaptive = probe->supports_adaptive() && takes_rtol(cand.integrator);
+  const auto probe = s.in.create_integrator(cand.integrator, s.spec.params);
+  const bool adaptive = probe->supports_adaptive() && takes_rtol(s.in, cand.integrator);
   if (!adaptive && !probe->supports_fixed_step()) return "no fixed-step mode and no rtol";
   const auto method_start = std::chrono::steady_clock::now();
   std::string last;
@@ -163,7 +165,7 @@ std::string sweep_method(const SweepState& s, const RecommendCandidate& cand, do
                          static_cast<double>(FixedStepOptions{}.max_steps))
       break;
     RecommendRow row;
-    row.run = run_work_precision_setting(s.sys, s.spec.model, cand.integrator, s.spec.params,
+    row.run = run_work_precision_setting(s.in, s.sys, s.spec.model, cand.integrator, s.spec.params,
                                          adaptive, setting, kRecommendAtolRatio, s.t_end, s.ref,
                                          s.spec.timing_repeats, s.spec.seed, rows.size(), left);
     row.family = cand.family;
@@ -230,11 +232,12 @@ void mark_pareto(std::vector<RecommendRow>& rows) {
   }
 }
 
-RecommendResult run_recommend(const RecommendSpec& spec_in, std::ostream* progress) {
+RecommendResult run_recommend(const StudyInputs& in, const RecommendSpec& spec_in,
+                              std::ostream* progress) {
   const auto start = std::chrono::steady_clock::now();
-  RecommendSpec spec = spec_in;
+  const RecommendSpec spec = with_inputs(spec_in, in);
   spec.validate();
-  Setup with_params = make_setup(spec.model, {}, spec.params);
+  Setup with_params = make_setup(in, {}, spec.params);
   const OdeSystem& sys = *with_params.model;
   RecommendResult r;
   r.model = spec.model;
@@ -256,7 +259,7 @@ RecommendResult run_recommend(const RecommendSpec& spec_in, std::ostream* progre
   r.stiff = fc.stiff;
   r.mechanical = fc.mechanical;
   r.stiffness_note = fc.note;
-  r.candidates = choose_candidates(spec, sys, fc);
+  r.candidates = choose_candidates(in, spec, sys, fc);
   if (progress) *progress << fc.note << "\n";
 
   // The exact solution, else an adaptive run (see the header comment).
@@ -265,18 +268,21 @@ RecommendResult run_recommend(const RecommendSpec& spec_in, std::ostream* progre
   Vec ref;
   {
     const RowClock clock(spec.budget_s / 2);
-    ref = adaptive_state_at_end(sys, spec.params,
-                                exact ? "auto" : (fc.stiff ? "cvode_bdf" : "cvode_adams"),
-                                exact ? std::nullopt : std::optional<double>(ref_rtol),
-                                exact ? std::nullopt : std::optional<double>(ref_rtol / 100),
-                                r.t_end, &r.reference_description);
+    const ReferenceRequest req{&in,
+                               spec.model,
+                               spec.params,
+                               exact ? "auto" : (fc.stiff ? "cvode_bdf" : "cvode_adams"),
+                               exact ? std::nullopt : std::optional<double>(ref_rtol),
+                               exact ? std::nullopt : std::optional<double>(ref_rtol / 100),
+                               ""};
+    ref = reference_at_end(req, sys, r.t_end, r.t_end, &r.reference_description);
   }
   r.ref_norm = ref.lpNorm<Eigen::Infinity>();
   if (progress)
     *progress << "reference: " << r.reference_description << " ("
               << format_short(seconds_since(start), 2) << " s)\n";
 
-  const SweepState s{spec, sys, ref, r.t_end, r.h0, r.ref_norm, start, progress};
+  const SweepState s{in, spec, sys, ref, r.t_end, r.h0, r.ref_norm, start, progress};
   std::vector<const RecommendCandidate*> run;
   for (const auto& c : r.candidates)
     if (c.included) run.push_back(&c);
@@ -356,48 +362,48 @@ std::string recommend_markdown(const RecommendResult& r) {
 
 namespace {
 
-class RecommendJob : public StudyJob {
- public:
-  explicit RecommendJob(RecommendSpec spec) : spec_(std::move(spec)) { spec_.validate(); }
-  nlohmann::json spec_json() const override { return spec_.to_json(); }
-  void run(std::ostream* progress) override { result_ = run_recommend(spec_, progress); }
-  Table unit_table() const override { return recommend_table(result_); }
-  bool write(const std::filesystem::path& dir, const std::string& title, const PlotOptions& plot,
-             std::ostream& err) const override {
-    write_file_atomic(dir / "recommend.csv", recommend_table(result_).to_csv());
-    write_file_atomic(dir / "recommend.md", recommend_markdown(result_));
-    nlohmann::json meta = run_metadata("recommend", spec_.to_json());
-    meta["y_ref"] = result_.reference_description;
-    meta["t_end_used"] = result_.t_end;
-    meta["total_wall_s"] = result_.total_wall_s;
-    meta["meets_definition"] = "||y - y_ref||_inf / max(1, ||y_ref||_inf) <= rtol at t_end";
-    write_file_atomic(dir / "recommend.json", meta.dump(2) + "\n");
-    std::vector<std::string> methods;
-    for (const auto& row : result_.rows)
-      if (std::find(methods.begin(), methods.end(), row.run.integrator) == methods.end())
-        methods.push_back(row.run.integrator);
-    return run_plot("recommend.gp", dir / "recommend",
-                    {{"csvfile", (dir / "recommend.csv").string()},
-                     {"ttl", title},
-                     {"log10_rtol", std::to_string(std::log10(spec_.rtol))}},
-                    {PlotPanel{"all methods", methods}}, plot, err);
-  }
-  void print_summary(std::ostream& out) const override {
-    const std::string md = recommend_markdown(result_);
-    out << md.substr(0, md.find("\n## Candidates"))
-        << "\nTotal wall time: " << format_short(result_.total_wall_s, 3) << " s (budget "
-        << format_short(spec_.budget_s, 3) << " s)\n";
-  }
-  std::string report_markdown(const std::string& note) const override {
-    return note + "\n\n" + recommend_markdown(result_);
-  }
-  std::string default_title() const override { return "Recommend: " + spec_.model; }
-  const RecommendResult& result() const { return result_; }
+bool write_recommend(const std::filesystem::path& dir, const RecommendSpec& spec,
+                     const RecommendResult& result, const std::string& title,
+                     const PlotOptions& plot, std::ostream& err) {
+  write_file_atomic(dir / "recommend.csv", recommend_table(result).to_csv());
+  write_file_atomic(dir / "recommend.md", recommend_markdown(result));
+  nlohmann::json meta = run_metadata("recommend", spec.to_json());
+  meta["y_ref"] = result.reference_description;
+  meta["t_end_used"] = result.t_end;
+  meta["total_wall_s"] = result.total_wall_s;
+  meta["meets_definition"] = "||y - y_ref||_inf / max(1, ||y_ref||_inf) <= rtol at t_end";
+  write_file_atomic(dir / "recommend.json", meta.dump(2) + "\n");
+  std::vector<std::string> methods;
+  for (const auto& row : result.rows)
+    if (std::find(methods.begin(), methods.end(), row.run.integrator) == methods.end())
+      methods.push_back(row.run.integrator);
+  return run_plot("recommend.gp", dir / "recommend",
+                  {{"csvfile", (dir / "recommend.csv").string()},
+                   {"ttl", title},
+                   {"log10_rtol", std::to_string(std::log10(spec.rtol))}},
+                  {PlotPanel{"all methods", methods}}, plot, err);
+}
 
- private:
-  RecommendSpec spec_;
-  RecommendResult result_;
-};
+const StudyFunctions<RecommendSpec, RecommendResult> kRecommend{
+    .run = [](const StudyInputs& in, const RecommendSpec& s,
+              std::ostream* progress) { return run_recommend(in, s, progress); },
+    .unit_table = [](const RecommendSpec&, const RecommendResult& r) { return recommend_table(r); },
+    .write = write_recommend,
+    .print_summary =
+        [](const RecommendSpec& s, const RecommendResult& r, std::ostream& out) {
+          const std::string md = recommend_markdown(r);
+          out << md.substr(0, md.find("\n## Candidates"))
+              << "\nTotal wall time: " << format_short(r.total_wall_s, 3) << " s (budget "
+              << format_short(s.budget_s, 3) << " s)\n";
+        },
+    .report_markdown =
+        [](const RecommendSpec&, const RecommendResult& r, const std::string& note) {
+          return note + "\n\n" + recommend_markdown(r);
+        },
+    .default_title = [](const RecommendSpec& s) { return "Recommend: " + s.model; },
+    .helpers = {}};
+
+using RecommendJob = TypedStudyJob<RecommendSpec, RecommendResult>;
 
 }  // namespace
 
@@ -426,28 +432,31 @@ StudyKind recommend_study_kind() {
   k.required = {"rtol"};
   k.unit_columns = recommend_table(RecommendResult{}).columns;
   k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
-    RecommendSpec spec;
-    spec.model = t.model;
-    spec.params = t.params;
-    spec.integrators = t.integrators;
+    RecommendSpec spec = with_inputs(RecommendSpec{}, t);
     spec.rtol = o.real("rtol");
     spec.budget_s = o.real(kBudgetKey);
     spec.t_end = o.real("t_end");
     spec.timing_repeats = static_cast<int>(o.integer(timing_repeats_option("").key));
     spec.seed = static_cast<unsigned long>(o.integer("seed"));
-    return std::make_unique<RecommendJob>(std::move(spec));
+    spec.validate();
+    return std::make_unique<RecommendJob>(kRecommend, t, std::move(spec));
   };
   return k;
 }
 
 const RecommendResult& recommend_result(const StudyJob& job) {
-  return dynamic_cast<const RecommendJob&>(job).result();
+  return typed_result<RecommendSpec, RecommendResult>(job);
 }
 
-RecommendResult recommend_study(RecommendSpec spec, const StudyObjects& objects,
+RecommendResult run_recommend(const RecommendSpec& spec, std::ostream* progress) {
+  return run_recommend(inputs_of(spec), spec, progress);
+}
+
+RecommendResult recommend_study(const StudyInputs& in, RecommendSpec spec,
                                 const std::filesystem::path& dir, const StudyContext& ctx) {
-  const ScopedStudyObjects scope(objects, spec.model, spec.integrators);
-  RecommendJob job(std::move(spec));
+  spec = with_inputs(std::move(spec), in);
+  spec.validate();
+  RecommendJob job(kRecommend, in, std::move(spec));
   run_study_job(study_kind("recommend"), job, dir, ctx);
   return job.result();
 }

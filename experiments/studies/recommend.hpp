@@ -23,7 +23,7 @@
 // remaining budget (95% of --budget less the time used) divided by the methods still to run,
 // and is the row clock's limit of its settings, so a slow setting ends as `timeout`.
 // Meets the tolerance: error_rel = ||y - y_ref||_inf / max(1, ||y_ref||_inf) <= R at t_end;
-// y_ref is the exact solution, else an adaptive run (adaptive_state_at_end, not cached:
+// y_ref is the exact solution, else an adaptive run (reference_at_end, not cached:
 // cvode_bdf, or cvode_adams on a model that is not stiff, at rtol = max(1e-14, R·1e-4),
 // atol = rtol/100), limited to half the budget.
 // Pareto: among the rows that ended ok, a row is on the front for wall time (f evaluations)
@@ -45,7 +45,7 @@
 #include "core/solve_stats.hpp"
 #include "experiments/framework/study.hpp"
 #include "experiments/output/output.hpp"
-#include "experiments/studies/work_precision.hpp"
+#include "experiments/support/timed_settings.hpp"
 
 namespace stiffbench {
 
@@ -58,7 +58,7 @@ constexpr double kSceneEndTime = 1.0;         // s: a mechanical model without a
 struct RecommendSpec {
   std::string model;
   Params params;
-  std::vector<std::string> integrators;  // a user's integrator objects (names in scope)
+  std::vector<std::string> integrators;  // added to the candidates (labels of the inputs)
   double rtol = 0;
   double t_end = 0;  // 0: the model's literature end time
   double budget_s = 60;
@@ -97,13 +97,20 @@ struct RecommendResult {
   double total_wall_s = 0;
 };
 
+// Runs the sweep on `in` (its model, parameters and integrators replace the spec's; the
+// candidates are the registered integrators and `in`'s). Progress lines go to `progress`.
+RecommendResult run_recommend(const StudyInputs& in, const RecommendSpec& spec,
+                              std::ostream* progress);
+// The same on the names the spec gives (resolve_inputs first).
 RecommendResult run_recommend(const RecommendSpec& spec, std::ostream* progress);
 // Marks pareto_wall and pareto_f of the rows (see the header comment).
 void mark_pareto(std::vector<RecommendRow>& rows);
 Table recommend_table(const RecommendResult& r);
 std::string recommend_markdown(const RecommendResult& r);
 
-RecommendResult recommend_study(RecommendSpec spec, const StudyObjects& objects,
+// The one call on resolved inputs (a program's objects: resolve_inputs(StudyTarget{.objects =
+// ...})): check DIR, run, write recommend.{csv,md,json}, plot, print (ctx.out).
+RecommendResult recommend_study(const StudyInputs& in, RecommendSpec spec,
                                 const std::filesystem::path& dir, const StudyContext& ctx = {});
 const RecommendResult& recommend_result(const StudyJob& job);
 

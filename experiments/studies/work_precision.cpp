@@ -11,6 +11,7 @@
 #include "core/driver.hpp"
 #include "core/run_control.hpp"
 #include "experiments/framework/catalog.hpp"
+#include "experiments/support/timed_settings.hpp"
 
 namespace stiffbench {
 
@@ -42,9 +43,20 @@ WorkPrecisionSpec::WorkPrecisionSpec() {
   apply_defaults(work_precision_defaults());
 }
 
+void WorkPrecisionSpec::read_options(const Params& o) {
+  read_step_study_options(o, *this);
+  if (std::isnan(h)) h = 0;
+  tol_levels = static_cast<int>(o.integer("tol_levels"));
+  rtol_max = o.real("rtol_max");
+  atol_factor = o.real("atol_factor");
+  repeats = static_cast<int>(o.integer(timing_repeats_option("").key));
+  seed = static_cast<unsigned long>(o.integer("seed"));
+}
+
 void WorkPrecisionSpec::validate() const {
   validate_step_study();
-  choose_reference(*this, nullptr, 0, 0);  // the names: an unknown or a studied method
+  // The names: an unknown or a studied method.
+  choose_reference(reference_request(nullptr), integrators, nullptr, 0, 0);
 }
 
 nlohmann::json WorkPrecisionSpec::to_json() const {
@@ -52,40 +64,10 @@ nlohmann::json WorkPrecisionSpec::to_json() const {
   j["tol_levels"] = tol_levels;
   j["rtol_max"] = rtol_max;
   j["atol_factor"] = atol_factor;
-  j["repeats"] = repeats;
+  j[timing_repeats_option("").key] = repeats;
   j["seed"] = seed;
   return j;
 }
-
-namespace {
-
-// The first field in which a repeat differs from the first run ("" when none): the status, the
-// final state (bit for bit) and every SolveStats field but the wall time.
-std::string repeat_mismatch(const RunResult& a, const RunResult& b) {
-  if (a.stats.status != b.stats.status)
-    return "status (" + to_string(b.stats.status) + " against " + to_string(a.stats.status) + ")";
-  if (a.y.size() != b.y.size() || a.y != b.y)
-    return "the final state (max difference " +
-           (a.y.size() == b.y.size() ? format_short(max_abs_diff(a.y, b.y)) : "size") + ")";
-  const auto names = SolveStats::field_names();
-  const auto va = a.stats.field_values(), vb = b.stats.field_values();
-  for (std::size_t i = 0; i < names.size(); ++i)
-    if (names[i] != "wall_s" && va[i] != vb[i])
-      return names[i] + " (" + vb[i] + " against " + va[i] + ")";
-  if (a.stats.library_f_evals != b.stats.library_f_evals)
-    return "library_f_evals (" + std::to_string(b.stats.library_f_evals) + " against " +
-           std::to_string(a.stats.library_f_evals) + ")";
-  return {};
-}
-
-double mescd(CVecRef y, CVecRef ref, double ratio) {
-  double m = 0;
-  for (Index i = 0; i < y.size(); ++i)
-    m = std::max(m, std::abs(y[i] - ref[i]) / (ratio + std::abs(ref[i])));
-  return -std::log10(m);
-}
-
-}  // namespace
 
 double published_accuracy(const OdeSystem::PublishedSolution& p) {
   double acc = 0;
@@ -137,9 +119,11 @@ void numerical_reference(const ReferenceChoice& choice, const OdeSystem& sys, do
 
 }  // namespace
 
-WorkPrecisionReference work_precision_reference(const WorkPrecisionSpec& spec, const OdeSystem& sys,
+WorkPrecisionReference work_precision_reference(const StudyInputs& in,
+                                                const WorkPrecisionSpec& spec, const OdeSystem& sys,
                                                 double h_fine, std::ostream* progress) {
-  const ReferenceChoice choice = choose_reference(spec, &sys, spec.t_end, h_fine);
+  const ReferenceChoice choice =
+      choose_reference(spec.reference_request(&in), spec.integrators, &sys, spec.t_end, h_fine);
   WorkPrecisionReference r;
   if (choice.kind == "exact") {
     r.values = reference_at_end(choice.numerical, sys, spec.t_end, h_fine, &r.description);
@@ -196,33 +180,13 @@ WorkPrecisionReference work_precision_reference(const WorkPrecisionSpec& spec, c
 
 namespace {
 
-// One row's point: its integrator and ladder index, its first run and the wall times so far.
-struct WorkPrecisionPoint {
-  std::size_t integ, k;
-  bool adaptive;
-  RunResult first;
-  std::vector<double> walls;
-  bool stopped = false;
-  std::string mismatch;
-};
-
-// What every point of one run shares: the resolved spec, the model, the ladders, the reference.
-struct WorkPrecisionContext {
-  const WorkPrecisionSpec& spec;
-  const OdeSystem& sys;
-  const Setup& setup;
-  const std::vector<double>& tols;
-  const std::vector<double>& hs;
-  const Vec& ref;
-  std::ostream* progress;
-};
-
 // An adaptive method runs over the tolerance ladder, so it must take rtol and atol (a user's
 // integrator object without them would run at its own tolerance in every row).
-void require_tolerance_params(const Setup& setup) {
-  for (const auto& integ : setup.integrators) {
+void require_tolerance_params(const StudyInputs& in, const Setup& setup) {
+  for (std::size_t i = 0; i < setup.integrators.size(); ++i) {
+    const auto& integ = setup.integrators[i];
     if (!integ->supports_adaptive()) continue;
-    const auto& entry = integrator_registry().at(integ->info().name);
+    const auto& entry = in.integrator_entry(in.integrators[i]);
     bool tolerances = false;
     for (const auto& p : entry.params) tolerances = tolerances || p.key == "rtol";
     require_input(tolerances, "integrator '" + integ->info().name +
@@ -232,138 +196,24 @@ void require_tolerance_params(const Setup& setup) {
   }
 }
 
-// The points in the rows' order: per integrator, its tolerance ladder or its step ladder.
-std::vector<WorkPrecisionPoint> work_precision_points(const WorkPrecisionContext& c) {
-  std::vector<WorkPrecisionPoint> points;
-  for (std::size_t i = 0; i < c.setup.integrators.size(); ++i) {
-    const bool adaptive = c.setup.integrators[i]->supports_adaptive();
-    for (std::size_t k = 0; k < (adaptive ? c.tols.size() : c.hs.size()); ++k)
-      points.push_back(WorkPrecisionPoint{i, k, adaptive, {}, {}, false, {}});
-  }
-  return points;
-}
-
-// One run of a point: an adaptive method at its tolerance, a fixed-step method at its step.
-RunResult run_point(const WorkPrecisionContext& c, const WorkPrecisionPoint& p) {
-  const std::string& name = c.spec.integrators[p.integ];
-  if (p.adaptive) {
-    Params prm = c.spec.params;
-    prm.set("rtol", format_full(c.tols[p.k]));
-    prm.set("atol", format_full(c.tols[p.k] * c.spec.atol_factor));
-    auto integ = integrator_registry().create(name, prm);
-    return run_adaptive(c.sys, *integ, {c.spec.t_end, 0});
-  }
-  FixedStepOptions opt;
-  opt.t_end = c.spec.t_end;
-  opt.h = c.hs[p.k];
-  return run_fixed_step(c.sys, *c.setup.integrators[p.integ], opt);
-}
-
-// Whether a point runs again in a later round (see kRepeatBudget in the header).
-bool repeats_more(const WorkPrecisionContext& c, const WorkPrecisionPoint& p) {
-  double total = 0;
-  for (double w : p.walls) total += w;
-  return !p.stopped && static_cast<int>(p.walls.size()) < c.spec.repeats &&
-         p.walls.front() < kRepeatLongRun && total < kRepeatBudget;
-}
-
-// Records a point's first run and reports it as run `done` of `total`.
-void record_first_run(const WorkPrecisionContext& c, WorkPrecisionPoint& p, RunResult r,
-                      std::size_t done, std::size_t total) {
-  p.walls.push_back(r.stats.wall_s);
-  p.stopped = r.stats.status != Status::ok;  // a failed run is not repeated
-  p.first = std::move(r);
-  if (c.progress) {
-    const RunResult& f = p.first;
-    const bool ok = f.stats.status == Status::ok;
-    *c.progress << "[" << done << "/" << total << "] " << c.spec.integrators[p.integ] << " "
-                << (p.adaptive ? "rtol=" + format_short(c.tols[p.k], 0) : "h=" + format_full(f.h))
-                << " error="
-                << (ok ? format_short(max_abs_diff(f.y, c.ref)) : to_string(f.stats.status))
-                << " f_evals=" << f.stats.f_evals << " (" << format_short(f.stats.wall_s, 2)
-                << " s)\n"
-                << std::flush;
-  }
-}
-
-// Records a repeat: its wall time, or a stop on a timeout or on a result differing from run 1.
-void record_repeat(WorkPrecisionPoint& p, const RunResult& r) {
-  if (r.stats.status == Status::timeout) {
-    p.stopped = true;  // over --max-wall: the runs so far stand
-    return;
-  }
-  p.mismatch = repeat_mismatch(p.first, r);
-  if (!p.mismatch.empty()) {
-    p.mismatch = "not deterministic: run " + std::to_string(p.walls.size() + 1) +
-                 " differs from run 1 in " + p.mismatch;
-    p.stopped = true;
-  } else {
-    p.walls.push_back(r.stats.wall_s);
-  }
-}
-
-// Runs the points in rounds, each shuffled with the seed, until no point repeats any more.
-void run_rounds(const WorkPrecisionContext& c, std::vector<WorkPrecisionPoint>& points) {
-  std::size_t done = 0;
-  for (int round = 1; round <= c.spec.repeats; ++round) {
-    std::size_t ran = 0;
-    double spent = 0;
-    for (const std::size_t idx : run_order(points.size(), c.spec.seed, round)) {
-      WorkPrecisionPoint& p = points[idx];
-      if (round > 1 && !repeats_more(c, p)) continue;
-      RunResult r = run_point(c, p);
-      ++ran;
-      spent += r.stats.wall_s;
-      if (round == 1)
-        record_first_run(c, p, std::move(r), ++done, points.size());
-      else
-        record_repeat(p, r);
-    }
-    if (c.progress && round > 1 && ran > 0)
-      *c.progress << "repeat round " << round << "/" << c.spec.repeats << ": " << ran << " runs ("
-                  << format_short(spent, 2) << " s)\n"
-                  << std::flush;
-    if (ran == 0) break;
-  }
-}
-
-// The row of point `idx`: its first run's counters, the timing spread, the errors.
-WorkPrecisionRow work_precision_row(const WorkPrecisionContext& c, const WorkPrecisionPoint& p,
-                                    std::size_t idx) {
-  WorkPrecisionRow row;
-  row.model = c.spec.model;
-  row.integrator = c.spec.integrators[p.integ];
-  row.setting = p.adaptive ? "rtol=" + format_short(c.tols[p.k], 0) : "h=" + format_full(p.first.h);
-  row.stats = p.first.stats;
-  row.wall = timing_spread(p.walls, c.spec.seed, idx);
-  row.stats.wall_s = row.wall.median;
-  if (!p.mismatch.empty()) {
-    row.stats.status = Status::error;
-    row.stats.message = p.mismatch;
-  }
-  const bool ok = row.stats.status == Status::ok;
-  row.error = ok ? max_abs_diff(p.first.y, c.ref) : std::numeric_limits<double>::quiet_NaN();
-  row.mescd =
-      ok ? mescd(p.first.y, c.ref, c.spec.atol_factor) : std::numeric_limits<double>::quiet_NaN();
-  return row;
-}
-
 }  // namespace
 
-WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream* progress) {
-  WorkPrecisionSpec spec = s;
+WorkPrecisionResult run_work_precision(const StudyInputs& in, const WorkPrecisionSpec& s,
+                                       std::ostream* progress) {
+  WorkPrecisionSpec spec = with_inputs(s, in);
   spec.validate();
   require_input(spec.tol_levels >= 2,
                 "--tol-levels must be >= 2 (got " + std::to_string(spec.tol_levels) + ")");
-  require_input(spec.repeats >= 1, "--repeats must be >= 1");
+  require_input(spec.max_runs() >= 1, option_flag(timing_repeats_option("").key) + " must be >= 1");
   require_input(spec.rtol_max > 0 && spec.rtol_max < 1, "--rtol-max must be in (0, 1)");
   require_input(spec.atol_factor >= 0, "--atol-factor must be >= 0");
-  Setup setup = make_setup(spec.model, spec.integrators, spec.params);
+  Setup setup = make_setup(in);
   const OdeSystem& sys = *setup.model;
   const double t0 = sys.initial_time();
   spec.t_end = resolve_end_time(sys, spec.t_end == 0 ? std::nan("") : spec.t_end, spec.model).value;
   require_input(spec.t_end > t0, "--t-end must be > the model's initial time");
-  choose_reference(spec, &sys, spec.t_end, 0);  // exact / published: the model has it
+  // exact / published: the model has it.
+  choose_reference(spec.reference_request(&in), spec.integrators, &sys, spec.t_end, 0);
   const Resolved h0 = resolve_step(sys, spec.h == 0 ? std::nan("") : spec.h, spec.model, [&] {
     return Resolved{(spec.t_end - t0) / 16000, "(t_end - t0)/16000"};
   });
@@ -376,19 +226,34 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
   const std::vector<double> hs = spec.step_ladder(spec.h);
   for (int k = 0; k < spec.tol_levels; ++k) tols.push_back(spec.rtol_max / std::pow(10.0, k));
   for (double h : hs) fixed_step_count(t0, spec.t_end, h, FixedStepOptions{}.max_steps);
-  require_tolerance_params(setup);
+  require_tolerance_params(in, setup);
 
   WorkPrecisionResult res;
   res.t_end = spec.t_end;
   res.h = spec.h;
   res.h_source = h_source;
-  res.reference = work_precision_reference(spec, sys, hs.back(), progress);
+  res.reference = work_precision_reference(in, spec, sys, hs.back(), progress);
   res.reference_description = res.reference.description;
   const Vec& ref = res.reference.values;
   if (progress) *progress << "reference: " << res.reference_description << "\n";
 
   // The points in the rows' order; run in rounds (see kRepeatBudget in the header).
-  const WorkPrecisionContext c{spec, sys, setup, tols, hs, ref, progress};
+  std::vector<Integrator*> instances;
+  for (const auto& integ : setup.integrators) instances.push_back(integ.get());
+  const TimedSweep c{in,
+                     sys,
+                     spec.model,
+                     spec.params,
+                     spec.integrators,
+                     instances,
+                     spec.t_end,
+                     spec.atol_factor,
+                     spec.max_runs(),
+                     spec.seed,
+                     tols,
+                     hs,
+                     ref,
+                     progress};
   std::vector<WorkPrecisionPoint> points = work_precision_points(c);
   run_rounds(c, points);
   for (std::size_t idx = 0; idx < points.size(); ++idx) {
@@ -399,33 +264,6 @@ WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& s, std::ostream*
                              row.error <= kFloorFactor * *res.reference.error_estimate;
   }
   return res;
-}
-
-WorkPrecisionRow run_work_precision_setting(const OdeSystem& sys, const std::string& model,
-                                            const std::string& integrator, const Params& params,
-                                            bool adaptive, double setting, double atol_factor,
-                                            double t_end, const Vec& ref, int repeats,
-                                            unsigned long seed, std::size_t stream,
-                                            double wall_limit_s) {
-  WorkPrecisionSpec spec;
-  spec.model = model;
-  spec.params = params;
-  spec.integrators = {integrator};
-  spec.t_end = t_end;
-  spec.atol_factor = atol_factor;
-  spec.repeats = repeats;
-  spec.seed = seed;
-  Setup setup;
-  setup.integrators.push_back(integrator_registry().create(integrator, params));
-  const std::vector<double> tols = {setting}, hs = {setting};
-  const WorkPrecisionContext c{spec, sys, setup, tols, hs, ref, nullptr};
-  std::vector<WorkPrecisionPoint> points = {WorkPrecisionPoint{0, 0, adaptive, {}, {}, false, {}}};
-  const double global = wall_limit();
-  const double limit =
-      global > 0 && (wall_limit_s <= 0 || global < wall_limit_s) ? global : wall_limit_s;
-  const RowClock clock(limit);
-  run_rounds(c, points);
-  return work_precision_row(c, points.front(), stream);
 }
 
 // The CSV contract: the original contract columns first, then the solver counters and the
@@ -484,7 +322,8 @@ Table work_precision_markdown_table(const WorkPrecisionResult& res) {
         break;
       }
   Table t{shown, {}};
-  t.columns.insert(t.columns.end(), {"wall s (median)", "95% interval", "repeats", "status"});
+  t.columns.insert(t.columns.end(),
+                   {"wall s (median)", "95% interval", kWallTimingColumns.runs, "status"});
   for (const auto& row : full.rows) {
     std::vector<std::string> out;
     for (const auto& c : shown) {
@@ -498,7 +337,7 @@ Table work_precision_markdown_table(const WorkPrecisionResult& res) {
     out.push_back(format_short(std::stod(row[col("wall_s_median")]), 2));
     out.push_back("[" + format_short(std::stod(row[col("wall_s_ci_low")]), 2) + ", " +
                   format_short(std::stod(row[col("wall_s_ci_high")]), 2) + "]");
-    out.push_back(row[col("repeats")]);
+    out.push_back(row[col(kWallTimingColumns.runs)]);
     out.push_back(row[col("flag")].empty() ? row[col("status")] : row[col("flag")]);
     t.rows.push_back(std::move(out));
   }
@@ -647,7 +486,7 @@ void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpe
   md << "# Work-precision: " << spec.model
      << "\n\nError: max-norm at t_end = " << format_full(res.t_end) << " against "
      << res.reference_description << "; mescd with atol/rtol = " << format_full(spec.atol_factor)
-     << ". Wall time: the median over up to " << spec.repeats
+     << ". Wall time: the median over up to " << spec.max_runs()
      << " runs per row (fewer for slow rows: a first run of " << format_short(kRepeatLongRun, 2)
      << " s or more runs once, and repeats stop once a row's runs total "
      << format_short(kRepeatBudget, 2) << " s), run in shuffled rounds (seed " << spec.seed
@@ -667,7 +506,7 @@ void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpe
   meta["error_norm"] = "max-norm of the absolute error at t_end";
   meta["timing"] = {
       {"seed", spec.seed},
-      {"max_repeats", spec.repeats},
+      {"max_repeats", spec.max_runs()},
       {"repeat_long_run_s", kRepeatLongRun},
       {"repeat_budget_s", kRepeatBudget},
       {"bootstrap_resamples", kBootstrapResamples},
@@ -679,46 +518,25 @@ void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpe
 
 namespace {
 
-class WorkPrecisionJob : public StudyJob {
- public:
-  explicit WorkPrecisionJob(WorkPrecisionSpec spec) : spec_(std::move(spec)) { spec_.validate(); }
-  nlohmann::json spec_json() const override { return spec_.to_json(); }
-  std::vector<std::string> helper_integrators() const override {
-    return spec_.reference_integrators();
-  }
-  void run(std::ostream* progress) override { result_ = run_work_precision(spec_, progress); }
-  Table unit_table() const override { return work_precision_table(result_); }
-  bool write(const std::filesystem::path& dir, const std::string& title, const PlotOptions& plot,
-             std::ostream& err) const override {
-    write_work_precision_outputs(dir.string(), spec_, result_);
-    return plot_work_precision(dir / "work_precision.csv", title, plot, err);
-  }
-  void print_summary(std::ostream& out) const override { out << unit_table().to_markdown(); }
-  std::string report_markdown(const std::string& note) const override;
-  std::string default_title() const override { return "Work-precision: " + spec_.model; }
-  const WorkPrecisionResult& result() const { return result_; }
-
- private:
-  WorkPrecisionSpec spec_;
-  WorkPrecisionResult result_;
-};
-
-std::string WorkPrecisionJob::report_markdown(const std::string& note) const {
+// The report's section: what was timed, the reference and each integrator's best point.
+std::string work_precision_report(const WorkPrecisionSpec& spec, const WorkPrecisionResult& result,
+                                  const std::string& note) {
   std::ostringstream md;
-  md << note << " Fixed-step methods over h, references over rtol (atol = "
-     << format_full(spec_.atol_factor) << "·rtol). Wall time: the median over up to "
-     << spec_.repeats << " runs per setting in rounds shuffled with seed " << spec_.seed
+  md << note
+     << " Fixed-step methods over h, references over rtol (atol = " << format_full(spec.atol_factor)
+     << "·rtol). Wall time: the median over up to " << spec.max_runs()
+     << " runs per setting in rounds shuffled with seed " << spec.seed
      << ", with a bootstrap 95% interval. Best error: the smallest not at the reference's "
         "floor.\n\n"
-     << reference_markdown(result_) << "\n";
+     << reference_markdown(result) << "\n";
   Table summary{{"integrator", "settings", "best error", "f_evals at best", "newton_iters at best",
                  "wall s at best (median [95% interval])", "status"},
                 {}};
-  for (const auto& name : spec_.integrators) {
+  for (const auto& name : spec.integrators) {
     int n = 0, floor = 0;
     const WorkPrecisionRow* best = nullptr;
     std::string status = "ok";
-    for (const auto& r : result_.rows) {
+    for (const auto& r : result.rows) {
       if (r.integrator != name) continue;
       ++n;
       if (r.stats.status != Status::ok)
@@ -738,9 +556,29 @@ std::string WorkPrecisionJob::report_markdown(const std::string& note) const {
               : "-",
          status});
   }
-  md << summary.to_markdown() << tolerance_response_markdown(result_) << "\n";
+  md << summary.to_markdown() << tolerance_response_markdown(result) << "\n";
   return md.str();
 }
+
+const StudyFunctions<WorkPrecisionSpec, WorkPrecisionResult> kWorkPrecision{
+    .run = [](const StudyInputs& in, const WorkPrecisionSpec& s,
+              std::ostream* progress) { return run_work_precision(in, s, progress); },
+    .unit_table = [](const WorkPrecisionSpec&,
+                     const WorkPrecisionResult& r) { return work_precision_table(r); },
+    .write =
+        [](const std::filesystem::path& dir, const WorkPrecisionSpec& s,
+           const WorkPrecisionResult& r, const std::string& title, const PlotOptions& plot,
+           std::ostream& err) {
+          write_work_precision_outputs(dir.string(), s, r);
+          return plot_work_precision(dir / "work_precision.csv", title, plot, err);
+        },
+    .print_summary = [](const WorkPrecisionSpec&, const WorkPrecisionResult& r,
+                        std::ostream& out) { out << work_precision_table(r).to_markdown(); },
+    .report_markdown = work_precision_report,
+    .default_title = [](const WorkPrecisionSpec& s) { return "Work-precision: " + s.model; },
+    .helpers = [](const WorkPrecisionSpec& s) { return s.reference_integrators(); }};
+
+using WorkPrecisionJob = TypedStudyJob<WorkPrecisionSpec, WorkPrecisionResult>;
 
 }  // namespace
 
@@ -764,24 +602,20 @@ StudyKind work_precision_study_kind() {
   k.options.insert(k.options.end(), own.begin(), own.end());
   k.unit_columns = work_precision_table(WorkPrecisionResult{}).columns;
   k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
-    WorkPrecisionSpec spec;
-    spec.model = t.model;
-    spec.params = t.params;
-    spec.integrators = t.integrators;
-    read_step_study_options(o, spec);
-    if (std::isnan(spec.h)) spec.h = 0;
-    spec.tol_levels = static_cast<int>(o.integer("tol_levels"));
-    spec.rtol_max = o.real("rtol_max");
-    spec.atol_factor = o.real("atol_factor");
-    spec.repeats = static_cast<int>(o.integer("repeats"));
-    spec.seed = static_cast<unsigned long>(o.integer("seed"));
-    return std::make_unique<WorkPrecisionJob>(std::move(spec));
+    WorkPrecisionSpec spec = with_inputs(WorkPrecisionSpec{}, t);
+    spec.read_options(o);
+    spec.validate();
+    return std::make_unique<WorkPrecisionJob>(kWorkPrecision, t, std::move(spec));
   };
   return k;
 }
 
 const WorkPrecisionResult& work_precision_result(const StudyJob& job) {
-  return dynamic_cast<const WorkPrecisionJob&>(job).result();
+  return typed_result<WorkPrecisionSpec, WorkPrecisionResult>(job);
+}
+
+WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& spec, std::ostream* progress) {
+  return run_work_precision(inputs_of(spec), spec, progress);
 }
 
 WorkPrecisionResult work_precision_study(const WorkPrecisionSpec& spec, const std::string& dir,
@@ -792,27 +626,17 @@ WorkPrecisionResult work_precision_study(const WorkPrecisionSpec& spec, const st
   ctx.plot = plot;
   ctx.progress = progress;
   ctx.err = &err;
-  return work_precision_study(spec, StudyObjects{}, dir, ctx);
+  return work_precision_study(inputs_of(spec), spec, dir, ctx);
 }
 
-WorkPrecisionResult work_precision_study(WorkPrecisionSpec spec, const StudyObjects& objects,
+WorkPrecisionResult work_precision_study(const StudyInputs& in, WorkPrecisionSpec spec,
                                          const std::filesystem::path& dir,
                                          const StudyContext& ctx) {
-  const ScopedStudyObjects scope(objects, spec.model, spec.integrators);
-  WorkPrecisionJob job(std::move(spec));
+  spec = with_inputs(std::move(spec), in);
+  spec.validate();
+  WorkPrecisionJob job(kWorkPrecision, in, std::move(spec));
   run_study_job(study_kind("work-precision"), job, dir, ctx);
   return job.result();
-}
-
-WorkPrecisionResult run_work_precision(WorkPrecisionSpec spec, const StudyObjects& objects,
-                                       std::ostream* progress) {
-  const ScopedStudyObjects scope(objects, spec.model, spec.integrators);
-  return run_work_precision(static_cast<const WorkPrecisionSpec&>(spec), progress);
-}
-
-WorkPrecisionResult run_work_precision(WorkPrecisionSpec spec, const SystemFactory& system,
-                                       std::ostream* progress) {
-  return run_work_precision(std::move(spec), StudyObjects{system, {}}, progress);
 }
 
 }  // namespace stiffbench

@@ -20,14 +20,17 @@
 #include "core/params.hpp"
 #include "core/solve_stats.hpp"
 #include "experiments/framework/catalog.hpp"
+#include "experiments/framework/study.hpp"
 #include "experiments/output/output.hpp"
 #include "experiments/output/plotting.hpp"
-#include "experiments/studies/convergence.hpp"
+#include "experiments/support/reference.hpp"
+#include "experiments/support/step_study.hpp"
+#include "experiments/support/timed_settings.hpp"
 #include "experiments/support/timing.hpp"
 
 namespace stiffbench {
 
-// The step ladder and reference are StepStudySpec's (experiments/studies/convergence.hpp) with
+// The step ladder and reference are StepStudySpec's (experiments/support/step_study.hpp) with
 // other defaults: t_end = 0 (the model's literature end time); h = 0, the coarsest step: the
 // model's suggested step, else (t_end - t0)/16000. Fixed steps on stiff problems are pre-asymptotic
 // for a long way (bdf2 on HIRES: the final-time error crosses zero near h = 0.04, so a ladder
@@ -47,6 +50,10 @@ struct WorkPrecisionSpec : StepStudySpec {
   unsigned long seed = 1;
 
   nlohmann::json to_json() const;
+  // The most runs per point (`repeats`).
+  int max_runs() const { return repeats; }
+  // The options of the study registry (work_precision_study_kind) read into the spec.
+  void read_options(const Params& options);
   // validate_step_study, and a --reference that is also one of the integrators is BadInput
   // (see "The reference" below).
   void validate() const;
@@ -60,7 +67,7 @@ struct WorkPrecisionSpec : StepStudySpec {
 //  - `exact`: the exact solution (BadInput without one);
 //  - `published`: the model's published solution at t_end (BadInput without one there);
 //  - an integrator (a name or a method file): the numerical reference is that method.
-// The numerical reference R is reference_at_end (experiments/studies/convergence.hpp): an adaptive
+// The numerical reference R is reference_at_end (experiments/support/reference.hpp): an adaptive
 // method at --reference-rtol/--reference-atol (default 1e-14, 1e-16), a fixed-step one at
 // (finest h)/16. Its accuracy is estimated as convergence estimates its reference's: a second
 // run R2, tighter by kReferenceTightening (rtol/10 and atol/10; half the step), and
@@ -107,29 +114,11 @@ constexpr int kPublishedDigits = 16;
 double published_accuracy(const OdeSystem::PublishedSolution& p);
 // The reference of a work-precision study at spec.t_end (the spec resolved: t_end > t0, the
 // reference a name); h_fine: the finest step of the fixed-step ladder. BadInput as above.
-WorkPrecisionReference work_precision_reference(const WorkPrecisionSpec& spec, const OdeSystem& sys,
+WorkPrecisionReference work_precision_reference(const StudyInputs& in,
+                                                const WorkPrecisionSpec& spec, const OdeSystem& sys,
                                                 double h_fine, std::ostream* progress);
-
-// Timing with spread (the rounds, the repeat rule, the bootstrap interval of the median):
-// experiments/support/timing.hpp.
-
-// The timing columns of work_precision.csv, in order: the median, the fastest run, the
-// bootstrap interval of the median and the number of runs (read by
-// experiments/commands/compare.cpp).
-struct TimingColumnNames {
-  const char *median, *min, *ci_low, *ci_high, *runs;
-};
-inline constexpr TimingColumnNames kWallTimingColumns{"wall_s_median", "wall_s_min",
-                                                      "wall_s_ci_low", "wall_s_ci_high", "repeats"};
-
-struct WorkPrecisionRow {
-  std::string model, integrator, setting;
-  double error = 0, mescd = 0;
-  SolveStats stats;  // the first run's (wall_s: the median over the repeats)
-  TimingSpread wall;
-  // ok, and error <= kFloorFactor × the reference's estimated error (see "The reference").
-  bool at_reference_floor = false;
-};
+// (Timing with spread, the row of a timed setting and run_work_precision_setting:
+// experiments/support/timing.hpp and experiments/support/timed_settings.hpp.)
 
 struct WorkPrecisionResult {
   std::vector<WorkPrecisionRow> rows;
@@ -140,25 +129,12 @@ struct WorkPrecisionResult {
   std::string h_source;  // where it came from
 };
 
+// Runs the study on `in` (its model, parameters and integrators replace the spec's; a
+// user-named reference is looked up there). Progress lines go to `progress` when non-null.
+WorkPrecisionResult run_work_precision(const StudyInputs& in, const WorkPrecisionSpec& spec,
+                                       std::ostream* progress);
+// The same on the names the spec gives (resolve_inputs first).
 WorkPrecisionResult run_work_precision(const WorkPrecisionSpec& spec, std::ostream* progress);
-// The same on a user's objects (see run_convergence with StudyObjects).
-WorkPrecisionResult run_work_precision(WorkPrecisionSpec spec, const StudyObjects& objects,
-                                       std::ostream* progress);
-WorkPrecisionResult run_work_precision(WorkPrecisionSpec spec, const SystemFactory& system,
-                                       std::ostream* progress);
-// One setting of the sweep (recommend): `integrator` (created from the registry with `params`)
-// at tolerance `setting` (adaptive: rtol = setting, atol = atol_factor·setting) or at step
-// `setting` (fixed step) over [t0, t_end], timed like a work-precision point (repeats up to
-// `repeats` under kRepeatLongRun and kRepeatBudget, repeats checked for determinism) and
-// measured against `ref` (error, mescd). All runs of the setting share one row clock of
-// `wall_limit_s` seconds (0: none), or the --max-wall limit when that is smaller, so a slow
-// setting ends as `timeout`.
-WorkPrecisionRow run_work_precision_setting(const OdeSystem& sys, const std::string& model,
-                                            const std::string& integrator, const Params& params,
-                                            bool adaptive, double setting, double atol_factor,
-                                            double t_end, const Vec& ref, int repeats,
-                                            unsigned long seed, std::size_t stream,
-                                            double wall_limit_s);
 // The CSV contract: model, integrator, setting, error, f_evals, jac_evals, lin_solves, steps,
 // wall_s, status, mescd, the solver counters (SolveStats::counter_names), wall_s_median,
 // wall_s_min, wall_s_ci_low, wall_s_ci_high, repeats, then flag (`reference_floor` for a row
@@ -184,8 +160,9 @@ void write_work_precision_outputs(const std::string& dir, const WorkPrecisionSpe
 WorkPrecisionResult work_precision_study(const WorkPrecisionSpec& spec, const std::string& dir,
                                          std::ostream* progress, std::ostream& err,
                                          const PlotOptions& plot = {});
-// The one call on a user's objects (the pipeline of experiments/framework/study.hpp).
-WorkPrecisionResult work_precision_study(WorkPrecisionSpec spec, const StudyObjects& objects,
+// The one call on resolved inputs (a program's objects: resolve_inputs(StudyTarget{.objects =
+// ...})): the pipeline of experiments/framework/study.hpp.
+WorkPrecisionResult work_precision_study(const StudyInputs& in, WorkPrecisionSpec spec,
                                          const std::filesystem::path& dir,
                                          const StudyContext& ctx = {});
 const WorkPrecisionResult& work_precision_result(const StudyJob& job);

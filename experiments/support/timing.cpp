@@ -66,11 +66,4 @@ TimingSpread timing_spread(const std::vector<double>& samples, std::uint64_t see
   return t;
 }
 
-ParamSpec timing_repeats_option(const std::string& default_value) {
-  return {"repeats", ParamType::integer, default_value,
-          "most runs per setting (a first run of 1 s or more runs once; repeats stop once a "
-          "setting's runs total 2 s); the time is their median, with a bootstrap 95% interval",
-          Bounds::at_least(1)};
-}
-
 }  // namespace stiffbench

@@ -1,13 +1,6 @@
-// Timing with spread, shared by the studies that time runs (work-precision, budget).
-//
-// Every point (one integrator at one h or tolerance) runs in round 1; in round k >= 2 it runs
-// again while it has run fewer than `repeats` times, its first run took under kRepeatLongRun
-// seconds and its runs so far took under kRepeatBudget seconds in total (a run of a second or
-// more runs once). Each round visits its points in an order shuffled with the spec's seed
-// (run_order), so methods are interleaved and slow drifts of the machine spread over all of
-// them. A point whose run did not end ok is not repeated. Every repeat must reproduce the first
-// run exactly (status, final state, every counter): a mismatch turns the row into status
-// `error` naming the field (a nondeterministic method is a bug).
+// Timing with spread, shared by the studies that time repeated runs (work-precision, budget,
+// recommend): the rounds' shuffled order, the repeat limits, the median with a bootstrap
+// interval, and the column names of the timing.
 #pragma once
 
 #include <cstddef>
@@ -20,6 +13,14 @@
 
 namespace stiffbench {
 
+// Every point (one integrator at one h or tolerance) runs in round 1; in round k >= 2 it runs
+// again while it has run fewer than `repeats` times, its first run took under kRepeatLongRun
+// seconds and its runs so far took under kRepeatBudget seconds in total (a run of a second or
+// more runs once). Each round visits its points in an order shuffled with the spec's seed
+// (run_order), so methods are interleaved and slow drifts of the machine spread over all of
+// them. A point whose run did not end ok is not repeated. Every repeat must reproduce the first
+// run exactly (status, final state, every counter): a mismatch turns the row into status
+// `error` naming the field (a nondeterministic method is a bug).
 constexpr double kRepeatLongRun = 1.0;  // s: a first run this long is not repeated
 constexpr double kRepeatBudget = 2.0;   // s: total of a point's runs before it stops repeating
 constexpr int kBootstrapResamples = 2000;
@@ -46,8 +47,22 @@ struct TimingSpread {
 TimingSpread timing_spread(const std::vector<double>& samples, std::uint64_t seed,
                            std::uint64_t stream, int resamples = kBootstrapResamples);
 
+// The timing columns of work_precision.csv, in order: the median, the fastest run, the
+// bootstrap interval of the median and the number of runs (read by
+// experiments/commands/compare.cpp).
+struct TimingColumnNames {
+  const char *median, *min, *ci_low, *ci_high, *runs;
+};
+inline constexpr TimingColumnNames kWallTimingColumns{"wall_s_median", "wall_s_min",
+                                                      "wall_s_ci_low", "wall_s_ci_high", "repeats"};
+
 // The option of the studies timed this way (work-precision, budget): the most runs per
 // setting, declared once.
-ParamSpec timing_repeats_option(const std::string& default_value);
+inline ParamSpec timing_repeats_option(const std::string& default_value) {
+  return {"repeats", ParamType::integer, default_value,
+          "most runs per setting (a first run of 1 s or more runs once; repeats stop once a "
+          "setting's runs total 2 s); the time is their median, with a bootstrap 95% interval",
+          Bounds::at_least(1)};
+}
 
 }  // namespace stiffbench

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "cli/cli_main.hpp"
+#include "experiments/build_info.hpp"
 #include "experiments/framework/catalog.hpp"
 #include "experiments/framework/study.hpp"
 #include "experiments/output/csv.hpp"
@@ -23,6 +24,29 @@
 
 namespace stiffbench {
 namespace {
+
+// The inputs of `spec` with a user's objects (resolve_inputs: nothing is registered by name).
+template <class Spec>
+StudyInputs inputs_with(const Spec& spec, StudyObjects objects) {
+  return resolve_inputs(StudyTarget{spec.model, spec.params, spec.integrators, std::move(objects)});
+}
+
+// methods/heun.toml registered from a copy under the name `name` (a method file in a temporary
+// folder); returns its path.
+std::string heun_file(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("stiffbench_" + name + "_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  std::ifstream in(std::filesystem::path(STIFFBENCH_SOURCE_DIR) / "methods" / "heun.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string s = text.str();
+  const std::string key = "name = \"heun\"";
+  s.replace(s.find(key), key.size(), "name = \"" + name + "\"");
+  const std::filesystem::path path = dir / (name + ".toml");
+  std::ofstream(path) << s;
+  return path.string();
+}
 
 namespace fs = std::filesystem;
 
@@ -204,8 +228,8 @@ TEST(Recommend, UsersOwnSystemGetsARecommendation) {
   StudyContext ctx;
   ctx.out = &out;
   ctx.err = &err;
-  const RecommendResult r =
-      recommend_study(s, StudyObjects{[] { return std::make_unique<UserDecay>(); }, {}}, dir, ctx);
+  const RecommendResult r = recommend_study(
+      inputs_with(s, StudyObjects{[] { return std::make_unique<UserDecay>(); }, {}}), s, dir, ctx);
   ASSERT_TRUE(r.best_wall) << recommend_markdown(r);
   EXPECT_LE(r.rows[*r.best_wall].error_rel, 1e-5);
   // ||y_ref||_inf = e^-1 < 1: error_rel is the absolute error |y - e^-1|.
@@ -214,6 +238,28 @@ TEST(Recommend, UsersOwnSystemGetsARecommendation) {
   EXPECT_TRUE(fs::exists(dir / "recommend.md"));
   EXPECT_EQ(model_registry().find("recommend_user_decay"), nullptr);
   fs::remove_all(dir);
+}
+
+// The sweep runs on resolved inputs: a method file and a variant given as integrators are
+// candidates under their labels (kept whatever their family) and run or are reported by label.
+TEST(RecommendInputs, MethodFileAndVariantAreCandidatesUnderTheirLabels) {
+  RecommendSpec s = small_spec();
+  s.rtol = 1e-3;
+  s.budget_s = 10;
+  StudyTarget t;
+  t.model = s.model;
+  t.integrators = {heun_file("rec_heun"), "radau5{linear_solver=dense_lu,label=radau5_dense_rec}"};
+  const StudyInputs in = resolve_inputs(t);
+  const RecommendResult r = run_recommend(in, s, nullptr);
+  for (const std::string label : {"rec_heun", "radau5_dense_rec"}) {
+    bool candidate = false, reported = false;
+    for (const auto& c : r.candidates)
+      if (c.integrator == label) candidate = c.included;
+    for (const auto& row : r.rows) reported = reported || row.run.integrator == label;
+    for (const auto& [name, why] : r.dropped) reported = reported || name == label;
+    EXPECT_TRUE(candidate) << label;
+    EXPECT_TRUE(reported) << label;
+  }
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "core/driver.hpp"
+#include "experiments/build_info.hpp"
 #include "experiments/commands/list_describe.hpp"
 #include "experiments/output/output.hpp"
 #include "experiments/studies/convergence.hpp"
@@ -20,6 +21,29 @@
 
 namespace stiffbench {
 namespace {
+
+// The inputs of `spec` with a user's objects (resolve_inputs: nothing is registered by name).
+template <class Spec>
+StudyInputs inputs_with(const Spec& spec, StudyObjects objects) {
+  return resolve_inputs(StudyTarget{spec.model, spec.params, spec.integrators, std::move(objects)});
+}
+
+// methods/heun.toml registered from a copy under the name `name` (a method file in a temporary
+// folder); returns its path.
+std::string heun_file(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("stiffbench_" + name + "_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  std::ifstream in(std::filesystem::path(STIFFBENCH_SOURCE_DIR) / "methods" / "heun.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string s = text.str();
+  const std::string key = "name = \"heun\"";
+  s.replace(s.find(key), key.size(), "name = \"" + name + "\"");
+  const std::filesystem::path path = dir / (name + ".toml");
+  std::ofstream(path) << s;
+  return path.string();
+}
 
 namespace fs = std::filesystem;
 
@@ -232,8 +256,9 @@ TEST(ReferenceCache, ChangedRightHandSideIsNotServedAStaleReference) {
   spec.reference = "rk4";
   spec.cache_dir = dir.string();
   auto run = [&](double rate) {
-    return run_convergence(spec, StudyObjects{[rate] { return std::make_unique<Decay>(rate); }, {}},
-                           nullptr);
+    return run_convergence(
+        inputs_with(spec, StudyObjects{[rate] { return std::make_unique<Decay>(rate); }, {}}), spec,
+        nullptr);
   };
   const ConvergenceResult a = run(1.0);
   EXPECT_FALSE(a.reference_from_cache);
@@ -531,6 +556,32 @@ TEST(SolveTimes, DriverStopsAtGivenTimes) {
   EXPECT_THROW(run_adaptive(*sys, *integ, opt), BadInput);
   opt.times = {1.0, 4.0};
   EXPECT_THROW(run_adaptive(*sys, *integ, opt), BadInput);
+}
+
+// The study runs on resolved inputs: a method file and a variant in the integrator list are
+// registered by resolve_inputs and appear in the rows under their labels, in the given order.
+TEST(ConvergenceInputs, MethodFileAndVariantRunUnderTheirLabels) {
+  ConvergenceSpec spec;
+  spec.model = "harmonic_oscillator";
+  spec.t_end = 1;
+  spec.h = 0.1;
+  spec.levels = 3;
+  StudyTarget t;
+  t.model = spec.model;
+  t.integrators = {"rk4", heun_file("conv_heun"),
+                   "radau5{linear_solver=dense_lu,label=radau5_dense_conv}"};
+  const StudyInputs in = resolve_inputs(t);
+  const ConvergenceResult r = run_convergence(in, spec, nullptr);
+  ASSERT_EQ(r.rows.size(), 9u);
+  const std::vector<std::string> labels = {"rk4", "conv_heun", "radau5_dense_conv"};
+  for (std::size_t k = 0; k < r.rows.size(); ++k) {
+    EXPECT_EQ(r.rows[k].integrator, labels[k / 3]) << k;
+    EXPECT_EQ(r.rows[k].stats.status, Status::ok) << r.rows[k].stats.message;
+  }
+  ASSERT_EQ(r.fits.size(), 3u);
+  EXPECT_EQ(r.fits[1].integrator, "conv_heun");
+  ASSERT_TRUE(last_observed_order(r.rows, "conv_heun"));
+  EXPECT_NEAR(*last_observed_order(r.rows, "conv_heun"), 2.0, 0.1);  // Heun is order 2
 }
 
 }  // namespace

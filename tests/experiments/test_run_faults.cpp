@@ -18,6 +18,12 @@ using namespace stiffbench;
 
 namespace {
 
+// The inputs of `spec` with a user's objects (resolve_inputs: nothing is registered by name).
+template <class Spec>
+StudyInputs inputs_with(const Spec& spec, StudyObjects objects) {
+  return resolve_inputs(StudyTarget{spec.model, spec.params, spec.integrators, std::move(objects)});
+}
+
 // y' = -y, y(0) = 1, exact e^{-t}. The fault fires on one chosen evaluation of the right-hand
 // side, counted over the process, so exactly one run of a study meets it.
 enum class Fault { none, throws, nan };
@@ -52,7 +58,8 @@ ConvergenceResult study(Fault fault, long fault_at) {
   spec.refine = 2;
   spec.reference = "exact";
   return run_convergence(
-      spec, [] { return std::make_unique<FaultyDecay>(); }, nullptr);
+      inputs_with(spec, StudyObjects{[] { return std::make_unique<FaultyDecay>(); }, {}}), spec,
+      nullptr);
 }
 
 // rk4 at h = 0.1 makes 10 steps x 4 evaluations; evaluation 30 falls in its first run.

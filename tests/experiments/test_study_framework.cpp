@@ -27,6 +27,12 @@ using namespace stiffbench;
 
 namespace {
 
+// The inputs of `spec` with a user's objects (resolve_inputs: nothing is registered by name).
+template <class Spec>
+StudyInputs inputs_with(const Spec& spec, StudyObjects objects) {
+  return resolve_inputs(StudyTarget{spec.model, spec.params, spec.integrators, std::move(objects)});
+}
+
 std::string slurp_file(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   std::stringstream ss;
@@ -317,7 +323,8 @@ TEST(StudyFramework, UserIntegratorObjectRunsWithoutRegistration) {
   spec.h = 0.01;
   spec.levels = 3;
   const ConvergenceResult r = run_convergence(
-      spec, StudyObjects{nullptr, {[] { return std::make_unique<MyEuler>(); }}}, nullptr);
+      inputs_with(spec, StudyObjects{nullptr, {[] { return std::make_unique<MyEuler>(); }}}), spec,
+      nullptr);
   ASSERT_EQ(r.rows.size(), 6u);
   for (std::size_t k = 0; k < 3; ++k) {
     EXPECT_EQ(r.rows[k].integrator, "euler");
@@ -351,7 +358,9 @@ TEST(StudyFramework, AdaptiveObjectWithoutTolerancesIsRefusedByWorkPrecision) {
   spec.repeats = 1;
   try {
     run_work_precision(
-        spec, StudyObjects{nullptr, {[] { return std::make_unique<MyAdaptiveEuler>(); }}}, nullptr);
+        inputs_with(spec,
+                    StudyObjects{nullptr, {[] { return std::make_unique<MyAdaptiveEuler>(); }}}),
+        spec, nullptr);
     ADD_FAILURE() << "not refused";
   } catch (const BadInput& e) {
     EXPECT_NE(std::string(e.what()).find("takes no rtol/atol"), std::string::npos) << e.what();

@@ -13,14 +13,39 @@
 #include <numeric>
 #include <random>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "core/driver.hpp"
+#include "experiments/build_info.hpp"
 #include "experiments/studies/work_precision.hpp"
 
 namespace stiffbench {
 namespace {
+
+// The inputs of `spec` with a user's objects (resolve_inputs: nothing is registered by name).
+template <class Spec>
+StudyInputs inputs_with(const Spec& spec, StudyObjects objects) {
+  return resolve_inputs(StudyTarget{spec.model, spec.params, spec.integrators, std::move(objects)});
+}
+
+// methods/heun.toml registered from a copy under the name `name` (a method file in a temporary
+// folder); returns its path.
+std::string heun_file(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("stiffbench_" + name + "_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  std::ifstream in(std::filesystem::path(STIFFBENCH_SOURCE_DIR) / "methods" / "heun.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string s = text.str();
+  const std::string key = "name = \"heun\"";
+  s.replace(s.find(key), key.size(), "name = \"" + name + "\"");
+  const std::filesystem::path path = dir / (name + ".toml");
+  std::ofstream(path) << s;
+  return path.string();
+}
 
 std::size_t column(const Table& t, const std::string& name) {
   const auto it = std::find(t.columns.begin(), t.columns.end(), name);
@@ -224,7 +249,8 @@ TEST(WorkPrecisionTiming, RepeatThatDiffersIsAnError) {
   spec.levels = 2;
   spec.repeats = 2;
   const WorkPrecisionResult res = run_work_precision(
-      spec, StudyObjects{nullptr, {[] { return std::make_unique<Fickle>(); }}}, nullptr);
+      inputs_with(spec, StudyObjects{nullptr, {[] { return std::make_unique<Fickle>(); }}}), spec,
+      nullptr);
   ASSERT_EQ(res.rows.size(), 4u);
   for (std::size_t i = 0; i < 2; ++i) {  // euler: deterministic
     EXPECT_EQ(res.rows[i].stats.status, Status::ok) << res.rows[i].stats.message;
@@ -528,6 +554,33 @@ TEST(WorkPrecisionReference, AMethodIsNotItsOwnReference) {
   EXPECT_NO_THROW(spec.validate());
   spec.reference = "published";
   EXPECT_NO_THROW(spec.validate());
+}
+
+// The study runs on resolved inputs: a method file (fixed-step, over the h ladder) and a variant
+// (adaptive, over the tolerance ladder with its fixed key kept) appear under their labels.
+TEST(WorkPrecisionInputs, MethodFileAndVariantRunUnderTheirLabels) {
+  WorkPrecisionSpec spec;
+  spec.model = "harmonic_oscillator";
+  spec.t_end = 1;
+  spec.h = 0.05;
+  spec.levels = 2;
+  spec.tol_levels = 2;
+  spec.repeats = 1;
+  spec.reference = "exact";
+  StudyTarget t;
+  t.model = spec.model;
+  t.integrators = {heun_file("wp_heun"), "radau5{linear_solver=dense_lu,label=radau5_dense_wp}"};
+  const StudyInputs in = resolve_inputs(t);
+  const WorkPrecisionResult r = run_work_precision(in, spec, nullptr);
+  ASSERT_EQ(r.rows.size(), 4u);
+  const std::vector<std::string> labels = {"wp_heun", "wp_heun", "radau5_dense_wp",
+                                           "radau5_dense_wp"};
+  for (std::size_t k = 0; k < r.rows.size(); ++k) {
+    EXPECT_EQ(r.rows[k].integrator, labels[k]) << k;
+    EXPECT_EQ(r.rows[k].stats.status, Status::ok) << r.rows[k].stats.message;
+  }
+  EXPECT_EQ(r.rows[0].setting.rfind("h=", 0), 0u) << r.rows[0].setting;
+  EXPECT_EQ(r.rows[2].setting.rfind("rtol=", 0), 0u) << r.rows[2].setting;
 }
 
 }  // namespace
