@@ -89,13 +89,16 @@ void record_timeout(RunResult& r, const std::string& what, double t_goal) {
 // The admissible-set check at an output time: the first component of `nonneg` (the model's
 // non-negative components) below -bound ends the run with status invalid_state and a message
 // naming the component, its value, t and the bound. Returns true when it did.
-bool left_admissible_set(const std::vector<Index>& nonneg, double bound, RunResult& r) {
+bool left_admissible_set(const OdeSystem& sys, const std::vector<Index>& nonneg, double bound,
+                         RunResult& r) {
   for (const Index i : nonneg) {
     if (!(r.y[i] < -bound)) continue;
     r.stats.status = Status::invalid_state;
     std::ostringstream msg;
     msg.precision(12);
-    msg << "component y[" << i << "] = " << r.y[i] << " < -" << bound << " at t = " << r.t
+    msg << "component y[" << i << "]";
+    if (const std::string name = sys.component_name(i); !name.empty()) msg << " (" << name << ")";
+    msg << " = " << r.y[i] << " < -" << bound << " at t = " << r.t
         << ": the model's solution keeps it non-negative";
     r.stats.message = msg.str();
     return true;
@@ -227,7 +230,7 @@ RunResult run_fixed_step_from(const OdeSystem& sys, Integrator& integ, double t0
       break;
     }
     if (k + 1 == output_step(next_output_index)) {
-      if (!nonneg.empty() && left_admissible_set(nonneg, roundoff_bound(r.y), r)) break;
+      if (!nonneg.empty() && left_admissible_set(sys, nonneg, roundoff_bound(r.y), r)) break;
       if (observer) observer(r.t, r.y);
       ++next_output_index;
     }
@@ -305,7 +308,7 @@ RunResult run_adaptive(const OdeSystem& sys, Integrator& integ, const AdaptiveOp
       break;
     }
     if (!nonneg.empty() &&
-        left_admissible_set(nonneg, atol && *atol > 0 ? *atol : roundoff_bound(r.y), r))
+        left_admissible_set(sys, nonneg, atol && *atol > 0 ? *atol : roundoff_bound(r.y), r))
       break;
     if (observer) observer(r.t, r.y);
   }

@@ -146,6 +146,9 @@ class ProblemMetadata {
   // f_i(t, y) >= 0 whenever y >= 0 and y_i = 0 keep y(t) >= 0 (a mass-action kinetics' species
   // is consumed only by reactions whose rate contains it). Empty (the default): no such set.
   virtual std::vector<Index> nonnegative_components() const { return {}; }
+  // The name of component i where the literature has one (a species, "v_3" of an interleaved
+  // grid), for messages such as invalid_state's; empty (the default) otherwise.
+  virtual std::string component_name(Index /*i*/) const { return {}; }
 };
 
 // What `solve --frames` writes besides the state: particle and grid views, profiles and

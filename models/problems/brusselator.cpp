@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <string>
 
 namespace stiffbench {
 
@@ -68,6 +69,11 @@ std::optional<double> Brusselator::stiffness(double t, CVecRef y) const {
   SparseMat jac;
   eval_jacobian(t, y, jac);  // not counted: an estimate, not a solver's evaluation
   return gershgorin_bound(jac);
+}
+
+std::string Brusselator::component_name(Index i) const {
+  if (i < 0 || i >= dimension()) return {};
+  return (i % 2 == 0 ? "u_" : "v_") + std::to_string(i / 2 + 1);
 }
 
 std::vector<Profile> Brusselator::profiles(double, CVecRef y) const {

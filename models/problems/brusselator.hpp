@@ -49,6 +49,8 @@ class Brusselator final : public OdeSystem {
   std::optional<double> stiffness(double t, CVecRef y) const override;
   std::vector<Profile> profiles(double t, CVecRef y) const override;
   std::vector<Index> nonnegative_components() const override { return all_components(2 * n_); }
+  // "u_i" or "v_i" (i = 1..N) of the interleaved unknowns.
+  std::string component_name(Index i) const override;
 
   int cells() const { return n_; }
   double alpha() const { return alpha_; }

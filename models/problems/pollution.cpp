@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cmath>
+#include <string>
 
 namespace stiffbench {
 
@@ -117,6 +118,13 @@ ModelRegistry::Entry pollution_entry() {
                    .size = fixed_problem_size},
           .params = {},
           .make = [](const Params&) { return std::make_unique<Pollution>(); }};
+}
+
+std::string Pollution::component_name(Index i) const {
+  static const char* const kSpecies[20] = {"NO2",  "NO",  "O3P",  "O3",   "HO2", "OH",  "HCHO",
+                                           "CO",   "ALD", "MEO2", "C2O3", "CO2", "PAN", "CH3O",
+                                           "HNO3", "O1D", "SO2",  "SO4",  "NO3", "N2O5"};
+  return i >= 0 && i < 20 ? kSpecies[i] : "";
 }
 
 }  // namespace stiffbench

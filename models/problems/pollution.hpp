@@ -54,6 +54,7 @@ class Pollution final : public OdeSystem {
   bool autonomous() const override { return true; }
   std::vector<Invariant> invariants() const override;
   std::vector<Index> nonnegative_components() const override { return all_components(20); }
+  std::string component_name(Index i) const override;  // the species above: "NO2", ...
   std::optional<double> stiffness(double t, CVecRef y) const override;
 
   // End of the literature time span (IVP test set).
