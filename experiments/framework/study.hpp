@@ -180,14 +180,6 @@ std::string option_flag(const std::string& key);
 // The options table of `stiffbench describe STUDY`.
 void describe_study(const StudyKind& kind, std::ostream& out);
 
-// TEMPORARY while the studies move to StudyInputs: refuses objects (removed when no study uses it).
-struct ScopedStudyObjects {
-  ScopedStudyObjects(const StudyObjects& objects, const std::string&,
-                     const std::vector<std::string>&) {
-    require_input(objects.empty(), "this study does not take objects yet");
-  }
-};
-
 // Configures a job: the target resolved (resolve_inputs, relative method-file paths from
 // `base`), the options resolved with `how`.
 std::unique_ptr<StudyJob> make_study(const StudyKind& kind, const StudyTarget& target,

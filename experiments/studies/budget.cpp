@@ -520,7 +520,8 @@ StudyKind budget_study_kind() {
     spec.timing_repeats = static_cast<int>(o.integer(timing_repeats_option("").key));
     spec.seed = static_cast<unsigned long>(o.integer("seed"));
     spec.max_strain = o.real("max_strain");
-    spec.ref_integrator = o.text("ref_integrator");
+    // A method-file path or a variant is resolved here, once, like the studied integrators.
+    spec.ref_integrator = resolve_integrator_tokens({o.text("ref_integrator")}).front();
     spec.ref_substeps = o.integer("ref_substeps");
     return std::make_unique<BudgetJob>(kBudget, t, std::move(spec));
   };

@@ -432,7 +432,8 @@ ReferenceChoice choose_reference(const ReferenceRequest& req,
   c.method = c.kind == "method" ? given : "cvode_bdf";
   if (c.kind == "method") {
     // A method file is compared by the name it registers (the same file, or one with the same
-    // text, registers one name).
+    // text, registers one name). Options read from the command line or a spec file hold labels
+    // already; a program may still fill the spec with a path.
     const auto name_of = [](const std::string& token) {
       return is_method_file_token(token) ? resolve_integrator_tokens({token}).front() : token;
     };

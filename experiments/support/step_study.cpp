@@ -85,7 +85,11 @@ void read_step_study_options(const Params& o, StepStudySpec& spec) {
   spec.h = optional_real(o, "h");
   spec.levels = static_cast<int>(o.integer("levels"));
   spec.refine = o.real("refine");
+  // A method file or a variant named as the reference is registered here, once, like the
+  // studied integrators; the spec holds its label.
   spec.reference = o.text("reference");
+  if (is_method_file_token(spec.reference) || is_variant_token(spec.reference))
+    spec.reference = resolve_integrator_tokens({spec.reference}).front();
   if (o.contains("reference_rtol")) spec.reference_rtol = o.real("reference_rtol");
   if (o.contains("reference_atol")) spec.reference_atol = o.real("reference_atol");
 }

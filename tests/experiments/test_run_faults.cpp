@@ -139,7 +139,8 @@ TEST(RunFaults, StateOutsideTheAdmissibleSetEndsOnlyItsRow) {
   spec.refine = 2;
   spec.reference = "exact";
   const ConvergenceResult r = run_convergence(
-      spec, [] { return std::make_unique<NonNegativeDecay>(); }, nullptr);
+      inputs_with(spec, StudyObjects{[] { return std::make_unique<NonNegativeDecay>(); }, {}}),
+      spec, nullptr);
   ASSERT_EQ(r.rows.size(), 6u);
   EXPECT_EQ(r.rows[0].stats.status, Status::invalid_state);
   EXPECT_NE(r.rows[0].stats.message.find("y[0] = -0.125"), std::string::npos)
