@@ -347,9 +347,16 @@ void print_run_header(const SolveRun& run, const RunResult& r, std::ostream& out
   if (!r.stats.message.empty()) out << "message      " << r.stats.message << "\n";
 }
 
-// The final state; large states (particle and network models) print their first components.
+// The final state; large states (particle and network models) print their first components. A
+// run that ended early holds the state where it stopped, which may lie after the last output
+// time it reached (the status message says where).
 void print_final_state(const RunResult& r, std::ostream& out) {
-  out << "\nfinal state at t = " << format_full(r.t) << ":\n";
+  if (r.stats.status == Status::ok)
+    out << "\nfinal state at t = " << format_full(r.t) << ":\n";
+  else
+    out << "\nstate where the run stopped (" << to_string(r.stats.status)
+        << "; the last output time it reached is t = " << format_full(r.t)
+        << ", the message says where it stopped):\n";
   constexpr Index kPrintMax = 24;
   const Index shown = r.y.size() <= kPrintMax ? r.y.size() : kPrintMax / 2;
   for (Index i = 0; i < shown; ++i) out << "  y" << i << " = " << format_full(r.y[i]) << "\n";
