@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "experiments/framework/catalog.hpp"
+#include "experiments/framework/option_table.hpp"
 #include "experiments/framework/study.hpp"
 #include "experiments/output/progress.hpp"
 
@@ -14,19 +15,40 @@ namespace stiffbench {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+// The options of `stiffbench energy`, bound to EnergySpec's fields (defaults: its initialisers).
+const OptionTable<EnergySpec>& energy_options() {
+  static const OptionTable<EnergySpec> table =
+      OptionTable<EnergySpec>()
+          .add("h", &EnergySpec::h,
+               "step size (the run takes N = round(T/h) steps of T/N; default: the model's "
+               "suggested step, where it has one)",
+               Bounds::positive())
+          .add("t_end", &EnergySpec::t_end,
+               "final time (default: the model's literature end time, where it has one)",
+               Bounds::positive())
+          .add("samples", &EnergySpec::samples,
+               "rows per integrator in energy.csv (every ceil(N/samples) steps, each with the "
+               "maximum error since the previous row)",
+               Bounds::at_least(1))
+          .add("invariant", &EnergySpec::invariant,
+               "which invariant of the model is measured (see `stiffbench describe MODEL`)");
+  return table;
+}
+
+}  // namespace
+
 void EnergySpec::validate() const {
-  require_input(std::isnan(h) || (std::isfinite(h) && h > 0),
-                "--h must be > 0 (got " + format_full(h) + ")");
-  require_input(std::isnan(t_end) || (std::isfinite(t_end) && t_end > 0),
-                "--t-end must be > 0 (got " + format_full(t_end) + ")");
-  require_input(samples >= 1, "--samples must be >= 1 (got " + std::to_string(samples) + ")");
+  energy_options().check(*this);
   require_input(!invariant.empty(), "--invariant: empty name");
   require_input(!integrators.empty(), "--integrators: no integrator given");
 }
 
 nlohmann::json EnergySpec::to_json() const {
-  return {{"model", model}, {"params", params.values()}, {"integrators", integrators}, {"h", h},
-          {"t_end", t_end}, {"samples", samples},        {"invariant", invariant}};
+  nlohmann::json j = {{"model", model}, {"params", params.values()}, {"integrators", integrators}};
+  energy_options().to_json(*this, j);
+  return j;
 }
 
 namespace {
@@ -506,7 +528,6 @@ using EnergyJob = TypedStudyJob<EnergySpec, EnergyResult>;
 }  // namespace
 
 StudyKind energy_study_kind() {
-  using P = ParamType;
   StudyKind k;
   k.name = "energy";
   k.stem = "energy";
@@ -514,28 +535,12 @@ StudyKind energy_study_kind() {
       "energy drift of long fixed-step runs: the relative error of an invariant after every step, "
       "sampled with the maximum between samples, its maximum, final value, drift rate and growth "
       "ratio; writes energy.{csv,md,json,png} and energy_summary.csv";
-  k.options = {
-      {"h", P::real, "",
-       "step size (the run takes N = round(T/h) steps of T/N; default: the model's suggested "
-       "step, where it has one)",
-       Bounds::positive()},
-      {"t_end", P::real, "",
-       "final time (default: the model's literature end time, where it has one)",
-       Bounds::positive()},
-      {"samples", P::integer, "1000",
-       "rows per integrator in energy.csv (every ceil(N/samples) steps, each with the maximum "
-       "error since the previous row)",
-       Bounds::at_least(1)},
-      {"invariant", P::text, "energy",
-       "which invariant of the model is measured (see `stiffbench describe MODEL`)"}};
+  k.options = energy_options().declarations();
   k.extra_files = {"energy_summary.csv"};
   k.unit_columns = energy_summary_table(EnergyResult{}).columns;
   k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
     EnergySpec s = with_inputs(EnergySpec{}, t);
-    s.h = optional_real(o, "h");
-    s.t_end = optional_real(o, "t_end");
-    s.samples = o.integer("samples");
-    s.invariant = o.text("invariant");
+    energy_options().read(o, s);
     s.validate();
     return std::make_unique<EnergyJob>(kEnergy, t, std::move(s));
   };

@@ -4,8 +4,10 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -15,6 +17,7 @@
 #include "experiments/build_info.hpp"
 #include "experiments/commands/list_describe.hpp"
 #include "experiments/commands/run.hpp"
+#include "experiments/framework/option_table.hpp"
 #include "experiments/framework/study.hpp"
 #include "experiments/studies/convergence.hpp"
 #include "experiments/studies/energy.hpp"
@@ -365,4 +368,77 @@ TEST(StudyFramework, AdaptiveObjectWithoutTolerancesIsRefusedByWorkPrecision) {
   } catch (const BadInput& e) {
     EXPECT_NE(std::string(e.what()).find("takes no rtol/atol"), std::string::npos) << e.what();
   }
+}
+
+namespace {
+
+// A spec with one option of each kind an OptionTable binds.
+struct TableSpec {
+  double h = std::numeric_limits<double>::quiet_NaN();  // no default
+  double tol = 1e-3;
+  long samples = 1000;
+  bool quick = false;
+  std::string norm = "rms";
+};
+
+const OptionTable<TableSpec>& table_options() {
+  static const OptionTable<TableSpec> t = OptionTable<TableSpec>()
+                                              .add("h", &TableSpec::h, "step", Bounds::positive())
+                                              .add("tol", &TableSpec::tol, "tolerance",
+                                                   Bounds::in_open_closed(0, 1))
+                                              .add("samples", &TableSpec::samples, "rows",
+                                                   Bounds::at_least(1))
+                                              .add("quick", &TableSpec::quick, "fewer runs")
+                                              .add("norm", &TableSpec::norm, "error norm",
+                                                   std::vector<std::string>{"rms", "max"});
+  return t;
+}
+
+}  // namespace
+
+// The table's declarations carry the fields' initialisers as defaults (the shortest text that
+// reads back as the same double), read resolved options into the fields, check a hand-filled
+// spec against the same ranges, and write the values under their keys.
+TEST(StudyFramework, OptionTableBindsKeysToFieldsWithTheirInitialisersAsDefaults) {
+  const auto& d = table_options().declarations();
+  ASSERT_EQ(d.size(), 5u);
+  EXPECT_EQ(d[0].default_value, "");  // NaN: an option without default
+  EXPECT_EQ(d[1].default_value, "0.001");
+  EXPECT_EQ(d[2].default_value, "1000");
+  EXPECT_EQ(d[3].default_value, "false");
+  EXPECT_EQ(d[4].default_value, "rms");
+  EXPECT_EQ(d[2].type, ParamType::integer);
+  EXPECT_EQ(d[4].choices, (std::vector<std::string>{"rms", "max"}));
+  // 1/3 needs all 17 significant digits to read back; 0.1 needs one.
+  EXPECT_EQ(std::stod(option_default_text(1.0 / 3.0)), 1.0 / 3.0);
+  EXPECT_EQ(option_default_text(0.1), "0.1");
+
+  StudyKind kind;
+  kind.name = "table";
+  kind.options = d;
+  const Params o = resolve_study_options(kind, Params{{"samples", 7}, {"norm", "max"}}, option_flag);
+  TableSpec s;
+  table_options().read(o, s);
+  EXPECT_TRUE(std::isnan(s.h));  // not given, no default: the field keeps its NaN
+  EXPECT_EQ(s.tol, 1e-3);
+  EXPECT_EQ(s.samples, 7);
+  EXPECT_EQ(s.norm, "max");
+
+  nlohmann::json j;
+  table_options().to_json(s, j);
+  EXPECT_EQ(j["samples"], 7);
+  EXPECT_EQ(j["norm"], "max");
+  EXPECT_TRUE(j["h"].is_null() || std::isnan(j["h"].get<double>()));
+
+  table_options().check(s);  // in range
+  s.samples = 0;
+  try {
+    table_options().check(s);
+    FAIL() << "samples = 0 passed";
+  } catch (const BadInput& e) {
+    EXPECT_EQ(std::string(e.what()), "--samples must be >= 1 (got 0)");
+  }
+  s.samples = 7;
+  s.norm = "l1";
+  EXPECT_THROW(table_options().check(s), BadInput);
 }
