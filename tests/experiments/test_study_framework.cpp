@@ -129,8 +129,8 @@ std::string unit_of(const fs::path& relative, const std::set<std::string>& studi
 // The measure of "declared once": every option key of six or more characters of a
 // built-in study is named (as an identifier or as the whole of a string literal; comments and
 // prose in messages do not count) in at most two units under experiments/ (a .cpp with its
-// header, or the files of one study): its declaration and at most one use. Before the framework, norm_growth
-// was in five files.
+// header, or the files of one study): its declaration and at most one use. Before the framework,
+// norm_growth was in five files.
 TEST(StudyFramework, OptionKeysAreNamedInAtMostTwoFiles) {
   const fs::path dir = fs::path(STIFFBENCH_SOURCE_DIR) / "experiments";
   std::set<std::string> studies;
@@ -382,15 +382,13 @@ struct TableSpec {
 };
 
 const OptionTable<TableSpec>& table_options() {
-  static const OptionTable<TableSpec> t = OptionTable<TableSpec>()
-                                              .add("h", &TableSpec::h, "step", Bounds::positive())
-                                              .add("tol", &TableSpec::tol, "tolerance",
-                                                   Bounds::in_open_closed(0, 1))
-                                              .add("samples", &TableSpec::samples, "rows",
-                                                   Bounds::at_least(1))
-                                              .add("quick", &TableSpec::quick, "fewer runs")
-                                              .add("norm", &TableSpec::norm, "error norm",
-                                                   std::vector<std::string>{"rms", "max"});
+  static const OptionTable<TableSpec> t =
+      OptionTable<TableSpec>()
+          .add("h", &TableSpec::h, "step", Bounds::positive())
+          .add("tol", &TableSpec::tol, "tolerance", Bounds::in_open_closed(0, 1))
+          .add("samples", &TableSpec::samples, "rows", Bounds::at_least(1))
+          .add("quick", &TableSpec::quick, "fewer runs")
+          .add("norm", &TableSpec::norm, "error norm", std::vector<std::string>{"rms", "max"});
   return t;
 }
 
@@ -416,7 +414,8 @@ TEST(StudyFramework, OptionTableBindsKeysToFieldsWithTheirInitialisersAsDefaults
   StudyKind kind;
   kind.name = "table";
   kind.options = d;
-  const Params o = resolve_study_options(kind, Params{{"samples", 7}, {"norm", "max"}}, option_flag);
+  const Params o =
+      resolve_study_options(kind, Params{{"samples", 7}, {"norm", "max"}}, option_flag);
   TableSpec s;
   table_options().read(o, s);
   EXPECT_TRUE(std::isnan(s.h));  // not given, no default: the field keeps its NaN
