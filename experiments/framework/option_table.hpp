@@ -14,6 +14,7 @@
 // spec a program filled by hand, and the options' part of the spec JSON.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -29,15 +30,30 @@
 
 namespace stiffbench {
 
-// The shortest decimal text that reads back as `v` (what a user would type), "" for NaN.
+// The shortest decimal text that reads back as `v` (what a user would type: "0.01", "100",
+// "1e-7"), "" for NaN.
 inline std::string option_default_text(double v) {
   if (std::isnan(v)) return "";
   char buf[40];
-  for (int digits = 1; digits <= 17; ++digits) {
+  int digits = 1;
+  for (; digits <= 17; ++digits) {
     std::snprintf(buf, sizeof buf, "%.*g", digits, v);
     if (std::strtod(buf, nullptr) == v) break;
   }
-  return buf;
+  std::string text = buf;
+  const auto e = text.find('e');
+  if (e == std::string::npos) return text;
+  const int exponent = std::atoi(text.c_str() + e + 1);
+  if (exponent >= 0 && exponent < 16) {  // an integer-sized number: written out ("100")
+    std::snprintf(buf, sizeof buf, "%.*g", std::max(digits, exponent + 1), v);
+    return buf;
+  }
+  // "1e-07" -> "1e-7", "1e+20" -> "1e20".
+  std::string mantissa = text.substr(0, e), exp = text.substr(e + 1);
+  const bool negative = exp[0] == '-';
+  exp = exp.substr(exp[0] == '-' || exp[0] == '+' ? 1 : 0);
+  exp.erase(0, std::min(exp.find_first_not_of('0'), exp.size() - 1));
+  return mantissa + "e" + (negative ? "-" : "") + exp;
 }
 
 template <class Spec>
@@ -52,6 +68,15 @@ class OptionTable {
   OptionTable& add(std::string key, std::string Spec::*member, std::string help,
                    std::vector<std::string> choices) {
     return bind(std::move(key), member, std::move(help), Bounds{}, std::move(choices));
+  }
+
+  // An option of its own type (a list, a box): its declaration, how it is read from resolved
+  // options and how it is written to the spec JSON (nothing: a field recorded elsewhere).
+  OptionTable& add(ParamSpec decl, std::function<void(const Params&, Spec&)> read,
+                   std::function<void(const Spec&, nlohmann::json&)> json) {
+    decls_.push_back(std::move(decl));
+    fields_.push_back({std::move(read), [](const Spec&) {}, std::move(json)});
+    return *this;
   }
 
   // The declarations, in table order, defaults from Spec{}.

@@ -12,6 +12,7 @@
 #include "core/driver.hpp"
 #include "core/ode_system.hpp"
 #include "experiments/framework/catalog.hpp"
+#include "experiments/framework/option_table.hpp"
 #include "experiments/output/progress.hpp"
 #include "experiments/studies/fidelity_modes.hpp"
 #include "experiments/studies/fidelity_output.hpp"
@@ -99,8 +100,46 @@ RecurrenceFit fit_step_multiplier(const std::vector<std::vector<double>>& series
   return fit;
 }
 
+namespace {
+
+std::vector<double> parse_steps(const std::string& text);
+
+// The options of `stiffbench fidelity`, bound to FidelitySpec's fields (defaults: its
+// initialisers); the per-mode step list is read and recorded by its own functions.
+const OptionTable<FidelitySpec>& fidelity_options() {
+  static const OptionTable<FidelitySpec> table =
+      OptionTable<FidelitySpec>()
+          .add("nu_min", &FidelitySpec::nu_min, "smallest nu = h*omega", Bounds::positive())
+          .add("nu_max", &FidelitySpec::nu_max, "largest nu", Bounds::positive())
+          .add("curve_points", &FidelitySpec::curve_points, "nu values of the curve, log-spaced",
+               Bounds::in(1, 10000))
+          .add("measure", &FidelitySpec::measure,
+               "also measure the curve on harmonic_oscillator (one run per nu)")
+          .add("steps", &FidelitySpec::steps, "steps of each measured oscillator run",
+               Bounds::in(40, 100000000))
+          .add(
+              ParamSpec{"h", ParamType::text, "",
+                        "per-mode runs (--model): step sizes, comma-separated (default: nu = 0.1 "
+                        "at the lowest and nu = 2 at the highest selected mode)"},
+              [](const Params& o, FidelitySpec& s) {
+                if (o.contains("h") && !o.text("h").empty()) s.h = parse_steps(o.text("h"));
+              },
+              [](const FidelitySpec& s, nlohmann::json& j) { j["h"] = s.h; })
+          .add("modes", &FidelitySpec::modes, "lowest modes analysed (--model)",
+               Bounds::in(1, 4000))
+          .add("amplitude", &FidelitySpec::amplitude,
+               "mode excitation relative to the RMS spread of the rest positions (--model)",
+               Bounds::positive())
+          .add("mode_steps", &FidelitySpec::mode_steps, "steps of each per-mode run (--model)",
+               Bounds::in(40, 100000000));
+  return table;
+}
+
+}  // namespace
+
 void FidelitySpec::validate() const {
   require_input(!integrators.empty(), "--integrators: no integrator given");
+  fidelity_options().check(*this);
   require_input(std::isfinite(nu_min) && std::isfinite(nu_max) && nu_min > 0 && nu_max > nu_min,
                 "--nu-min/--nu-max: need 0 < nu_min < nu_max (got " + format_short(nu_min) + ", " +
                     format_short(nu_max) + ")");
@@ -116,15 +155,7 @@ nlohmann::json FidelitySpec::to_json() const {
   j["integrators"] = integrators;
   j["model"] = model;
   j["params"] = params.values();
-  j["nu_min"] = nu_min;
-  j["nu_max"] = nu_max;
-  j["curve_points"] = curve_points;
-  j["measure"] = measure;
-  j["steps"] = steps;
-  j["h"] = h;
-  j["modes"] = modes;
-  j["amplitude"] = amplitude;
-  j["mode_steps"] = mode_steps;
+  fidelity_options().to_json(*this, j);
   return j;
 }
 
@@ -358,37 +389,12 @@ StudyKind fidelity_study_kind() {
       "measured on harmonic_oscillator, and per mode of a mechanical --model; writes "
       "fidelity.{csv,md,json,png} (and modes.csv, modes.png)";
   k.model_required = false;
-  k.options = {
-      {"nu_min", ParamType::real, "0.01", "smallest nu = h*omega", Bounds::positive()},
-      {"nu_max", ParamType::real, "100", "largest nu", Bounds::positive()},
-      {"curve_points", ParamType::integer, "41", "nu values of the curve, log-spaced",
-       Bounds::in(1, 10000)},
-      {"measure", ParamType::boolean, "true",
-       "also measure the curve on harmonic_oscillator (one run per nu)"},
-      {"steps", ParamType::integer, "400", "steps of each measured oscillator run",
-       Bounds::in(40, 100000000)},
-      {"h", ParamType::text, "",
-       "per-mode runs (--model): step sizes, comma-separated (default: nu = 0.1 at the lowest "
-       "and nu = 2 at the highest selected mode)"},
-      {"modes", ParamType::integer, "20", "lowest modes analysed (--model)", Bounds::in(1, 4000)},
-      {"amplitude", ParamType::real, "1e-7",
-       "mode excitation relative to the RMS spread of the rest positions (--model)",
-       Bounds::positive()},
-      {"mode_steps", ParamType::integer, "400", "steps of each per-mode run (--model)",
-       Bounds::in(40, 100000000)}};
+  k.options = fidelity_options().declarations();
   k.extra_files = {"modes.csv"};
   k.unit_columns = fidelity_table(FidelityResult{}).columns;
   k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
     FidelitySpec s = with_inputs(FidelitySpec{}, t);
-    s.nu_min = o.real("nu_min");
-    s.nu_max = o.real("nu_max");
-    s.curve_points = static_cast<int>(o.integer("curve_points"));
-    s.measure = o.boolean("measure");
-    s.steps = o.integer("steps");
-    if (o.contains("h") && !o.text("h").empty()) s.h = parse_steps(o.text("h"));
-    s.modes = static_cast<int>(o.integer("modes"));
-    s.amplitude = o.real("amplitude");
-    s.mode_steps = o.integer("mode_steps");
+    fidelity_options().read(o, s);
     // The model's rest state is applied here, so that fidelity.json records the parameters run.
     s = with_rest_state(t, std::move(s));
     s.validate();

@@ -410,6 +410,9 @@ TEST(StudyFramework, OptionTableBindsKeysToFieldsWithTheirInitialisersAsDefaults
   // 1/3 needs all 17 significant digits to read back; 0.1 needs one.
   EXPECT_EQ(std::stod(option_default_text(1.0 / 3.0)), 1.0 / 3.0);
   EXPECT_EQ(option_default_text(0.1), "0.1");
+  EXPECT_EQ(option_default_text(100.0), "100");  // %g alone gives 1e+02
+  EXPECT_EQ(option_default_text(1e-7), "1e-7");  // %g alone gives 1e-07
+  EXPECT_EQ(option_default_text(1e20), "1e20");
 
   StudyKind kind;
   kind.name = "table";
