@@ -13,6 +13,7 @@
 #include "core/driver.hpp"
 #include "core/run_control.hpp"
 #include "experiments/framework/catalog.hpp"
+#include "experiments/framework/option_table.hpp"
 #include "experiments/support/coefficients.hpp"
 
 namespace stiffbench {
@@ -69,16 +70,30 @@ std::vector<std::string> analyze_integrators() {
   return out;
 }
 
+namespace {
+
+// The options of `stiffbench analyze`, bound to AnalyzeSpec's fields (defaults: its initialisers).
+const OptionTable<AnalyzeSpec>& analyze_options() {
+  static const OptionTable<AnalyzeSpec> table = OptionTable<AnalyzeSpec>().add(
+      "nu_points", &AnalyzeSpec::points,
+      "samples of nu in [1e-2, 10] (log-spaced) for the dissipation and dispersion curves",
+      Bounds::in(2, 10000));
+  return table;
+}
+
+}  // namespace
+
 void AnalyzeSpec::validate() const {
   std::set<std::string> seen;
   for (const auto& name : integrators)
     require_input(seen.insert(name).second, "--integrators: '" + name + "' is listed twice");
-  require_input(points >= 2 && points <= 10000,
-                "--nu-points must be between 2 and 10000 (got " + std::to_string(points) + ")");
+  analyze_options().check(*this);
 }
 
 nlohmann::json AnalyzeSpec::to_json() const {
-  return {{"integrators", chosen(*this)}, {"nu_points", points}};
+  nlohmann::json j = {{"integrators", chosen(*this)}};
+  analyze_options().to_json(*this, j);
+  return j;
 }
 
 namespace {
@@ -667,15 +682,12 @@ StudyKind analyze_study_kind() {
   k.integrators_required = false;
   k.unit_per_integrator = false;
   k.positional_integrators = true;
-  k.options = {{"nu_points", ParamType::integer, "121",
-                "samples of nu in [1e-2, 10] (log-spaced) for the dissipation and dispersion "
-                "curves",
-                Bounds::in(2, 10000)}};
+  k.options = analyze_options().declarations();
   k.extra_files = {"analyze_conditions.csv", "analyze_dispersion.csv"};
   k.unit_columns = analyze_table(AnalyzeResult{}).columns;
   k.make = [](const StudyInputs& t, const Params& o, const StudyContext&) {
     AnalyzeSpec s = with_inputs(AnalyzeSpec{}, t);
-    s.points = static_cast<int>(o.integer("nu_points"));
+    analyze_options().read(o, s);
     s.validate();
     return std::make_unique<AnalyzeJob>(kAnalyze, t, std::move(s));
   };
