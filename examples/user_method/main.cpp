@@ -109,10 +109,6 @@ int main(int argc, char** argv) {
   // The objects: fresh copies for every run; results carry their names.
   const StudyObjects mine{[] { return std::make_unique<StiffSprings>(); },
                           {[] { return std::make_unique<Ralston3>(); }}};
-  // What a study runs on: the spec's names and the objects, resolved once.
-  auto inputs = [&](const auto& spec) {
-    return resolve_inputs(StudyTarget{spec.model, spec.params, spec.integrators, mine});
-  };
   StudyContext ctx;  // settings of the pipeline: progress and notes to stderr, plots as PNG
   ctx.progress = &std::cerr;
   ctx.err = &std::cerr;
@@ -124,7 +120,7 @@ int main(int argc, char** argv) {
   conv.h = 0.004;  // h*w from 0.2 down to 0.00625 on the stiff mode: the asymptotic range
   conv.levels = 6;
   const ConvergenceResult c =
-      convergence_study(inputs(conv), conv, out + "/convergence", false, ctx);
+      convergence_study(inputs_of(conv, mine), conv, out + "/convergence", false, ctx);
 
   // rk4 by name and the objects, resolved once into the inputs the next two studies run on.
   const StudyInputs in = resolve_inputs(StudyTarget{.integrators = {"rk4"}, .objects = mine});
@@ -143,7 +139,7 @@ int main(int argc, char** argv) {
   wp.levels = 4;
   wp.tol_levels = 4;
   wp.repeats = 1;
-  work_precision_study(inputs(wp), wp, out + "/work_precision", ctx);
+  work_precision_study(inputs_of(wp, mine), wp, out + "/work_precision", ctx);
 
   // What theory says of ralston3: order 3 (the observed order of the finest pair), and, like every
   // three-stage third-order method, R(z) = 1 + z + z^2/2 + z^3/6 with |R(iy)| <= 1 exactly for

@@ -87,13 +87,14 @@ StudyInputs resolve_inputs(const StudyTarget& target, const std::vector<std::str
                            const std::string& base = "");
 
 // The inputs a study spec names (its model, params and integrators fields; a study of methods
-// alone, e.g. region, has integrators only), resolved.
+// alone, e.g. region, has integrators only), with a user's objects when given, resolved.
 template <class Spec>
-StudyInputs inputs_of(const Spec& spec) {
+StudyInputs inputs_of(const Spec& spec, StudyObjects objects = {}) {
   StudyTarget t;
   if constexpr (requires { spec.model; }) t.model = spec.model;
   if constexpr (requires { spec.params; }) t.params = spec.params;
   t.integrators = spec.integrators;
+  t.objects = std::move(objects);
   return resolve_inputs(t);
 }
 // `spec` with its model, params and integrators fields (those it has) taken from `in` (what it

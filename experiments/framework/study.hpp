@@ -84,8 +84,7 @@ struct StudyFunctions {
                      const std::string& title, const PlotOptions&, std::ostream& err)>
       write;
   std::function<void(const Spec&, const Result&, std::ostream& out)> print_summary;
-  std::function<std::string(const Spec&, const Result&, const std::string& note)>
-      report_markdown;
+  std::function<std::string(const Spec&, const Result&, const std::string& note)> report_markdown;
   std::function<std::string(const Spec&)> default_title;
   // Integrators besides the studied ones whose parameters the study consumes (optional).
   std::function<std::vector<std::string>(const Spec&)> helpers;

@@ -23,6 +23,7 @@
 #include "integrators/imex/imex_ark.hpp"
 #include "integrators/implicit/rosenbrock.hpp"
 #include "models/problems/kepler.hpp"
+#include "tests/experiments/method_file_copy.hpp"
 
 namespace stiffbench {
 namespace {
@@ -171,9 +172,10 @@ std::filesystem::path scratch(const std::string& what) {
   return dir;
 }
 
-// The wrapper counts its own calls: 3 f (two rhs, one acceleration) and 2 Jacobians (one analytic,
-// one force-Jacobian pair), and forwards them, so the wrapped Kepler's boundary counters see the
-// 3 f and the 1 analytic Jacobian (force_jacobians is not counted by a system, by design).
+// The wrapper counts its own calls: 3 f (two rhs, one acceleration) and 2 Jacobians (one
+// analytic, one force-Jacobian pair), and forwards them, so the wrapped Kepler's boundary
+// counters see the 3 f and the 1 analytic Jacobian (force_jacobians is not counted by a system,
+// by design).
 TEST(AuditCountingWrapper, CountsItsOwnCallsAndForwardsTheHooks) {
   Params p;
   p.set("e", "0.5");
@@ -221,7 +223,8 @@ TEST(AuditCountingWrapper, CountsItsOwnCallsAndForwardsTheHooks) {
 //     O(h³), slope 3, not 4;
 //   an Euler that evaluates f twice per step but subtracts one: 16 steps are 32 evaluations at
 //     the wrapper, 16 reported, and 8 more steps cost 16, not 8 × 1 stage;
-//   a symplectic Euler evaluating a copy of Kepler: the system sees 0 evaluations per step, not 1.
+//   a symplectic Euler evaluating a copy of Kepler: the system sees 0 evaluations per step,
+//   not 1.
 TEST(Audit, CatchesEachBrokenMethodForItsReason) {
   ButcherTableau wrong_sum = explicit_tableau("heun");
   wrong_sum.name = "heun_bad_embedded";
@@ -361,9 +364,9 @@ TEST(Audit, BuiltInMethodsPass) {
 // conditions of core/theory/method_analysis.hpp (rosenbrock2's, claimed W-order 2, in
 // BuiltInMethodsPass). ROS3P's tableau under a claim of W-order 3 fails: by hand bᵀα1 = (2/3)·0 +
 // (1/3)·1 = 1/3, not 1/2, and bᵀΓ1 = (2/3)γ + (1/3)(1/2 − 2γ) = 1/6, not 0, so both order-2
-// W-conditions fail (the reason names the first in w_trees()' order, W[t], by 1/6) and the W-order
-// is 1 (Lang & Verwer's method has order 3 with the exact Jacobian only); its classical order 3
-// passes.
+// W-conditions fail (the reason names the first in w_trees()' order, W[t], by 1/6) and the
+// W-order is 1 (Lang & Verwer's method has order 3 with the exact Jacobian only); its classical
+// order 3 passes.
 TEST(Audit, RosenbrockWOrderClaimIsChecked) {
   RosenbrockTableau w3 = ros3p_tableau();
   w3.name = "test_ros3p_w3";
@@ -383,23 +386,12 @@ TEST(Audit, RosenbrockWOrderClaimIsChecked) {
   EXPECT_EQ(find_row(r, "test_ros3p_w3", "embedded_order")->measured, "2");
 }
 
-// A study's inputs from resolve_inputs: a method file (heun's coefficients under another name) and
-// a variant of a built-in method; each row carries its label and both pass.
+// A study's inputs from resolve_inputs: a method file (heun's coefficients under another name)
+// and a variant of a built-in method; each row carries its label and both pass.
 TEST(Audit, RunsFromResolvedInputsWithAMethodFileAndAVariant) {
-  const auto dir = scratch("inputs");
-  std::filesystem::create_directories(dir);
-  std::ifstream in(std::filesystem::path(STIFFBENCH_SOURCE_DIR) / "methods" / "heun.toml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string toml = text.str();
-  const std::string key = "name = \"heun\"";
-  ASSERT_NE(toml.find(key), std::string::npos);
-  toml.replace(toml.find(key), key.size(), "name = \"test_audit_heun\"");
-  const auto file = dir / "test_audit_heun.toml";
-  std::ofstream(file) << toml;
-
+  const std::string file = testing_support::renamed_method_file("heun", "test_audit_heun");
   StudyTarget target;
-  target.integrators = {file.string(), "bs3{rtol=1e-8}"};
+  target.integrators = {file, "bs3{rtol=1e-8}"};
   const AuditResult r = run_audit(resolve_inputs(target), AuditSpec{});
   std::set<std::string> labels;
   for (const auto& row : r.rows) labels.insert(row.integrator);
@@ -407,7 +399,7 @@ TEST(Audit, RunsFromResolvedInputsWithAMethodFileAndAVariant) {
   EXPECT_EQ(r.count("fail"), 0) << fails(r);
   EXPECT_EQ(find_row(r, "test_audit_heun", "tableau_order")->measured, "2");
   EXPECT_EQ(find_row(r, "bs3{rtol=1e-8}", "adaptive_constant")->status, "ok");
-  std::filesystem::remove_all(dir);
+  std::filesystem::remove_all(std::filesystem::path(file).parent_path());
 }
 
 int cli(std::vector<std::string> args) {

@@ -17,12 +17,6 @@
 namespace stiffbench {
 namespace {
 
-// The inputs of `spec` with a user's objects (resolve_inputs: nothing is registered by name).
-template <class Spec>
-StudyInputs inputs_with(const Spec& spec, StudyObjects objects) {
-  return resolve_inputs(StudyTarget{spec.model, spec.params, spec.integrators, std::move(objects)});
-}
-
 // y' = -k y (k a parameter), y(0) = 1, exact y = exp(-k t): a user's own system.
 class Decay final : public OdeSystem {
  public:
@@ -202,7 +196,7 @@ TEST(LibraryApi, StudiesOnASystemObjectMatchTheNamedModel) {
   by_object.params = Params{};
   const auto a = run_convergence(by_name, nullptr);
   const auto b =
-      run_convergence(inputs_with(by_object, StudyObjects{kepler, {}}), by_object, nullptr);
+      run_convergence(inputs_of(by_object, StudyObjects{kepler, {}}), by_object, nullptr);
   ASSERT_EQ(a.rows.size(), b.rows.size());
   for (std::size_t k = 0; k < a.rows.size(); ++k) {
     EXPECT_EQ(a.rows[k].error, b.rows[k].error) << k;
@@ -223,7 +217,7 @@ TEST(LibraryApi, StudiesOnASystemObjectMatchTheNamedModel) {
   wp_object.params = Params{};
   const auto c = run_work_precision(wp, nullptr);
   const auto d =
-      run_work_precision(inputs_with(wp_object, StudyObjects{kepler, {}}), wp_object, nullptr);
+      run_work_precision(inputs_of(wp_object, StudyObjects{kepler, {}}), wp_object, nullptr);
   ASSERT_EQ(c.rows.size(), d.rows.size());
   for (std::size_t k = 0; k < c.rows.size(); ++k) EXPECT_EQ(c.rows[k].error, d.rows[k].error) << k;
   // A built-in model's name cannot be taken by a system object.

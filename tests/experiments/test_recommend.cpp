@@ -21,31 +21,13 @@
 #include "experiments/framework/study.hpp"
 #include "experiments/output/csv.hpp"
 #include "experiments/studies/recommend.hpp"
+#include "tests/experiments/method_file_copy.hpp"
 
 namespace stiffbench {
 namespace {
 
-// The inputs of `spec` with a user's objects (resolve_inputs: nothing is registered by name).
-template <class Spec>
-StudyInputs inputs_with(const Spec& spec, StudyObjects objects) {
-  return resolve_inputs(StudyTarget{spec.model, spec.params, spec.integrators, std::move(objects)});
-}
-
-// methods/heun.toml registered from a copy under the name `name` (a method file in a temporary
-// folder); returns its path.
 std::string heun_file(const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("stiffbench_" + name + "_" + std::to_string(getpid()));
-  std::filesystem::create_directories(dir);
-  std::ifstream in(std::filesystem::path(STIFFBENCH_SOURCE_DIR) / "methods" / "heun.toml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string s = text.str();
-  const std::string key = "name = \"heun\"";
-  s.replace(s.find(key), key.size(), "name = \"" + name + "\"");
-  const std::filesystem::path path = dir / (name + ".toml");
-  std::ofstream(path) << s;
-  return path.string();
+  return testing_support::renamed_method_file("heun", name);
 }
 
 namespace fs = std::filesystem;
@@ -229,7 +211,7 @@ TEST(Recommend, UsersOwnSystemGetsARecommendation) {
   ctx.out = &out;
   ctx.err = &err;
   const RecommendResult r = recommend_study(
-      inputs_with(s, StudyObjects{[] { return std::make_unique<UserDecay>(); }, {}}), s, dir, ctx);
+      inputs_of(s, StudyObjects{[] { return std::make_unique<UserDecay>(); }, {}}), s, dir, ctx);
   ASSERT_TRUE(r.best_wall) << recommend_markdown(r);
   EXPECT_LE(r.rows[*r.best_wall].error_rel, 1e-5);
   // ||y_ref||_inf = e^-1 < 1: error_rel is the absolute error |y - e^-1|.

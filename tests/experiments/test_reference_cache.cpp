@@ -17,32 +17,14 @@
 #include "experiments/output/output.hpp"
 #include "experiments/studies/convergence.hpp"
 #include "tests/cli_support.hpp"
+#include "tests/experiments/method_file_copy.hpp"
 #include "tests/test_support.hpp"
 
 namespace stiffbench {
 namespace {
 
-// The inputs of `spec` with a user's objects (resolve_inputs: nothing is registered by name).
-template <class Spec>
-StudyInputs inputs_with(const Spec& spec, StudyObjects objects) {
-  return resolve_inputs(StudyTarget{spec.model, spec.params, spec.integrators, std::move(objects)});
-}
-
-// methods/heun.toml registered from a copy under the name `name` (a method file in a temporary
-// folder); returns its path.
 std::string heun_file(const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("stiffbench_" + name + "_" + std::to_string(getpid()));
-  std::filesystem::create_directories(dir);
-  std::ifstream in(std::filesystem::path(STIFFBENCH_SOURCE_DIR) / "methods" / "heun.toml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string s = text.str();
-  const std::string key = "name = \"heun\"";
-  s.replace(s.find(key), key.size(), "name = \"" + name + "\"");
-  const std::filesystem::path path = dir / (name + ".toml");
-  std::ofstream(path) << s;
-  return path.string();
+  return testing_support::renamed_method_file("heun", name);
 }
 
 namespace fs = std::filesystem;
@@ -257,7 +239,7 @@ TEST(ReferenceCache, ChangedRightHandSideIsNotServedAStaleReference) {
   spec.cache_dir = dir.string();
   auto run = [&](double rate) {
     return run_convergence(
-        inputs_with(spec, StudyObjects{[rate] { return std::make_unique<Decay>(rate); }, {}}), spec,
+        inputs_of(spec, StudyObjects{[rate] { return std::make_unique<Decay>(rate); }, {}}), spec,
         nullptr);
   };
   const ConvergenceResult a = run(1.0);

@@ -22,6 +22,7 @@
 #include "integrators/explicit/explicit_rk.hpp"
 #include "integrators/explicit/tableaux.hpp"
 #include "integrators/implicit/dirk.hpp"
+#include "tests/experiments/method_file_copy.hpp"
 
 namespace stiffbench {
 namespace {
@@ -368,24 +369,13 @@ TEST(RegionExperiment, DefaultIntegratorsAreThoseWithStabilityData) {
 }
 
 // A study's inputs from resolve_inputs: a method file (bs3's coefficients under another name), a
-// variant of a built-in method and a user's integrator object; each row carries its label, and the
-// file's method has bs3's region.
+// variant of a built-in method and a user's integrator object; each row carries its label, and
+// the file's method has bs3's region.
 TEST(RegionExperiment, RunsFromResolvedInputsWithAMethodFileAVariantAndAnObject) {
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("sb_region_inputs_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  std::ifstream in(std::filesystem::path(STIFFBENCH_SOURCE_DIR) / "methods" / "bs3.toml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string toml = text.str();
-  const std::string key = "name = \"bs3\"";
-  ASSERT_NE(toml.find(key), std::string::npos);
-  toml.replace(toml.find(key), key.size(), "name = \"test_region_bs3\"");
-  const auto file = dir / "test_region_bs3.toml";
-  std::ofstream(file) << toml;
+  const std::string file = testing_support::renamed_method_file("bs3", "test_region_bs3");
 
   StudyTarget target;
-  target.integrators = {file.string(), "sdirk3{newton=full}", "bs3"};
+  target.integrators = {file, "sdirk3{newton=full}", "bs3"};
   ButcherTableau heun = tableau("heun");
   heun.name = "test_region_heun_object";
   target.objects.integrators = {
@@ -403,7 +393,7 @@ TEST(RegionExperiment, RunsFromResolvedInputsWithAMethodFileAVariantAndAnObject)
   EXPECT_NEAR(method(r, "test_region_heun_object").real_axis->limit, 2.0, 1e-12);
   EXPECT_EQ(method(r, "test_region_heun_object").family, "explicit");
   EXPECT_EQ(method(r, "sdirk3{newton=full}").family, "implicit");
-  std::filesystem::remove_all(dir);
+  std::filesystem::remove_all(std::filesystem::path(file).parent_path());
 }
 
 }  // namespace

@@ -21,12 +21,6 @@
 namespace stiffbench {
 namespace {
 
-// The inputs of `spec` with a user's objects (resolve_inputs: nothing is registered by name).
-template <class Spec>
-StudyInputs inputs_with(const Spec& spec, StudyObjects objects) {
-  return resolve_inputs(StudyTarget{spec.model, spec.params, spec.integrators, std::move(objects)});
-}
-
 // The chemical Akzo Nobel problem (IVP Test Set, F. Mazzia & C. Magherini, problem CHEMAKZO;
 // originally a DAE of index 1 from Akzo Nobel Central Research), written as an ODE of 5
 // components by eliminating the algebraic y6 = Ks·y1·y4:
@@ -283,7 +277,7 @@ TEST(RoundoffFloor, RowsBelowTheModelFloorAreKeptAndFitted) {
   spec.h = 0.1;
   spec.levels = 5;
   const StudyObjects decay{[] { return std::make_unique<FastDecay>(); }, {}};
-  const auto res = run_convergence(inputs_with(spec, decay), spec, nullptr);
+  const auto res = run_convergence(inputs_of(spec, decay), spec, nullptr);
   ASSERT_EQ(res.rows.size(), 5u);
   for (const auto& r : res.rows) {
     EXPECT_LT(r.error, r.roundoff_floor) << r.h;  // below the model bound
@@ -292,7 +286,7 @@ TEST(RoundoffFloor, RowsBelowTheModelFloorAreKeptAndFitted) {
   ASSERT_TRUE(res.fits[0].fitted.has_value()) << res.fits[0].reason;
   EXPECT_NEAR(*res.fits[0].fitted, 4.0, 0.1);
   spec.floor = "model";
-  const auto old = run_convergence(inputs_with(spec, decay), spec, nullptr);
+  const auto old = run_convergence(inputs_of(spec, decay), spec, nullptr);
   for (const auto& r : old.rows) EXPECT_TRUE(r.at_floor) << r.h;
   EXPECT_FALSE(old.fits[0].fitted.has_value());
   // No level is usable: the reason names the model floor and the change that helps.
@@ -417,7 +411,7 @@ TEST(RoundoffFloor, ChemAkzoKeepsRowsBelowTheModelFloorAndFits) {
   spec.t_end = 180;
   spec.h = 0.1;
   spec.levels = 7;
-  const auto res = run_convergence(inputs_with(spec, chemakzo()), spec, nullptr);
+  const auto res = run_convergence(inputs_of(spec, chemakzo()), spec, nullptr);
   for (const auto& f : res.fits) {
     ASSERT_TRUE(f.fitted.has_value()) << f.integrator << ": " << f.reason;
     EXPECT_NEAR(*f.fitted, f.order, 0.1) << f.integrator << ": " << f.reason;
@@ -437,7 +431,7 @@ TEST(RoundoffFloor, ChemAkzoKeepsRowsBelowTheModelFloorAndFits) {
   spec.ladder = "per-method";
   spec.levels = 6;
   spec.integrators = {"radau5"};
-  const auto own = run_convergence(inputs_with(spec, chemakzo()), spec, nullptr);
+  const auto own = run_convergence(inputs_of(spec, chemakzo()), spec, nullptr);
   ASSERT_TRUE(own.fits[0].fitted.has_value()) << own.fits[0].reason;
   EXPECT_NEAR(*own.fits[0].fitted, 5.0, 0.1) << own.fits[0].reason;
   for (const auto& r : own.rows) {
@@ -450,7 +444,7 @@ TEST(RoundoffFloor, ChemAkzoKeepsRowsBelowTheModelFloorAndFits) {
   spec.levels = 7;
   spec.floor = "model";
   spec.integrators = {"radau5"};
-  const auto old = run_convergence(inputs_with(spec, chemakzo()), spec, nullptr);
+  const auto old = run_convergence(inputs_of(spec, chemakzo()), spec, nullptr);
   EXPECT_FALSE(old.fits[0].fitted.has_value());
   EXPECT_NE(old.fits[0].reason.find("only 2 levels above the round-off floor (the model N·u·s)"),
             std::string::npos)

@@ -18,12 +18,6 @@ using namespace stiffbench;
 
 namespace {
 
-// The inputs of `spec` with a user's objects (resolve_inputs: nothing is registered by name).
-template <class Spec>
-StudyInputs inputs_with(const Spec& spec, StudyObjects objects) {
-  return resolve_inputs(StudyTarget{spec.model, spec.params, spec.integrators, std::move(objects)});
-}
-
 // y' = -y, y(0) = 1, exact e^{-t}. The fault fires on one chosen evaluation of the right-hand
 // side, counted over the process, so exactly one run of a study meets it.
 enum class Fault { none, throws, nan };
@@ -58,7 +52,7 @@ ConvergenceResult study(Fault fault, long fault_at) {
   spec.refine = 2;
   spec.reference = "exact";
   return run_convergence(
-      inputs_with(spec, StudyObjects{[] { return std::make_unique<FaultyDecay>(); }, {}}), spec,
+      inputs_of(spec, StudyObjects{[] { return std::make_unique<FaultyDecay>(); }, {}}), spec,
       nullptr);
 }
 
@@ -139,8 +133,8 @@ TEST(RunFaults, StateOutsideTheAdmissibleSetEndsOnlyItsRow) {
   spec.refine = 2;
   spec.reference = "exact";
   const ConvergenceResult r = run_convergence(
-      inputs_with(spec, StudyObjects{[] { return std::make_unique<NonNegativeDecay>(); }, {}}),
-      spec, nullptr);
+      inputs_of(spec, StudyObjects{[] { return std::make_unique<NonNegativeDecay>(); }, {}}), spec,
+      nullptr);
   ASSERT_EQ(r.rows.size(), 6u);
   EXPECT_EQ(r.rows[0].stats.status, Status::invalid_state);
   EXPECT_NE(r.rows[0].stats.message.find("y[0] = -0.125"), std::string::npos)

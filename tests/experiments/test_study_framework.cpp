@@ -30,12 +30,6 @@ using namespace stiffbench;
 
 namespace {
 
-// The inputs of `spec` with a user's objects (resolve_inputs: nothing is registered by name).
-template <class Spec>
-StudyInputs inputs_with(const Spec& spec, StudyObjects objects) {
-  return resolve_inputs(StudyTarget{spec.model, spec.params, spec.integrators, std::move(objects)});
-}
-
 std::string slurp_file(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   std::stringstream ss;
@@ -326,7 +320,7 @@ TEST(StudyFramework, UserIntegratorObjectRunsWithoutRegistration) {
   spec.h = 0.01;
   spec.levels = 3;
   const ConvergenceResult r = run_convergence(
-      inputs_with(spec, StudyObjects{nullptr, {[] { return std::make_unique<MyEuler>(); }}}), spec,
+      inputs_of(spec, StudyObjects{nullptr, {[] { return std::make_unique<MyEuler>(); }}}), spec,
       nullptr);
   ASSERT_EQ(r.rows.size(), 6u);
   for (std::size_t k = 0; k < 3; ++k) {
@@ -361,8 +355,8 @@ TEST(StudyFramework, AdaptiveObjectWithoutTolerancesIsRefusedByWorkPrecision) {
   spec.repeats = 1;
   try {
     run_work_precision(
-        inputs_with(spec,
-                    StudyObjects{nullptr, {[] { return std::make_unique<MyAdaptiveEuler>(); }}}),
+        inputs_of(spec,
+                  StudyObjects{nullptr, {[] { return std::make_unique<MyAdaptiveEuler>(); }}}),
         spec, nullptr);
     ADD_FAILURE() << "not refused";
   } catch (const BadInput& e) {

@@ -20,31 +20,13 @@
 #include "core/driver.hpp"
 #include "experiments/build_info.hpp"
 #include "experiments/studies/work_precision.hpp"
+#include "tests/experiments/method_file_copy.hpp"
 
 namespace stiffbench {
 namespace {
 
-// The inputs of `spec` with a user's objects (resolve_inputs: nothing is registered by name).
-template <class Spec>
-StudyInputs inputs_with(const Spec& spec, StudyObjects objects) {
-  return resolve_inputs(StudyTarget{spec.model, spec.params, spec.integrators, std::move(objects)});
-}
-
-// methods/heun.toml registered from a copy under the name `name` (a method file in a temporary
-// folder); returns its path.
 std::string heun_file(const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("stiffbench_" + name + "_" + std::to_string(getpid()));
-  std::filesystem::create_directories(dir);
-  std::ifstream in(std::filesystem::path(STIFFBENCH_SOURCE_DIR) / "methods" / "heun.toml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string s = text.str();
-  const std::string key = "name = \"heun\"";
-  s.replace(s.find(key), key.size(), "name = \"" + name + "\"");
-  const std::filesystem::path path = dir / (name + ".toml");
-  std::ofstream(path) << s;
-  return path.string();
+  return testing_support::renamed_method_file("heun", name);
 }
 
 std::size_t column(const Table& t, const std::string& name) {
@@ -249,7 +231,7 @@ TEST(WorkPrecisionTiming, RepeatThatDiffersIsAnError) {
   spec.levels = 2;
   spec.repeats = 2;
   const WorkPrecisionResult res = run_work_precision(
-      inputs_with(spec, StudyObjects{nullptr, {[] { return std::make_unique<Fickle>(); }}}), spec,
+      inputs_of(spec, StudyObjects{nullptr, {[] { return std::make_unique<Fickle>(); }}}), spec,
       nullptr);
   ASSERT_EQ(res.rows.size(), 4u);
   for (std::size_t i = 0; i < 2; ++i) {  // euler: deterministic
